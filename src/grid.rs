@@ -1,0 +1,195 @@
+//! A rectangular pixel grid: the one container for images, masks, label maps, depth and normals.
+//!
+//! Row 0 is the top row of the picture; world y points up, so world y = −row (see
+//! `docs/conventions.md`). Data are stored row-major.
+
+use crate::error::{Error, Result};
+
+/// A width × height grid of `T`, stored row-major from the top-left pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid<T> {
+    width: usize,
+    height: usize,
+    data: Vec<T>,
+}
+
+/// A single-channel image of linear luminance (nominally 0..1).
+pub type Image = Grid<f64>;
+/// A domain mask: `true` inside the object.
+pub type Mask = Grid<bool>;
+/// A label map: 0 = background, 1..N = named targets.
+pub type Labels = Grid<u16>;
+/// A linear RGB image (each channel nominally 0..1).
+pub type RgbImage = Grid<[f64; 3]>;
+
+/// The largest grid shadelab makes unless told otherwise (about 64 megapixels).
+pub const DEFAULT_MAX_PIXELS: usize = 64 * 1024 * 1024;
+
+/// Checks that `width × height` is a usable, non-empty size below `max_pixels`.
+pub fn check_size(width: usize, height: usize, max_pixels: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::invalid(format!(
+            "image size {width}x{height} is empty (both sides must be at least 1 pixel)"
+        )));
+    }
+    match width.checked_mul(height) {
+        Some(n) if n <= max_pixels => Ok(()),
+        _ => Err(Error::invalid(format!(
+            "image size {width}x{height} exceeds the limit of {max_pixels} pixels"
+        ))),
+    }
+}
+
+impl<T: Clone> Grid<T> {
+    /// A grid filled with `value`.
+    pub fn new(width: usize, height: usize, value: T) -> Self {
+        Grid {
+            width,
+            height,
+            data: vec![value; width * height],
+        }
+    }
+}
+
+impl<T> Grid<T> {
+    /// Wraps row-major `data`; fails when its length is not `width * height`.
+    pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Result<Self> {
+        if width.checked_mul(height) != Some(data.len()) {
+            return Err(Error::invalid(format!(
+                "{} values do not fill a {width}x{height} grid",
+                data.len()
+            )));
+        }
+        Ok(Grid {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// A grid whose pixel (col, row) is `f(col, row)`.
+    pub fn from_fn(width: usize, height: usize, mut f: impl FnMut(usize, usize) -> T) -> Self {
+        let mut data = Vec::with_capacity(width * height);
+        for row in 0..height {
+            for col in 0..width {
+                data.push(f(col, row));
+            }
+        }
+        Grid {
+            width,
+            height,
+            data,
+        }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Whether the grid has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// Whether `other` has the same width and height.
+    pub fn same_size<U>(&self, other: &Grid<U>) -> bool {
+        self.width == other.width && self.height == other.height
+    }
+
+    /// The pixel at column `col`, row `row` (row 0 at the top). Panics out of bounds.
+    pub fn get(&self, col: usize, row: usize) -> &T {
+        &self.data[row * self.width + col]
+    }
+
+    /// Mutable access to the pixel at (`col`, `row`). Panics out of bounds.
+    pub fn get_mut(&mut self, col: usize, row: usize) -> &mut T {
+        &mut self.data[row * self.width + col]
+    }
+
+    /// The pixel at (`col`, `row`), or `None` outside the grid (signed coordinates).
+    pub fn checked(&self, col: isize, row: isize) -> Option<&T> {
+        if col < 0 || row < 0 || col as usize >= self.width || row as usize >= self.height {
+            None
+        } else {
+            Some(&self.data[row as usize * self.width + col as usize])
+        }
+    }
+
+    /// Row-major pixel data.
+    pub fn data(&self) -> &[T] {
+        &self.data
+    }
+
+    /// Mutable row-major pixel data.
+    pub fn data_mut(&mut self) -> &mut [T] {
+        &mut self.data
+    }
+
+    /// Consumes the grid, returning its row-major data.
+    pub fn into_vec(self) -> Vec<T> {
+        self.data
+    }
+
+    /// A grid of the same size with `f` applied to every pixel.
+    pub fn map<U>(&self, f: impl FnMut(&T) -> U) -> Grid<U> {
+        Grid {
+            width: self.width,
+            height: self.height,
+            data: self.data.iter().map(f).collect(),
+        }
+    }
+
+    /// Row `row` as a slice.
+    pub fn row(&self, row: usize) -> &[T] {
+        &self.data[row * self.width..(row + 1) * self.width]
+    }
+}
+
+impl Grid<f64> {
+    /// Smallest and largest value (ignoring NaN); `None` when empty or all NaN.
+    pub fn min_max(&self) -> Option<(f64, f64)> {
+        let mut it = self.data.iter().copied().filter(|v| !v.is_nan());
+        let first = it.next()?;
+        Some(it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v))))
+    }
+
+    /// Mean of the values where `mask` is true; `None` when the mask is empty.
+    pub fn masked_mean(&self, mask: &Mask) -> Option<f64> {
+        let (sum, n) = self
+            .data
+            .iter()
+            .zip(mask.data())
+            .filter(|(_, &m)| m)
+            .fold((0.0, 0usize), |(s, n), (v, _)| (s + v, n + 1));
+        (n > 0).then(|| sum / n as f64)
+    }
+
+    /// The grid rotated by 180° (pixel (c, r) goes to (w−1−c, h−1−r)).
+    pub fn rotated_180(&self) -> Self {
+        let mut data = self.data.clone();
+        data.reverse();
+        Grid {
+            width: self.width,
+            height: self.height,
+            data,
+        }
+    }
+}
+
+impl Grid<bool> {
+    /// Number of pixels set.
+    pub fn count(&self) -> usize {
+        self.data.iter().filter(|&&m| m).count()
+    }
+}

@@ -1,0 +1,247 @@
+//! Light directions: unit vectors toward a distant light, and the tilt/slant angles of the
+//! vision-science literature.
+//!
+//! Tilt is the image-plane direction the light comes from, in degrees: 0 = from above, +90 = from
+//! the left (counter-clockwise), 180 = from below, −90 = from the right. Slant is the angle from
+//! the viewing direction (0 = frontal). The unit vector is
+//! s = (−sin(tilt)·sin(slant), cos(tilt)·sin(slant), cos(slant)).
+
+use crate::error::{Error, Result};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// The slant used by the named lights (`above`, `left`, …) when none is given.
+pub const DEFAULT_NAMED_SLANT_DEG: f64 = 45.0;
+
+/// The named lights and their tilts in degrees.
+pub const NAMED_LIGHTS: &[(&str, f64)] = &[
+    ("above", 0.0),
+    ("above-left", 45.0),
+    ("left", 90.0),
+    ("below", 180.0),
+    ("right", -90.0),
+    ("above-right", -45.0),
+];
+
+/// A distant light: a unit vector from the surface toward the light, never below the horizon
+/// (z ≥ 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "[f64; 3]", into = "[f64; 3]")]
+pub struct Light {
+    dir: Vector3<f64>,
+}
+
+impl Light {
+    /// The frontal light (0, 0, 1), from the viewer's direction.
+    pub const FRONT: Light = Light {
+        dir: Vector3::new(0.0, 0.0, 1.0),
+    };
+
+    /// A light toward `(x, y, z)`, normalised. Fails for a zero, non-finite or below-horizon
+    /// (z < 0) direction.
+    pub fn from_vector(x: f64, y: f64, z: f64) -> Result<Self> {
+        let v = Vector3::new(x, y, z);
+        let norm = v.norm();
+        if !norm.is_finite() || norm < 1e-12 {
+            return Err(Error::invalid(format!(
+                "light ({x}, {y}, {z}) is not a direction (it must be a non-zero finite vector)"
+            )));
+        }
+        if z < 0.0 {
+            return Err(Error::invalid(format!(
+                "light ({x}, {y}, {z}) is below the horizon (z must be ≥ 0: the light must face the viewer's side)"
+            )));
+        }
+        Ok(Light { dir: v / norm })
+    }
+
+    /// A light from `tilt_deg` and `slant_deg` (0 ≤ slant ≤ 90).
+    pub fn from_tilt_slant(tilt_deg: f64, slant_deg: f64) -> Result<Self> {
+        if !tilt_deg.is_finite() || !slant_deg.is_finite() {
+            return Err(Error::invalid(
+                "light tilt and slant must be finite numbers",
+            ));
+        }
+        if !(0.0..=90.0).contains(&slant_deg) {
+            return Err(Error::invalid(format!(
+                "light slant {slant_deg}° is outside 0..90 (90 is grazing; more is below the horizon)"
+            )));
+        }
+        let (t, s) = (tilt_deg.to_radians(), slant_deg.to_radians());
+        let z = s.cos().max(0.0);
+        Light::from_vector(-t.sin() * s.sin(), t.cos() * s.sin(), z)
+    }
+
+    /// The unit vector toward the light.
+    pub fn direction(&self) -> Vector3<f64> {
+        self.dir
+    }
+
+    /// Tilt in degrees, in (−180, 180]; 0 for the frontal light, whose tilt is undefined.
+    pub fn tilt_deg(&self) -> f64 {
+        if self.dir.x.hypot(self.dir.y) < 1e-12 {
+            return 0.0;
+        }
+        let t = (-self.dir.x).atan2(self.dir.y).to_degrees();
+        if t <= -180.0 {
+            t + 360.0
+        } else {
+            t
+        }
+    }
+
+    /// Slant in degrees, 0..90.
+    pub fn slant_deg(&self) -> f64 {
+        self.dir.z.clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
+    /// The light with its image-plane part turned by 180° (tilt + 180°, same slant): the light
+    /// under which the depth-negated surface gives the same image.
+    pub fn opposite_tilt(&self) -> Light {
+        Light {
+            dir: Vector3::new(-self.dir.x, -self.dir.y, self.dir.z),
+        }
+    }
+}
+
+impl TryFrom<[f64; 3]> for Light {
+    type Error = Error;
+    fn try_from(v: [f64; 3]) -> Result<Self> {
+        Light::from_vector(v[0], v[1], v[2])
+    }
+}
+
+impl From<Light> for [f64; 3] {
+    fn from(l: Light) -> Self {
+        [l.dir.x, l.dir.y, l.dir.z]
+    }
+}
+
+impl fmt::Display for Light {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "tilt={},slant={}",
+            round6(self.tilt_deg()),
+            round6(self.slant_deg())
+        )
+    }
+}
+
+fn round6(v: f64) -> f64 {
+    let r = (v * 1e6).round() / 1e6;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+impl FromStr for Light {
+    type Err = Error;
+
+    /// Parses `x,y,z`, `tilt=T,slant=S` (either may be omitted: tilt 0, slant 45), or a name
+    /// (`front`, `above`, `below`, `left`, `right`, `above-left`, `above-right`, optionally
+    /// followed by `,slant=S`).
+    fn from_str(text: &str) -> Result<Self> {
+        let text = text.trim();
+        let bad = || {
+            Error::invalid(format!(
+                "light '{text}' is not a direction: use x,y,z or tilt=T,slant=S or one of front, {}",
+                NAMED_LIGHTS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            ))
+        };
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        if parts.len() == 3 && parts.iter().all(|p| !p.contains('=')) {
+            let v: Vec<f64> = parts
+                .iter()
+                .map(|p| p.parse::<f64>().map_err(|_| bad()))
+                .collect::<Result<_>>()?;
+            return Light::from_vector(v[0], v[1], v[2]);
+        }
+        let mut tilt = None;
+        let mut slant = None;
+        let mut named = false;
+        for (i, part) in parts.iter().enumerate() {
+            if let Some((key, value)) = part.split_once('=') {
+                let value: f64 = value.trim().parse().map_err(|_| bad())?;
+                match key.trim() {
+                    "tilt" if tilt.is_none() => tilt = Some(value),
+                    "slant" if slant.is_none() => slant = Some(value),
+                    _ => return Err(bad()),
+                }
+            } else if i == 0 {
+                if *part == "front" {
+                    named = true;
+                    tilt = Some(0.0);
+                    slant = Some(0.0);
+                } else if let Some((_, t)) = NAMED_LIGHTS.iter().find(|(n, _)| n == part) {
+                    named = true;
+                    tilt = Some(*t);
+                } else {
+                    return Err(bad());
+                }
+            } else {
+                return Err(bad());
+            }
+        }
+        if !named && tilt.is_none() && slant.is_none() {
+            return Err(bad());
+        }
+        Light::from_tilt_slant(
+            tilt.unwrap_or(0.0),
+            slant.unwrap_or(DEFAULT_NAMED_SLANT_DEG),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tilt_conventions() {
+        let above = Light::from_tilt_slant(0.0, 90.0).unwrap().direction();
+        assert!((above - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+        let left = Light::from_tilt_slant(90.0, 90.0).unwrap().direction();
+        assert!((left - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12);
+        let right = Light::from_tilt_slant(-90.0, 30.0).unwrap();
+        assert!(right.direction().x > 0.0);
+        assert!((right.tilt_deg() + 90.0).abs() < 1e-9);
+        assert!((right.slant_deg() - 30.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn parses_all_forms() {
+        let a: Light = "above".parse().unwrap();
+        assert!((a.slant_deg() - 45.0).abs() < 1e-9 && a.tilt_deg().abs() < 1e-9);
+        let b: Light = "left,slant=30".parse().unwrap();
+        assert!((b.tilt_deg() - 90.0).abs() < 1e-9 && (b.slant_deg() - 30.0).abs() < 1e-9);
+        let c: Light = "1,0,1".parse().unwrap();
+        assert!((c.tilt_deg() + 90.0).abs() < 1e-9 && (c.slant_deg() - 45.0).abs() < 1e-9);
+        let d: Light = "tilt=180,slant=10".parse().unwrap();
+        assert!((d.tilt_deg() - 180.0).abs() < 1e-9);
+        assert_eq!("front".parse::<Light>().unwrap(), Light::FRONT);
+        for bad in [
+            "",
+            "0,0,0",
+            "0,0,-1",
+            "up",
+            "1,2",
+            "tilt=x",
+            "slant=120",
+            "nan,0,1",
+        ] {
+            assert!(bad.parse::<Light>().is_err(), "{bad} should fail");
+        }
+    }
+
+    #[test]
+    fn display_round_trips() {
+        let l = Light::from_tilt_slant(-135.0, 60.0).unwrap();
+        let back: Light = l.to_string().parse().unwrap();
+        assert!((back.direction() - l.direction()).norm() < 1e-9);
+    }
+}

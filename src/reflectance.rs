@@ -1,0 +1,383 @@
+//! Reflectance maps: the brightness R of each surface orientation under one distant light.
+//!
+//! Every model gives R as a function of the unit normal together with its gradient ∂R/∂n; the
+//! trait turns that, by the chain rule through the analytic Jacobians of
+//! [`crate::gradient_space`], into R(f, g) with ∂R/∂f, ∂R/∂g and R(p, q) with ∂R/∂p, ∂R/∂q. The
+//! viewer is at v = (0, 0, 1) (orthographic projection).
+
+use crate::error::{Error, Result};
+use crate::gradient_space::{
+    normal_fg_jacobian, normal_from_fg, normal_from_pq, normal_pq_jacobian, Normal,
+};
+use crate::light::Light;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// R and its two partial derivatives at one point of a 2-D orientation space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// The brightness R.
+    pub value: f64,
+    /// ∂R with respect to the first coordinate (f or p).
+    pub d1: f64,
+    /// ∂R with respect to the second coordinate (g or q).
+    pub d2: f64,
+}
+
+/// A reflectance map: brightness as a function of surface orientation, for a fixed light.
+pub trait ReflectanceMap: Send + Sync + std::fmt::Debug {
+    /// The light the map is computed for.
+    fn light(&self) -> Light;
+
+    /// R(n) and its gradient ∂R/∂n (the components of n taken as independent variables) at a
+    /// unit normal `n`.
+    fn radiance_and_gradient(&self, n: &Normal) -> (f64, Vector3<f64>);
+
+    /// The brightness of a surface that the light does not reach (cast or attached shadow).
+    fn ambient(&self) -> f64 {
+        0.0
+    }
+
+    /// R(n) at a unit normal.
+    fn radiance(&self, n: &Normal) -> f64 {
+        self.radiance_and_gradient(n).0
+    }
+
+    /// R(f, g) with ∂R/∂f and ∂R/∂g.
+    fn fg(&self, f: f64, g: f64) -> Sample {
+        let n = normal_from_fg(f, g);
+        let (value, grad) = self.radiance_and_gradient(&n);
+        let (dn_df, dn_dg) = normal_fg_jacobian(f, g);
+        Sample {
+            value,
+            d1: grad.dot(&dn_df),
+            d2: grad.dot(&dn_dg),
+        }
+    }
+
+    /// R(p, q) with ∂R/∂p and ∂R/∂q.
+    fn pq(&self, p: f64, q: f64) -> Sample {
+        let n = normal_from_pq(p, q);
+        let (value, grad) = self.radiance_and_gradient(&n);
+        let (dn_dp, dn_dq) = normal_pq_jacobian(p, q);
+        Sample {
+            value,
+            d1: grad.dot(&dn_dp),
+            d2: grad.dot(&dn_dq),
+        }
+    }
+}
+
+/// Lambertian (matte) reflectance: R = ambient + albedo · max(0, n·s). In attached shadow
+/// (n·s ≤ 0) R is the ambient level and carries no information about the orientation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lambertian {
+    /// The light.
+    pub light: Light,
+    /// Surface albedo ρ.
+    pub albedo: f64,
+    /// Ambient level added everywhere.
+    pub ambient: f64,
+}
+
+impl ReflectanceMap for Lambertian {
+    fn light(&self) -> Light {
+        self.light
+    }
+
+    fn ambient(&self) -> f64 {
+        self.ambient
+    }
+
+    fn radiance_and_gradient(&self, n: &Normal) -> (f64, Vector3<f64>) {
+        let s = self.light.direction();
+        let cos_i = n.dot(&s);
+        if cos_i > 0.0 {
+            (self.ambient + self.albedo * cos_i, s * self.albedo)
+        } else {
+            (self.ambient, Vector3::zeros())
+        }
+    }
+}
+
+/// Blinn–Phong: the Lambertian term plus a specular lobe k_s·max(0, n·h)^shininess, with
+/// h the unit half-vector between the light and the viewer, lit faces only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlinnPhong {
+    /// The diffuse part.
+    pub diffuse: Lambertian,
+    /// Specular strength k_s.
+    pub specular: f64,
+    /// Specular exponent (larger is glossier).
+    pub shininess: f64,
+}
+
+impl ReflectanceMap for BlinnPhong {
+    fn light(&self) -> Light {
+        self.diffuse.light
+    }
+
+    fn ambient(&self) -> f64 {
+        self.diffuse.ambient
+    }
+
+    fn radiance_and_gradient(&self, n: &Normal) -> (f64, Vector3<f64>) {
+        let (mut r, mut grad) = self.diffuse.radiance_and_gradient(n);
+        let s = self.diffuse.light.direction();
+        let h = (s + Vector3::z()).normalize();
+        let cos_h = n.dot(&h);
+        if n.dot(&s) > 0.0 && cos_h > 0.0 {
+            r += self.specular * cos_h.powf(self.shininess);
+            grad += h * (self.specular * self.shininess * cos_h.powf(self.shininess - 1.0));
+        }
+        (r, grad)
+    }
+}
+
+/// Oren–Nayar rough diffuse reflectance (qualitative model), normalised so that roughness 0 is
+/// Lambertian: R = ρ·cos θ_i·(A + B·max(0, cos(φ_i − φ_r))·sin α·tan β).
+///
+/// With v = (0, 0, 1), max(0, cos Δφ)·sin α·tan β = max(0, s_z − (n·s)·n_z) / max(n·s, n_z),
+/// which is what is computed (and differentiated) here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrenNayar {
+    /// The light.
+    pub light: Light,
+    /// Surface albedo ρ.
+    pub albedo: f64,
+    /// Roughness σ, the standard deviation of facet slopes, in radians.
+    pub roughness: f64,
+}
+
+impl ReflectanceMap for OrenNayar {
+    fn light(&self) -> Light {
+        self.light
+    }
+
+    fn radiance_and_gradient(&self, n: &Normal) -> (f64, Vector3<f64>) {
+        let s = self.light.direction();
+        let v = Vector3::z();
+        let s2 = self.roughness * self.roughness;
+        let a = 1.0 - 0.5 * s2 / (s2 + 0.33);
+        let b = 0.45 * s2 / (s2 + 0.09);
+        let ci = n.dot(&s);
+        if ci <= 0.0 {
+            return (0.0, Vector3::zeros());
+        }
+        let cr = n.z;
+        let c = s.z - ci * cr;
+        let mut r = a * ci;
+        let mut grad = s * a;
+        if c > 0.0 && b > 0.0 {
+            let dc = -(s * cr + v * ci);
+            if ci >= cr {
+                r += b * c;
+                grad += dc * b;
+            } else {
+                r += b * ci * c / cr;
+                grad += (s * (c / cr) + dc * (ci / cr) - v * (ci * c / (cr * cr))) * b;
+            }
+        }
+        (self.albedo * r, grad * self.albedo)
+    }
+}
+
+/// The reflectance models shadelab knows, by name, with their parameters: what `--brdf NAME`
+/// and the `brdf` key of a spec select.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BrdfSpec {
+    /// `lambertian`, `blinn-phong` or `oren-nayar`.
+    pub model: String,
+    /// Albedo ρ (0..1 for physical surfaces).
+    pub albedo: f64,
+    /// Ambient level (Lambertian and Blinn–Phong).
+    pub ambient: f64,
+    /// Specular strength k_s (Blinn–Phong).
+    pub specular: f64,
+    /// Specular exponent (Blinn–Phong).
+    pub shininess: f64,
+    /// Roughness σ in degrees (Oren–Nayar).
+    pub roughness_deg: f64,
+}
+
+/// The names accepted by [`BrdfSpec::model`].
+pub const BRDF_NAMES: &[&str] = &["lambertian", "blinn-phong", "oren-nayar"];
+
+impl Default for BrdfSpec {
+    fn default() -> Self {
+        BrdfSpec {
+            model: "lambertian".into(),
+            albedo: 1.0,
+            ambient: 0.0,
+            specular: 0.4,
+            shininess: 30.0,
+            roughness_deg: 20.0,
+        }
+    }
+}
+
+impl BrdfSpec {
+    /// The default parameters of the named model; fails for an unknown name.
+    pub fn named(model: &str) -> Result<Self> {
+        let model = match model {
+            "phong" => "blinn-phong",
+            "lambert" => "lambertian",
+            m => m,
+        };
+        if !BRDF_NAMES.contains(&model) {
+            return Err(Error::unknown("reflectance model", model, BRDF_NAMES));
+        }
+        Ok(BrdfSpec {
+            model: model.to_string(),
+            ..BrdfSpec::default()
+        })
+    }
+
+    /// Builds the reflectance map for `light`, checking every parameter.
+    pub fn build(&self, light: Light) -> Result<Box<dyn ReflectanceMap>> {
+        let check = |name: &str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(v)
+            } else {
+                Err(Error::invalid(format!(
+                    "{name} = {v} is outside {lo}..{hi}"
+                )))
+            }
+        };
+        let albedo = check("albedo", self.albedo, 0.0, 100.0)?;
+        let ambient = check("ambient", self.ambient, 0.0, 1.0)?;
+        let diffuse = Lambertian {
+            light,
+            albedo,
+            ambient,
+        };
+        Ok(match self.model.as_str() {
+            "lambertian" => Box::new(diffuse),
+            "blinn-phong" => Box::new(BlinnPhong {
+                diffuse,
+                specular: check("specular", self.specular, 0.0, 100.0)?,
+                shininess: check("shininess", self.shininess, 1.0, 10_000.0)?,
+            }),
+            "oren-nayar" => Box::new(OrenNayar {
+                light,
+                albedo,
+                roughness: check("roughness_deg", self.roughness_deg, 0.0, 90.0)?.to_radians(),
+            }),
+            other => return Err(Error::unknown("reflectance model", other, BRDF_NAMES)),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gradient_space::normal_from_fg;
+    use proptest::prelude::*;
+
+    fn models(light: Light) -> Vec<Box<dyn ReflectanceMap>> {
+        BRDF_NAMES
+            .iter()
+            .map(|m| {
+                let mut spec = BrdfSpec::named(m).unwrap();
+                spec.ambient = 0.05;
+                spec.build(light).unwrap()
+            })
+            .collect()
+    }
+
+    /// Whether (f, g) is away from the kinks of the models (terminator, specular cut-off,
+    /// Oren–Nayar's branch switches), where finite differences are meaningless.
+    fn smooth_at(light: Light, f: f64, g: f64) -> bool {
+        let n = normal_from_fg(f, g);
+        let s = light.direction();
+        let ci = n.dot(&s);
+        let c = s.z - ci * n.z;
+        ci.abs() > 1e-3 && (ci - n.z).abs() > 1e-3 && c.abs() > 1e-3
+    }
+
+    #[test]
+    fn lambertian_is_clamped_cosine() {
+        let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
+        let r = Lambertian {
+            light,
+            albedo: 1.0,
+            ambient: 0.0,
+        };
+        for &(f, g) in &[(0.0, 0.0), (0.5, -0.3), (-1.9, 0.2), (1.0, 1.0)] {
+            let n = normal_from_fg(f, g);
+            let expect = n.dot(&light.direction()).max(0.0);
+            assert!((r.fg(f, g).value - expect).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn oren_nayar_at_zero_roughness_is_lambertian() {
+        let light = Light::from_tilt_slant(-60.0, 50.0).unwrap();
+        let on = OrenNayar {
+            light,
+            albedo: 0.8,
+            roughness: 0.0,
+        };
+        let l = Lambertian {
+            light,
+            albedo: 0.8,
+            ambient: 0.0,
+        };
+        for &(p, q) in &[(0.0, 0.0), (0.7, -0.3), (-2.0, 1.5)] {
+            assert!((on.pq(p, q).value - l.pq(p, q).value).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn unknown_model_is_an_error() {
+        let e = BrdfSpec::named("chrome").unwrap_err().to_string();
+        assert!(e.contains("chrome") && e.contains("lambertian"), "{e}");
+        let mut bad = BrdfSpec::default();
+        bad.albedo = f64::NAN;
+        assert!(bad.build(Light::FRONT).is_err());
+    }
+
+    proptest! {
+        #[test]
+        fn fg_derivatives_match_finite_differences(
+            f in -1.95..1.95f64, g in -1.95..1.95f64,
+            tilt in -180.0..180.0f64, slant in 0.0..80.0f64,
+        ) {
+            let light = Light::from_tilt_slant(tilt, slant).unwrap();
+            prop_assume!(f * f + g * g < 3.8);
+            let h = 1e-6;
+            prop_assume!(smooth_at(light, f, g) && smooth_at(light, f + h, g) && smooth_at(light, f - h, g)
+                && smooth_at(light, f, g + h) && smooth_at(light, f, g - h));
+            for m in models(light) {
+                let s = m.fg(f, g);
+                let df = (m.fg(f + h, g).value - m.fg(f - h, g).value) / (2.0 * h);
+                let dg = (m.fg(f, g + h).value - m.fg(f, g - h).value) / (2.0 * h);
+                prop_assert!((s.d1 - df).abs() < 1e-5 * (1.0 + df.abs()), "{:?} d/df {} vs {}", m, s.d1, df);
+                prop_assert!((s.d2 - dg).abs() < 1e-5 * (1.0 + dg.abs()), "{:?} d/dg {} vs {}", m, s.d2, dg);
+            }
+        }
+
+        #[test]
+        fn pq_derivatives_match_finite_differences(
+            p in -3.0..3.0f64, q in -3.0..3.0f64,
+            tilt in -180.0..180.0f64, slant in 0.0..80.0f64,
+        ) {
+            let light = Light::from_tilt_slant(tilt, slant).unwrap();
+            let h = 1e-6;
+            let (f, g) = crate::gradient_space::fg_from_pq(p, q);
+            prop_assume!(smooth_at(light, f, g));
+            for (dp, dq) in [(h, 0.0), (-h, 0.0), (0.0, h), (0.0, -h)] {
+                let (f2, g2) = crate::gradient_space::fg_from_pq(p + dp, q + dq);
+                prop_assume!(smooth_at(light, f2, g2));
+            }
+            for m in models(light) {
+                let s = m.pq(p, q);
+                let dpv = (m.pq(p + h, q).value - m.pq(p - h, q).value) / (2.0 * h);
+                let dqv = (m.pq(p, q + h).value - m.pq(p, q - h).value) / (2.0 * h);
+                prop_assert!((s.d1 - dpv).abs() < 1e-5 * (1.0 + dpv.abs()));
+                prop_assert!((s.d2 - dqv).abs() < 1e-5 * (1.0 + dqv.abs()));
+            }
+        }
+    }
+}
