@@ -16,10 +16,13 @@
 pub mod error;
 pub mod gradient_space;
 pub mod grid;
+pub mod io;
 pub mod light;
 pub mod params;
+pub mod random;
 pub mod reflectance;
 pub mod render;
+pub mod stimulus;
 pub mod surface;
 pub mod visual_size;
 

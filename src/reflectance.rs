@@ -333,8 +333,10 @@ mod tests {
     fn unknown_model_is_an_error() {
         let e = BrdfSpec::named("chrome").unwrap_err().to_string();
         assert!(e.contains("chrome") && e.contains("lambertian"), "{e}");
-        let mut bad = BrdfSpec::default();
-        bad.albedo = f64::NAN;
+        let bad = BrdfSpec {
+            albedo: f64::NAN,
+            ..BrdfSpec::default()
+        };
         assert!(bad.build(Light::FRONT).is_err());
     }
 

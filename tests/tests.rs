@@ -1,1 +1,3 @@
+//! shadelab's integration tests: one binary (one link step) with a module per area.
 
+mod cli;

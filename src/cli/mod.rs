@@ -1,0 +1,143 @@
+//! Command-line parsing and dispatch. Each subcommand lives in its own file; none holds an
+//! algorithm. Errors print as one line, `error: …` with the cause chain, and exit with 2 for
+//! usage errors and 1 for everything else (never a panic or a backtrace).
+
+mod describe;
+mod progress;
+mod render;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Options every subcommand accepts.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Global {
+    /// No progress bars or chatter on stderr.
+    #[arg(long, global = true)]
+    pub quiet: bool,
+    /// Worker threads (default: all cores). Outputs are identical for any count.
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Largest image accepted or made, in pixels.
+    #[arg(long, global = true, value_name = "N", default_value_t = shadelab::grid::DEFAULT_MAX_PIXELS)]
+    pub max_pixels: usize,
+    /// Replace existing files or folders that shadelab did not write.
+    #[arg(long, global = true)]
+    pub force: bool,
+}
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "shadelab",
+    version,
+    about = "Shape-from-shading stimuli and analyses for vision science"
+)]
+struct Cli {
+    #[command(flatten)]
+    global: Global,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render a stimulus or surface to PNG/.npy with a JSON sidecar.
+    Render(render::Args),
+    /// List everything that can be rendered, one line each.
+    List,
+    /// Show a stimulus's parameters with defaults and ranges.
+    Describe(describe::Args),
+}
+
+/// An error from a subcommand, with whether it is a usage error (exit 2).
+#[derive(Debug)]
+pub struct CliError {
+    error: anyhow::Error,
+    usage: bool,
+}
+
+impl<E: Into<anyhow::Error>> From<E> for CliError {
+    fn from(e: E) -> Self {
+        let error: anyhow::Error = e.into();
+        let usage = error.chain().any(|c| {
+            c.downcast_ref::<shadelab::Error>()
+                .is_some_and(|e| e.is_usage())
+        });
+        CliError { error, usage }
+    }
+}
+
+impl CliError {
+    /// A usage error (exit 2) from a message.
+    pub fn usage(message: impl Into<String>) -> Self {
+        CliError {
+            error: anyhow::anyhow!(message.into()),
+            usage: true,
+        }
+    }
+}
+
+/// The result of a subcommand.
+pub type CliResult = Result<(), CliError>;
+
+/// Parses the command line, runs the subcommand and turns the outcome into an exit code.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                let _ = e.print();
+                return if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                    ExitCode::from(2)
+                } else {
+                    ExitCode::SUCCESS
+                };
+            }
+            // clap's message is several lines (tips, usage); keep the first, as one line.
+            let text = e.render().to_string();
+            let first = text
+                .lines()
+                .next()
+                .unwrap_or("invalid arguments")
+                .trim_start_matches("error: ");
+            eprintln!("error: {first} (see shadelab --help)");
+            return ExitCode::from(2);
+        }
+    };
+    let result = configure_threads(&cli.global).and_then(|_| run(cli.command, &cli.global));
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let text = format!("{:#}", e.error).replace('\n', " ");
+            eprintln!("error: {text}");
+            ExitCode::from(if e.usage { 2 } else { 1 })
+        }
+    }
+}
+
+fn configure_threads(global: &Global) -> CliResult {
+    if let Some(n) = global.threads {
+        if n == 0 {
+            return Err(CliError::usage("--threads must be at least 1"));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| CliError::usage(format!("cannot set --threads {n}: {e}")))?;
+    }
+    Ok(())
+}
+
+fn run(command: Command, global: &Global) -> CliResult {
+    match command {
+        Command::Render(args) => render::run(args, global),
+        Command::List => describe::list(),
+        Command::Describe(args) => describe::run(args),
+    }
+}

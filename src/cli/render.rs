@@ -1,0 +1,142 @@
+//! `shadelab render`: one stimulus or surface to a file with its sidecar.
+
+use super::{CliError, CliResult, Global};
+use clap::builder::TypedValueParser;
+use serde_json::{Map, Value};
+use shadelab::io::BitDepth;
+use shadelab::stimulus::{self, ExportOptions, Range, Spec};
+use shadelab::visual_size::{parse_pair, SizeRequest};
+use std::path::PathBuf;
+
+/// Arguments of `render`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// What to render (see `shadelab list`); optional with --spec.
+    pub name: Option<String>,
+    /// A JSON spec naming the stimulus and its parameters; flags given here override it.
+    #[arg(long, value_name = "FILE.json")]
+    pub spec: Option<PathBuf>,
+    /// Set a parameter (repeatable); `shadelab describe NAME` lists them.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// The light: x,y,z or tilt=T,slant=S or a name (front, above, below, left, right, above-left, above-right).
+    #[arg(long, value_name = "L")]
+    pub light: Option<String>,
+    /// The reflectance model (lambertian, blinn-phong, oren-nayar).
+    #[arg(long, value_name = "NAME")]
+    pub brdf: Option<String>,
+    /// Size in pixels: N (square) or WxH.
+    #[arg(long, value_name = "N|WxH", conflicts_with_all = ["width", "height"])]
+    pub size: Option<String>,
+    /// Width in pixels (with --height).
+    #[arg(long, requires = "height")]
+    pub width: Option<usize>,
+    /// Height in pixels (with --width).
+    #[arg(long, requires = "width")]
+    pub height: Option<usize>,
+    /// Visual size in degrees: D (square) or WxH.
+    #[arg(long, value_name = "DEG|WxH")]
+    pub visual_size: Option<String>,
+    /// Pixels per degree of visual angle.
+    #[arg(long, value_name = "N")]
+    pub ppd: Option<f64>,
+    /// Seed for random layouts (recorded in the sidecar).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Also write the ground-truth layers: FILE_depth.npy, FILE_normals.npy, FILE_shading.npy (FILE_mask.png, the target mask, is always written)
+    #[arg(long)]
+    pub layers: bool,
+    /// Bits per channel of PNG output.
+    #[arg(long, value_name = "8|16", default_value_t = 16, value_parser = clap::builder::PossibleValuesParser::new(["8", "16"]).map(|s| if s == "8" { 8u8 } else { 16u8 }))]
+    pub bit_depth: u8,
+    /// Display gamma for PNG output (recorded); default: linear values.
+    #[arg(long, value_name = "G")]
+    pub gamma: Option<f64>,
+    /// Value range of float output: unit (0..1) or psychopy (-1..1).
+    #[arg(long, value_name = "unit|psychopy", default_value = "unit", value_parser = ["unit", "psychopy"])]
+    pub range: String,
+    /// Output file: .png (16-bit by default) or .npy; the sidecar goes beside it as .json.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// Runs `render`.
+pub fn run(args: Args, global: &Global) -> CliResult {
+    let spec = args.spec.as_deref().map(Spec::load).transpose()?;
+    let name = match (&args.name, &spec) {
+        (Some(n), Some(s)) if *n != s.stimulus => {
+            return Err(CliError::usage(format!(
+                "the name '{n}' disagrees with the spec's stimulus '{}'",
+                s.stimulus
+            )))
+        }
+        (Some(n), _) => n.clone(),
+        (None, Some(s)) => s.stimulus.clone(),
+        (None, None) => {
+            return Err(CliError::usage(
+                "name what to render (see `shadelab list`) or give --spec FILE.json",
+            ))
+        }
+    };
+    let mut given: Map<String, Value> = spec.as_ref().map(|s| s.params.clone()).unwrap_or_default();
+    given.extend(shadelab::params::Params::parse_pairs(&args.set)?);
+    if let Some(l) = &args.light {
+        given.insert("light".into(), Value::from(l.as_str()));
+    }
+    if let Some(b) = &args.brdf {
+        given.insert("brdf".into(), Value::from(b.as_str()));
+    }
+    let mut size = spec.as_ref().map(Spec::size).unwrap_or_default();
+    if let Some(s) = &args.size {
+        size.shape = Some(parse_pair::<usize>(s, "--size")?);
+    }
+    if let (Some(w), Some(h)) = (args.width, args.height) {
+        size.shape = Some((w, h));
+    }
+    if let Some(v) = &args.visual_size {
+        size.visual_size = Some(parse_pair::<f64>(v, "--visual-size")?);
+    }
+    if args.ppd.is_some() {
+        size.ppd = args.ppd;
+    }
+    let seed = args
+        .seed
+        .or(spec.as_ref().and_then(|s| s.seed))
+        .unwrap_or(0);
+    let options = ExportOptions {
+        bit_depth: if args.bit_depth == 8 {
+            BitDepth::Eight
+        } else {
+            BitDepth::Sixteen
+        },
+        gamma: args.gamma,
+        range: if args.range == "psychopy" {
+            Range::Psychopy
+        } else {
+            Range::Unit
+        },
+        layers: args.layers,
+        force: global.force,
+    };
+    render_to(&name, &given, &size, seed, &args.out, &options, global)
+}
+
+/// Renders `name` and writes it with its sidecar; prints the files written unless quiet.
+pub fn render_to(
+    name: &str,
+    given: &Map<String, Value>,
+    size: &SizeRequest,
+    seed: u64,
+    out: &std::path::Path,
+    options: &ExportOptions,
+    global: &Global,
+) -> CliResult {
+    let (request, output) = stimulus::generate(name, given, size, seed, global.max_pixels)?;
+    let files = stimulus::write_output(name, &request, &output, out, options)?;
+    if !global.quiet {
+        for f in files {
+            eprintln!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}

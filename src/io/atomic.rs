@@ -1,0 +1,234 @@
+//! Atomic output: write to a temporary name beside the target, then rename.
+
+use crate::error::{Error, Result};
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+fn temp_name(target: &Path) -> Result<PathBuf> {
+    let name = target
+        .file_name()
+        .ok_or_else(|| Error::invalid(format!("{}: not a file name", target.display())))?;
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    Ok(target.with_file_name(format!(
+        ".{}.tmp-{}-{n}",
+        name.to_string_lossy(),
+        std::process::id()
+    )))
+}
+
+fn parent_of(target: &Path) -> &Path {
+    match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Writes `target` atomically: `write` fills a temporary file in the same folder, which is
+/// renamed over `target` only when everything succeeded. On failure the temporary file is
+/// removed and `target` is untouched.
+pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let parent = parent_of(target);
+    if !parent.is_dir() {
+        return Err(Error::format(parent, "output folder does not exist"));
+    }
+    if target.is_dir() {
+        return Err(Error::format(
+            target,
+            "is a directory; expected a file name",
+        ));
+    }
+    let tmp = temp_name(target)?;
+    let result = (|| {
+        let file = fs::File::create(&tmp).map_err(|e| Error::io(target, e))?;
+        let mut out = BufWriter::new(file);
+        write(&mut out)?;
+        let file = out
+            .into_inner()
+            .map_err(|e| Error::io(target, e.into_error()))?;
+        file.sync_all().map_err(|e| Error::io(target, e))?;
+        fs::rename(&tmp, target).map_err(|e| Error::io(target, e))
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Refuses to replace an existing file that shadelab did not write: a file is shadelab's when
+/// `marker` (its sidecar or report) exists beside it. `force` overrides.
+pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> {
+    if force || !target.exists() {
+        return Ok(());
+    }
+    if target.is_dir() {
+        return Err(Error::format(
+            target,
+            "is a directory; expected a file name",
+        ));
+    }
+    if marker.exists() {
+        return Ok(());
+    }
+    Err(Error::format(
+        target,
+        format!(
+            "exists and was not written by shadelab (no {} beside it); use --force to replace it",
+            marker
+                .file_name()
+                .map(|n| n.to_string_lossy())
+                .unwrap_or_default()
+        ),
+    ))
+}
+
+/// An output folder filled under a temporary name and renamed into place by
+/// [`AtomicDir::commit`]; dropped uncommitted, it removes itself.
+#[derive(Debug)]
+pub struct AtomicDir {
+    temp: PathBuf,
+    target: PathBuf,
+    marker: String,
+    committed: bool,
+}
+
+impl AtomicDir {
+    /// Starts an output folder for `target`. `marker` names the file (e.g. `report.json`) that
+    /// identifies a folder shadelab wrote: an existing `target` is replaced only when it is
+    /// empty or holds that file, or when `force` is set (and it is then still never a file).
+    pub fn create(target: &Path, marker: &str, force: bool) -> Result<AtomicDir> {
+        if target.exists() {
+            if !target.is_dir() {
+                return Err(Error::format(target, "exists and is not a folder"));
+            }
+            let empty = fs::read_dir(target)
+                .map_err(|e| Error::io(target, e))?
+                .next()
+                .is_none();
+            if !empty && !force && !target.join(marker).exists() {
+                return Err(Error::format(
+                    target,
+                    format!("folder exists and was not written by shadelab (no {marker} in it); use --force or another folder"),
+                ));
+            }
+        }
+        let parent = parent_of(target);
+        if !parent.is_dir() {
+            return Err(Error::format(
+                parent,
+                "output folder's parent does not exist",
+            ));
+        }
+        let temp = temp_name(target)?;
+        fs::create_dir(&temp).map_err(|e| Error::io(target, e))?;
+        Ok(AtomicDir {
+            temp,
+            target: target.to_path_buf(),
+            marker: marker.to_string(),
+            committed: false,
+        })
+    }
+
+    /// Where to write the folder's files until it is committed.
+    pub fn path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The folder's final name.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Moves the finished folder into place, replacing an earlier shadelab output there.
+    pub fn commit(mut self) -> Result<PathBuf> {
+        if !self.temp.join(&self.marker).exists() {
+            return Err(Error::Compute(format!(
+                "internal: output folder lacks its {}",
+                self.marker
+            )));
+        }
+        if self.target.exists() {
+            fs::remove_dir_all(&self.target).map_err(|e| Error::io(&self.target, e))?;
+        }
+        fs::rename(&self.temp, &self.target).map_err(|e| Error::io(&self.target, e))?;
+        self.committed = true;
+        Ok(self.target.clone())
+    }
+}
+
+impl Drop for AtomicDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.temp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("shadelab-atomic-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn failed_write_leaves_nothing() {
+        let d = scratch("fail");
+        let target = d.join("out.bin");
+        let r = write_atomic(&target, |w| {
+            w.write_all(b"partial").unwrap();
+            Err(Error::invalid("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 0);
+        write_atomic(&target, |w| {
+            w.write_all(b"ok").map_err(|e| Error::io(&target, e))
+        })
+        .unwrap();
+        assert_eq!(fs::read(&target).unwrap(), b"ok");
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn dir_is_removed_unless_committed_and_foreign_dirs_are_kept() {
+        let d = scratch("dir");
+        let target = d.join("result");
+        {
+            let a = AtomicDir::create(&target, "report.json", false).unwrap();
+            fs::write(a.path().join("x"), "1").unwrap();
+        }
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 0);
+        let a = AtomicDir::create(&target, "report.json", false).unwrap();
+        fs::write(a.path().join("report.json"), "{}").unwrap();
+        a.commit().unwrap();
+        assert!(target.join("report.json").exists());
+        // Replacing our own output is fine; a folder of someone else's is refused.
+        let a = AtomicDir::create(&target, "report.json", false).unwrap();
+        fs::write(a.path().join("report.json"), "{}").unwrap();
+        a.commit().unwrap();
+        let foreign = d.join("photos");
+        fs::create_dir(&foreign).unwrap();
+        fs::write(foreign.join("holiday.jpg"), "x").unwrap();
+        assert!(AtomicDir::create(&foreign, "report.json", false).is_err());
+        assert!(foreign.join("holiday.jpg").exists());
+    }
+
+    #[test]
+    fn overwrite_needs_a_marker_or_force() {
+        let d = scratch("overwrite");
+        let target = d.join("img.png");
+        fs::write(&target, "not ours").unwrap();
+        let marker = d.join("img.json");
+        assert!(check_overwrite(&target, &marker, false).is_err());
+        assert!(check_overwrite(&target, &marker, true).is_ok());
+        fs::write(&marker, "{}").unwrap();
+        assert!(check_overwrite(&target, &marker, false).is_ok());
+    }
+}

@@ -1,0 +1,47 @@
+//! Reading and writing files: PNG (8/16-bit), float `.npy`, JSON sidecars, all written
+//! atomically (a temporary name in the same folder, then a rename), so that no half-written file
+//! is ever left where the user asked for one.
+
+mod atomic;
+mod npy;
+mod png;
+mod sidecar;
+
+pub use atomic::{check_overwrite, write_atomic, AtomicDir};
+pub use npy::{
+    read_array, read_image, read_normals, write_f32, write_image, write_normals, NpyArray,
+};
+pub use png::{
+    read_gray, read_labels, read_mask, read_rgb, write_gray, write_labels, write_mask, write_rgb,
+    BitDepth, GrayInfo, LUMINANCE_FORMULA,
+};
+pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
+
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// Reads a whole file, with the path in any error.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    if path.is_dir() {
+        return Err(Error::format(path, "is a directory, not a file"));
+    }
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The lower-case extension of `path` ("" when none).
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// `path` with `suffix` inserted before the extension and the extension replaced by `ext`:
+/// `out/a.png` + `_mask`, `png` → `out/a_mask.png`.
+pub fn sibling(path: &Path, suffix: &str, ext: &str) -> std::path::PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}{suffix}.{ext}"))
+}

@@ -1,0 +1,290 @@
+//! NumPy `.npy` arrays: read any real dtype (converted to f64), write little-endian float32.
+
+use crate::error::{Error, Result};
+use crate::gradient_space::Normal;
+use crate::grid::{check_size, Grid, Image};
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// An n-dimensional array read from `.npy`, in C (row-major) order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyArray {
+    /// The shape, outermost axis first (H, W[, C] for images).
+    pub shape: Vec<usize>,
+    /// The values in C order.
+    pub data: Vec<f64>,
+}
+
+/// Reads a `.npy` file of any float, integer or boolean dtype, either memory order, refusing
+/// arrays of more than `max_elements` values and files shorter than their header declares.
+pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
+    let bytes = super::read_bytes(path)?;
+    let file = npyz::NpyFile::new(&bytes[..])
+        .map_err(|e| Error::format(path, format!("not a .npy file ({e})")))?;
+    let shape: Vec<usize> = file.shape().iter().map(|&d| d as usize).collect();
+    let count = shape
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+        .filter(|&n| n <= max_elements)
+        .ok_or_else(|| {
+            Error::format(
+                path,
+                format!("array shape {shape:?} exceeds the limit of {max_elements} values"),
+            )
+        })?;
+    let item = match file.dtype() {
+        npyz::DType::Plain(t) => t.num_bytes().unwrap_or(0),
+        _ => 0,
+    };
+    if item == 0 {
+        return Err(Error::format(
+            path,
+            format!("unsupported dtype {}", file.dtype().descr()),
+        ));
+    }
+    if bytes.len() < count.saturating_mul(item) {
+        return Err(Error::format(
+            path,
+            "file is truncated (shorter than its header declares)",
+        ));
+    }
+    let fortran = matches!(file.order(), npyz::Order::Fortran);
+    let io = |e: std::io::Error| {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof {
+            Error::format(path, "file is truncated (shorter than its header declares)")
+        } else {
+            Error::format(path, format!("cannot read values ({e})"))
+        }
+    };
+    let data: Vec<f64> = match file.try_data::<f64>() {
+        Ok(r) => r.collect::<std::io::Result<_>>().map_err(io)?,
+        Err(file) => match file.try_data::<f32>() {
+            Ok(r) => r
+                .map(|v| v.map(f64::from))
+                .collect::<std::io::Result<_>>()
+                .map_err(io)?,
+            Err(file) => match file.try_data::<i64>() {
+                Ok(r) => r
+                    .map(|v| v.map(|v| v as f64))
+                    .collect::<std::io::Result<_>>()
+                    .map_err(io)?,
+                Err(file) => match file.try_data::<u64>() {
+                    Ok(r) => r
+                        .map(|v| v.map(|v| v as f64))
+                        .collect::<std::io::Result<_>>()
+                        .map_err(io)?,
+                    Err(file) => match file.try_data::<bool>() {
+                        Ok(r) => r
+                            .map(|v| v.map(|b| if b { 1.0 } else { 0.0 }))
+                            .collect::<std::io::Result<_>>()
+                            .map_err(io)?,
+                        Err(file) => {
+                            return Err(Error::format(
+                                path,
+                                format!(
+                                    "unsupported dtype {} (need a real number type)",
+                                    file.dtype().descr()
+                                ),
+                            ))
+                        }
+                    },
+                },
+            },
+        },
+    };
+    if data.len() != count {
+        return Err(Error::format(
+            path,
+            "file is truncated (shorter than its header declares)",
+        ));
+    }
+    let data = if fortran && shape.len() > 1 {
+        fortran_to_c(&shape, &data)
+    } else {
+        data
+    };
+    Ok(NpyArray { shape, data })
+}
+
+fn fortran_to_c(shape: &[usize], data: &[f64]) -> Vec<f64> {
+    let n = data.len();
+    let mut out = vec![0.0; n];
+    let mut index = vec![0usize; shape.len()];
+    for value in out.iter_mut() {
+        // `index` runs in C order; its Fortran offset has the first axis fastest.
+        let mut offset = 0;
+        let mut stride = 1;
+        for (i, &d) in index.iter().zip(shape) {
+            offset += i * stride;
+            stride *= d;
+        }
+        *value = data[offset];
+        for axis in (0..shape.len()).rev() {
+            index[axis] += 1;
+            if index[axis] < shape[axis] {
+                break;
+            }
+            index[axis] = 0;
+        }
+    }
+    out
+}
+
+fn check_finite(path: &Path, data: &[f64]) -> Result<()> {
+    match data.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::format(
+            path,
+            format!("holds a non-finite value (NaN or Inf) at flat index {i}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Reads an H×W (or H×W×1) array as an image, rejecting NaN and Inf.
+pub fn read_image(path: &Path, max_pixels: usize) -> Result<Image> {
+    let a = read_array(path, max_pixels)?;
+    let (h, w) = match a.shape[..] {
+        [h, w] | [h, w, 1] => (h, w),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!("expected a 2-D H×W array, found shape {:?}", a.shape),
+            ))
+        }
+    };
+    check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
+    check_finite(path, &a.data)?;
+    Grid::from_vec(w, h, a.data)
+}
+
+/// Reads an H×W×3 array of normals (x right, y up, z toward the viewer), normalising each;
+/// rejects NaN, Inf and zero vectors.
+pub fn read_normals(path: &Path, max_pixels: usize) -> Result<Grid<Normal>> {
+    let a = read_array(path, max_pixels.saturating_mul(3))?;
+    let (h, w) = match a.shape[..] {
+        [h, w, 3] => (h, w),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!("expected an H×W×3 normal map, found shape {:?}", a.shape),
+            ))
+        }
+    };
+    check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
+    check_finite(path, &a.data)?;
+    let mut normals = Vec::with_capacity(w * h);
+    for (i, c) in a.data.chunks_exact(3).enumerate() {
+        let v = Vector3::new(c[0], c[1], c[2]);
+        let n = v.norm();
+        if n < 1e-12 {
+            return Err(Error::format(
+                path,
+                format!("normal {i} (row {}, col {}) is zero", i / w, i % w),
+            ));
+        }
+        normals.push(v / n);
+    }
+    Grid::from_vec(w, h, normals)
+}
+
+/// Writes float32 values of `shape` (C order) as a `.npy` file, atomically.
+pub fn write_f32(path: &Path, shape: &[usize], data: impl Iterator<Item = f64>) -> Result<()> {
+    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let shape_text = if dims.len() == 1 {
+        format!("({},)", dims[0])
+    } else {
+        format!("({})", dims.join(", "))
+    };
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape_text}, }}");
+    // Magic (6) + version (2) + length (2) + header + '\n' is padded to a multiple of 64.
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+    header.push('\n');
+    let header_len =
+        u16::try_from(header.len()).map_err(|_| Error::invalid("array has too many dimensions"))?;
+    let values: Vec<u8> = data.flat_map(|v| (v as f32).to_le_bytes()).collect();
+    super::write_atomic(path, |out| {
+        let io = |e| Error::io(path, e);
+        out.write_all(b"\x93NUMPY\x01\x00").map_err(io)?;
+        out.write_all(&header_len.to_le_bytes()).map_err(io)?;
+        out.write_all(header.as_bytes()).map_err(io)?;
+        out.write_all(&values).map_err(io)
+    })
+}
+
+/// Writes an image as an H×W float32 `.npy`.
+pub fn write_image(path: &Path, image: &Image) -> Result<()> {
+    write_f32(
+        path,
+        &[image.height(), image.width()],
+        image.data().iter().copied(),
+    )
+}
+
+/// Writes normals as an H×W×3 float32 `.npy` (x right, y up, z toward the viewer).
+pub fn write_normals(path: &Path, normals: &Grid<Normal>) -> Result<()> {
+    write_f32(
+        path,
+        &[normals.height(), normals.width(), 3],
+        normals.data().iter().flat_map(|n| [n.x, n.y, n.z]),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("shadelab-npy-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn round_trip_and_shape_checks() {
+        let d = scratch("rt");
+        let img = Grid::from_fn(5, 3, |c, r| c as f64 * 0.5 - r as f64);
+        write_image(&d.join("a.npy"), &img).unwrap();
+        assert_eq!(read_image(&d.join("a.npy"), 1000).unwrap(), img);
+        let bytes = std::fs::read(d.join("a.npy")).unwrap();
+        assert_eq!((bytes.len() - 15 * 4) % 64, 0, "header is 64-byte aligned");
+        let normals = Grid::from_fn(2, 2, |c, _| Vector3::new(c as f64, 0.0, 1.0).normalize());
+        write_normals(&d.join("n.npy"), &normals).unwrap();
+        let back = read_normals(&d.join("n.npy"), 1000).unwrap();
+        assert!(back
+            .data()
+            .iter()
+            .zip(normals.data())
+            .all(|(a, b)| (a - b).norm() < 1e-7));
+        assert!(read_normals(&d.join("a.npy"), 1000).is_err());
+        assert!(read_image(&d.join("n.npy"), 1000).is_err());
+        assert!(read_image(&d.join("a.npy"), 10).is_err());
+    }
+
+    #[test]
+    fn nan_truncated_and_garbage_are_errors() {
+        let d = scratch("bad");
+        write_image(&d.join("nan.npy"), &Grid::new(2, 2, f64::NAN)).unwrap();
+        assert!(read_image(&d.join("nan.npy"), 100)
+            .unwrap_err()
+            .to_string()
+            .contains("NaN"));
+        write_image(&d.join("t.npy"), &Grid::new(20, 20, 1.0)).unwrap();
+        let bytes = std::fs::read(d.join("t.npy")).unwrap();
+        std::fs::write(d.join("t.npy"), &bytes[..bytes.len() - 10]).unwrap();
+        assert!(read_image(&d.join("t.npy"), 1000)
+            .unwrap_err()
+            .to_string()
+            .contains("truncated"));
+        std::fs::write(d.join("g.npy"), b"hello").unwrap();
+        assert!(read_image(&d.join("g.npy"), 1000).is_err());
+    }
+
+    #[test]
+    fn fortran_order_is_reordered() {
+        // shape (2, 3) stored column-major: [[0,1,2],[3,4,5]] → 0,3,1,4,2,5.
+        let out = fortran_to_c(&[2, 3], &[0.0, 3.0, 1.0, 4.0, 2.0, 5.0]);
+        assert_eq!(out, vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+    }
+}

@@ -1,0 +1,330 @@
+//! PNG input and output (8- and 16-bit, grayscale and RGB) through the `image` crate.
+
+use crate::error::{Error, Result};
+use crate::grid::{check_size, Grid, Image, Labels, Mask, RgbImage};
+use image::{codecs::png::PngEncoder, DynamicImage, ExtendedColorType, ImageEncoder, ImageReader};
+use serde::Serialize;
+use std::path::Path;
+
+/// How colour input becomes luminance (stated in reports): the Rec. 709 / sRGB luminance
+/// weights applied to the stored channel values scaled to 0..1, without gamma decoding; alpha
+/// is ignored.
+pub const LUMINANCE_FORMULA: &str = "Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 weights on the stored values scaled to 0..1, no gamma decoding; alpha ignored)";
+
+/// Bits per channel of a written PNG.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum BitDepth {
+    /// 8 bits per channel (0..255).
+    Eight,
+    /// 16 bits per channel (0..65535).
+    Sixteen,
+}
+
+/// What was read from a PNG and how it was converted.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GrayInfo {
+    /// Bits per channel in the file.
+    pub bit_depth: u8,
+    /// Channels in the file (1 gray, 2 gray+alpha, 3 RGB, 4 RGBA).
+    pub channels: u8,
+    /// The conversion applied, when the file was not plain grayscale.
+    pub conversion: Option<String>,
+}
+
+fn decode(path: &Path, max_pixels: usize) -> Result<DynamicImage> {
+    if path.is_dir() {
+        return Err(Error::format(path, "is a directory, not an image"));
+    }
+    let open = || -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
+        ImageReader::open(path)
+            .map_err(|e| Error::io(path, e))?
+            .with_guessed_format()
+            .map_err(|e| Error::io(path, e))
+    };
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| Error::format(path, format!("not a readable image ({e})")))?;
+    check_size(w as usize, h as usize, max_pixels)
+        .map_err(|e| Error::format(path, e.to_string()))?;
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    reader.limits(limits);
+    reader
+        .decode()
+        .map_err(|e| Error::format(path, format!("cannot decode image ({e})")))
+}
+
+/// Reads a PNG (or another format the `image` crate knows) as linear luminance 0..1.
+/// Grayscale is scaled by its maximum code; colour becomes luminance by [`LUMINANCE_FORMULA`].
+pub fn read_gray(path: &Path, max_pixels: usize) -> Result<(Image, GrayInfo)> {
+    let img = decode(path, max_pixels)?;
+    let color = img.color();
+    let channels = color.channel_count();
+    let bit_depth = (color.bits_per_pixel() / channels as u16) as u8;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let (data, conversion): (Vec<f64>, Option<String>) = match img {
+        DynamicImage::ImageLuma8(b) => (
+            b.into_raw().into_iter().map(|v| v as f64 / 255.0).collect(),
+            None,
+        ),
+        DynamicImage::ImageLuma16(b) => (
+            b.into_raw()
+                .into_iter()
+                .map(|v| v as f64 / 65535.0)
+                .collect(),
+            None,
+        ),
+        DynamicImage::ImageLumaA8(b) => (
+            b.pixels().map(|p| p.0[0] as f64 / 255.0).collect(),
+            Some("alpha ignored".into()),
+        ),
+        DynamicImage::ImageLumaA16(b) => (
+            b.pixels().map(|p| p.0[0] as f64 / 65535.0).collect(),
+            Some("alpha ignored".into()),
+        ),
+        other => {
+            let rgb = other.into_rgb32f();
+            (
+                rgb.pixels()
+                    .map(|p| {
+                        0.2126 * p.0[0] as f64 + 0.7152 * p.0[1] as f64 + 0.0722 * p.0[2] as f64
+                    })
+                    .collect(),
+                Some(LUMINANCE_FORMULA.to_string()),
+            )
+        }
+    };
+    Ok((
+        Grid::from_vec(w, h, data)?,
+        GrayInfo {
+            bit_depth,
+            channels,
+            conversion,
+        },
+    ))
+}
+
+/// Reads a colour image as linear RGB 0..1 (gray input is copied to the three channels).
+pub fn read_rgb(path: &Path, max_pixels: usize) -> Result<RgbImage> {
+    let img = decode(path, max_pixels)?.into_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(
+        w,
+        h,
+        img.pixels()
+            .map(|p| [p.0[0] as f64, p.0[1] as f64, p.0[2] as f64])
+            .collect(),
+    )
+}
+
+/// Reads a mask: any non-zero pixel (in any channel) is inside.
+pub fn read_mask(path: &Path, max_pixels: usize) -> Result<Mask> {
+    let img = decode(path, max_pixels)?.into_rgba16();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(
+        w,
+        h,
+        img.pixels()
+            .map(|p| p.0[..3].iter().any(|&v| v > 0))
+            .collect(),
+    )
+}
+
+/// Reads a label map (8- or 16-bit grayscale codes 0..N).
+pub fn read_labels(path: &Path, max_pixels: usize) -> Result<Labels> {
+    let img = decode(path, max_pixels)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let data = match img {
+        DynamicImage::ImageLuma8(b) => b.into_raw().into_iter().map(u16::from).collect(),
+        DynamicImage::ImageLuma16(b) => b.into_raw(),
+        _ => {
+            return Err(Error::format(
+                path,
+                "a label map must be an 8- or 16-bit grayscale PNG",
+            ))
+        }
+    };
+    Grid::from_vec(w, h, data)
+}
+
+/// Encodes a linear value 0..1 (clamped; NaN becomes 0) with an optional display gamma.
+fn encode(v: f64, gamma: Option<f64>, max: f64) -> f64 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    let v = match gamma {
+        Some(g) => v.powf(1.0 / g),
+        None => v,
+    };
+    (v * max).round()
+}
+
+fn write_png(
+    path: &Path,
+    w: usize,
+    h: usize,
+    bytes: &[u8],
+    color: ExtendedColorType,
+) -> Result<()> {
+    let (w32, h32) = (
+        u32::try_from(w).map_err(|_| Error::invalid("image too wide for PNG"))?,
+        u32::try_from(h).map_err(|_| Error::invalid("image too tall for PNG"))?,
+    );
+    super::write_atomic(path, |out| {
+        PngEncoder::new(out)
+            .write_image(bytes, w32, h32, color)
+            .map_err(|e| Error::format(path, format!("cannot encode PNG ({e})")))
+    })
+}
+
+fn check_gamma(gamma: Option<f64>) -> Result<()> {
+    match gamma {
+        Some(g) if !(g.is_finite() && g > 0.0 && g <= 10.0) => {
+            Err(Error::invalid(format!("gamma {g} must be in (0, 10]")))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Writes a grayscale PNG of linear values 0..1 (clamped), optionally display-encoded with
+/// v^(1/gamma).
+pub fn write_gray(path: &Path, image: &Image, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
+    check_gamma(gamma)?;
+    let (w, h) = (image.width(), image.height());
+    match depth {
+        BitDepth::Eight => {
+            let bytes: Vec<u8> = image
+                .data()
+                .iter()
+                .map(|&v| encode(v, gamma, 255.0) as u8)
+                .collect();
+            write_png(path, w, h, &bytes, ExtendedColorType::L8)
+        }
+        BitDepth::Sixteen => {
+            let bytes: Vec<u8> = image
+                .data()
+                .iter()
+                .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                .collect();
+            write_png(path, w, h, &bytes, ExtendedColorType::L16)
+        }
+    }
+}
+
+/// Writes an RGB PNG of linear values 0..1 (clamped), optionally display-encoded.
+pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
+    check_gamma(gamma)?;
+    let (w, h) = (image.width(), image.height());
+    match depth {
+        BitDepth::Eight => {
+            let bytes: Vec<u8> = image
+                .data()
+                .iter()
+                .flat_map(|p| p.map(|v| encode(v, gamma, 255.0) as u8))
+                .collect();
+            write_png(path, w, h, &bytes, ExtendedColorType::Rgb8)
+        }
+        BitDepth::Sixteen => {
+            let bytes: Vec<u8> = image
+                .data()
+                .iter()
+                .flat_map(|p| {
+                    p.iter()
+                        .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            write_png(path, w, h, &bytes, ExtendedColorType::Rgb16)
+        }
+    }
+}
+
+/// Writes a label map: 8-bit when every label fits, else 16-bit; the codes are the labels.
+pub fn write_labels(path: &Path, labels: &Labels) -> Result<()> {
+    let (w, h) = (labels.width(), labels.height());
+    if labels.data().iter().all(|&l| l <= 255) {
+        let bytes: Vec<u8> = labels.data().iter().map(|&l| l as u8).collect();
+        write_png(path, w, h, &bytes, ExtendedColorType::L8)
+    } else {
+        let bytes: Vec<u8> = labels.data().iter().flat_map(|l| l.to_ne_bytes()).collect();
+        write_png(path, w, h, &bytes, ExtendedColorType::L16)
+    }
+}
+
+/// Writes a mask as an 8-bit PNG (0 outside, 255 inside).
+pub fn write_mask(path: &Path, mask: &Mask) -> Result<()> {
+    let bytes: Vec<u8> = mask
+        .data()
+        .iter()
+        .map(|&m| if m { 255 } else { 0 })
+        .collect();
+    write_png(
+        path,
+        mask.width(),
+        mask.height(),
+        &bytes,
+        ExtendedColorType::L8,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::DEFAULT_MAX_PIXELS;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("shadelab-png-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn sixteen_bit_round_trip_is_exact() {
+        let d = scratch("rt16");
+        let img = Grid::from_fn(7, 5, |c, r| ((c * 5 + r) as f64 * 1000.0).round() / 65535.0);
+        let p = d.join("a.png");
+        write_gray(&p, &img, BitDepth::Sixteen, None).unwrap();
+        let (back, info) = read_gray(&p, DEFAULT_MAX_PIXELS).unwrap();
+        assert_eq!((info.bit_depth, info.channels), (16, 1));
+        for (a, b) in img.data().iter().zip(back.data()) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        let labels = Grid::from_fn(4, 3, |c, r| (c + 300 * r) as u16);
+        write_labels(&d.join("l.png"), &labels).unwrap();
+        assert_eq!(
+            read_labels(&d.join("l.png"), DEFAULT_MAX_PIXELS).unwrap(),
+            labels
+        );
+    }
+
+    #[test]
+    fn gamma_and_rgb_luminance() {
+        let d = scratch("gamma");
+        let img = Grid::new(2, 2, 0.25);
+        write_gray(&d.join("g.png"), &img, BitDepth::Eight, Some(2.0)).unwrap();
+        let (back, _) = read_gray(&d.join("g.png"), DEFAULT_MAX_PIXELS).unwrap();
+        assert_eq!(back.get(0, 0) * 255.0, 128.0); // 0.25^(1/2) = 0.5 → 127.5 → 128
+        let rgb = Grid::new(2, 1, [1.0, 0.0, 0.0]);
+        write_rgb(&d.join("c.png"), &rgb, BitDepth::Sixteen, None).unwrap();
+        let (y, info) = read_gray(&d.join("c.png"), DEFAULT_MAX_PIXELS).unwrap();
+        assert!((y.get(0, 0) - 0.2126).abs() < 1e-6);
+        assert!(info.conversion.unwrap().contains("0.2126"));
+    }
+
+    #[test]
+    fn corrupt_and_oversized_files_are_errors() {
+        let d = scratch("bad");
+        let p = d.join("t.png");
+        std::fs::write(&p, b"\x89PNG\r\n\x1a\n garbage").unwrap();
+        assert!(read_gray(&p, DEFAULT_MAX_PIXELS).is_err());
+        let ok = d.join("ok.png");
+        write_gray(&ok, &Grid::new(40, 30, 0.5), BitDepth::Eight, None).unwrap();
+        let e = read_gray(&ok, 100).unwrap_err().to_string();
+        assert!(e.contains("exceeds"), "{e}");
+        let bytes = std::fs::read(&ok).unwrap();
+        std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+        assert!(read_gray(&p, DEFAULT_MAX_PIXELS).is_err());
+        assert!(read_gray(&d, DEFAULT_MAX_PIXELS).is_err());
+    }
+}

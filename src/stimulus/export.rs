@@ -1,0 +1,222 @@
+//! Writing a rendered stimulus: the picture in the format its extension names, the target
+//! mask, the ground-truth layers and a JSON sidecar recording every parameter.
+
+use super::{Output, Pixels, Request};
+use crate::error::{Error, Result};
+use crate::io::{self, BitDepth};
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// The value range of float outputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Range {
+    /// Linear luminance 0..1.
+    Unit,
+    /// PsychoPy's −1..1 (v·2 − 1), for float formats.
+    Psychopy,
+}
+
+/// How to write a stimulus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportOptions {
+    /// Bits per channel of PNG output.
+    pub bit_depth: BitDepth,
+    /// Display gamma applied to PNG output (recorded); `None` writes linear values.
+    pub gamma: Option<f64>,
+    /// Value range for float formats.
+    pub range: Range,
+    /// Also write the ground-truth layers (depth, normals, albedo, shading).
+    pub layers: bool,
+    /// Replace an existing file that shadelab did not write.
+    pub force: bool,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        ExportOptions {
+            bit_depth: BitDepth::Sixteen,
+            gamma: None,
+            range: Range::Unit,
+            layers: false,
+            force: false,
+        }
+    }
+}
+
+/// The output formats, by extension.
+pub const FORMATS: &[&str] = &["png", "npy"];
+
+/// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
+/// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
+/// layers. Returns every file written. Files are written whole or not at all; when one fails,
+/// those already written by this call are removed.
+pub fn write_output(
+    name: &str,
+    request: &Request,
+    output: &Output,
+    path: &Path,
+    options: &ExportOptions,
+) -> Result<Vec<PathBuf>> {
+    let ext = io::extension(path);
+    if !FORMATS.contains(&ext.as_str()) {
+        return Err(Error::invalid(format!(
+            "{}: unknown output format '.{ext}' (use one of: {})",
+            path.display(),
+            FORMATS
+                .iter()
+                .map(|f| format!(".{f}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    if options.range == Range::Psychopy && ext == "png" {
+        return Err(Error::invalid(
+            "--range psychopy applies to float formats (.npy, .mat), not PNG",
+        ));
+    }
+    if options.gamma.is_some() && ext != "png" {
+        return Err(Error::invalid(
+            "--gamma applies to PNG output only (float formats stay linear)",
+        ));
+    }
+    let sidecar = io::sibling(path, "", "json");
+    io::check_overwrite(path, &sidecar, options.force)?;
+    let mut written: Vec<PathBuf> = Vec::new();
+    let result = write_all(
+        name,
+        request,
+        output,
+        path,
+        &ext,
+        &sidecar,
+        options,
+        &mut written,
+    );
+    if result.is_err() {
+        for p in &written {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+    result.map(|_| written)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_all(
+    name: &str,
+    request: &Request,
+    output: &Output,
+    path: &Path,
+    ext: &str,
+    sidecar: &Path,
+    options: &ExportOptions,
+    written: &mut Vec<PathBuf>,
+) -> Result<()> {
+    let mut files = Map::new();
+    let mut record = |key: &str, p: PathBuf, written: &mut Vec<PathBuf>| {
+        files.insert(
+            key.to_string(),
+            Value::from(
+                p.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+            ),
+        );
+        written.push(p);
+    };
+    if let Some(t) = &output.targets {
+        let p = io::sibling(path, "_mask", "png");
+        io::write_labels(&p, &t.labels)?;
+        record("target_mask", p, written);
+    }
+    if options.layers {
+        if let Some(s) = &output.surface {
+            let p = io::sibling(path, "_depth", "npy");
+            io::write_image(&p, &s.depth)?;
+            record("depth", p, written);
+            let p = io::sibling(path, "_normals", "npy");
+            io::write_normals(&p, &s.normals)?;
+            record("normals", p, written);
+            if let Some(a) = &s.albedo {
+                let p = io::sibling(path, "_albedo", "npy");
+                io::write_image(&p, a)?;
+                record("albedo", p, written);
+            }
+            if let Some(sh) = &s.shading {
+                let p = io::sibling(path, "_shading", "npy");
+                io::write_image(&p, sh)?;
+                record("shading", p, written);
+            }
+        }
+    }
+    let to_range = |v: f64| match options.range {
+        Range::Unit => v,
+        Range::Psychopy => v * 2.0 - 1.0,
+    };
+    match (ext, &output.pixels) {
+        ("png", Pixels::Gray(img)) => io::write_gray(path, img, options.bit_depth, options.gamma)?,
+        ("png", Pixels::Rgb(img)) => io::write_rgb(path, img, options.bit_depth, options.gamma)?,
+        ("npy", Pixels::Gray(img)) => io::write_image(path, &img.map(|&v| to_range(v)))?,
+        ("npy", Pixels::Rgb(img)) => io::write_f32(
+            path,
+            &[img.height(), img.width(), 3],
+            img.data().iter().flat_map(|p| p.map(to_range)),
+        )?,
+        _ => return Err(Error::invalid(format!("unknown output format '.{ext}'"))),
+    }
+    record("image", path.to_path_buf(), written);
+    let value = sidecar_json(name, request, output, ext, options, files);
+    io::write_json(sidecar, &value)?;
+    written.push(sidecar.to_path_buf());
+    Ok(())
+}
+
+/// The sidecar of a rendered stimulus: program, version, conventions, stimulus, every
+/// parameter, geometry, seed, format, gamma, range, checksum, targets and files.
+pub fn sidecar_json(
+    name: &str,
+    request: &Request,
+    output: &Output,
+    format: &str,
+    options: &ExportOptions,
+    files: Map<String, Value>,
+) -> Value {
+    let g = &request.geometry;
+    let (channels, md5) = match &output.pixels {
+        Pixels::Gray(img) => (1, io::image_md5(img)),
+        Pixels::Rgb(img) => (
+            3,
+            io::image_md5(&crate::grid::Grid::from_fn(
+                img.width() * 3,
+                img.height(),
+                |c, r| img.get(c / 3, r)[c % 3],
+            )),
+        ),
+    };
+    json!({
+        "program": "shadelab",
+        "version": io::PROGRAM_VERSION,
+        "stimulus": name,
+        "parameters": request.params.to_json(),
+        "seed": request.seed,
+        "visual_size_deg": { "width": g.width_deg(), "height": g.height_deg() },
+        "ppd": g.ppd,
+        "shape_px": { "width": g.width, "height": g.height },
+        "channels": channels,
+        "format": format,
+        "bit_depth": if format == "png" { Value::from(match options.bit_depth { BitDepth::Eight => 8, BitDepth::Sixteen => 16 }) } else { Value::Null },
+        "gamma": options.gamma,
+        "encoding": match (format, options.gamma) {
+            ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
+            ("png", None) => "linear: code = round(v * max)".to_string(),
+            _ => match options.range { Range::Unit => "float32, linear 0..1".to_string(), Range::Psychopy => "float32, linear mapped to -1..1 (v*2-1)".to_string() },
+        },
+        "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },
+        "md5_float64_rounded8": md5,
+        "targets": output.targets.as_ref().map(|t| {
+            t.names.iter().enumerate().map(|(i, n)| json!({"label": i + 1, "name": n})).collect::<Vec<_>>()
+        }),
+        "notes": output.notes,
+        "files": files,
+        "conventions": io::conventions_json(),
+    })
+}

@@ -1,0 +1,275 @@
+//! Stimuli: every picture shadelab renders, from a benchmark sphere to Adelson's checker-shadow,
+//! behind one interface. A stimulus declares its parameters and default size; given resolved
+//! parameters, a geometry (size in degrees and pixels) and a seed, it returns linear luminance
+//! with its target mask and, where a surface exists, the ground-truth layers.
+
+mod export;
+mod surfaces;
+
+pub use export::{write_output, ExportOptions, Range};
+
+use crate::error::{Error, Result};
+use crate::gradient_space::Normal;
+use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
+use crate::params::{ParamSpec, Params};
+use crate::visual_size::{Geometry, SizeRequest};
+use serde::Deserialize;
+use serde_json::{Map, Value};
+
+/// What a stimulus is, for `list`, `describe` and the gallery.
+#[derive(Debug, Clone)]
+pub struct Info {
+    /// The name used on the command line.
+    pub name: &'static str,
+    /// One line: what it shows.
+    pub summary: &'static str,
+    /// Its parameters.
+    pub params: Vec<ParamSpec>,
+    /// Default (width, height) in degrees.
+    pub default_visual_size: (f64, f64),
+    /// Default pixels per degree.
+    pub default_ppd: f64,
+}
+
+/// A fully resolved request to render a stimulus.
+#[derive(Debug, Clone)]
+pub struct Request {
+    /// Checked parameters, defaults filled in.
+    pub params: Params,
+    /// Size in pixels and degrees.
+    pub geometry: Geometry,
+    /// Seed for anything random (layouts, jitter).
+    pub seed: u64,
+}
+
+/// Luminance, gray or colour, linear 0..1.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Pixels {
+    /// One channel.
+    Gray(Image),
+    /// Three channels (linear RGB).
+    Rgb(RgbImage),
+}
+
+impl Pixels {
+    /// Width and height.
+    pub fn size(&self) -> (usize, usize) {
+        match self {
+            Pixels::Gray(i) => (i.width(), i.height()),
+            Pixels::Rgb(i) => (i.width(), i.height()),
+        }
+    }
+
+    /// The luminance (Rec. 709 weights for colour).
+    pub fn luminance(&self) -> Image {
+        match self {
+            Pixels::Gray(i) => i.clone(),
+            Pixels::Rgb(i) => i.map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]),
+        }
+    }
+}
+
+/// A target mask: 0 = background, label k = `names[k − 1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Targets {
+    /// The label map.
+    pub labels: Labels,
+    /// The names of labels 1..N.
+    pub names: Vec<String>,
+}
+
+/// Ground truth for stimuli made by rendering a surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceLayers {
+    /// Depth toward the viewer, pixel units.
+    pub depth: Image,
+    /// Unit normals.
+    pub normals: Grid<Normal>,
+    /// Where the surface is (the target mask records it for the file).
+    pub mask: Mask,
+    /// Reflectance factor per pixel, where the stimulus varies it.
+    pub albedo: Option<Image>,
+    /// Shading R(n) before albedo and cast shadows, where distinct from the image.
+    pub shading: Option<Image>,
+}
+
+/// What a stimulus produces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// The picture.
+    pub pixels: Pixels,
+    /// Named target regions, if the stimulus has any.
+    pub targets: Option<Targets>,
+    /// Ground-truth surface layers, if the stimulus is a rendered surface.
+    pub surface: Option<SurfaceLayers>,
+    /// An SVG rendering, for stimuli that are vector by nature (in pixel units).
+    pub svg: Option<String>,
+    /// Extra facts worth recording in the sidecar (e.g. the shared value of checker squares).
+    pub notes: Map<String, Value>,
+}
+
+impl Output {
+    /// A gray output with no targets, layers or notes.
+    pub fn gray(image: Image) -> Self {
+        Output {
+            pixels: Pixels::Gray(image),
+            targets: None,
+            surface: None,
+            svg: None,
+            notes: Map::new(),
+        }
+    }
+}
+
+/// A stimulus that shadelab can render.
+pub trait Stimulus: Send + Sync {
+    /// Its name, parameters and defaults.
+    fn info(&self) -> Info;
+
+    /// Renders it.
+    fn generate(&self, request: &Request) -> Result<Output>;
+
+    /// The size in pixels the stimulus has by nature (a depth map's own size), used when the
+    /// user gives no size in pixels.
+    fn natural_shape(&self, _params: &Params) -> Result<Option<(usize, usize)>> {
+        Ok(None)
+    }
+}
+
+/// Every stimulus, in the order `list` shows them.
+pub fn all() -> Vec<Box<dyn Stimulus>> {
+    let mut v: Vec<Box<dyn Stimulus>> = Vec::new();
+    v.extend(surfaces::all());
+    v
+}
+
+/// The names of every stimulus.
+pub fn names() -> Vec<&'static str> {
+    all().iter().map(|s| s.info().name).collect()
+}
+
+/// The stimulus called `name`; the error lists the valid names.
+pub fn find(name: &str) -> Result<Box<dyn Stimulus>> {
+    all()
+        .into_iter()
+        .find(|s| s.info().name == name)
+        .ok_or_else(|| Error::unknown("stimulus", name, &names()))
+}
+
+/// A stimulus spec file: `{"stimulus": NAME, "params": {...}, "visual_size": [w, h],
+/// "ppd": N, "shape": [w, h], "seed": S}`; everything but `stimulus` is optional.
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// The stimulus name.
+    pub stimulus: String,
+    /// Parameter values (checked against the stimulus's declarations).
+    #[serde(default)]
+    pub params: Map<String, Value>,
+    /// Visual size (width, height) in degrees.
+    #[serde(default)]
+    pub visual_size: Option<(f64, f64)>,
+    /// Pixels per degree.
+    #[serde(default)]
+    pub ppd: Option<f64>,
+    /// Size (width, height) in pixels.
+    #[serde(default)]
+    pub shape: Option<(usize, usize)>,
+    /// Random seed.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// A caption for the gallery: what a viewer sees and why.
+    #[serde(default)]
+    pub caption: Option<String>,
+    /// A title for the gallery.
+    #[serde(default)]
+    pub title: Option<String>,
+}
+
+impl Spec {
+    /// Reads and checks a spec file.
+    pub fn load(path: &std::path::Path) -> Result<Spec> {
+        let bytes = crate::io::read_bytes(path)?;
+        serde_json::from_slice(&bytes)
+            .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))
+    }
+
+    /// The size request this spec makes.
+    pub fn size(&self) -> SizeRequest {
+        SizeRequest {
+            visual_size: self.visual_size,
+            ppd: self.ppd,
+            shape: self.shape,
+        }
+    }
+}
+
+/// Resolves a render: finds the stimulus, checks the parameters against its declarations and
+/// resolves the size triple against its defaults.
+pub fn prepare(
+    name: &str,
+    given: &Map<String, Value>,
+    size: &SizeRequest,
+    seed: u64,
+    max_pixels: usize,
+) -> Result<(Box<dyn Stimulus>, Request)> {
+    let stimulus = find(name)?;
+    let info = stimulus.info();
+    let params =
+        Params::resolve(&info.params, given).map_err(|e| Error::invalid(format!("{name}: {e}")))?;
+    let mut size = *size;
+    if size.shape.is_none() && !(size.visual_size.is_some() && size.ppd.is_some()) {
+        size.shape = stimulus.natural_shape(&params)?;
+    }
+    let geometry = size.resolve(info.default_visual_size, info.default_ppd, max_pixels)?;
+    Ok((
+        stimulus,
+        Request {
+            params,
+            geometry,
+            seed,
+        },
+    ))
+}
+
+/// Prepares and renders in one step.
+pub fn generate(
+    name: &str,
+    given: &Map<String, Value>,
+    size: &SizeRequest,
+    seed: u64,
+    max_pixels: usize,
+) -> Result<(Request, Output)> {
+    let (stimulus, request) = prepare(name, given, size, seed, max_pixels)?;
+    let output = stimulus.generate(&request)?;
+    Ok((request, output))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_described() {
+        let names = names();
+        let mut sorted = names.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), names.len());
+        for s in all() {
+            let info = s.info();
+            assert!(!info.summary.is_empty());
+            // Every default must pass its own check.
+            Params::resolve(&info.params, &Map::new()).unwrap();
+        }
+    }
+
+    #[test]
+    fn unknown_names_list_the_valid_ones() {
+        let e = find("teapot").err().unwrap().to_string();
+        assert!(e.contains("teapot") && e.contains("sphere"), "{e}");
+        let spec: std::result::Result<Spec, _> =
+            serde_json::from_str(r#"{"stimulus":"sphere","colour":1}"#);
+        assert!(spec.is_err());
+    }
+}
