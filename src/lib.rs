@@ -13,6 +13,7 @@
 //! the light, or tilt/slant in degrees with tilt 0 = from above and +90 = from the left.
 #![deny(missing_docs)]
 
+pub mod colormap;
 pub mod error;
 pub mod gradient_space;
 pub mod grid;

@@ -4,6 +4,7 @@
 //! with its target mask and, where a surface exists, the ground-truth layers.
 
 mod export;
+mod reflectance_map;
 mod surfaces;
 
 pub use export::{write_output, ExportOptions, Range};
@@ -140,6 +141,7 @@ pub trait Stimulus: Send + Sync {
 pub fn all() -> Vec<Box<dyn Stimulus>> {
     let mut v: Vec<Box<dyn Stimulus>> = Vec::new();
     v.extend(surfaces::all());
+    v.extend(reflectance_map::all());
     v
 }
 

@@ -1,0 +1,50 @@
+//! Perceptually uniform colour maps for figures (viridis), as linear RGB.
+
+/// Viridis (van der Walt & Smith, matplotlib), sampled at 9 evenly spaced points in sRGB.
+const VIRIDIS: [[f64; 3]; 9] = [
+    [0.267004, 0.004874, 0.329415],
+    [0.278826, 0.175490, 0.483397],
+    [0.229739, 0.322361, 0.545706],
+    [0.172719, 0.448791, 0.557885],
+    [0.127568, 0.566949, 0.550556],
+    [0.157851, 0.683765, 0.501686],
+    [0.369214, 0.788888, 0.382914],
+    [0.678489, 0.863742, 0.189503],
+    [0.993248, 0.906157, 0.143936],
+];
+
+fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The viridis colour of `t` in 0..1 (clamped), as linear RGB, so that writing it through the
+/// usual display gamma reproduces the published map.
+pub fn viridis(t: f64) -> [f64; 3] {
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+    let x = t * (VIRIDIS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(VIRIDIS.len() - 2);
+    let u = x - i as f64;
+    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
+    [0, 1, 2].map(|k| srgb_to_linear(a[k] + u * (b[k] - a[k])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ends_and_monotone_luminance() {
+        let lum = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        let mut last = -1.0;
+        for i in 0..=100 {
+            let l = lum(viridis(i as f64 / 100.0));
+            assert!(l > last, "viridis luminance rises");
+            last = l;
+        }
+        assert!((viridis(1.0)[0] - srgb_to_linear(0.993248)).abs() < 1e-12);
+    }
+}
