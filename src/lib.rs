@@ -13,16 +13,20 @@
 //! the light, or tilt/slant in degrees with tilt 0 = from above and +90 = from the left.
 #![deny(missing_docs)]
 
+pub mod boundary;
 pub mod colormap;
 pub mod error;
 pub mod gradient_space;
 pub mod grid;
+pub mod integrate;
 pub mod io;
 pub mod light;
+pub mod light_estimation;
 pub mod params;
 pub mod random;
 pub mod reflectance;
 pub mod render;
+pub mod solver;
 pub mod stimulus;
 pub mod surface;
 pub mod visual_size;

@@ -1,3 +1,4 @@
 //! shadelab's integration tests: one binary (one link step) with a module per area.
 
 mod cli;
+mod solve;

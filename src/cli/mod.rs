@@ -5,6 +5,7 @@
 mod describe;
 mod progress;
 mod render;
+mod solve;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -47,6 +48,8 @@ enum Command {
     List,
     /// Show a stimulus's parameters with defaults and ranges.
     Describe(describe::Args),
+    /// Recover surface normals and depth from one shaded image (shape from shading).
+    Solve(solve::Args),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -139,5 +142,6 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Render(args) => render::run(args, global),
         Command::List => describe::list(),
         Command::Describe(args) => describe::run(args),
+        Command::Solve(args) => solve::run(args, global),
     }
 }

@@ -1,0 +1,148 @@
+//! Integration of gradient fields into depth maps.
+//!
+//! Two integrators, both least squares:
+//! - [`FrankotChellappa`] projects the gradient field onto the integrable (periodic) surfaces in
+//!   the Fourier domain. Fast (two real 2-D FFTs), but it assumes the field wraps around the
+//!   image borders, and it knows nothing of a mask.
+//! - [`integrate_gradients`] and [`integrate_differences`] solve the masked Poisson equation by
+//!   conjugate gradients: only differences between neighbouring pixels that are both inside the
+//!   mask count, so the silhouette and the image border are free (natural) boundaries. This is
+//!   the one to use on an object with a silhouette, and it takes any difference field (log
+//!   luminance for a lightness model, for instance), not only surface slopes.
+//!
+//! Gradients are in world axes: ∂z/∂x along the image's columns (x right) and ∂z/∂y upward
+//! (y up, so ∂z/∂y = −∂z/∂row), in depth units per pixel. A unit normal gives ∂z/∂x = −n_x/n_z
+//! and ∂z/∂y = −n_y/n_z ([`gradients_from_normals`]). [`mesh_obj`] writes a depth map as a
+//! triangle mesh.
+
+mod fourier;
+mod mesh;
+mod poisson;
+
+pub use fourier::FrankotChellappa;
+pub use mesh::mesh_obj;
+pub use poisson::{integrate_differences, integrate_gradients, Integration, PoissonOptions};
+
+use crate::error::{Error, Result};
+use crate::gradient_space::Normal;
+use crate::grid::{Grid, Image, Mask};
+
+/// The smallest n_z used when turning normals into slopes: at the occluding limb n_z → 0 and
+/// the slope is infinite, so slopes are capped at 1/0.05 = 20.
+pub const DEFAULT_MIN_NZ: f64 = 0.05;
+
+/// The surface slopes (∂z/∂x, ∂z/∂y) of unit normals inside `mask`, with n_z clamped to at least
+/// `min_nz` (0 outside the mask).
+pub fn gradients_from_normals(
+    normals: &Grid<Normal>,
+    mask: &Mask,
+    min_nz: f64,
+) -> Result<(Image, Image)> {
+    if !normals.same_size(mask) {
+        return Err(Error::invalid(format!(
+            "normals are {}x{} but the mask is {}x{}",
+            normals.width(),
+            normals.height(),
+            mask.width(),
+            mask.height()
+        )));
+    }
+    if !(min_nz.is_finite() && min_nz > 0.0) {
+        return Err(Error::invalid(format!(
+            "min_nz = {min_nz} must be a positive number"
+        )));
+    }
+    let slope = |pick: fn(&Normal) -> f64| {
+        Grid::from_fn(normals.width(), normals.height(), |c, r| {
+            if *mask.get(c, r) {
+                let n = normals.get(c, r);
+                -pick(n) / n.z.max(min_nz)
+            } else {
+                0.0
+            }
+        })
+    };
+    Ok((slope(|n| n.x), slope(|n| n.y)))
+}
+
+/// A least-squares fit truth ≈ scale·estimate + offset over a mask, and its residual.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScaleOffsetFit {
+    /// The fitted scale.
+    pub scale: f64,
+    /// The fitted offset.
+    pub offset: f64,
+    /// Root-mean-square residual of the fit.
+    pub rmse: f64,
+}
+
+/// Fits `truth ≈ scale·estimate + offset` over `mask` by least squares: the depth error left
+/// once the unknown scale and offset of a reconstruction are taken out.
+pub fn fit_scale_offset(estimate: &Image, truth: &Image, mask: &Mask) -> Result<ScaleOffsetFit> {
+    if !estimate.same_size(truth) || !estimate.same_size(mask) {
+        return Err(Error::invalid(
+            "estimate, truth and mask must have the same size",
+        ));
+    }
+    let pairs: Vec<(f64, f64)> = estimate
+        .data()
+        .iter()
+        .zip(truth.data())
+        .zip(mask.data())
+        .filter(|(_, &m)| m)
+        .map(|((&e, &t), _)| (e, t))
+        .collect();
+    if pairs.is_empty() {
+        return Err(Error::invalid("the mask is empty: nothing to fit"));
+    }
+    let n = pairs.len() as f64;
+    let (me, mt) = pairs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (e, t)| (a + e / n, b + t / n));
+    let (mut see, mut set) = (0.0, 0.0);
+    for (e, t) in &pairs {
+        see += (e - me) * (e - me);
+        set += (e - me) * (t - mt);
+    }
+    let scale = if see > 0.0 { set / see } else { 0.0 };
+    let offset = mt - scale * me;
+    let sse: f64 = pairs
+        .iter()
+        .map(|(e, t)| {
+            let r = scale * e + offset - t;
+            r * r
+        })
+        .sum();
+    Ok(ScaleOffsetFit {
+        scale,
+        offset,
+        rmse: (sse / n).sqrt(),
+    })
+}
+
+/// Checks that two gradient grids match each other (and `width` × `height` when given) and
+/// hold only finite numbers.
+fn check_gradients(dz_dx: &Image, dz_dy: &Image) -> Result<()> {
+    if !dz_dx.same_size(dz_dy) {
+        return Err(Error::invalid(format!(
+            "gradient fields differ in size: {}x{} and {}x{}",
+            dz_dx.width(),
+            dz_dx.height(),
+            dz_dy.width(),
+            dz_dy.height()
+        )));
+    }
+    for (name, grid) in [("x", dz_dx), ("y", dz_dy)] {
+        if let Some(i) = grid.data().iter().position(|v| !v.is_finite()) {
+            return Err(Error::invalid(format!(
+                "gradient along {name} at column {}, row {} is not a finite number",
+                i % grid.width(),
+                i / grid.width()
+            )));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

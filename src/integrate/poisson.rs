@@ -1,0 +1,295 @@
+//! Mask-aware least-squares integration: the masked Poisson equation by conjugate gradients.
+
+use super::check_gradients;
+use crate::error::{Error, Result};
+use crate::grid::{Grid, Image, Mask};
+
+/// Stopping rule of the conjugate-gradient solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoissonOptions {
+    /// Stop when the residual norm falls below `tol` times the right-hand side's (> 0).
+    pub tol: f64,
+    /// Stop after this many iterations (≥ 1).
+    pub max_iter: usize,
+}
+
+impl Default for PoissonOptions {
+    fn default() -> Self {
+        PoissonOptions {
+            tol: 1e-9,
+            max_iter: 50_000,
+        }
+    }
+}
+
+/// A depth map and how its solve went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Integration {
+    /// Depth inside the mask (0 outside); each connected part of the mask has zero mean, since
+    /// differences say nothing about the offset between parts.
+    pub depth: Image,
+    /// Conjugate-gradient iterations.
+    pub iterations: usize,
+    /// Final residual norm relative to the right-hand side.
+    pub relative_residual: f64,
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+}
+
+/// The depth z on `mask` whose neighbour differences best match, in least squares, the
+/// `right` and `down` differences: `right` at (c, r) is the wanted z(c+1, r) − z(c, r) and
+/// `down` at (c, r) the wanted z(c, r+1) − z(c, r) (row r+1 is below row r). Only pairs of
+/// pixels both inside the mask count.
+///
+/// This is the general entry point: a lightness model can pass thresholded differences of log
+/// luminance here; [`integrate_gradients`] builds the differences from a slope field.
+///
+/// The normal equations are the Poisson equation L z = b with L the graph Laplacian of the
+/// mask's 4-neighbour graph (natural boundary conditions on the silhouette and the image
+/// border), solved by conjugate gradients with a diagonal preconditioner. L is singular (a
+/// constant can be added to each connected part); the solution is fixed by zero mean per part.
+/// Every sum is taken in a fixed order: the result does not depend on threads.
+pub fn integrate_differences(
+    right: &Image,
+    down: &Image,
+    mask: &Mask,
+    options: &PoissonOptions,
+) -> Result<Integration> {
+    check_gradients(right, down)?;
+    if !right.same_size(mask) {
+        return Err(Error::invalid(format!(
+            "difference fields are {}x{} but the mask is {}x{}",
+            right.width(),
+            right.height(),
+            mask.width(),
+            mask.height()
+        )));
+    }
+    if !(options.tol.is_finite() && options.tol > 0.0) || options.max_iter == 0 {
+        return Err(Error::invalid(format!(
+            "integration tolerance {} must be positive and max_iter {} at least 1",
+            options.tol, options.max_iter
+        )));
+    }
+    if mask.count() == 0 {
+        return Err(Error::invalid(
+            "the mask is empty: there is nothing to integrate",
+        ));
+    }
+    let (w, h) = (mask.width(), mask.height());
+    let problem = Laplacian::new(mask);
+    let n = problem.pixels.len();
+    // b_k = Σ over pairs (i → k) of d − Σ over pairs (k → j) of d, for d the wanted z_j − z_i.
+    let mut b = vec![0.0; n];
+    for (k, &p) in problem.pixels.iter().enumerate() {
+        let (c, r) = (p % w, p / w);
+        let inside = |cc: usize, rr: usize| *mask.get(cc, rr);
+        if c + 1 < w && inside(c + 1, r) {
+            b[k] -= right.get(c, r);
+        }
+        if c > 0 && inside(c - 1, r) {
+            b[k] += right.get(c - 1, r);
+        }
+        if r + 1 < h && inside(c, r + 1) {
+            b[k] -= down.get(c, r);
+        }
+        if r > 0 && inside(c, r - 1) {
+            b[k] += down.get(c, r - 1);
+        }
+    }
+    let (mut z, iterations, relative_residual, converged) = problem.solve(&b, options);
+    problem.remove_part_means(&mut z);
+    let mut depth = Grid::new(w, h, 0.0);
+    for (k, &p) in problem.pixels.iter().enumerate() {
+        depth.data_mut()[p] = z[k];
+    }
+    Ok(Integration {
+        depth,
+        iterations,
+        relative_residual,
+        converged,
+    })
+}
+
+/// The depth on `mask` whose slopes best match (`dz_dx`, `dz_dy`) in least squares (world axes:
+/// x right, y up; see the module documentation). The difference between two neighbours is
+/// taken as the mean of their slopes (the trapezoid rule); see [`integrate_differences`].
+pub fn integrate_gradients(
+    dz_dx: &Image,
+    dz_dy: &Image,
+    mask: &Mask,
+    options: &PoissonOptions,
+) -> Result<Integration> {
+    check_gradients(dz_dx, dz_dy)?;
+    if !dz_dx.same_size(mask) {
+        return Err(Error::invalid(format!(
+            "gradient fields are {}x{} but the mask is {}x{}",
+            dz_dx.width(),
+            dz_dx.height(),
+            mask.width(),
+            mask.height()
+        )));
+    }
+    let (w, h) = (mask.width(), mask.height());
+    let right = Grid::from_fn(w, h, |c, r| {
+        if c + 1 < w {
+            0.5 * (dz_dx.get(c, r) + dz_dx.get(c + 1, r))
+        } else {
+            0.0
+        }
+    });
+    // One row down is one pixel toward −y.
+    let down = Grid::from_fn(w, h, |c, r| {
+        if r + 1 < h {
+            -0.5 * (dz_dy.get(c, r) + dz_dy.get(c, r + 1))
+        } else {
+            0.0
+        }
+    });
+    integrate_differences(&right, &down, mask, options)
+}
+
+/// The graph Laplacian of a mask's 4-neighbour graph, over its pixels in row-major order.
+struct Laplacian {
+    /// Pixel index of each unknown.
+    pixels: Vec<usize>,
+    /// Unknown indices of each unknown's neighbours; missing ones point at index n, which
+    /// holds 0 in every vector the operator reads.
+    neighbours: Vec<[u32; 4]>,
+    /// Number of neighbours.
+    degree: Vec<f64>,
+}
+
+impl Laplacian {
+    fn new(mask: &Mask) -> Laplacian {
+        let (w, h) = (mask.width(), mask.height());
+        let mut index = vec![u32::MAX; w * h];
+        let mut pixels = Vec::new();
+        for (p, &m) in mask.data().iter().enumerate() {
+            if m {
+                index[p] = pixels.len() as u32;
+                pixels.push(p);
+            }
+        }
+        let missing = pixels.len() as u32;
+        let mut neighbours = Vec::with_capacity(pixels.len());
+        let mut degree = Vec::with_capacity(pixels.len());
+        for &p in &pixels {
+            let (c, r) = (p % w, p / w);
+            let mut nb = [missing; 4];
+            let mut k = 0;
+            let candidates = [
+                (c > 0).then(|| p - 1),
+                (c + 1 < w).then(|| p + 1),
+                (r > 0).then(|| p - w),
+                (r + 1 < h).then(|| p + w),
+            ];
+            for q in candidates.into_iter().flatten() {
+                if index[q] != u32::MAX {
+                    nb[k] = index[q];
+                    k += 1;
+                }
+            }
+            neighbours.push(nb);
+            degree.push(k as f64);
+        }
+        Laplacian {
+            pixels,
+            neighbours,
+            degree,
+        }
+    }
+
+    /// out = L x, for x holding n + 1 values (the last one 0).
+    fn apply(&self, x: &[f64], out: &mut [f64]) {
+        for (k, (nb, d)) in self.neighbours.iter().zip(&self.degree).enumerate() {
+            let [a, b, c, e] = *nb;
+            out[k] = d * x[k] - (x[a as usize] + x[b as usize] + x[c as usize] + x[e as usize]);
+        }
+    }
+
+    /// Preconditioned conjugate gradients from z = 0; returns (z, iterations, relative
+    /// residual, converged).
+    fn solve(&self, b: &[f64], options: &PoissonOptions) -> (Vec<f64>, usize, f64, bool) {
+        let n = b.len();
+        let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
+        let b_norm = dot(b, b).sqrt();
+        let mut z = vec![0.0; n];
+        if b_norm == 0.0 {
+            return (z, 0, 0.0, true);
+        }
+        // Isolated pixels have no equation (degree 0): their preconditioner entry is 0, which
+        // keeps them at 0 and out of the Krylov space.
+        let inv_degree: Vec<f64> = self
+            .degree
+            .iter()
+            .map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 })
+            .collect();
+        let mut r = b.to_vec();
+        let mut s: Vec<f64> = r.iter().zip(&inv_degree).map(|(r, m)| r * m).collect();
+        let mut p = s.clone();
+        p.push(0.0);
+        let mut lp = vec![0.0; n];
+        let mut rs = dot(&r, &s);
+        let target = options.tol * b_norm;
+        let mut residual = b_norm;
+        for iteration in 1..=options.max_iter {
+            self.apply(&p, &mut lp);
+            let curvature = dot(&p[..n], &lp);
+            if curvature <= 0.0 {
+                return (z, iteration - 1, residual / b_norm, residual <= target);
+            }
+            let alpha = rs / curvature;
+            for k in 0..n {
+                z[k] += alpha * p[k];
+                r[k] -= alpha * lp[k];
+            }
+            residual = dot(&r, &r).sqrt();
+            if residual <= target {
+                return (z, iteration, residual / b_norm, true);
+            }
+            for k in 0..n {
+                s[k] = r[k] * inv_degree[k];
+            }
+            let rs_next = dot(&r, &s);
+            let beta = rs_next / rs;
+            rs = rs_next;
+            for k in 0..n {
+                p[k] = s[k] + beta * p[k];
+            }
+        }
+        (z, options.max_iter, residual / b_norm, false)
+    }
+
+    /// Subtracts from z the mean of each connected part of the graph.
+    fn remove_part_means(&self, z: &mut [f64]) {
+        let n = z.len();
+        let mut part = vec![usize::MAX; n];
+        let mut stack = Vec::new();
+        let mut members = Vec::new();
+        for start in 0..n {
+            if part[start] != usize::MAX {
+                continue;
+            }
+            part[start] = start;
+            stack.push(start);
+            members.clear();
+            while let Some(k) = stack.pop() {
+                members.push(k);
+                for &q in &self.neighbours[k] {
+                    let q = q as usize;
+                    if q < n && part[q] == usize::MAX {
+                        part[q] = start;
+                        stack.push(q);
+                    }
+                }
+            }
+            // Sum in index order, whatever order the search visited them in.
+            members.sort_unstable();
+            let mean = members.iter().map(|&k| z[k]).sum::<f64>() / members.len() as f64;
+            for &k in &members {
+                z[k] -= mean;
+            }
+        }
+    }
+}

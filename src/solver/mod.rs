@@ -1,0 +1,562 @@
+//! The Ikeuchi–Horn shape-from-shading iteration in f–g space.
+//!
+//! Minimises e = e_S + λ·e_R over the unknown pixels of a [`BoundaryConditions`] domain, where
+//! e_S = ¼ Σ [(Δf)² + (Δg)²] over the 4-neighbour pairs inside the mask (Horn's discrete
+//! smoothness term; the ¼ makes λ mean what it means in Horn's update below) and
+//! e_R = Σ (I − R(f, g))² over the unknown pixels that are lit.
+//!
+//! Each sweep moves every unknown pixel, simultaneously (Jacobi), to
+//!
+//! f ← f̄ + λ·(4/k)·(I − R)·∂R/∂f,  g ← ḡ + λ·(4/k)·(I − R)·∂R/∂g,
+//!
+//! with f̄, ḡ the mean over its k neighbours in the domain (k = 4 inside; fewer where the domain
+//! has a free edge, which is the natural boundary condition). [`Method::Jacobi`] evaluates R
+//! and its derivatives at (f̄, ḡ), as in Horn's *Robot Vision*: a checkerboard error is averaged
+//! away before R sees it, and the sweep is stable while λ·R_f² < 2. [`Method::Literal`]
+//! evaluates them at the pixel's current (f, g), as the update is often printed; there the
+//! checkerboard mode is multiplied by about 1 + λ·R_f² every sweep and the iteration blows up.
+//!
+//! Pixels in attached shadow (I at or below the reflectance map's ambient level) say nothing
+//! about their orientation and carry smoothness only. Unknown pixels start at (0, 0), facing
+//! the viewer. The iteration stops when the largest change of f or g in a sweep falls below
+//! the tolerance, or after the maximum number of sweeps.
+
+use crate::boundary::{boundary_conditions, Boundary, BoundaryConditions, Role};
+use crate::error::{Error, Result};
+use crate::gradient_space::{normal_from_fg, Normal};
+use crate::grid::{Grid, Image, Mask};
+use crate::reflectance::ReflectanceMap;
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use std::fmt;
+use std::str::FromStr;
+
+/// How the reflectance map enters each sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// R, ∂R/∂f, ∂R/∂g at the neighbour average (f̄, ḡ): stable (the default).
+    #[default]
+    Jacobi,
+    /// R, ∂R/∂f, ∂R/∂g at the current (f, g): the form often printed, which is unstable; kept
+    /// to demonstrate that.
+    Literal,
+}
+
+/// The names of the methods, as `--method` spells them.
+pub const METHOD_NAMES: &[&str] = &["jacobi", "literal"];
+
+impl FromStr for Method {
+    type Err = Error;
+    fn from_str(name: &str) -> Result<Self> {
+        match name {
+            "jacobi" => Ok(Method::Jacobi),
+            "literal" => Ok(Method::Literal),
+            other => Err(Error::unknown("solver method", other, METHOD_NAMES)),
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Method::Jacobi => "jacobi",
+            Method::Literal => "literal",
+        })
+    }
+}
+
+/// The parameters of a solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveOptions {
+    /// Weight λ of the brightness term (> 0). Larger trusts the image more; the Jacobi sweep
+    /// needs λ·R_f² < 2, about λ < 2 for a Lambertian surface of albedo 1.
+    pub lambda: f64,
+    /// Stop when the largest change of f or g in a sweep is below this (> 0).
+    pub tol: f64,
+    /// Stop after this many sweeps (≥ 1).
+    pub max_iter: usize,
+    /// Where R is evaluated.
+    pub method: Method,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions {
+            lambda: 1.0,
+            tol: 1e-6,
+            max_iter: 100_000,
+            method: Method::Jacobi,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// Checks every parameter, naming the bad one.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+            return Err(Error::invalid(format!(
+                "lambda = {} must be a positive number",
+                self.lambda
+            )));
+        }
+        if !(self.tol.is_finite() && self.tol > 0.0) {
+            return Err(Error::invalid(format!(
+                "tol = {} must be a positive number",
+                self.tol
+            )));
+        }
+        if self.max_iter == 0 {
+            return Err(Error::invalid("max-iter must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Where a running solve stands; passed to the progress callback after every sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Sweeps done.
+    pub iteration: usize,
+    /// The most sweeps the solve will do.
+    pub max_iter: usize,
+    /// The largest change of f or g in the last sweep.
+    pub last_update: f64,
+}
+
+/// The result of a solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// Stereographic f at every pixel (0 outside the mask).
+    pub f: Image,
+    /// Stereographic g at every pixel (0 outside the mask).
+    pub g: Image,
+    /// Unit normals from (f, g); (0, 0, 1) outside the mask.
+    pub normals: Grid<Normal>,
+    /// Sweeps done.
+    pub iterations: usize,
+    /// Whether the last update fell below the tolerance.
+    pub converged: bool,
+    /// Whether the iteration blew up (an update larger than [`DIVERGENCE_UPDATE`], or not a
+    /// number); the values are then meaningless.
+    pub diverged: bool,
+    /// The smoothness term e_S at the end.
+    pub smoothness_energy: f64,
+    /// The brightness term e_R at the end.
+    pub brightness_energy: f64,
+    /// The largest change of f or g in the last sweep.
+    pub last_update: f64,
+    /// The number of unknown pixels.
+    pub unknowns: usize,
+}
+
+/// A change of f or g larger than this in one sweep means the iteration has blown up: the
+/// whole visible hemisphere spans |(f, g)| ≤ 2, and a stable sweep moves a pixel by less than
+/// its distance to the neighbour average.
+pub const DIVERGENCE_UPDATE: f64 = 8.0;
+
+/// Unknowns per parallel work item. Fixed, so the work split (and the result) does not depend
+/// on the number of threads.
+const CHUNK: usize = 4096;
+
+/// Below this many unknowns a sweep runs on one thread: the split costs more than it saves.
+const PARALLEL_MIN: usize = 32_768;
+
+/// One unknown pixel: where its neighbours' values are, and its data term.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    /// Value slots of the 4 neighbours; missing neighbours point at the slot that holds 0.
+    neighbours: [u32; 4],
+    /// 1/k for k neighbours in the domain (0 for an isolated pixel, which stays at (0, 0)).
+    inv_k: f64,
+    /// λ·4/k for lit pixels, 0 in attached shadow.
+    data_weight: f64,
+    /// The image brightness.
+    intensity: f64,
+}
+
+/// An Ikeuchi–Horn solver for images of one size; its buffers are allocated once and reused
+/// by every [`Solver::solve`].
+#[derive(Debug, Clone)]
+pub struct Solver {
+    width: usize,
+    height: usize,
+    /// Value slot of each pixel (unknowns first, then fixed pixels, then the zero slot).
+    slot: Vec<u32>,
+    /// Pixel index of each unknown.
+    pixels: Vec<u32>,
+    nodes: Vec<Node>,
+    cur_f: Vec<f64>,
+    cur_g: Vec<f64>,
+    next_f: Vec<f64>,
+    next_g: Vec<f64>,
+}
+
+const NO_SLOT: u32 = u32::MAX;
+
+impl Solver {
+    /// A solver for `width` × `height` images.
+    pub fn new(width: usize, height: usize) -> Result<Solver> {
+        crate::grid::check_size(width, height, crate::grid::DEFAULT_MAX_PIXELS)?;
+        let n = width * height;
+        if n >= NO_SLOT as usize {
+            return Err(Error::invalid(format!(
+                "image size {width}x{height} is too large for the solver"
+            )));
+        }
+        Ok(Solver {
+            width,
+            height,
+            slot: vec![NO_SLOT; n],
+            pixels: Vec::with_capacity(n),
+            nodes: Vec::with_capacity(n),
+            cur_f: Vec::with_capacity(n + 1),
+            cur_g: Vec::with_capacity(n + 1),
+            next_f: Vec::with_capacity(n + 1),
+            next_g: Vec::with_capacity(n + 1),
+        })
+    }
+
+    /// Width of the images this solver takes.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height of the images this solver takes.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Recovers surface normals from `image` on `mask` under `reflectance`, with the boundary
+    /// condition `boundary`.
+    ///
+    /// Fails on sizes that differ from the solver's, non-finite brightness, an empty mask, a
+    /// light not strictly in front of the surface (z ≤ 0) or bad options.
+    pub fn solve(
+        &mut self,
+        image: &Image,
+        mask: &Mask,
+        boundary: &Boundary,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+    ) -> Result<Solution> {
+        self.solve_with_progress(image, mask, boundary, reflectance, options, &mut |_| {})
+    }
+
+    /// [`Solver::solve`], calling `progress` after every sweep.
+    pub fn solve_with_progress(
+        &mut self,
+        image: &Image,
+        mask: &Mask,
+        boundary: &Boundary,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Solution> {
+        options.validate()?;
+        let (w, h) = (self.width, self.height);
+        for (what, gw, gh) in [
+            ("image", image.width(), image.height()),
+            ("mask", mask.width(), mask.height()),
+        ] {
+            if (gw, gh) != (w, h) {
+                return Err(Error::invalid(format!(
+                    "{what} is {gw}x{gh} but the solver was made for {w}x{h}"
+                )));
+            }
+        }
+        if let Some(i) = image.data().iter().position(|v| !v.is_finite()) {
+            return Err(Error::invalid(format!(
+                "image value at column {}, row {} is not a finite number",
+                i % w,
+                i / w
+            )));
+        }
+        let light = reflectance.light().direction();
+        if light.z <= 0.0 {
+            return Err(Error::invalid(format!(
+                "light ({:.4}, {:.4}, {:.4}) must have z > 0 (in front of the surface) for \
+                 shape from shading",
+                light.x, light.y, light.z
+            )));
+        }
+        let bc = boundary_conditions(mask, boundary)?;
+        self.solve_conditions(image, &bc, reflectance, options, progress)
+    }
+
+    /// [`Solver::solve_with_progress`] on a domain already built (checked sizes assumed).
+    fn solve_conditions(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Solution> {
+        let n_unknown = self.build(image, bc, reflectance, options.lambda);
+        let literal = options.method == Method::Literal;
+        let mut iterations = 0;
+        let mut last_update = 0.0;
+        let mut converged = n_unknown == 0;
+        let mut diverged = false;
+        while !converged && iterations < options.max_iter {
+            last_update = self.sweep(n_unknown, reflectance, literal);
+            std::mem::swap(&mut self.cur_f, &mut self.next_f);
+            std::mem::swap(&mut self.cur_g, &mut self.next_g);
+            iterations += 1;
+            progress(&Progress {
+                iteration: iterations,
+                max_iter: options.max_iter,
+                last_update,
+            });
+            if last_update.is_nan() || last_update > DIVERGENCE_UPDATE {
+                diverged = true;
+                break;
+            }
+            converged = last_update < options.tol;
+        }
+        Ok(self.solution(
+            image,
+            bc,
+            reflectance,
+            SolveStats {
+                iterations,
+                converged,
+                diverged,
+                last_update,
+                unknowns: n_unknown,
+            },
+        ))
+    }
+
+    /// Lays out the value slots and the nodes for `bc`; returns the number of unknowns.
+    fn build(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        lambda: f64,
+    ) -> usize {
+        let (w, h) = (self.width, self.height);
+        let roles = bc.roles.data();
+        self.slot.fill(NO_SLOT);
+        self.pixels.clear();
+        self.nodes.clear();
+        self.cur_f.clear();
+        self.cur_g.clear();
+        for (i, role) in roles.iter().enumerate() {
+            if *role == Role::Unknown {
+                self.slot[i] = self.pixels.len() as u32;
+                self.pixels.push(i as u32);
+                self.cur_f.push(0.0);
+                self.cur_g.push(0.0);
+            }
+        }
+        let n_unknown = self.pixels.len();
+        for (i, role) in roles.iter().enumerate() {
+            if *role == Role::Fixed {
+                self.slot[i] = self.cur_f.len() as u32;
+                self.cur_f.push(bc.f.data()[i]);
+                self.cur_g.push(bc.g.data()[i]);
+            }
+        }
+        let zero = self.cur_f.len() as u32;
+        self.cur_f.push(0.0);
+        self.cur_g.push(0.0);
+        self.next_f.clone_from(&self.cur_f);
+        self.next_g.clone_from(&self.cur_g);
+        let ambient = reflectance.ambient();
+        for &p in &self.pixels {
+            let p = p as usize;
+            let (col, row) = (p % w, p / w);
+            let mut neighbours = [zero; 4];
+            let mut k = 0;
+            let candidates = [
+                (col > 0).then(|| p - 1),
+                (col + 1 < w).then(|| p + 1),
+                (row > 0).then(|| p - w),
+                (row + 1 < h).then(|| p + w),
+            ];
+            for q in candidates.into_iter().flatten() {
+                if self.slot[q] != NO_SLOT {
+                    neighbours[k] = self.slot[q];
+                    k += 1;
+                }
+            }
+            let intensity = image.data()[p];
+            let (inv_k, data_weight) = if k == 0 {
+                (0.0, 0.0)
+            } else {
+                let lit = intensity > ambient;
+                (
+                    1.0 / k as f64,
+                    if lit { lambda * 4.0 / k as f64 } else { 0.0 },
+                )
+            };
+            self.nodes.push(Node {
+                neighbours,
+                inv_k,
+                data_weight,
+                intensity,
+            });
+        }
+        n_unknown
+    }
+
+    /// One Jacobi sweep from `cur` into `next`; returns the largest change (∞ for NaN).
+    fn sweep(&mut self, n_unknown: usize, reflectance: &dyn ReflectanceMap, literal: bool) -> f64 {
+        let (cur_f, cur_g) = (&self.cur_f[..], &self.cur_g[..]);
+        let next_f = &mut self.next_f[..n_unknown];
+        let next_g = &mut self.next_g[..n_unknown];
+        if n_unknown < PARALLEL_MIN {
+            return sweep_nodes(
+                &self.nodes,
+                0,
+                cur_f,
+                cur_g,
+                next_f,
+                next_g,
+                reflectance,
+                literal,
+            );
+        }
+        // max is exact and order-free, so the result does not depend on the thread count.
+        self.nodes
+            .par_chunks(CHUNK)
+            .zip(next_f.par_chunks_mut(CHUNK))
+            .zip(next_g.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(chunk, ((nodes, nf), ng))| {
+                sweep_nodes(
+                    nodes,
+                    chunk * CHUNK,
+                    cur_f,
+                    cur_g,
+                    nf,
+                    ng,
+                    reflectance,
+                    literal,
+                )
+            })
+            .reduce(|| 0.0, f64::max)
+    }
+
+    /// The solution grids and energies from the current values.
+    fn solution(
+        &self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        stats: SolveStats,
+    ) -> Solution {
+        let (w, h) = (self.width, self.height);
+        let value = |i: usize, of: &[f64]| match self.slot[i] {
+            NO_SLOT => 0.0,
+            s => of[s as usize],
+        };
+        let f = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f));
+        let g = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g));
+        let inside = |c: usize, r: usize| *bc.roles.get(c, r) != Role::Outside;
+        let normals = Grid::from_fn(w, h, |c, r| {
+            if inside(c, r) {
+                normal_from_fg(*f.get(c, r), *g.get(c, r))
+            } else {
+                Vector3::z()
+            }
+        });
+        let mut smoothness = 0.0;
+        for r in 0..h {
+            for c in 0..w {
+                if !inside(c, r) {
+                    continue;
+                }
+                let (f0, g0) = (*f.get(c, r), *g.get(c, r));
+                for (c2, r2) in [(c + 1, r), (c, r + 1)] {
+                    if c2 < w && r2 < h && inside(c2, r2) {
+                        let (df, dg) = (f.get(c2, r2) - f0, g.get(c2, r2) - g0);
+                        smoothness += 0.25 * (df * df + dg * dg);
+                    }
+                }
+            }
+        }
+        let ambient = reflectance.ambient();
+        let mut brightness = 0.0;
+        for &p in &self.pixels {
+            let p = p as usize;
+            let i = image.data()[p];
+            if i > ambient {
+                let e = i - reflectance.fg(f.data()[p], g.data()[p]).value;
+                brightness += e * e;
+            }
+        }
+        Solution {
+            f,
+            g,
+            normals,
+            iterations: stats.iterations,
+            converged: stats.converged,
+            diverged: stats.diverged,
+            smoothness_energy: smoothness,
+            brightness_energy: brightness,
+            last_update: stats.last_update,
+            unknowns: stats.unknowns,
+        }
+    }
+}
+
+/// Counters of a finished iteration.
+struct SolveStats {
+    iterations: usize,
+    converged: bool,
+    diverged: bool,
+    last_update: f64,
+    unknowns: usize,
+}
+
+/// The sweep over `nodes`, the unknowns `first..first + nodes.len()`; writes their new values
+/// into `next_f`, `next_g` (indexed from `first`) and returns the largest change.
+#[allow(clippy::too_many_arguments)]
+fn sweep_nodes(
+    nodes: &[Node],
+    first: usize,
+    cur_f: &[f64],
+    cur_g: &[f64],
+    next_f: &mut [f64],
+    next_g: &mut [f64],
+    reflectance: &dyn ReflectanceMap,
+    literal: bool,
+) -> f64 {
+    let mut largest: f64 = 0.0;
+    for (j, node) in nodes.iter().enumerate() {
+        let [a, b, c, d] = node.neighbours;
+        let (a, b, c, d) = (a as usize, b as usize, c as usize, d as usize);
+        let f_bar = (cur_f[a] + cur_f[b] + cur_f[c] + cur_f[d]) * node.inv_k;
+        let g_bar = (cur_g[a] + cur_g[b] + cur_g[c] + cur_g[d]) * node.inv_k;
+        let (f_old, g_old) = (cur_f[first + j], cur_g[first + j]);
+        let (mut f_new, mut g_new) = (f_bar, g_bar);
+        if node.data_weight != 0.0 {
+            let s = if literal {
+                reflectance.fg(f_old, g_old)
+            } else {
+                reflectance.fg(f_bar, g_bar)
+            };
+            let e = node.data_weight * (node.intensity - s.value);
+            f_new += e * s.d1;
+            g_new += e * s.d2;
+        }
+        next_f[j] = f_new;
+        next_g[j] = g_new;
+        for change in [(f_new - f_old).abs(), (g_new - g_old).abs()] {
+            // A NaN must register as a blow-up, not be skipped the way f64::max skips it.
+            if change.is_nan() {
+                largest = f64::INFINITY;
+            } else if change > largest {
+                largest = change;
+            }
+        }
+    }
+    largest
+}
+
+
+#[cfg(test)]
+mod tests;

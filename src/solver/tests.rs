@@ -1,0 +1,327 @@
+use super::*;
+use crate::gradient_space::angle_deg;
+use crate::integrate::{gradients_from_normals, integrate_gradients, PoissonOptions};
+use crate::light::Light;
+use crate::reflectance::Lambertian;
+use crate::render::{render, RenderOptions};
+use crate::surface::{gaussian, sphere, vase, Surface};
+
+/// The image of `surface` under a Lambertian surface of albedo 1 lit from `light`.
+fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
+    let map = Lambertian {
+        light,
+        albedo: 1.0,
+        ambient: 0.0,
+    };
+    let image = render(surface, &map, &RenderOptions::default()).image;
+    (image, map)
+}
+
+/// Mean angle (degrees) between the solution's normals and the truth over the unknowns.
+fn mean_error(solution: &Solution, truth: &Surface, boundary: &Boundary) -> f64 {
+    let bc = boundary_conditions(&truth.mask, boundary).unwrap();
+    let (mut sum, mut n) = (0.0, 0);
+    for (i, role) in bc.roles.data().iter().enumerate() {
+        if *role == Role::Unknown {
+            sum += angle_deg(&solution.normals.data()[i], &truth.normals.data()[i]);
+            n += 1;
+        }
+    }
+    assert_eq!(n, solution.unknowns);
+    sum / n as f64
+}
+
+/// Solves the image of `surface` under `light`, assuming `assumed` (λ = 1 and the defaults).
+fn solve(surface: &Surface, light: Light, assumed: Light, boundary: &Boundary) -> Solution {
+    let (image, _) = picture(surface, light);
+    let (_, map) = picture(surface, assumed);
+    let mut solver = Solver::new(surface.width(), surface.height()).unwrap();
+    solver
+        .solve(
+            &image,
+            &surface.mask,
+            boundary,
+            &map,
+            &SolveOptions::default(),
+        )
+        .unwrap()
+}
+
+/// Depth from the solution's normals by least squares on the mask.
+fn depth(solution: &Solution, mask: &Mask) -> Image {
+    let (dx, dy) = gradients_from_normals(&solution.normals, mask, 0.05).unwrap();
+    integrate_gradients(&dx, &dy, mask, &PoissonOptions::default())
+        .unwrap()
+        .depth
+}
+
+fn bump() -> Surface {
+    gaussian(128, 128, 0.12 * 128.0, 0.12 * 128.0, 0.0, 0.0).unwrap()
+}
+
+#[test]
+fn sphere_with_frontal_light_is_within_a_quarter_degree() {
+    let s = sphere(128, 128, 57.6).unwrap();
+    let sol = solve(&s, Light::FRONT, Light::FRONT, &Boundary::Occluding);
+    assert!(sol.converged && !sol.diverged && sol.last_update < 1e-6);
+    let err = mean_error(&sol, &s, &Boundary::Occluding);
+    assert!(
+        err <= 0.25,
+        "mean normal error {err}° after {} sweeps",
+        sol.iterations
+    );
+    // Normals are unit, and face the viewer outside the mask.
+    for (n, m) in sol.normals.data().iter().zip(s.mask.data()) {
+        assert!((n.norm() - 1.0).abs() < 1e-12);
+        if !m {
+            assert_eq!(*n, Vector3::z());
+        }
+    }
+}
+
+#[test]
+fn vase_with_frontal_light_is_within_three_and_a_half_degrees() {
+    let v = vase(128, 128).unwrap();
+    let sol = solve(&v, Light::FRONT, Light::FRONT, &Boundary::Occluding);
+    assert!(sol.converged);
+    let err = mean_error(&sol, &v, &Boundary::Occluding);
+    assert!(
+        err <= 3.5,
+        "mean normal error {err}° after {} sweeps",
+        sol.iterations
+    );
+}
+
+#[test]
+fn sphere_with_oblique_light_is_within_eleven_degrees() {
+    let s = sphere(128, 128, 57.6).unwrap();
+    let light = Light::from_vector(1.0, 0.0, 1.0).unwrap();
+    let sol = solve(&s, light, light, &Boundary::Occluding);
+    assert!(sol.converged);
+    let err = mean_error(&sol, &s, &Boundary::Occluding);
+    assert!(
+        err <= 11.0,
+        "mean normal error {err}° after {} sweeps",
+        sol.iterations
+    );
+}
+
+#[test]
+fn bump_on_a_plane_is_recovered_and_flips_with_the_light() {
+    let b = bump();
+    let light = Light::from_tilt_slant(0.0, 45.0).unwrap();
+    let sol = solve(&b, light, light, &Boundary::Flat);
+    assert!(sol.converged);
+    let err = mean_error(&sol, &b, &Boundary::Flat);
+    assert!(err <= 5.0, "mean normal error {err}°");
+    let z = depth(&sol, &b.mask);
+    let rim: Vec<f64> = (0..128)
+        .flat_map(|i| [(i, 0), (i, 127), (0, i), (127, i)])
+        .map(|(c, r)| *z.get(c, r))
+        .collect();
+    let rim_mean = rim.iter().sum::<f64>() / rim.len() as f64;
+    let centre = (z.get(63, 63) + z.get(64, 64) + z.get(63, 64) + z.get(64, 63)) / 4.0;
+    assert!(centre > rim_mean + 5.0, "centre {centre} vs rim {rim_mean}");
+    // Assuming the light from below, the same image is a dimple: the depth negated.
+    let below = solve(&b, light, light.opposite_tilt(), &Boundary::Flat);
+    let z2 = depth(&below, &b.mask);
+    let scale = z.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (a, b) in z.data().iter().zip(z2.data()) {
+        assert!((a + b).abs() <= 1e-6 * scale, "{a} vs {b}");
+    }
+    assert_eq!(below.iterations, sol.iterations);
+}
+
+#[test]
+fn the_literal_update_diverges_where_jacobi_converges() {
+    let s = sphere(64, 64, 28.8).unwrap();
+    let (image, map) = picture(&s, Light::FRONT);
+    let mut solver = Solver::new(64, 64).unwrap();
+    let mut options = SolveOptions {
+        max_iter: 5000,
+        ..SolveOptions::default()
+    };
+    let stable = solver
+        .solve(&image, &s.mask, &Boundary::Occluding, &map, &options)
+        .unwrap();
+    assert!(stable.converged && !stable.diverged);
+    assert!(mean_error(&stable, &s, &Boundary::Occluding) < 1.0);
+    options.method = Method::Literal;
+    let literal = solver
+        .solve(&image, &s.mask, &Boundary::Occluding, &map, &options)
+        .unwrap();
+    assert!(literal.diverged && !literal.converged, "{literal:?}");
+    assert!(
+        literal.iterations < 2000,
+        "took {} sweeps",
+        literal.iterations
+    );
+    assert!(literal.last_update > DIVERGENCE_UPDATE);
+}
+
+#[test]
+fn shadowed_pixels_carry_smoothness_only() {
+    // A sphere lit from the side at a steep slant: its far side is in attached shadow.
+    let s = sphere(64, 64, 28.8).unwrap();
+    let light = Light::from_tilt_slant(90.0, 70.0).unwrap();
+    let (image, map) = picture(&s, light);
+    let mut solver = Solver::new(64, 64).unwrap();
+    let options = SolveOptions {
+        tol: 1e-9,
+        ..SolveOptions::default()
+    };
+    let sol = solver
+        .solve(&image, &s.mask, &Boundary::Occluding, &map, &options)
+        .unwrap();
+    assert!(sol.converged);
+    let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+    let mut shadowed = 0;
+    for r in 1..63 {
+        for c in 1..63 {
+            if *bc.roles.get(c, r) != Role::Unknown || *image.get(c, r) > 0.0 {
+                continue;
+            }
+            shadowed += 1;
+            // At the fixed point a shadowed pixel is the mean of its neighbours: no data pull.
+            let f_bar = (sol.f.get(c - 1, r)
+                + sol.f.get(c + 1, r)
+                + sol.f.get(c, r - 1)
+                + sol.f.get(c, r + 1))
+                / 4.0;
+            assert!((sol.f.get(c, r) - f_bar).abs() < 1e-8);
+        }
+    }
+    assert!(shadowed > 50, "{shadowed} shadowed unknowns");
+}
+
+#[test]
+fn a_plane_facing_the_viewer_is_a_fixed_point_with_zero_energy() {
+    let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
+    let map = Lambertian {
+        light,
+        albedo: 1.0,
+        ambient: 0.0,
+    };
+    let image = Grid::new(20, 16, light.direction().z);
+    let mut solver = Solver::new(20, 16).unwrap();
+    let sol = solver
+        .solve(
+            &image,
+            &Grid::new(20, 16, true),
+            &Boundary::Flat,
+            &map,
+            &SolveOptions::default(),
+        )
+        .unwrap();
+    assert_eq!(sol.iterations, 1);
+    assert!(sol.converged && sol.last_update == 0.0);
+    assert_eq!(sol.smoothness_energy, 0.0);
+    assert!(sol.brightness_energy < 1e-28);
+    assert_eq!(sol.unknowns, 18 * 14);
+}
+
+#[test]
+fn progress_is_reported_every_sweep() {
+    let s = sphere(32, 32, 14.0).unwrap();
+    let (image, map) = picture(&s, Light::FRONT);
+    let mut solver = Solver::new(32, 32).unwrap();
+    let mut seen = Vec::new();
+    let sol = solver
+        .solve_with_progress(
+            &image,
+            &s.mask,
+            &Boundary::Occluding,
+            &map,
+            &SolveOptions::default(),
+            &mut |p| seen.push(*p),
+        )
+        .unwrap();
+    assert_eq!(seen.len(), sol.iterations);
+    for (i, p) in seen.iter().enumerate() {
+        assert_eq!(p.iteration, i + 1);
+        assert_eq!(p.max_iter, 100_000);
+    }
+    assert_eq!(seen.last().map(|p| p.last_update), Some(sol.last_update));
+}
+
+#[test]
+fn reused_buffers_carry_nothing_over_and_results_do_not_depend_on_threads() {
+    // Big enough for the parallel sweep; a few sweeps suffice to compare bits.
+    let b = gaussian(200, 200, 20.0, 20.0, 0.0, 0.0).unwrap();
+    let light = Light::from_tilt_slant(20.0, 40.0).unwrap();
+    let (image, map) = picture(&b, light);
+    let options = SolveOptions {
+        max_iter: 30,
+        ..SolveOptions::default()
+    };
+    let run = |threads: usize, solver: &mut Solver| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                solver
+                    .solve(&image, &b.mask, &Boundary::Flat, &map, &options)
+                    .unwrap()
+            })
+    };
+    let mut solver = Solver::new(200, 200).unwrap();
+    let one = run(1, &mut solver);
+    assert!(one.unknowns >= PARALLEL_MIN);
+    // The same solver, used first on another problem, then again.
+    let s = sphere(200, 200, 90.0).unwrap();
+    let (other, _) = picture(&s, Light::FRONT);
+    solver
+        .solve(&other, &s.mask, &Boundary::Occluding, &map, &options)
+        .unwrap();
+    let three = run(3, &mut solver);
+    assert_eq!(one, three);
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let s = sphere(16, 16, 6.0).unwrap();
+    let (image, map) = picture(&s, Light::FRONT);
+    let mut solver = Solver::new(16, 16).unwrap();
+    let ok = SolveOptions::default();
+    let occ = Boundary::Occluding;
+    let e = solver
+        .solve(&Grid::new(16, 15, 0.5), &s.mask, &occ, &map, &ok)
+        .unwrap_err();
+    assert!(e.to_string().contains("16x15"), "{e}");
+    assert!(solver
+        .solve(&image, &Grid::new(15, 16, true), &occ, &map, &ok)
+        .is_err());
+    let mut nan = image.clone();
+    *nan.get_mut(3, 5) = f64::NAN;
+    let e = solver.solve(&nan, &s.mask, &occ, &map, &ok).unwrap_err();
+    assert!(e.to_string().contains("column 3, row 5"), "{e}");
+    let empty = solver
+        .solve(&image, &Grid::new(16, 16, false), &occ, &map, &ok)
+        .unwrap_err();
+    assert!(empty.to_string().contains("empty"), "{empty}");
+    for bad in [
+        SolveOptions { lambda: 0.0, ..ok },
+        SolveOptions { lambda: -1.0, ..ok },
+        SolveOptions {
+            lambda: f64::NAN,
+            ..ok
+        },
+        SolveOptions { tol: 0.0, ..ok },
+        SolveOptions { max_iter: 0, ..ok },
+    ] {
+        assert!(solver.solve(&image, &s.mask, &occ, &map, &bad).is_err());
+    }
+    let grazing = Lambertian {
+        light: Light::from_vector(1.0, 0.0, 0.0).unwrap(),
+        albedo: 1.0,
+        ambient: 0.0,
+    };
+    let e = solver
+        .solve(&image, &s.mask, &occ, &grazing, &ok)
+        .unwrap_err();
+    assert!(e.to_string().contains("z > 0"), "{e}");
+    assert!("multigridx".parse::<Method>().is_err());
+    assert_eq!("literal".parse::<Method>().unwrap(), Method::Literal);
+    assert_eq!(Method::Jacobi.to_string(), "jacobi");
+}

@@ -1,0 +1,342 @@
+//! `shadelab solve` through the binary: the output folder, the report, and one-line errors
+//! that leave no half-filled folder behind.
+
+use crate::cli::{assert_error, scratch, shadelab};
+use shadelab::gradient_space::angle_deg;
+use shadelab::io::{self, BitDepth};
+use shadelab::reflectance::Lambertian;
+use shadelab::render::{render, RenderOptions};
+use shadelab::surface::{sphere, Surface};
+use shadelab::{Grid, Light};
+use std::path::Path;
+
+/// A 64² sphere (radius 28.8) lit from `light`, written as `image.npy` and `mask.png` in `dir`.
+fn sphere_inputs(dir: &Path, light: Light) -> Surface {
+    let s = sphere(64, 64, 28.8).unwrap();
+    let map = Lambertian {
+        light,
+        albedo: 1.0,
+        ambient: 0.0,
+    };
+    let image = render(&s, &map, &RenderOptions::default()).image;
+    io::write_image(&dir.join("image.npy"), &image).unwrap();
+    io::write_gray(&dir.join("image.png"), &image, BitDepth::Sixteen, None).unwrap();
+    io::write_mask(&dir.join("mask.png"), &s.mask).unwrap();
+    s
+}
+
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn solve_writes_the_outputs_and_recovers_a_sphere() {
+    let d = scratch("solve-ok");
+    let truth = sphere_inputs(&d, Light::FRONT);
+    let out = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "front",
+            "--mask",
+            "mask.png",
+            "--out",
+            "result",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result = d.join("result");
+    assert_eq!(
+        names_in(&result),
+        [
+            "depth.npy",
+            "depth.png",
+            "normals.npy",
+            "normals.png",
+            "report.json",
+            "surface.obj"
+        ]
+    );
+    let r = report(&result);
+    assert_eq!(r["solver"]["converged"], true);
+    assert!(r["solver"]["iterations"].as_u64().unwrap() > 10);
+    assert!(r["solver"]["last_update"].as_f64().unwrap() < 1e-6);
+    assert_eq!(r["parameters"]["lambda"], 1.0);
+    assert_eq!(r["parameters"]["method"], "jacobi");
+    assert_eq!(r["parameters"]["boundary"], "occluding");
+    assert_eq!(r["light"]["vector"], serde_json::json!([0.0, 0.0, 1.0]));
+    assert!(r["solver"]["smoothness_energy"].as_f64().unwrap() > 0.0);
+    assert!(r["seconds"].as_f64().unwrap() >= 0.0);
+
+    // The normals match the sphere's away from the rim, and face the viewer outside it.
+    let normals = io::read_normals(&result.join("normals.npy"), 1 << 20).unwrap();
+    let (mut sum, mut n) = (0.0, 0);
+    for (i, (got, want)) in normals.data().iter().zip(truth.normals.data()).enumerate() {
+        if !truth.mask.data()[i] {
+            assert!((got - nalgebra::Vector3::z()).norm() < 1e-6);
+        } else if want.z > 0.3 {
+            sum += angle_deg(got, want);
+            n += 1;
+        }
+    }
+    assert!(
+        sum / (n as f64) < 1.0,
+        "mean normal error {}°",
+        sum / n as f64
+    );
+
+    // Depth: lowest point of the object at 0, the centre highest, about the sphere's radius.
+    let depth = io::read_image(&result.join("depth.npy"), 1 << 20).unwrap();
+    let centre = *depth.get(32, 32);
+    assert!(centre > 20.0 && centre < 36.0, "centre depth {centre}");
+    assert_eq!(*depth.get(0, 0), 0.0);
+    let (png, info) = io::read_gray(&result.join("depth.png"), 1 << 20).unwrap();
+    assert_eq!(info.bit_depth, 16);
+    assert!((png.get(32, 32) - centre / r["depth_range"][1].as_f64().unwrap()).abs() < 1e-4);
+    let rgb = io::read_rgb(&result.join("normals.png"), 1 << 20).unwrap();
+    assert!((rgb.get(0, 0)[2] - 1.0).abs() < 1e-9 && (rgb.get(0, 0)[0] - 0.5).abs() < 0.01);
+    let obj = std::fs::read_to_string(result.join("surface.obj")).unwrap();
+    let vertices = obj.lines().filter(|l| l.starts_with("v ")).count();
+    assert_eq!(vertices, truth.mask.count());
+    assert!(obj.lines().filter(|l| l.starts_with("f ")).count() > vertices);
+
+    // Solving again into the same folder replaces it whole.
+    let again = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.png",
+            "--light",
+            "estimate",
+            "--mask",
+            "mask.png",
+            "--out",
+            "result",
+            "--quiet",
+        ],
+    );
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    let r = report(&result);
+    assert_eq!(r["light"]["estimated"], true);
+    assert_eq!(r["input"]["image_info"]["bit_depth"], 16);
+    assert!(r["light"]["estimate"]["albedo"].as_f64().unwrap() > 0.5);
+    assert_eq!(
+        names_in(&d),
+        ["image.npy", "image.png", "mask.png", "result"]
+    );
+}
+
+#[test]
+fn light_estimate_finds_the_tilt() {
+    let d = scratch("solve-estimate");
+    sphere_inputs(&d, Light::from_tilt_slant(90.0, 45.0).unwrap());
+    let out = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "estimate",
+            "--mask",
+            "mask.png",
+            "--boundary",
+            "occluding",
+            "--out",
+            "est",
+            "--max-iter",
+            "50",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = report(&d.join("est"));
+    let tilt = r["light"]["tilt_deg"].as_f64().unwrap();
+    assert!((tilt - 90.0).abs() < 1e-6, "tilt {tilt}");
+    let slant = r["light"]["slant_deg"].as_f64().unwrap();
+    assert!((slant - 45.0).abs() < 10.0, "slant {slant}");
+    // 50 sweeps are not enough: the run is reported as not converged, not as a failure.
+    assert_eq!(r["solver"]["converged"], false);
+    assert_eq!(r["solver"]["iterations"], 50);
+}
+
+/// Runs `args` in a fresh folder holding the sphere inputs, and checks the one-line error and
+/// that nothing but the inputs is left (no output folder, no temporary one).
+fn fails(name: &str, args: &[&str], code: i32, needle: &str) {
+    let d = scratch(name);
+    sphere_inputs(&d, Light::FRONT);
+    let mut nan = io::read_image(&d.join("image.npy"), 1 << 20).unwrap();
+    *nan.get_mut(5, 7) = f64::NAN;
+    io::write_f32(&d.join("nan.npy"), &[64, 64], nan.data().iter().copied()).unwrap();
+    *nan.get_mut(5, 7) = f64::INFINITY;
+    io::write_f32(&d.join("inf.npy"), &[64, 64], nan.data().iter().copied()).unwrap();
+    io::write_mask(&d.join("small.png"), &Grid::new(32, 64, true)).unwrap();
+    io::write_mask(&d.join("empty.png"), &Grid::new(64, 64, false)).unwrap();
+    std::fs::write(d.join("a-file"), "x").unwrap();
+    let before = names_in(&d);
+    let out = shadelab(&d, args);
+    assert_error(&out, code, needle);
+    assert_eq!(names_in(&d), before, "{args:?} left files behind");
+}
+
+#[test]
+fn bad_input_gives_one_line_and_no_output_folder() {
+    let base = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["solve", "image.npy", "--out", "result"];
+        v.extend_from_slice(extra);
+        v
+    };
+    fails(
+        "solve-size",
+        &base(&["--light", "front", "--mask", "small.png"]),
+        2,
+        "32x64",
+    );
+    fails(
+        "solve-empty",
+        &base(&["--light", "front", "--mask", "empty.png"]),
+        2,
+        "empty",
+    );
+    fails(
+        "solve-nan",
+        &["solve", "nan.npy", "--light", "front", "--out", "result"],
+        1,
+        "non-finite",
+    );
+    fails(
+        "solve-inf",
+        &["solve", "inf.npy", "--light", "front", "--out", "result"],
+        1,
+        "non-finite",
+    );
+    fails("solve-grazing", &base(&["--light", "1,0,0"]), 2, "z > 0");
+    fails(
+        "solve-behind",
+        &base(&["--light", "0,0,-1"]),
+        2,
+        "below the horizon",
+    );
+    fails(
+        "solve-lambda0",
+        &base(&["--light", "front", "--lambda", "0"]),
+        2,
+        "lambda",
+    );
+    fails(
+        "solve-lambda-",
+        &base(&["--light", "front", "--lambda", "-2"]),
+        2,
+        "lambda",
+    );
+    fails(
+        "solve-method",
+        &base(&["--light", "front", "--method", "newton"]),
+        2,
+        "jacobi",
+    );
+    fails(
+        "solve-boundary",
+        &base(&["--light", "front", "--boundary", "wavy"]),
+        2,
+        "wavy",
+    );
+    fails(
+        "solve-unwritable",
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "front",
+            "--out",
+            "a-file/result",
+        ],
+        1,
+        "a-file",
+    );
+    fails(
+        "solve-literal",
+        &base(&[
+            "--light", "front", "--mask", "mask.png", "--method", "literal",
+        ]),
+        1,
+        "diverged",
+    );
+}
+
+#[test]
+fn boundary_normals_can_come_from_a_file() {
+    let d = scratch("solve-given");
+    let truth = sphere_inputs(&d, Light::FRONT);
+    io::write_normals(&d.join("rim.npy"), &truth.normals).unwrap();
+    let out = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "front",
+            "--mask",
+            "mask.png",
+            "--boundary",
+            "rim.npy",
+            "--out",
+            "given",
+            "--quiet",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = report(&d.join("given"));
+    assert_eq!(r["boundary"]["kind"], "given");
+    assert_eq!(r["solver"]["converged"], true);
+    // The rim holds the true normals exactly (to float32).
+    let normals = io::read_normals(&d.join("given/normals.npy"), 1 << 20).unwrap();
+    let rim = (0..64).find(|&c| *truth.mask.get(c, 32)).unwrap();
+    assert!(angle_deg(normals.get(rim, 32), truth.normals.get(rim, 32)) < 1e-3);
+    // A file of the wrong size is refused.
+    io::write_normals(
+        &d.join("small.npy"),
+        &Grid::new(8, 8, nalgebra::Vector3::z()),
+    )
+    .unwrap();
+    let bad = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "front",
+            "--boundary",
+            "small.npy",
+            "--out",
+            "x",
+        ],
+    );
+    assert_error(&bad, 2, "8x8");
+    assert!(!d.join("x").exists());
+}
