@@ -213,6 +213,9 @@ fn bad_input_gets_one_line_and_nothing_written() {
             "does not exist",
         ),
         (&["render", "sphere", "--frobnicate"], 2, "--frobnicate"),
+        (&["render", "mesh", "--out", "x.png"], 2, "give the mesh file"),
+        (&["render", "mesh", "--set", "path=nothing.ply", "--out", "x.png"], 1, "nothing.ply"),
+        (&["render", "bunny", "--set", "fill=0", "--out", "x.png"], 2, "fill"),
         (&["describe", "teapot"], 2, "teapot"),
     ];
     for (args, code, needle) in cases {
@@ -293,4 +296,30 @@ fn list_and_describe() {
     let out = shadelab(&d, &["describe", "sphere"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("radius") && text.contains("0.01..5"));
+}
+
+#[test]
+fn the_built_in_bunny_renders_upright() {
+    let d = scratch("bunny");
+    let out = shadelab(&d, &["render", "bunny", "--light", "above", "--size", "96", "--layers", "--out", "b.png"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mask = shadelab::io::read_mask(&d.join("b_mask.png"), 1 << 20).unwrap();
+    let frac = mask.count() as f64 / mask.len() as f64;
+    assert!((0.25..0.6).contains(&frac), "bunny covers {frac} of the frame");
+    let normals = shadelab::io::read_normals(&d.join("b_normals.npy"), 1 << 20).unwrap();
+    // Ears up: the topmost object row lies in the top fifth of the frame, and the normals along
+    // the top of the silhouette point up.
+    let top = (0..96).find(|&r| (0..96).any(|c| *mask.get(c, r))).unwrap();
+    assert!(top < 20, "top row {top}");
+    let mut up = 0;
+    let mut n = 0;
+    for c in 0..96 {
+        if let Some(r) = (0..96).find(|&r| *mask.get(c, r)) {
+            n += 1;
+            if normals.get(c, r).y > 0.0 {
+                up += 1;
+            }
+        }
+    }
+    assert!(up * 10 >= n * 8, "{up} of {n} top-edge normals point up");
 }

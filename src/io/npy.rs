@@ -19,6 +19,7 @@ pub struct NpyArray {
 /// arrays of more than `max_elements` values and files shorter than their header declares.
 pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
     let bytes = super::read_bytes(path)?;
+    precheck_header(&bytes, max_elements).map_err(|m| Error::format(path, m))?;
     let file = npyz::NpyFile::new(&bytes[..])
         .map_err(|e| Error::format(path, format!("not a .npy file ({e})")))?;
     let shape: Vec<usize> = file.shape().iter().map(|&d| d as usize).collect();
@@ -106,6 +107,52 @@ pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
     Ok(NpyArray { shape, data })
 }
 
+/// Checks the preamble and the header's shape by hand before npyz parses them, so that a
+/// corrupt or hostile header (a shape whose product overflows, a header longer than the file)
+/// is an error rather than an overflow or a huge allocation.
+fn precheck_header(bytes: &[u8], max_elements: usize) -> std::result::Result<(), String> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err("not a .npy file (no \\x93NUMPY magic)".into());
+    }
+    let (start, length): (usize, usize) = match bytes[6] {
+        1 => (10, u16::from_le_bytes([bytes[8], bytes[9]]) as usize),
+        2 | 3 if bytes.len() >= 12 => (
+            12,
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+        ),
+        2 | 3 => return Err("the .npy header is truncated".into()),
+        v => return Err(format!("unsupported .npy format version {v}")),
+    };
+    let text = bytes
+        .get(start..start.saturating_add(length))
+        .ok_or("the .npy header is truncated")?;
+    let text = String::from_utf8_lossy(text);
+    if text.matches("shape").count() != 1 {
+        return Err("the .npy header does not name one shape".into());
+    }
+    let tuple = text
+        .split("shape")
+        .nth(1)
+        .and_then(|after| after.split_once('('))
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .map(|(inside, _)| inside)
+        .ok_or("the .npy header's shape is not a tuple")?;
+    let dims: Vec<u64> = tuple
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.trim_end_matches('L').parse::<u64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("the .npy shape ({tuple}) is not a tuple of sizes"))?;
+    match dims.iter().try_fold(1u64, |acc, &d| acc.checked_mul(d)) {
+        Some(0) => Err(format!("the array is empty (shape ({tuple}))")),
+        Some(n) if n <= max_elements as u64 => Ok(()),
+        _ => Err(format!(
+            "array shape ({tuple}) exceeds the limit of {max_elements} values"
+        )),
+    }
+}
+
 fn fortran_to_c(shape: &[usize], data: &[f64]) -> Vec<f64> {
     let n = data.len();
     let mut out = vec![0.0; n];
@@ -130,12 +177,20 @@ fn fortran_to_c(shape: &[usize], data: &[f64]) -> Vec<f64> {
     out
 }
 
-fn check_finite(path: &Path, data: &[f64]) -> Result<()> {
+fn check_finite(path: &Path, data: &[f64], width: usize, per_pixel: usize) -> Result<()> {
     match data.iter().position(|v| !v.is_finite()) {
-        Some(i) => Err(Error::format(
-            path,
-            format!("holds a non-finite value (NaN or Inf) at flat index {i}"),
-        )),
+        Some(i) => {
+            let pixel = i / per_pixel;
+            Err(Error::format(
+                path,
+                format!(
+                    "value at row {}, column {} is {} (non-finite values are not allowed)",
+                    pixel / width,
+                    pixel % width,
+                    data[i]
+                ),
+            ))
+        }
         None => Ok(()),
     }
 }
@@ -153,7 +208,7 @@ pub fn read_image(path: &Path, max_pixels: usize) -> Result<Image> {
         }
     };
     check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
-    check_finite(path, &a.data)?;
+    check_finite(path, &a.data, w, 1)?;
     Grid::from_vec(w, h, a.data)
 }
 
@@ -171,7 +226,7 @@ pub fn read_normals(path: &Path, max_pixels: usize) -> Result<Grid<Normal>> {
         }
     };
     check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
-    check_finite(path, &a.data)?;
+    check_finite(path, &a.data, w, 3)?;
     let mut normals = Vec::with_capacity(w * h);
     for (i, c) in a.data.chunks_exact(3).enumerate() {
         let v = Vector3::new(c[0], c[1], c[2]);
@@ -279,6 +334,61 @@ mod tests {
             .contains("truncated"));
         std::fs::write(d.join("g.npy"), b"hello").unwrap();
         assert!(read_image(&d.join("g.npy"), 1000).is_err());
+    }
+
+    fn npy(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
+        let mut header =
+            format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+        header.push_str(&" ".repeat((64 - (11 + header.len()) % 64) % 64));
+        header.push('\n');
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    #[test]
+    fn hostile_headers_are_errors_not_overflows() {
+        let d = scratch("hostile");
+        let six: Vec<u8> = [0f32; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let mut lying = npy("<f4", "(2, 3)", &six);
+        lying[8] = 0xff;
+        lying[9] = 0xff;
+        let cases = [
+            (
+                npy("<f4", "(4294967296, 4294967296)", &six),
+                "exceeds the limit",
+            ),
+            (
+                npy("<f4", "(99999999999999999999, 1)", &six),
+                "not a tuple of sizes",
+            ),
+            (npy("<f4", "(0, 3)", &[]), "empty"),
+            (npy("<f2", "(2, 3)", &six), "dtype"),
+            (npy("<f4", "(2, 3)", &six[..20]), "truncated"),
+            (
+                npy(
+                    "<f4",
+                    "(2, 3)",
+                    &[0f32, 1.0, 0.0, 0.0, f32::INFINITY, 0.0]
+                        .iter()
+                        .flat_map(|v| v.to_le_bytes())
+                        .collect::<Vec<_>>(),
+                ),
+                "row 1, column 1 is inf",
+            ),
+            (lying, "header is truncated"),
+        ];
+        for (bytes, expected) in cases {
+            let p = d.join("x.npy");
+            std::fs::write(&p, &bytes).unwrap();
+            let e = read_image(&p, 1 << 20).unwrap_err().to_string();
+            assert!(
+                e.contains("x.npy: ") && e.contains(expected),
+                "expected '{expected}' in: {e}"
+            );
+        }
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! The benchmark surfaces (sphere, ellipsoid, Gaussian bump, vase, a mesh, a depth map) as
+//! The benchmark surfaces (sphere, ellipsoid, Gaussian bump, vase, the bunny, a mesh, a depth map) as
 //! stimuli: a surface rendered under one light with a chosen reflectance model.
 //!
 //! Their lengths are fractions of the frame's shorter side, because benchmark objects are
@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::params::{ParamSpec, Params};
 use crate::reflectance::{BrdfSpec, BRDF_NAMES};
 use crate::render::{render, RenderOptions};
-use crate::surface::{self, Surface};
+use crate::surface::{self, Mesh, MeshShading, Surface};
 
 /// Parameters shared by every rendered surface: light, reflectance and background.
 pub fn lighting_params(default_light: &'static str, default_background: f64) -> Vec<ParamSpec> {
@@ -294,12 +294,109 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
                         ),
                     ));
                 }
-                let zero_bg = p.bool("zero_is_background")?;
-                let mask = depth.map(|&z| !(zero_bg && z == 0.0));
+                let domain = if p.bool("zero_is_background")? {
+                    surface::DepthDomain::NonZero
+                } else {
+                    surface::DepthDomain::All
+                };
                 let scale = p.f64("scale")?;
-                Surface::from_depth(depth.map(|z| z * scale), mask)
+                surface::depth_surface(depth.map(|z| z * scale), domain)
+                    .map_err(|e| Error::format(path, e.to_string()))
             },
             natural: Some(depth_map_shape),
         }),
+        Box::new(SurfaceStimulus {
+            name: "bunny",
+            summary: "the Stanford Bunny (built in, 1,889 vertices), rasterised under any view",
+            params: view_params,
+            build: |r, _| {
+                let mesh = Mesh::from_ply(BUNNY_PLY, std::path::Path::new("bun_zipper_res3.ply"))?;
+                rasterize_mesh(&mesh, r)
+            },
+            natural: None,
+        }),
+        Box::new(SurfaceStimulus {
+            name: "mesh",
+            summary: "a triangle mesh (.ply or .obj) rasterised orthographically under any view",
+            params: || {
+                let mut v = vec![ParamSpec::text(
+                    "path",
+                    "",
+                    "the mesh file (.ply ASCII or binary, or .obj)",
+                )];
+                v.extend(view_params());
+                v
+            },
+            build: |r, _| {
+                let path = r.params.str("path")?;
+                if path.is_empty() {
+                    return Err(Error::invalid(
+                        "mesh: give the mesh file with --set path=FILE.ply (or .obj)",
+                    ));
+                }
+                rasterize_mesh(&Mesh::load(path)?, r)
+            },
+            natural: None,
+        }),
     ]
+}
+
+/// The Stanford Bunny at its coarsest resolution (Stanford 3D Scanning Repository, Stanford
+/// Computer Graphics Laboratory; Turk & Levoy 1994; credited in tests/data/README.md).
+const BUNNY_PLY: &[u8] = include_bytes!("../../tests/data/bun_zipper_res3.ply");
+
+fn view_params() -> Vec<ParamSpec> {
+    vec![
+        ParamSpec::number(
+            "yaw",
+            0.0,
+            -360.0,
+            360.0,
+            "turn about the vertical axis in degrees (front toward +x)",
+        ),
+        ParamSpec::number(
+            "pitch",
+            0.0,
+            -360.0,
+            360.0,
+            "tip about the horizontal axis in degrees (top toward the viewer)",
+        ),
+        ParamSpec::number(
+            "roll",
+            0.0,
+            -360.0,
+            360.0,
+            "turn in the image plane in degrees (counter-clockwise)",
+        ),
+        ParamSpec::number(
+            "fill",
+            0.85,
+            0.01,
+            surface::MAX_FILL,
+            "fraction of the frame the object's bounding box fills",
+        ),
+        ParamSpec::choice(
+            "shading",
+            "smooth",
+            &["smooth", "flat"],
+            "interpolated vertex normals or one normal per face",
+        ),
+    ]
+}
+
+fn rasterize_mesh(mesh: &Mesh, r: &Request) -> Result<Surface> {
+    let p = &r.params;
+    let view = surface::view_rotation(p.f64("yaw")?, p.f64("pitch")?, p.f64("roll")?)?;
+    let shading = if p.str("shading")? == "flat" {
+        MeshShading::Flat
+    } else {
+        MeshShading::Smooth
+    };
+    mesh.rasterize_with(
+        r.geometry.width,
+        r.geometry.height,
+        &view,
+        p.f64("fill")?,
+        shading,
+    )
 }

@@ -4,8 +4,12 @@
 //! units, y up); depth z is in pixel units toward the viewer. Normals are analytic where a
 //! shape knows them, else central finite differences of the depth inside the mask.
 
+mod mesh;
+mod npy_depth;
 mod shapes;
 
+pub use mesh::{view_rotation, Mesh, MeshShading, Projection, MAX_FILL};
+pub use npy_depth::{depth_surface, load_depth_surface, read_depth_npy, DepthDomain};
 pub use shapes::{ellipsoid, gaussian, sphere, vase, vase_profile};
 
 use crate::error::{Error, Result};
