@@ -51,6 +51,19 @@ impl<T: Clone> Grid<T> {
     }
 }
 
+impl<T: Clone> Grid<T> {
+    /// The grid rotated by 180° (pixel (c, r) goes to (w−1−c, h−1−r)).
+    pub fn rotated_180(&self) -> Self {
+        let mut data = self.data.clone();
+        data.reverse();
+        Grid {
+            width: self.width,
+            height: self.height,
+            data,
+        }
+    }
+}
+
 impl<T> Grid<T> {
     /// Wraps row-major `data`; fails when its length is not `width * height`.
     pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Result<Self> {
@@ -173,17 +186,6 @@ impl Grid<f64> {
             .filter(|(_, &m)| m)
             .fold((0.0, 0usize), |(s, n), (v, _)| (s + v, n + 1));
         (n > 0).then(|| sum / n as f64)
-    }
-
-    /// The grid rotated by 180° (pixel (c, r) goes to (w−1−c, h−1−r)).
-    pub fn rotated_180(&self) -> Self {
-        let mut data = self.data.clone();
-        data.reverse();
-        Grid {
-            width: self.width,
-            height: self.height,
-            data,
-        }
     }
 }
 

@@ -12,10 +12,12 @@
 //! viewer; pixel row 0 is the top row. p = −∂z/∂x, q = −∂z/∂y. Lights are unit vectors toward
 //! the light, or tilt/slant in degrees with tilt 0 = from above and +90 = from the left.
 #![deny(missing_docs)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod boundary;
 pub mod colormap;
 pub mod error;
+pub mod gallery;
 pub mod gradient_space;
 pub mod grid;
 pub mod integrate;

@@ -69,9 +69,9 @@ impl Light {
                 "light slant {slant_deg}° is outside 0..90 (90 is grazing; more is below the horizon)"
             )));
         }
-        let (t, s) = (tilt_deg.to_radians(), slant_deg.to_radians());
-        let z = s.cos().max(0.0);
-        Light::from_vector(-t.sin() * s.sin(), t.cos() * s.sin(), z)
+        let (sin_t, cos_t) = sin_cos_deg(tilt_deg);
+        let (sin_s, cos_s) = sin_cos_deg(slant_deg);
+        Light::from_vector(-sin_t * sin_s, cos_t * sin_s, cos_s.max(0.0))
     }
 
     /// The unit vector toward the light.
@@ -127,6 +127,22 @@ impl fmt::Display for Light {
             round6(self.tilt_deg()),
             round6(self.slant_deg())
         )
+    }
+}
+
+/// sin and cos of an angle in degrees, reduced to the first quadrant and turned by whole
+/// quadrants exactly: multiples of 90° are exact, and angles 180° apart give exactly negated
+/// values, so lights 180° apart in tilt are exact mirror images (which the convex/concave
+/// ambiguity relies on: the depth-negated surface under the turned light renders bit for bit).
+pub fn sin_cos_deg(degrees: f64) -> (f64, f64) {
+    let r = degrees.rem_euclid(360.0);
+    let quadrant = (r / 90.0).floor();
+    let (s, c) = (r - 90.0 * quadrant).to_radians().sin_cos();
+    match quadrant as i64 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
     }
 }
 
@@ -211,6 +227,23 @@ mod tests {
         assert!(right.direction().x > 0.0);
         assert!((right.tilt_deg() + 90.0).abs() < 1e-9);
         assert!((right.slant_deg() - 30.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn quadrant_angles_are_exact_and_opposite_tilts_mirror() {
+        assert_eq!(sin_cos_deg(90.0), (1.0, 0.0));
+        assert_eq!(sin_cos_deg(-90.0), (-1.0, 0.0));
+        assert_eq!(sin_cos_deg(180.0), (0.0, -1.0));
+        assert!((sin_cos_deg(123.0).0 - 123f64.to_radians().sin()).abs() < 1e-15);
+        for tilt in [0.0, 26.0, 45.0, 90.0, 137.5] {
+            let a = Light::from_tilt_slant(tilt, 45.0).unwrap().direction();
+            let b = Light::from_tilt_slant(tilt + 180.0, 45.0)
+                .unwrap()
+                .direction();
+            assert_eq!((a.x, a.y, a.z), (-b.x, -b.y, b.z), "tilt {tilt}");
+        }
+        let above = Light::from_tilt_slant(0.0, 45.0).unwrap().direction();
+        assert_eq!(above.x, 0.0);
     }
 
     #[test]

@@ -3,3 +3,4 @@
 mod cli;
 mod mesh;
 mod solve;
+mod stimuli;

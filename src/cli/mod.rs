@@ -3,6 +3,7 @@
 //! usage errors and 1 for everything else (never a panic or a backtrace).
 
 mod describe;
+mod gallery;
 mod progress;
 mod render;
 mod solve;
@@ -48,6 +49,8 @@ enum Command {
     List,
     /// Show a stimulus's parameters with defaults and ranges.
     Describe(describe::Args),
+    /// Render every preset of stimuli/ into a folder with thumbnails and an index.html.
+    Gallery(gallery::Args),
     /// Recover surface normals and depth from one shaded image (shape from shading).
     Solve(solve::Args),
 }
@@ -142,6 +145,7 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Render(args) => render::run(args, global),
         Command::List => describe::list(),
         Command::Describe(args) => describe::run(args),
+        Command::Gallery(args) => gallery::run(args, global),
         Command::Solve(args) => solve::run(args, global),
     }
 }

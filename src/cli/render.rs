@@ -55,7 +55,7 @@ pub struct Args {
     /// Value range of float output: unit (0..1) or psychopy (-1..1).
     #[arg(long, value_name = "unit|psychopy", default_value = "unit", value_parser = ["unit", "psychopy"])]
     pub range: String,
-    /// Output file: .png (16-bit by default) or .npy; the sidecar goes beside it as .json.
+    /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5, double) or .svg (vector stimuli); the sidecar goes beside it as .json.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
 }

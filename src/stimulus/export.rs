@@ -1,5 +1,6 @@
-//! Writing a rendered stimulus: the picture in the format its extension names, the target
-//! mask, the ground-truth layers and a JSON sidecar recording every parameter.
+//! Writing a rendered stimulus: the picture in the format its extension names (.png, .npy,
+//! .mat, .svg), the target mask, the ground-truth layers and a JSON sidecar recording every
+//! parameter.
 
 use super::{Output, Pixels, Request};
 use crate::error::{Error, Result};
@@ -44,7 +45,10 @@ impl Default for ExportOptions {
 }
 
 /// The output formats, by extension.
-pub const FORMATS: &[&str] = &["png", "npy"];
+pub const FORMATS: &[&str] = &["png", "npy", "mat", "svg"];
+
+/// The name of the variable in `.mat` output.
+pub const MAT_VARIABLE: &str = "stimulus";
 
 /// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
 /// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
@@ -69,10 +73,19 @@ pub fn write_output(
                 .join(", ")
         )));
     }
-    if options.range == Range::Psychopy && ext == "png" {
-        return Err(Error::invalid(
-            "--range psychopy applies to float formats (.npy, .mat), not PNG",
-        ));
+    if options.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat") {
+        return Err(Error::invalid(format!(
+            "--range psychopy applies to float formats (.npy, .mat), not .{ext}"
+        )));
+    }
+    if ext == "svg" && output.svg.is_none() {
+        let why = match output.notes.get("svg_omitted").and_then(|v| v.as_str()) {
+            Some(reason) => format!(" here ({reason})"),
+            None => String::new(),
+        };
+        return Err(Error::invalid(format!(
+            "{name} has no vector form{why}; write it as .png, .npy or .mat (SVG is for circle arrays, strips, cut-outs and checkerboards)"
+        )));
     }
     if options.gamma.is_some() && ext != "png" {
         return Err(Error::invalid(
@@ -161,6 +174,25 @@ fn write_all(
             &[img.height(), img.width(), 3],
             img.data().iter().flat_map(|p| p.map(to_range)),
         )?,
+        ("mat", pixels) => {
+            let (w, h) = pixels.size();
+            let (channels, values): (usize, Vec<f64>) = match pixels {
+                Pixels::Gray(img) => (1, img.data().iter().map(|&v| to_range(v)).collect()),
+                Pixels::Rgb(img) => (3, img.data().iter().flat_map(|p| p.map(to_range)).collect()),
+            };
+            let bytes = super::mat::encode_image(MAT_VARIABLE, w, h, channels, &values)?;
+            io::write_atomic(path, |out| {
+                out.write_all(&bytes).map_err(|e| Error::io(path, e))
+            })?
+        }
+        ("svg", _) => {
+            let text = output.svg.as_deref().unwrap_or_default();
+            io::write_atomic(path, |out| {
+                out.write_all(text.as_bytes())
+                    .and_then(|_| out.write_all(b"\n"))
+                    .map_err(|e| Error::io(path, e))
+            })?
+        }
         _ => return Err(Error::invalid(format!("unknown output format '.{ext}'"))),
     }
     record("image", path.to_path_buf(), written);
@@ -208,6 +240,8 @@ pub fn sidecar_json(
         "encoding": match (format, options.gamma) {
             ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
             ("png", None) => "linear: code = round(v * max)".to_string(),
+            ("svg", _) => "vector; colours are linear values as percentages, 1 user unit = 1 pixel".to_string(),
+            ("mat", _) => match options.range { Range::Unit => format!("MATLAB v5 double, linear 0..1, variable '{MAT_VARIABLE}' (H x W [x 3])"), Range::Psychopy => format!("MATLAB v5 double, linear mapped to -1..1 (v*2-1), variable '{MAT_VARIABLE}' (H x W [x 3])") },
             _ => match options.range { Range::Unit => "float32, linear 0..1".to_string(), Range::Psychopy => "float32, linear mapped to -1..1 (v*2-1)".to_string() },
         },
         "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },

@@ -3,9 +3,21 @@
 //! parameters, a geometry (size in degrees and pixels) and a seed, it returns linear luminance
 //! with its target mask and, where a surface exists, the ground-truth layers.
 
+mod boundary_strips;
+mod bumps;
+mod checker_shadow;
+mod checkerboard;
+mod circles;
+mod crater;
 mod export;
+mod fading_disk;
+mod frame;
+mod hollow_mask;
+pub mod mat;
 mod reflectance_map;
+mod strips;
 mod surfaces;
+mod svg;
 
 pub use export::{write_output, ExportOptions, Range};
 
@@ -141,6 +153,15 @@ pub trait Stimulus: Send + Sync {
 pub fn all() -> Vec<Box<dyn Stimulus>> {
     let mut v: Vec<Box<dyn Stimulus>> = Vec::new();
     v.extend(surfaces::all());
+    v.extend(bumps::all());
+    v.extend(crater::all());
+    v.extend(strips::all());
+    v.extend(circles::all());
+    v.extend(boundary_strips::all());
+    v.extend(hollow_mask::all());
+    v.extend(checker_shadow::all());
+    v.extend(fading_disk::all());
+    v.extend(checkerboard::all());
     v.extend(reflectance_map::all());
     v
 }

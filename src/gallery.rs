@@ -1,0 +1,426 @@
+//! The gallery: every preset of `stimuli/` rendered with its sidecar and target mask, with
+//! thumbnails, a contact sheet and an `index.html` that says what a viewer sees and why.
+//!
+//! The presets are compiled into the library (so `shadelab gallery` works from any folder);
+//! [`load_presets`] reads a folder of specs instead. The output folder is written atomically:
+//! it appears complete or not at all. Nothing in it depends on the clock or the thread count,
+//! so two runs give identical folders.
+
+use crate::error::{Error, Result};
+use crate::grid::{Grid, RgbImage};
+use crate::io::{self, AtomicDir, BitDepth};
+use crate::stimulus::{self, ExportOptions, Output, Pixels, Request, Spec};
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One preset: a file stem and the spec it holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Preset {
+    /// The file stem (`bumps` for `stimuli/bumps.json`); names the gallery's files.
+    pub name: String,
+    /// The spec.
+    pub spec: Spec,
+}
+
+/// The presets shipped in `stimuli/`, in gallery order.
+pub const BUILTIN: &[(&str, &str)] = &[
+    ("bumps", include_str!("../stimuli/bumps.json")),
+    (
+        "bumps-gradient",
+        include_str!("../stimuli/bumps-gradient.json"),
+    ),
+    ("crater", include_str!("../stimuli/crater.json")),
+    (
+        "crater-rotated",
+        include_str!("../stimuli/crater-rotated.json"),
+    ),
+    ("sideways", include_str!("../stimuli/sideways.json")),
+    ("strips", include_str!("../stimuli/strips.json")),
+    (
+        "circles-binary",
+        include_str!("../stimuli/circles-binary.json"),
+    ),
+    (
+        "circles-gradient",
+        include_str!("../stimuli/circles-gradient.json"),
+    ),
+    (
+        "circles-odd-one-out",
+        include_str!("../stimuli/circles-odd-one-out.json"),
+    ),
+    (
+        "boundary-strips",
+        include_str!("../stimuli/boundary-strips.json"),
+    ),
+    (
+        "boundary-strips-ramp",
+        include_str!("../stimuli/boundary-strips-ramp.json"),
+    ),
+    ("hollow-mask", include_str!("../stimuli/hollow-mask.json")),
+    (
+        "hollow-mask-convex",
+        include_str!("../stimuli/hollow-mask-convex.json"),
+    ),
+    (
+        "checker-shadow",
+        include_str!("../stimuli/checker-shadow.json"),
+    ),
+    ("fading-disk", include_str!("../stimuli/fading-disk.json")),
+    (
+        "fading-disk-achromatic",
+        include_str!("../stimuli/fading-disk-achromatic.json"),
+    ),
+    ("sphere", include_str!("../stimuli/sphere.json")),
+    ("vase", include_str!("../stimuli/vase.json")),
+];
+
+/// The file that marks a folder as a shadelab gallery.
+pub const MARKER: &str = "index.html";
+
+/// Longest side of a thumbnail, in pixels.
+pub const THUMBNAIL: usize = 256;
+
+/// The display gamma of thumbnails and the contact sheet (the full images stay linear).
+pub const THUMBNAIL_GAMMA: f64 = 2.2;
+
+/// The presets compiled into shadelab.
+pub fn builtin_presets() -> Result<Vec<Preset>> {
+    BUILTIN
+        .iter()
+        .map(|(name, text)| {
+            let spec: Spec = serde_json::from_str(text).map_err(|e| {
+                Error::format(
+                    format!("stimuli/{name}.json"),
+                    format!("bad stimulus spec: {e}"),
+                )
+            })?;
+            Ok(Preset {
+                name: name.to_string(),
+                spec,
+            })
+        })
+        .collect()
+}
+
+/// Every `*.json` spec in `dir`, sorted by file name.
+pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let mut paths: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| io::extension(p) == "json")
+        .collect();
+    paths.sort();
+    if paths.is_empty() {
+        return Err(Error::format(dir, "holds no stimulus specs (*.json)"));
+    }
+    paths
+        .iter()
+        .map(|p| {
+            let name = p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let ok = !name.is_empty()
+                && name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+            if !ok {
+                return Err(Error::format(
+                    p,
+                    "preset names may hold only letters, digits, '-' and '_'",
+                ));
+            }
+            Ok(Preset {
+                name,
+                spec: Spec::load(p)?,
+            })
+        })
+        .collect()
+}
+
+/// How to build a gallery.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Replace an existing folder that shadelab did not write.
+    pub force: bool,
+    /// Largest image made, in pixels.
+    pub max_pixels: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            force: false,
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+        }
+    }
+}
+
+/// What was rendered for one preset.
+#[derive(Debug, Clone)]
+struct Rendered {
+    preset: Preset,
+    request: Request,
+    thumbnail: RgbImage,
+    files: Vec<String>,
+}
+
+/// Builds the gallery of `presets` in `out`: per preset `NAME.png` (16-bit linear),
+/// `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then `gallery.png`
+/// (all thumbnails) and `index.html`. `progress` is called with each preset's name when it is
+/// done (from worker threads). Returns the folder.
+pub fn build(
+    presets: &[Preset],
+    out: &Path,
+    options: &Options,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<PathBuf> {
+    if presets.is_empty() {
+        return Err(Error::invalid("the gallery needs at least one preset"));
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    for p in presets {
+        if !seen.insert(p.name.as_str()) {
+            return Err(Error::invalid(format!(
+                "two presets are called '{}'",
+                p.name
+            )));
+        }
+    }
+    let dir = AtomicDir::create(out, MARKER, options.force)?;
+    let thumbs = dir.path().join("thumbs");
+    std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
+    let rendered: Vec<Rendered> = presets
+        .par_iter()
+        .map(|preset| {
+            let r = render_one(preset, dir.path(), options);
+            progress(&preset.name);
+            r
+        })
+        .collect::<Result<_>>()?;
+    let sheet = contact_sheet(&rendered);
+    io::write_rgb(
+        &dir.path().join("gallery.png"),
+        &sheet,
+        BitDepth::Eight,
+        Some(THUMBNAIL_GAMMA),
+    )?;
+    let html = index_html(&rendered);
+    io::write_atomic(&dir.path().join(MARKER), |w| {
+        w.write_all(html.as_bytes())
+            .map_err(|e| Error::io(out.join(MARKER), e))
+    })?;
+    dir.commit()
+}
+
+fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {
+    let spec = &preset.spec;
+    let context = |e: Error| Error::invalid(format!("preset {}: {e}", preset.name));
+    let (request, output) = stimulus::generate(
+        &spec.stimulus,
+        &spec.params,
+        &spec.size(),
+        spec.seed.unwrap_or(0),
+        options.max_pixels,
+    )
+    .map_err(context)?;
+    let path = dir.join(format!("{}.png", preset.name));
+    let written = stimulus::write_output(
+        &spec.stimulus,
+        &request,
+        &output,
+        &path,
+        &ExportOptions {
+            force: true,
+            ..ExportOptions::default()
+        },
+    )?;
+    let thumbnail = thumbnail(&output);
+    io::write_rgb(
+        &dir.join("thumbs").join(format!("{}.png", preset.name)),
+        &thumbnail,
+        BitDepth::Eight,
+        Some(THUMBNAIL_GAMMA),
+    )?;
+    let files = written
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    Ok(Rendered {
+        preset: preset.clone(),
+        request,
+        thumbnail,
+        files,
+    })
+}
+
+/// A box-filtered reduction to at most [`THUMBNAIL`] pixels on the longer side (linear RGB).
+fn thumbnail(output: &Output) -> RgbImage {
+    let rgb: RgbImage = match &output.pixels {
+        Pixels::Gray(g) => g.map(|&v| [v; 3]),
+        Pixels::Rgb(c) => c.clone(),
+    };
+    let (w, h) = (rgb.width(), rgb.height());
+    let factor = w.max(h).div_ceil(THUMBNAIL).max(1);
+    let (tw, th) = (w.div_ceil(factor), h.div_ceil(factor));
+    Grid::from_fn(tw, th, |c, r| {
+        let mut acc = [0.0; 3];
+        let mut n = 0.0;
+        for y in r * factor..((r + 1) * factor).min(h) {
+            for x in c * factor..((c + 1) * factor).min(w) {
+                let p = rgb.get(x, y);
+                for k in 0..3 {
+                    acc[k] += p[k];
+                }
+                n += 1.0;
+            }
+        }
+        acc.map(|a| a / n)
+    })
+}
+
+/// All thumbnails on one sheet, four to a row, each centred in its cell.
+fn contact_sheet(rendered: &[Rendered]) -> RgbImage {
+    let (cols, gap) = (4usize, 12usize);
+    let rows = rendered.len().div_ceil(cols);
+    let cell = THUMBNAIL + gap;
+    let mut sheet = Grid::new(cols * cell + gap, rows * cell + gap, [1.0; 3]);
+    for (i, r) in rendered.iter().enumerate() {
+        let t = &r.thumbnail;
+        let x0 = gap + (i % cols) * cell + (THUMBNAIL - t.width()) / 2;
+        let y0 = gap + (i / cols) * cell + (THUMBNAIL - t.height()) / 2;
+        for y in 0..t.height() {
+            for x in 0..t.width() {
+                *sheet.get_mut(x0 + x, y0 + y) = *t.get(x, y);
+            }
+        }
+    }
+    sheet
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn index_html(rendered: &[Rendered]) -> String {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        r#"<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>shadelab gallery</title>
+<style>
+body {{ font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }}
+.card {{ display: flex; gap: 1.5em; margin: 2em 0; border-top: 1px solid #ccc; padding-top: 1.5em; }}
+.card img {{ max-width: {THUMBNAIL}px; image-rendering: auto; }}
+table {{ border-collapse: collapse; font-size: 0.85em; }}
+td {{ padding: 0 0.8em 0 0; vertical-align: top; }}
+code {{ background: #f3f3f3; padding: 0 0.2em; }}
+</style>
+</head>
+<body>
+<h1>shadelab gallery</h1>
+<p>Every picture below is a preset from <code>stimuli/</code>, rendered by shadelab {version}.
+Full images (click a thumbnail) are 16-bit PNGs of <em>linear</em> luminance 0..1, for a calibrated
+(linearised) display; thumbnails are display-encoded with gamma {gamma} so they look right on an
+ordinary screen. Beside each image lie its JSON sidecar (every parameter, the seed, an md5) and
+its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named targets).</p>
+"#,
+        version = io::PROGRAM_VERSION,
+        gamma = THUMBNAIL_GAMMA,
+    );
+    for r in rendered {
+        let p = &r.preset;
+        let g = &r.request.geometry;
+        let title = p.spec.title.clone().unwrap_or_else(|| p.name.clone());
+        let caption = p.spec.caption.clone().unwrap_or_default();
+        let _ = write!(
+            h,
+            r#"<div class="card" id="{id}">
+<a href="{id}.png"><img src="thumbs/{id}.png" alt="{alt}"></a>
+<div>
+<h2>{title}</h2>
+<p>{caption}</p>
+<p>Stimulus <code>{stimulus}</code>, {wd:.2}&times;{hd:.2}&deg; at {ppd} pixels per degree = {w}&times;{h} pixels, seed {seed}.
+Reproduce: <code>shadelab render --spec stimuli/{id}.json --out {id}.png</code></p>
+<table>
+"#,
+            id = escape(&p.name),
+            alt = escape(&title),
+            title = escape(&title),
+            caption = escape(&caption),
+            stimulus = escape(&p.spec.stimulus),
+            wd = g.width_deg(),
+            hd = g.height_deg(),
+            ppd = g.ppd,
+            w = g.width,
+            h = g.height,
+            seed = r.request.seed,
+        );
+        if let serde_json::Value::Object(params) = r.request.params.to_json() {
+            for (k, v) in params {
+                let v = match v {
+                    serde_json::Value::String(s) => s,
+                    other => other.to_string(),
+                };
+                let _ = writeln!(
+                    h,
+                    "<tr><td><code>{}</code></td><td>{}</td></tr>",
+                    escape(&k),
+                    escape(&v)
+                );
+            }
+        }
+        let links: Vec<String> = r
+            .files
+            .iter()
+            .map(|f| format!("<a href=\"{0}\">{0}</a>", escape(f)))
+            .collect();
+        let _ = write!(
+            h,
+            "</table>\n<p>Files: {}</p>\n</div>\n</div>\n",
+            links.join(", ")
+        );
+    }
+    h.push_str("</body>\n</html>\n");
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_preset_parses_and_names_a_stimulus() {
+        let presets = builtin_presets().unwrap();
+        assert_eq!(presets.len(), BUILTIN.len());
+        let names = stimulus::names();
+        for p in &presets {
+            assert!(names.contains(&p.spec.stimulus.as_str()), "{}", p.name);
+            assert!(
+                p.spec.title.is_some() && p.spec.caption.is_some(),
+                "{}",
+                p.name
+            );
+        }
+    }
+
+    #[test]
+    fn thumbnails_average_and_fit() {
+        // 700 wide needs a factor of 3 to fit 256: columns 0, 1, 0 average to 1/3.
+        let mut out = crate::stimulus::Output::gray(Grid::from_fn(700, 100, |c, _| (c % 2) as f64));
+        let t = thumbnail(&out);
+        assert_eq!((t.width(), t.height()), (234, 34));
+        let v = t.get(0, 0)[0];
+        assert!((v - 1.0 / 3.0).abs() < 1e-12, "{v}");
+        out.pixels = Pixels::Gray(Grid::new(10, 10, 0.5));
+        assert_eq!(thumbnail(&out).width(), 10);
+        assert!(escape("<a & \"b\">").contains("&lt;a &amp; &quot;b&quot;&gt;"));
+    }
+}

@@ -1,0 +1,448 @@
+//! Shaded discs on a grey panel: `bumps` (light from above: bumps and dimples, Ramachandran
+//! 1988) and `sideways` (light from the left or right: every disc is bistable).
+//!
+//! The panel and its discs are one heightfield rendered under one light: a plane with
+//! hemispherical or Gaussian bumps (and their negatives, dimples), Lambertian, with the albedo
+//! chosen so that the flat panel has exactly the `background` luminance:
+//! L = background · max(0, n·s) / s_z. The `linear` profile draws Ramachandran's linear
+//! luminance gradient instead, L = background · (1 ± contrast · t), t running from −1 to 1
+//! across the disc toward the light; its layers are the hemisphere that gradient depicts (a
+//! hemisphere's n_x, n_y are exactly linear in position).
+//!
+//! Disc centres are snapped to pixel corners, so every disc covers the same pixel pattern and
+//! is mirror-symmetric on the pixel lattice.
+
+use super::frame::{grid_centres, Frame};
+use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use crate::error::{Error, Result};
+use crate::grid::Grid;
+use crate::light::Light;
+use crate::params::ParamSpec;
+use crate::random::SplitMix64;
+use nalgebra::Vector3;
+use serde_json::{json, Map};
+
+const PROFILES: &[&str] = &["hemisphere", "gaussian", "linear"];
+const PATTERNS: &[&str] = &["random", "alternate", "rows", "bumps", "dimples"];
+
+fn disc_params(rows: i64, columns: i64, pattern: &'static str) -> Vec<ParamSpec> {
+    vec![
+        ParamSpec::choice(
+            "profile",
+            "hemisphere",
+            PROFILES,
+            "disc profile: a rendered hemisphere or Gaussian, or a linear luminance gradient",
+        ),
+        ParamSpec::number("radius", 1.0, 0.01, 90.0, "disc radius (deg)"),
+        ParamSpec::number(
+            "spacing",
+            3.0,
+            0.01,
+            180.0,
+            "centre-to-centre distance (deg)",
+        ),
+        ParamSpec::integer("rows", rows, 1, 50, "rows of discs"),
+        ParamSpec::integer("columns", columns, 1, 50, "columns of discs"),
+        ParamSpec::choice(
+            "pattern",
+            pattern,
+            PATTERNS,
+            "which discs are bumps and which dimples (random uses the seed)",
+        ),
+        ParamSpec::number(
+            "height",
+            1.0,
+            0.01,
+            10.0,
+            "peak height as a fraction of the radius (hemisphere) or of sigma (gaussian)",
+        ),
+        ParamSpec::number(
+            "sigma",
+            0.35,
+            0.05,
+            5.0,
+            "Gaussian standard deviation as a fraction of the radius",
+        ),
+        ParamSpec::number(
+            "contrast",
+            0.5,
+            0.0,
+            1.0,
+            "gradient amplitude relative to the background (linear profile)",
+        ),
+        ParamSpec::number("background", 0.5, 0.0, 1.0, "luminance of the panel"),
+    ]
+}
+
+struct Bumps;
+struct Sideways;
+
+impl Stimulus for Bumps {
+    fn info(&self) -> Info {
+        let mut params = disc_params(3, 4, "random");
+        params.push(ParamSpec::light(
+            "light",
+            "above",
+            "light direction (x,y,z | tilt=T,slant=S | name)",
+        ));
+        Info {
+            name: "bumps",
+            summary: "discs shaded as bumps and dimples under one light (light-from-above prior)",
+            params,
+            default_visual_size: (14.0, 10.0),
+            default_ppd: 32.0,
+        }
+    }
+
+    fn generate(&self, request: &Request) -> Result<Output> {
+        let light = request.params.light("light")?;
+        discs("bumps", request, light)
+    }
+}
+
+impl Stimulus for Sideways {
+    fn info(&self) -> Info {
+        let mut params = disc_params(2, 4, "rows");
+        params.push(ParamSpec::choice(
+            "side",
+            "left",
+            &["left", "right"],
+            "where the light comes from",
+        ));
+        params.push(ParamSpec::number(
+            "slant",
+            45.0,
+            0.0,
+            89.0,
+            "light slant from the line of sight (deg)",
+        ));
+        Info {
+            name: "sideways",
+            summary: "discs lit from the left or right: bump or dimple is ambiguous (bistable)",
+            params,
+            default_visual_size: (14.0, 7.0),
+            default_ppd: 32.0,
+        }
+    }
+
+    fn generate(&self, request: &Request) -> Result<Output> {
+        let p = &request.params;
+        let tilt = if p.str("side")? == "left" {
+            90.0
+        } else {
+            -90.0
+        };
+        let light = Light::from_tilt_slant(tilt, p.f64("slant")?)?;
+        discs("sideways", request, light)
+    }
+}
+
+/// Bump (+1) or dimple (−1) for each disc, in reading order.
+fn polarities(pattern: &str, rows: usize, cols: usize, seed: u64) -> Vec<f64> {
+    let mut rng = SplitMix64::new(seed);
+    (0..rows * cols)
+        .map(|i| {
+            let (r, c) = (i / cols, i % cols);
+            let bump = match pattern {
+                "random" => rng.next_u64() >> 63 == 0,
+                "alternate" => (r + c) % 2 == 0,
+                "rows" => r % 2 == 0,
+                "dimples" => false,
+                _ => true,
+            };
+            if bump {
+                1.0
+            } else {
+                -1.0
+            }
+        })
+        .collect()
+}
+
+fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
+    let p = &request.params;
+    let frame = Frame::new(&request.geometry);
+    let radius = frame.px(p.f64("radius")?);
+    let spacing = frame.px(p.f64("spacing")?);
+    let (rows, cols) = (p.usize("rows")?, p.usize("columns")?);
+    let profile = p.str("profile")?;
+    let (height, sigma) = (p.f64("height")?, p.f64("sigma")? * radius);
+    let (contrast, background) = (p.f64("contrast")?, p.f64("background")?);
+    if radius < 1.0 {
+        return Err(Error::invalid(format!(
+            "{name}: radius {}° is under one pixel at {} ppd",
+            p.f64("radius")?,
+            frame.ppd
+        )));
+    }
+    if (rows > 1 || cols > 1) && spacing < 2.0 * radius {
+        return Err(Error::invalid(format!(
+            "{name}: spacing {}° is less than the disc diameter {}°: discs would overlap",
+            p.f64("spacing")?,
+            2.0 * p.f64("radius")?
+        )));
+    }
+    let centres = grid_centres(&frame, rows, cols, spacing);
+    frame.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
+    let sign = polarities(p.str("pattern")?, rows, cols, request.seed);
+    let s = light.direction();
+    let tilt_len = s.x.hypot(s.y);
+    if profile == "linear" && tilt_len < 1e-9 {
+        return Err(Error::invalid(format!(
+            "{name}: the linear profile needs a light with a direction in the image (slant > 0)"
+        )));
+    }
+    if profile != "linear" && s.z < 1e-6 {
+        return Err(Error::invalid(format!(
+            "{name}: a grazing light (slant 90°) leaves the panel dark; use a slant below 90°"
+        )));
+    }
+    if profile == "linear" && background * (1.0 + contrast) > 1.0 {
+        return Err(Error::invalid(format!(
+            "{name}: background {background} × (1 + contrast {contrast}) exceeds 1; lower one of them"
+        )));
+    }
+    let albedo = background / s.z;
+    let (dx, dy) = (s.x / tilt_len.max(1e-300), s.y / tilt_len.max(1e-300));
+    let (w, h) = (frame.w, frame.h);
+    let mut depth = Grid::new(w, h, 0.0);
+    let mut normals = Grid::new(w, h, Vector3::z());
+    let mut labels = Grid::new(w, h, 0u16);
+    let mut image = Grid::new(w, h, background);
+    let mut names = Vec::with_capacity(centres.len());
+    for (i, (&(cx, cy), &sg)) in centres.iter().zip(&sign).enumerate() {
+        let kind = if sg > 0.0 { "bump" } else { "dimple" };
+        names.push(format!("{kind} r{}c{}", i / cols + 1, i % cols + 1));
+        let label = u16::try_from(i + 1).map_err(|_| Error::invalid("too many discs"))?;
+        for row in frame.rows(cy - radius, cy + radius) {
+            for col in frame.cols(cx - radius, cx + radius) {
+                let (x, y) = (frame.x(col) - cx, frame.y(row) - cy);
+                let rho2 = x * x + y * y;
+                if rho2 >= radius * radius {
+                    continue;
+                }
+                let (z, n) = match profile {
+                    "gaussian" => {
+                        let z = height * sigma * (-rho2 / (2.0 * sigma * sigma)).exp();
+                        let k = z / (sigma * sigma);
+                        (z, Vector3::new(sg * k * x, sg * k * y, 1.0).normalize())
+                    }
+                    "linear" => {
+                        let root = (radius * radius - rho2).sqrt();
+                        (root, Vector3::new(sg * x, sg * y, root).normalize())
+                    }
+                    _ => {
+                        let root = (radius * radius - rho2).sqrt();
+                        (
+                            height * root,
+                            Vector3::new(sg * height * x, sg * height * y, root).normalize(),
+                        )
+                    }
+                };
+                *depth.get_mut(col, row) = sg * z;
+                *normals.get_mut(col, row) = n;
+                *labels.get_mut(col, row) = label;
+                *image.get_mut(col, row) = if profile == "linear" {
+                    background * (1.0 + contrast * sg * (x * dx + y * dy) / radius)
+                } else {
+                    albedo * n.dot(&s).max(0.0)
+                };
+            }
+        }
+    }
+    if profile != "linear" {
+        let peak = image.data().iter().fold(0.0f64, |a, &b| a.max(b));
+        if peak > 1.0 {
+            return Err(Error::invalid(format!(
+                "{name}: the brightest facet reaches {peak:.3} > 1 (background {background} / cos(slant {:.1}°)); lower the background or the light's slant",
+                light.slant_deg()
+            )));
+        }
+    }
+    let shading = if profile == "linear" {
+        image.clone()
+    } else {
+        normals.map(|n| n.dot(&s).max(0.0))
+    };
+    let mut notes = Map::new();
+    notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
+    if profile != "linear" {
+        notes.insert("albedo".into(), json!(albedo));
+    }
+    notes.insert(
+        "bumps".into(),
+        json!(sign.iter().filter(|&&v| v > 0.0).count()),
+    );
+    notes.insert(
+        "dimples".into(),
+        json!(sign.iter().filter(|&&v| v < 0.0).count()),
+    );
+    notes.insert(
+        "centres_px".into(),
+        json!(centres
+            .iter()
+            .map(|&(x, y)| frame.svg_xy(x, y))
+            .map(|(x, y)| [x, y])
+            .collect::<Vec<_>>()),
+    );
+    Ok(Output {
+        pixels: Pixels::Gray(image),
+        targets: Some(Targets { labels, names }),
+        surface: Some(SurfaceLayers {
+            depth,
+            normals,
+            mask: Grid::new(w, h, true),
+            albedo: None,
+            shading: Some(shading),
+        }),
+        svg: None,
+        notes,
+    })
+}
+
+/// The disc stimuli.
+pub fn all() -> Vec<Box<dyn Stimulus>> {
+    vec![Box::new(Bumps), Box::new(Sideways)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+    use crate::visual_size::Geometry;
+
+    fn request(s: &dyn Stimulus, pairs: &[&str], ppd: f64) -> Request {
+        let info = s.info();
+        let given = Params::parse_pairs(pairs).unwrap();
+        let (w, h) = info.default_visual_size;
+        Request {
+            params: Params::resolve(&info.params, &given).unwrap(),
+            geometry: Geometry {
+                width: (w * ppd).round() as usize,
+                height: (h * ppd).round() as usize,
+                ppd,
+            },
+            seed: 1,
+        }
+    }
+
+    fn halves(out: &Output, label: u16) -> (f64, f64) {
+        let (Pixels::Gray(img), Some(t)) = (&out.pixels, &out.targets) else {
+            panic!("gray with targets expected")
+        };
+        let rows: Vec<usize> = (0..img.height())
+            .filter(|&r| (0..img.width()).any(|c| *t.labels.get(c, r) == label))
+            .collect();
+        let mid = (rows[0] + rows[rows.len() - 1]).div_ceil(2);
+        let (mut top, mut bottom) = (0.0, 0.0);
+        for r in rows {
+            for c in 0..img.width() {
+                if *t.labels.get(c, r) == label {
+                    if r < mid {
+                        top += img.get(c, r);
+                    } else {
+                        bottom += img.get(c, r);
+                    }
+                }
+            }
+        }
+        (top, bottom)
+    }
+
+    #[test]
+    fn bumps_lit_from_above_are_bright_on_top_and_dimples_below() {
+        for profile in PROFILES {
+            let r = request(
+                &Bumps,
+                &[&format!("profile={profile}"), "pattern=alternate"],
+                16.0,
+            );
+            let out = Bumps.generate(&r).unwrap();
+            let names = &out.targets.as_ref().unwrap().names;
+            for (i, name) in names.iter().enumerate() {
+                let (top, bottom) = halves(&out, i as u16 + 1);
+                if name.starts_with("bump") {
+                    assert!(top > 1.2 * bottom, "{profile} {name}: {top} vs {bottom}");
+                } else {
+                    assert!(bottom > 1.2 * top, "{profile} {name}: {top} vs {bottom}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_panel_has_the_background_luminance_and_bumps_match_a_rendered_hemisphere() {
+        let r = request(&Bumps, &["background=0.4", "pattern=bumps"], 16.0);
+        let out = Bumps.generate(&r).unwrap();
+        let Pixels::Gray(img) = &out.pixels else {
+            panic!()
+        };
+        let t = out.targets.as_ref().unwrap();
+        let layers = out.surface.as_ref().unwrap();
+        let s = "tilt=0,slant=45".parse::<Light>().unwrap().direction();
+        for (i, &v) in img.data().iter().enumerate() {
+            if t.labels.data()[i] == 0 {
+                assert_eq!(v, 0.4);
+            } else {
+                let n = layers.normals.data()[i];
+                assert!((v - 0.4 * n.dot(&s).max(0.0) / s.z).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn sideways_rows_are_mirror_images() {
+        let r = request(&Sideways, &["rows=2", "columns=1", "pattern=rows"], 16.0);
+        let out = Sideways.generate(&r).unwrap();
+        let Pixels::Gray(img) = &out.pixels else {
+            panic!()
+        };
+        let t = out.targets.as_ref().unwrap();
+        // Disc 2 (a dimple lit from the left) is disc 1 (a bump) mirrored left-right.
+        let px = |label: u16| -> Vec<f64> {
+            (0..img.height())
+                .flat_map(|r| (0..img.width()).map(move |c| (c, r)))
+                .filter(|&(c, r)| *t.labels.get(c, r) == label)
+                .map(|(c, r)| *img.get(c, r))
+                .collect()
+        };
+        let (a, b) = (px(1), px(2));
+        assert_eq!(a.len(), b.len());
+        let side = (a.len() as f64).sqrt().round() as usize;
+        assert!(side > 10);
+        let w = img.width();
+        let row_of = |label: u16| {
+            (0..img.height())
+                .find(|&r| (0..w).any(|c| *t.labels.get(c, r) == label))
+                .unwrap()
+        };
+        let (r1, r2) = (row_of(1), row_of(2));
+        for dr in 0..10 {
+            for c in 0..w {
+                assert_eq!(img.get(c, r1 + dr), img.get(w - 1 - c, r2 + dr));
+            }
+        }
+    }
+
+    #[test]
+    fn bad_layouts_are_one_line_errors() {
+        let r = request(&Bumps, &["spacing=1"], 16.0);
+        assert!(Bumps
+            .generate(&r)
+            .unwrap_err()
+            .to_string()
+            .contains("overlap"));
+        let r = request(&Bumps, &["rows=20"], 16.0);
+        assert!(Bumps
+            .generate(&r)
+            .unwrap_err()
+            .to_string()
+            .contains("enlarge"));
+        let r = request(&Bumps, &["background=0.9", "light=tilt=0,slant=70"], 16.0);
+        assert!(Bumps
+            .generate(&r)
+            .unwrap_err()
+            .to_string()
+            .contains("slant"));
+    }
+}

@@ -1,0 +1,304 @@
+//! `crater`: a mound with a crater on top, lit from above. Turned by 180° (`rotation=180`,
+//! an exact pixel rotation of the upright picture) the same image reads as a mound inside a
+//! crater: vision keeps its light above and turns the depth inside out.
+//!
+//! The heightfield is radial, z(ρ) = H·exp(−ρ²/2σ²) − D·(1 − ρ²/R²)² (the last term only
+//! for ρ < R): a Gaussian mound of spread σ (`mound_radius`) with a smooth bowl of radius R
+//! (`crater_radius`) taken out of its top, which leaves a raised rim. Lambertian with an
+//! ambient level, the albedo chosen so that the flat ground has the `background` luminance,
+//! with cast shadows by default.
+
+use super::frame::Frame;
+use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use crate::error::{Error, Result};
+use crate::gradient_space::normal_from_pq;
+use crate::grid::Grid;
+use crate::params::ParamSpec;
+use crate::reflectance::Lambertian;
+use crate::render::{render, RenderOptions};
+use crate::surface::Surface;
+use nalgebra::Vector3;
+use serde_json::{json, Map};
+
+struct Crater;
+
+impl Stimulus for Crater {
+    fn info(&self) -> Info {
+        Info {
+            name: "crater",
+            summary: "a mound with a crater lit from above; rotation=180 turns it into a crater with a mound",
+            params: vec![
+                ParamSpec::number(
+                    "mound_radius",
+                    1.0,
+                    0.01,
+                    90.0,
+                    "spread σ of the Gaussian mound (deg)",
+                ),
+                ParamSpec::number(
+                    "crater_radius",
+                    0.7,
+                    0.01,
+                    90.0,
+                    "radius of the bowl-shaped pit in its top (deg)",
+                ),
+                ParamSpec::number(
+                    "height",
+                    1.2,
+                    0.0,
+                    10.0,
+                    "mound height as a multiple of mound_radius",
+                ),
+                ParamSpec::number(
+                    "depth",
+                    1.0,
+                    0.0,
+                    10.0,
+                    "pit depth as a multiple of mound_radius",
+                ),
+                ParamSpec::choice(
+                    "rotation",
+                    "0",
+                    &["0", "180"],
+                    "turn the finished picture by 180° (exact pixel rotation)",
+                ),
+                ParamSpec::light(
+                    "light",
+                    "above",
+                    "light direction (x,y,z | tilt=T,slant=S | name)",
+                ),
+                ParamSpec::number("background", 0.5, 0.0, 1.0, "luminance of the flat ground"),
+                ParamSpec::number(
+                    "ambient",
+                    0.1,
+                    0.0,
+                    1.0,
+                    "luminance of surfaces the light does not reach (attached and cast shadows)",
+                ),
+                ParamSpec::boolean(
+                    "cast_shadows",
+                    true,
+                    "ray-march cast shadows over the heightfield",
+                ),
+            ],
+            default_visual_size: (6.0, 6.0),
+            default_ppd: 40.0,
+        }
+    }
+
+    fn generate(&self, request: &Request) -> Result<Output> {
+        let p = &request.params;
+        let frame = Frame::new(&request.geometry);
+        let sm = frame.px(p.f64("mound_radius")?);
+        let sc = frame.px(p.f64("crater_radius")?);
+        let (hh, dd) = (p.f64("height")? * sm, p.f64("depth")? * sm);
+        if sm < 1.0 || sc < 0.5 {
+            return Err(Error::invalid(format!(
+                "crater: mound_radius and crater_radius must span at least a pixel at {} ppd",
+                frame.ppd
+            )));
+        }
+        let light = p.light("light")?;
+        let s = light.direction();
+        if s.z < 1e-6 {
+            return Err(Error::invalid(
+                "crater: a grazing light (slant 90°) leaves the ground dark; use a slant below 90°",
+            ));
+        }
+        let profile = |rho2: f64| -> (f64, f64) {
+            let em = (-rho2 / (2.0 * sm * sm)).exp();
+            let bowl = (1.0 - rho2 / (sc * sc)).max(0.0);
+            // z and k with p = k·x, q = k·y (p = −∂z/∂x for a radial profile).
+            (
+                hh * em - dd * bowl * bowl,
+                hh * em / (sm * sm) - 4.0 * dd * bowl / (sc * sc),
+            )
+        };
+        // The rim is where the profile peaks; the mound ends where it has fallen to 2% of H.
+        let (mut rim, mut best, mut edge) = (0.0, f64::NEG_INFINITY, 0.0);
+        let steps = 4000;
+        for i in 0..=steps {
+            let rho = 4.0 * sm.max(sc) * i as f64 / steps as f64;
+            let z = profile(rho * rho).0;
+            if z > best {
+                (best, rim) = (z, rho);
+            }
+            if z.abs() > 0.02 * hh.max(dd) {
+                edge = rho;
+            }
+        }
+        let (w, h) = (frame.w, frame.h);
+        let mut depth = Grid::new(w, h, 0.0);
+        let mut normals = Grid::new(w, h, Vector3::z());
+        let mut labels = Grid::new(w, h, 0u16);
+        for row in 0..h {
+            for col in 0..w {
+                let (x, y) = (frame.x(col), frame.y(row));
+                let rho2 = x * x + y * y;
+                let (z, k) = profile(rho2);
+                *depth.get_mut(col, row) = z;
+                *normals.get_mut(col, row) = normal_from_pq(k * x, k * y);
+                if rho2 < rim * rim {
+                    *labels.get_mut(col, row) = 1;
+                } else if rho2 < edge * edge {
+                    *labels.get_mut(col, row) = 2;
+                }
+            }
+        }
+        let surface = Surface {
+            depth,
+            normals,
+            mask: Grid::new(w, h, true),
+        };
+        let (background, ambient) = (p.f64("background")?, p.f64("ambient")?);
+        if ambient > background {
+            return Err(Error::invalid(format!(
+                "crater: ambient {ambient} exceeds the background {background} (the lit ground cannot be darker than shadow)"
+            )));
+        }
+        let albedo = (background - ambient) / s.z;
+        let reflectance = Lambertian {
+            light,
+            albedo,
+            ambient,
+        };
+        let options = RenderOptions {
+            background: 0.0,
+            cast_shadows: p.bool("cast_shadows")?,
+        };
+        let rendering = render(&surface, &reflectance, &options);
+        let peak = rendering.image.min_max().map_or(0.0, |m| m.1);
+        if peak > 1.0 {
+            return Err(Error::invalid(format!(
+                "crater: the brightest slope reaches {peak:.3} > 1; lower the background or the light's slant"
+            )));
+        }
+        let mut notes = Map::new();
+        notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
+        notes.insert("albedo".into(), json!(albedo));
+        notes.insert("rim_radius_deg".into(), json!(rim / frame.ppd));
+        let names = vec!["crater".to_string(), "mound".to_string()];
+        let mut out = Output {
+            pixels: Pixels::Gray(rendering.image),
+            targets: Some(Targets { labels, names }),
+            surface: Some(SurfaceLayers {
+                depth: surface.depth,
+                normals: surface.normals,
+                mask: surface.mask,
+                albedo: None,
+                shading: Some(rendering.shading),
+            }),
+            svg: None,
+            notes,
+        };
+        if p.str("rotation")? == "180" {
+            out = rotated(out);
+            let seen = light.opposite_tilt();
+            out.notes.insert(
+                "rotation".into(),
+                json!(format!(
+                    "the picture is turned by 180°: physically the same mound lit from {seen} (the layers describe it); seen as a crater lit from {light}"
+                )),
+            );
+        }
+        Ok(out)
+    }
+}
+
+/// The output turned by 180° in the image plane: pixels, labels and layers move with the
+/// picture, and normals turn with it ((n_x, n_y) → (−n_x, −n_y)).
+fn rotated(out: Output) -> Output {
+    Output {
+        pixels: match out.pixels {
+            Pixels::Gray(g) => Pixels::Gray(g.rotated_180()),
+            Pixels::Rgb(g) => Pixels::Rgb(g.rotated_180()),
+        },
+        targets: out.targets.map(|t| Targets {
+            labels: t.labels.rotated_180(),
+            names: t.names,
+        }),
+        surface: out.surface.map(|s| SurfaceLayers {
+            depth: s.depth.rotated_180(),
+            normals: s
+                .normals
+                .rotated_180()
+                .map(|n| Vector3::new(-n.x, -n.y, n.z)),
+            mask: s.mask.rotated_180(),
+            albedo: s.albedo.as_ref().map(Grid::rotated_180),
+            shading: s.shading.as_ref().map(Grid::rotated_180),
+        }),
+        svg: out.svg,
+        notes: out.notes,
+    }
+}
+
+/// The crater stimulus.
+pub fn all() -> Vec<Box<dyn Stimulus>> {
+    vec![Box::new(Crater)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+    use crate::visual_size::Geometry;
+
+    fn generate(pairs: &[&str]) -> Output {
+        let info = Crater.info();
+        let given = Params::parse_pairs(pairs).unwrap();
+        Crater
+            .generate(&Request {
+                params: Params::resolve(&info.params, &given).unwrap(),
+                geometry: Geometry {
+                    width: 96,
+                    height: 80,
+                    ppd: 12.0,
+                },
+                seed: 0,
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn rotation_180_is_the_exact_pixel_rotation() {
+        let up = generate(&["cast_shadows=true"]);
+        let down = generate(&["cast_shadows=true", "rotation=180"]);
+        let (Pixels::Gray(a), Pixels::Gray(b)) = (&up.pixels, &down.pixels) else {
+            panic!()
+        };
+        assert_eq!(&a.rotated_180(), b);
+        assert_eq!(
+            up.targets.as_ref().unwrap().labels.rotated_180(),
+            down.targets.as_ref().unwrap().labels
+        );
+        // The turned picture's layers describe the same mound lit from below.
+        let plain = generate(&["cast_shadows=false", "rotation=180"]);
+        let Pixels::Gray(img) = &plain.pixels else {
+            panic!()
+        };
+        let below = "tilt=180,slant=45"
+            .parse::<crate::light::Light>()
+            .unwrap()
+            .direction();
+        let albedo = plain.notes["albedo"].as_f64().unwrap();
+        let normals = &plain.surface.as_ref().unwrap().normals;
+        for (v, n) in img.data().iter().zip(normals.data()) {
+            assert!((v - (0.1 + albedo * n.dot(&below).max(0.0))).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_rim_is_lit_on_its_upper_side_and_the_pit_on_its_lower_side() {
+        let out = generate(&[]);
+        let Pixels::Gray(img) = &out.pixels else {
+            panic!()
+        };
+        // Along the central column: the outer slope above the rim faces up (bright); inside
+        // the pit, its lower wall faces up (bright) and its upper wall faces down (dark).
+        let rim_px = out.notes["rim_radius_deg"].as_f64().unwrap() * 12.0;
+        let (c, mid) = (48, 40.0 - 0.5);
+        let at = |dy: f64| *img.get(c, (mid - dy).round() as usize);
+        assert!(at(rim_px + 3.0) > 0.5 && at(-(rim_px + 3.0)) < 0.5);
+        assert!(at(rim_px * 0.5) < at(-rim_px * 0.5));
+    }
+}
