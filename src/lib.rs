@@ -24,6 +24,7 @@ pub mod integrate;
 pub mod io;
 pub mod light;
 pub mod light_estimation;
+pub mod lightness;
 pub mod params;
 pub mod random;
 pub mod reflectance;

@@ -2,6 +2,8 @@
 //! algorithm. Errors print as one line, `error: …` with the cause chain, and exit with 2 for
 //! usage errors and 1 for everything else (never a panic or a backtrace).
 
+mod analyze;
+mod bench;
 mod describe;
 mod gallery;
 mod progress;
@@ -53,6 +55,10 @@ enum Command {
     Gallery(gallery::Args),
     /// Recover surface normals and depth from one shaded image (shape from shading).
     Solve(solve::Args),
+    /// Analyses of an image or stimulus (lightness models, the fading disk).
+    Analyze(analyze::Args),
+    /// Time the shape-from-shading solvers (multigrid, Jacobi, the NumPy reference) as a table.
+    Bench(bench::Args),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -147,5 +153,7 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Describe(args) => describe::run(args),
         Command::Gallery(args) => gallery::run(args, global),
         Command::Solve(args) => solve::run(args, global),
+        Command::Analyze(args) => analyze::run(args, global),
+        Command::Bench(args) => bench::run(args, global),
     }
 }

@@ -51,10 +51,16 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub lambda: f64,
-    /// Iteration: jacobi (stable) or literal (R at the current value; unstable, for study).
-    #[arg(long, value_name = "jacobi|literal", default_value = "jacobi")]
+    /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow) or literal
+    /// (R at the current value; unstable, for study).
+    #[arg(
+        long,
+        value_name = "multigrid|jacobi|literal",
+        default_value = "multigrid"
+    )]
     pub method: String,
-    /// Stop when the largest change of f or g in a sweep is below this.
+    /// Stop when the largest change of f or g in a Jacobi sweep is below this (for multigrid:
+    /// the change the next Jacobi sweep would make).
     #[arg(
         long,
         value_name = "T",
@@ -62,7 +68,7 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub tol: f64,
-    /// Stop after this many sweeps.
+    /// Stop after this many sweeps (multigrid: cycles).
     #[arg(long, value_name = "N", default_value_t = 100_000)]
     pub max_iter: usize,
     /// Output folder (written whole or not at all).
@@ -162,14 +168,31 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         },
     )?;
     bar.finish_and_clear();
+    // The solver's buffers are not needed past this point: give their memory back before the
+    // integration and the outputs, which make their own.
+    drop(solver);
     let solve_seconds = solve_started.elapsed().as_secs_f64();
+    let unit = if method == Method::Multigrid {
+        "cycles"
+    } else {
+        "sweeps"
+    };
     if solution.diverged {
         return Err(CliError::from(shadelab::Error::Compute(format!(
-            "the {method} iteration diverged after {} sweeps (last update {:.3e}); use \
+            "the {method} iteration diverged after {} {unit} (last update {:.3e}); use \
              --method jacobi or a smaller --lambda",
             solution.iterations, solution.last_update
         ))));
     }
+    // Not converging is not an error (the values may still be useful), but it is never silent:
+    // it is in the report and on stderr, even with --quiet.
+    let warning = (!solution.converged).then(|| {
+        format!(
+            "the {method} solve did not converge within --max-iter {} {unit}: the last update \
+             {:.3e} is above --tol {:.3e}; raise --max-iter or --tol",
+            options.max_iter, solution.last_update, options.tol
+        )
+    });
 
     let integrate_started = Instant::now();
     let (dz_dx, dz_dy) = gradients_from_normals(&solution.normals, &mask, DEFAULT_MIN_NZ)?;
@@ -249,8 +272,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             "occluding_shrink": shadelab::boundary::OCCLUDING_SHRINK,
         },
         "solver": {
+            "method": method.to_string(),
             "iterations": solution.iterations,
+            "iteration_unit": unit,
             "converged": solution.converged,
+            "warning": warning,
             "last_update": solution.last_update,
             "unknowns": solution.unknowns,
             "smoothness_energy": solution.smoothness_energy,
@@ -277,6 +303,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     });
     io::write_json(&dir.join(REPORT), &report)?;
     let target = folder.commit()?;
+    if let Some(warning) = &warning {
+        eprintln!("warning: {warning}");
+    }
     if !global.quiet {
         let state = if solution.converged {
             "converged"
@@ -284,7 +313,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             "did NOT converge (raise --max-iter or --tol)"
         };
         eprintln!(
-            "{}: {state} after {} sweeps, last update {:.2e}, {:.2} s",
+            "{}: {state} after {} {unit}, last update {:.2e}, {:.2} s",
             target.display(),
             solution.iterations,
             solution.last_update,

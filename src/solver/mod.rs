@@ -20,6 +20,13 @@
 //! about their orientation and carry smoothness only. Unknown pixels start at (0, 0), facing
 //! the viewer. The iteration stops when the largest change of f or g in a sweep falls below
 //! the tolerance, or after the maximum number of sweeps.
+//!
+//! Jacobi needs a number of sweeps that grows with the square of the image side (thousands at
+//! 256²). [`Method::Multigrid`], the default, reaches the same fixed point — it relaxes the very
+//! equations whose solution the Jacobi sweep leaves unchanged, with coarse grids to remove the
+//! smooth part of the error — in a handful of cycles whatever the size (see `multigrid.rs`).
+//! Its tolerance means the same: it stops when the next Jacobi sweep would change no f or g by
+//! more than `tol`.
 
 use crate::boundary::{boundary_conditions, Boundary, BoundaryConditions, Role};
 use crate::error::{Error, Result};
@@ -31,11 +38,14 @@ use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 
-/// How the reflectance map enters each sweep.
+/// How the equations are iterated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
-    /// R, ∂R/∂f, ∂R/∂g at the neighbour average (f̄, ḡ): stable (the default).
+    /// Multigrid (the default): the fixed point of [`Method::Jacobi`] in a few cycles, with
+    /// work proportional to the number of pixels.
     #[default]
+    Multigrid,
+    /// Jacobi sweeps with R, ∂R/∂f, ∂R/∂g at the neighbour average (f̄, ḡ): stable, and slow.
     Jacobi,
     /// R, ∂R/∂f, ∂R/∂g at the current (f, g): the form often printed, which is unstable; kept
     /// to demonstrate that.
@@ -43,12 +53,13 @@ pub enum Method {
 }
 
 /// The names of the methods, as `--method` spells them.
-pub const METHOD_NAMES: &[&str] = &["jacobi", "literal"];
+pub const METHOD_NAMES: &[&str] = &["multigrid", "jacobi", "literal"];
 
 impl FromStr for Method {
     type Err = Error;
     fn from_str(name: &str) -> Result<Self> {
         match name {
+            "multigrid" => Ok(Method::Multigrid),
             "jacobi" => Ok(Method::Jacobi),
             "literal" => Ok(Method::Literal),
             other => Err(Error::unknown("solver method", other, METHOD_NAMES)),
@@ -59,6 +70,7 @@ impl FromStr for Method {
 impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
+            Method::Multigrid => "multigrid",
             Method::Jacobi => "jacobi",
             Method::Literal => "literal",
         })
@@ -71,11 +83,12 @@ pub struct SolveOptions {
     /// Weight λ of the brightness term (> 0). Larger trusts the image more; the Jacobi sweep
     /// needs λ·R_f² < 2, about λ < 2 for a Lambertian surface of albedo 1.
     pub lambda: f64,
-    /// Stop when the largest change of f or g in a sweep is below this (> 0).
+    /// Stop when the largest change of f or g in a sweep is below this (> 0); for multigrid,
+    /// when the next Jacobi sweep would change none by this much.
     pub tol: f64,
-    /// Stop after this many sweeps (≥ 1).
+    /// Stop after this many sweeps, or cycles for multigrid (≥ 1).
     pub max_iter: usize,
-    /// Where R is evaluated.
+    /// How the equations are iterated.
     pub method: Method,
 }
 
@@ -85,7 +98,7 @@ impl Default for SolveOptions {
             lambda: 1.0,
             tol: 1e-6,
             max_iter: 100_000,
-            method: Method::Jacobi,
+            method: Method::Multigrid,
         }
     }
 }
@@ -112,14 +125,16 @@ impl SolveOptions {
     }
 }
 
-/// Where a running solve stands; passed to the progress callback after every sweep.
+/// Where a running solve stands; passed to the progress callback after every sweep (every
+/// cycle for multigrid).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
-    /// Sweeps done.
+    /// Sweeps (cycles) done.
     pub iteration: usize,
-    /// The most sweeps the solve will do.
+    /// The most sweeps (cycles) the solve will do.
     pub max_iter: usize,
-    /// The largest change of f or g in the last sweep.
+    /// The largest change of f or g in the last sweep (for multigrid: that the next Jacobi
+    /// sweep would make).
     pub last_update: f64,
 }
 
@@ -132,7 +147,7 @@ pub struct Solution {
     pub g: Image,
     /// Unit normals from (f, g); (0, 0, 1) outside the mask.
     pub normals: Grid<Normal>,
-    /// Sweeps done.
+    /// Sweeps done (cycles for multigrid).
     pub iterations: usize,
     /// Whether the last update fell below the tolerance.
     pub converged: bool,
@@ -143,7 +158,8 @@ pub struct Solution {
     pub smoothness_energy: f64,
     /// The brightness term e_R at the end.
     pub brightness_energy: f64,
-    /// The largest change of f or g in the last sweep.
+    /// The largest change of f or g in the last sweep (for multigrid: that the next Jacobi
+    /// sweep would make from the values returned).
     pub last_update: f64,
     /// The number of unknown pixels.
     pub unknowns: usize,
@@ -189,6 +205,8 @@ pub struct Solver {
     cur_g: Vec<f64>,
     next_f: Vec<f64>,
     next_g: Vec<f64>,
+    /// The multigrid hierarchy, planned on the first multigrid solve.
+    multigrid: Option<multigrid::Multigrid>,
 }
 
 const NO_SLOT: u32 = u32::MAX;
@@ -206,13 +224,15 @@ impl Solver {
         Ok(Solver {
             width,
             height,
-            slot: vec![NO_SLOT; n],
+            // Filled on the first Jacobi or literal solve: multigrid does not need it.
+            slot: Vec::new(),
             pixels: Vec::with_capacity(n),
             nodes: Vec::with_capacity(n),
             cur_f: Vec::with_capacity(n + 1),
             cur_g: Vec::with_capacity(n + 1),
             next_f: Vec::with_capacity(n + 1),
             next_g: Vec::with_capacity(n + 1),
+            multigrid: None,
         })
     }
 
@@ -292,6 +312,27 @@ impl Solver {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
+        if options.method == Method::Multigrid {
+            let (w, h) = (self.width, self.height);
+            let mg = self
+                .multigrid
+                .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
+            let (f, g, stats) = mg.solve(image, bc, reflectance, options, progress);
+            return Ok(finish(
+                f,
+                g,
+                image,
+                bc,
+                reflectance,
+                SolveStats {
+                    iterations: stats.cycles,
+                    converged: stats.converged,
+                    diverged: stats.diverged,
+                    last_update: stats.residual,
+                    unknowns: bc.unknown_count(),
+                },
+            ));
+        }
         let n_unknown = self.build(image, bc, reflectance, options.lambda);
         let literal = options.method == Method::Literal;
         let mut iterations = 0;
@@ -338,7 +379,8 @@ impl Solver {
     ) -> usize {
         let (w, h) = (self.width, self.height);
         let roles = bc.roles.data();
-        self.slot.fill(NO_SLOT);
+        self.slot.clear();
+        self.slot.resize(w * h, NO_SLOT);
         self.pixels.clear();
         self.nodes.clear();
         self.cur_f.clear();
@@ -455,51 +497,65 @@ impl Solver {
         };
         let f = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f));
         let g = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g));
-        let inside = |c: usize, r: usize| *bc.roles.get(c, r) != Role::Outside;
-        let normals = Grid::from_fn(w, h, |c, r| {
-            if inside(c, r) {
-                normal_from_fg(*f.get(c, r), *g.get(c, r))
-            } else {
-                Vector3::z()
+        finish(f, g, image, bc, reflectance, stats)
+    }
+}
+
+/// The [`Solution`] for the values `f`, `g`: the normals and both energy terms.
+fn finish(
+    f: Image,
+    g: Image,
+    image: &Image,
+    bc: &BoundaryConditions,
+    reflectance: &dyn ReflectanceMap,
+    stats: SolveStats,
+) -> Solution {
+    let (w, h) = (f.width(), f.height());
+    let inside = |c: usize, r: usize| *bc.roles.get(c, r) != Role::Outside;
+    let normals = Grid::from_fn(w, h, |c, r| {
+        if inside(c, r) {
+            normal_from_fg(*f.get(c, r), *g.get(c, r))
+        } else {
+            Vector3::z()
+        }
+    });
+    let mut smoothness = 0.0;
+    for r in 0..h {
+        for c in 0..w {
+            if !inside(c, r) {
+                continue;
             }
-        });
-        let mut smoothness = 0.0;
-        for r in 0..h {
-            for c in 0..w {
-                if !inside(c, r) {
-                    continue;
-                }
-                let (f0, g0) = (*f.get(c, r), *g.get(c, r));
-                for (c2, r2) in [(c + 1, r), (c, r + 1)] {
-                    if c2 < w && r2 < h && inside(c2, r2) {
-                        let (df, dg) = (f.get(c2, r2) - f0, g.get(c2, r2) - g0);
-                        smoothness += 0.25 * (df * df + dg * dg);
-                    }
+            let (f0, g0) = (*f.get(c, r), *g.get(c, r));
+            for (c2, r2) in [(c + 1, r), (c, r + 1)] {
+                if c2 < w && r2 < h && inside(c2, r2) {
+                    let (df, dg) = (f.get(c2, r2) - f0, g.get(c2, r2) - g0);
+                    smoothness += 0.25 * (df * df + dg * dg);
                 }
             }
         }
-        let ambient = reflectance.ambient();
-        let mut brightness = 0.0;
-        for &p in &self.pixels {
-            let p = p as usize;
+    }
+    let ambient = reflectance.ambient();
+    let mut brightness = 0.0;
+    for (p, role) in bc.roles.data().iter().enumerate() {
+        if *role == Role::Unknown {
             let i = image.data()[p];
             if i > ambient {
                 let e = i - reflectance.fg(f.data()[p], g.data()[p]).value;
                 brightness += e * e;
             }
         }
-        Solution {
-            f,
-            g,
-            normals,
-            iterations: stats.iterations,
-            converged: stats.converged,
-            diverged: stats.diverged,
-            smoothness_energy: smoothness,
-            brightness_energy: brightness,
-            last_update: stats.last_update,
-            unknowns: stats.unknowns,
-        }
+    }
+    Solution {
+        f,
+        g,
+        normals,
+        iterations: stats.iterations,
+        converged: stats.converged,
+        diverged: stats.diverged,
+        smoothness_energy: smoothness,
+        brightness_energy: brightness,
+        last_update: stats.last_update,
+        unknowns: stats.unknowns,
     }
 }
 
@@ -557,6 +613,7 @@ fn sweep_nodes(
     largest
 }
 
+mod multigrid;
 
 #[cfg(test)]
 mod tests;

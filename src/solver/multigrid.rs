@@ -1,0 +1,916 @@
+//! A multigrid solver for the Ikeuchi–Horn equations: it reaches the fixed point of the stable
+//! Jacobi sweep ([`super::Method::Jacobi`]) with work that grows linearly with the number of
+//! pixels.
+//!
+//! # The equations
+//!
+//! A fixed point of the Jacobi sweep solves, at every unknown pixel i with k_i domain neighbours,
+//!
+//! N(u)_i = k_i·u_i − Σ_nb u_nb − 4λ·w_i·(I_i − R(ū_i))·∇R(ū_i) = 0,   ū_i = Σ_nb u_nb / k_i,
+//!
+//! with u = (f, g), w_i = 1 for lit pixels and 0 in attached shadow: the sweep moves u_i to
+//! u_i − N(u)_i / k_i, so the largest |N_i| / k_i is exactly the largest change the next Jacobi
+//! sweep would make. That is the convergence test here, so `tol` means what it means for Jacobi.
+//! The finest level relaxes N itself by red-black Gauss–Seidel (u_i enters N_i only through
+//! k_i·u_i, so the pointwise solve is the Jacobi update applied in place), which is why the
+//! answer is Jacobi's fixed point and not that of some other discretisation.
+//!
+//! # The coarse-grid correction
+//!
+//! Gauss–Seidel removes rough errors fast and smooth ones slowly; coarser grids remove the smooth
+//! ones. The correction is linear (a Newton–multigrid scheme): each cycle linearises N at the
+//! current values, dropping the term in (I − R)·∇²R as Gauss–Newton does, which leaves a
+//! diffusion–reaction system for the error e,
+//!
+//! k_i·e_i − Σ_nb e_nb + A_i·e_i = r_i,   A_i = 4λ·w_i·∇R·∇Rᵀ (at ū_i),
+//!
+//! whose reaction matrix is positive semi-definite. Its coarse versions are solved by a linear
+//! W-cycle with exact 2 × 2 pointwise solves, which is robust however large the reaction grows on
+//! coarse grids. (A full-approximation scheme, which solves nonlinear problems on the coarse
+//! grids, was tried first: on grids of 16 × 16 and coarser its reflectance term dominates so
+//! strongly that the coarse problems jumped between solutions and the cycle did not converge.)
+//!
+//! # The levels
+//!
+//! Level l+1 has one cell per 2 × 2 block of level l (cell-centred coarsening; odd sides round
+//! up). A coarse cell is *fixed* (its correction is zero) if any of its children is fixed, so the
+//! Dirichlet ring of an occluding or flat boundary stays closed however thin it is; otherwise
+//! *unknown* if any child is unknown; otherwise outside. Coarse cells couple to their domain
+//! neighbours with unit weight (the 5-point operator rediscretised at spacing 2^l and scaled by
+//! the squared spacing, like the fine one); residuals and reaction matrices are restricted by
+//! summing the unknown children, corrections prolongated bilinearly (weights 9, 3, 3, 1 / 16),
+//! with a neighbour outside the domain lending the parent's correction (natural boundary) and a
+//! fixed one lending zero. Coarsening stops at a level with few unknowns, which is relaxed until
+//! it settles.
+//!
+//! # The schedule
+//!
+//! From (0, 0) at the unknowns, as Jacobi starts: cycles of one Gauss–Seidel sweep, the residual
+//! (checked against `tol` on exactly the values that would be returned), the coarse correction
+//! and two more sweeps, until the residual is below `tol` or `max_iter` cycles are done. There is
+//! no full-multigrid start from a coarse solution: the equations have more than one fixed point
+//! (see below), and starting where Jacobi starts keeps the answer on Jacobi's. After a full
+//! red-black sweep every black cell sits exactly at its Jacobi target, so the residual is only
+//! evaluated on the red half.
+//!
+//! # Which fixed point
+//!
+//! Where a lit pixel's neighbour average faces away from the light, R and ∇R vanish and the data
+//! term pulls nowhere, so beside the terminator of an oblique light a range of values are all
+//! fixed points. Multigrid and Jacobi can settle on different ones there; over the sphere and the
+//! vase at 128² and 256² under oblique light the normals differ by 0.02–0.06° on average (a few
+//! pixels by up to a couple of degrees) against Jacobi stopped at the same `tol`
+//! (tests/fast_solver.rs), and by 0.005–0.02° against Jacobi run to 1e-8 or 1e-9, whose own
+//! answer at `tol` = 1e-6 is still 0.008–0.06° short of that. Without an attached shadow they
+//! agree to 0.001°.
+//!
+//! # Determinism
+//!
+//! Every sweep updates one colour from the other, so cells of a colour are independent and the
+//! work can be split across threads in any way; the only reduction is a maximum, which is exact.
+//! The result is bit-identical for any number of threads.
+
+use super::{Progress, SolveOptions, DIVERGENCE_UPDATE};
+use crate::boundary::{BoundaryConditions, Role};
+use crate::grid::{Grid, Image};
+use crate::reflectance::ReflectanceMap;
+use rayon::prelude::*;
+
+/// The number of domain neighbours k (0–4) of an unknown cell.
+const K_BITS: u8 = 0b111;
+/// The cell is an unknown.
+const UNKNOWN: u8 = 1 << 3;
+/// The cell holds a fixed value.
+const FIXED: u8 = 1 << 4;
+/// Finest level only: the pixel is lit (it has a data term).
+const LIT: u8 = 1 << 5;
+/// Unknown or fixed: a cell of the domain.
+const IN_DOMAIN: u8 = UNKNOWN | FIXED;
+
+/// (f, g), or a correction to them, at one cell.
+type Pair = [f64; 2];
+/// A symmetric 2 × 2 matrix (a11, a12, a22).
+type Sym = [f64; 3];
+
+/// Gauss–Seidel sweeps (each a red and a black half-sweep) before the coarse correction.
+const PRE_SWEEPS: usize = 1;
+/// Gauss–Seidel sweeps after the coarse correction.
+const POST_SWEEPS: usize = 2;
+/// Visits to each coarser level per cycle (2: a W-cycle, which the oblique-light problems need to
+/// converge at a steady rate).
+const COARSE_VISITS: usize = 2;
+/// Stop coarsening at a level with at most this many unknowns.
+const COARSEST_UNKNOWNS: usize = 64;
+/// Sweeps at most on the coarsest level per visit.
+const COARSEST_SWEEPS: usize = 100;
+/// The coarsest level is relaxed until its largest change falls below this fraction of its
+/// largest correction.
+const COARSEST_REDUCTION: f64 = 1e-4;
+/// Levels with fewer unknowns than this are swept on one thread: the split costs more than it
+/// saves.
+const PARALLEL_MIN_CELLS: usize = 16_384;
+/// Cells per parallel work item (whole rows; the split does not affect the result).
+const TASK_CELLS: usize = 8_192;
+
+/// One level of the hierarchy: a grid padded by one cell on every side, so that every cell of the
+/// image has four neighbours to read (padding holds 0 and is never in the domain).
+#[derive(Debug, Clone)]
+struct Level {
+    /// Unpadded width.
+    w: usize,
+    /// Unpadded height.
+    h: usize,
+    /// Padded width w + 2.
+    wp: usize,
+    /// Padded height h + 2.
+    hp: usize,
+    /// Cells per row of one colour: ⌈wp / 2⌉.
+    hw: usize,
+    /// Flags and neighbour count of each padded cell, row-major.
+    kind: Vec<u8>,
+    /// Values split by colour (r + c) mod 2: cell (r, c) lives at index r·hw + c/2 of its colour,
+    /// so one colour can be written in parallel while the other is read. The finest level holds
+    /// (f, g), coarse levels the correction.
+    val: [Vec<Pair>; 2],
+    /// Coarse levels: the restricted residual, padded row-major.
+    rhs: Vec<Pair>,
+    /// Coarse levels: the restricted reaction matrix A, padded row-major.
+    reaction: Vec<Sym>,
+    /// Unknown cells on this level in the current problem.
+    unknowns: usize,
+}
+
+impl Level {
+    fn new(w: usize, h: usize, coarse: bool) -> Level {
+        let (wp, hp) = (w + 2, h + 2);
+        let hw = wp.div_ceil(2);
+        let cells = if coarse { wp * hp } else { 0 };
+        Level {
+            w,
+            h,
+            wp,
+            hp,
+            hw,
+            kind: vec![0; wp * hp],
+            val: [vec![[0.0; 2]; hp * hw], vec![[0.0; 2]; hp * hw]],
+            rhs: vec![[0.0; 2]; cells],
+            reaction: vec![[0.0; 3]; cells],
+            unknowns: 0,
+        }
+    }
+
+    /// The value at padded (r, c).
+    #[inline]
+    fn value(&self, r: usize, c: usize) -> Pair {
+        self.val[(r + c) & 1][r * self.hw + (c >> 1)]
+    }
+
+    /// Sets the value at padded (r, c).
+    #[inline]
+    fn set_value(&mut self, r: usize, c: usize, v: Pair) {
+        let hw = self.hw;
+        self.val[(r + c) & 1][r * hw + (c >> 1)] = v;
+    }
+
+    /// The sum of the four neighbours of padded cell (r, c).
+    #[inline]
+    fn neighbours(&self, r: usize, c: usize) -> Pair {
+        neighbour_sum(&self.val[(r + c + 1) & 1], self.hw, r, c, c >> 1)
+    }
+
+    fn parallel(&self) -> bool {
+        self.unknowns >= PARALLEL_MIN_CELLS
+    }
+}
+
+/// The children of coarse padded cell (r, c) on the finer level `fine`, in padded coordinates.
+#[inline]
+fn children(fine: &Level, r: usize, c: usize) -> impl Iterator<Item = (usize, usize)> {
+    let (r0, c0) = (2 * r - 1, 2 * c - 1);
+    let (rmax, cmax) = (fine.h, fine.w);
+    [(r0, c0), (r0, c0 + 1), (r0 + 1, c0), (r0 + 1, c0 + 1)]
+        .into_iter()
+        .filter(move |&(fr, fc)| fr <= rmax && fc <= cmax)
+}
+
+/// The sum of the four neighbours of padded cell (r, c) (index j in its colour's rows), read
+/// from the other colour's values.
+#[inline]
+fn neighbour_sum(other: &[Pair], hw: usize, r: usize, c: usize, j: usize) -> Pair {
+    let row = r * hw;
+    let o = c & 1;
+    let (a, b) = (other[row + j + o - 1], other[row + j + o]);
+    let (u, d) = (other[row - hw + j], other[row + hw + j]);
+    [a[0] + b[0] + u[0] + d[0], a[1] + b[1] + u[1] + d[1]]
+}
+
+/// The larger of `worst` and the change from `old` to `new`; a NaN change counts as infinite.
+#[inline]
+fn track(worst: f64, old: Pair, new: Pair) -> f64 {
+    let mut m = worst;
+    for change in [(new[0] - old[0]).abs(), (new[1] - old[1]).abs()] {
+        if change.is_nan() || change > m {
+            m = if change.is_nan() {
+                f64::INFINITY
+            } else {
+                change
+            };
+        }
+    }
+    m
+}
+
+/// NaN-aware maximum for reductions.
+#[inline]
+fn worst_of(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::INFINITY
+    } else {
+        a.max(b)
+    }
+}
+
+/// Runs `f(r, row)` over the rows of `out` (`len` items each), in parallel when asked, and
+/// returns the largest value it returned.
+fn over_rows<T, F>(out: &mut [T], len: usize, parallel: bool, f: F) -> f64
+where
+    T: Send,
+    F: Fn(usize, &mut [T]) -> f64 + Sync + Send,
+{
+    if parallel {
+        out.par_chunks_mut(len)
+            .enumerate()
+            .with_min_len((TASK_CELLS / len).max(1))
+            .map(|(r, row)| f(r, row))
+            .reduce(|| 0.0, worst_of)
+    } else {
+        out.chunks_mut(len)
+            .enumerate()
+            .map(|(r, row)| f(r, row))
+            .fold(0.0, worst_of)
+    }
+}
+
+/// (k·Id + A)⁻¹ b.
+#[inline]
+fn solve2(k: f64, a: Sym, b: Pair) -> Pair {
+    let (m11, m12, m22) = (k + a[0], a[1], k + a[2]);
+    let det = m11 * m22 - m12 * m12;
+    [
+        (m22 * b[0] - m12 * b[1]) / det,
+        (m11 * b[1] - m12 * b[0]) / det,
+    ]
+}
+
+/// What the finest level's sweeps need to know about the problem.
+struct Context<'a> {
+    /// The image, row-major, unpadded.
+    image: &'a [f64],
+    reflectance: &'a dyn ReflectanceMap,
+    /// 1/k for k = 0..4 (0 for k = 0).
+    inv_k: [f64; 5],
+    /// 4λ/k for k = 0..4: the weight of the data term in the Jacobi update.
+    data_k: [f64; 5],
+    /// 4λ: the data weight of one lit pixel in the k-scaled equation.
+    data: f64,
+}
+
+impl Context<'_> {
+    /// The Jacobi update ū + (4λ/k)·w·(I − R(ū))·∇R(ū) of a fine unknown with flags `kind` and
+    /// neighbour sum `s` at image index `pixel`, and the reaction matrix 4λ·w·∇R·∇Rᵀ there.
+    #[inline]
+    fn fine_target(&self, kind: u8, s: Pair, pixel: usize) -> (Pair, Sym) {
+        let k = (kind & K_BITS) as usize;
+        let mut u = [s[0] * self.inv_k[k], s[1] * self.inv_k[k]];
+        let mut a = [0.0; 3];
+        if kind & LIT != 0 {
+            let sample = self.reflectance.fg(u[0], u[1]);
+            let e = self.data_k[k] * (self.image[pixel] - sample.value);
+            u[0] += e * sample.d1;
+            u[1] += e * sample.d2;
+            a = [
+                self.data * sample.d1 * sample.d1,
+                self.data * sample.d1 * sample.d2,
+                self.data * sample.d2 * sample.d2,
+            ];
+        }
+        (u, a)
+    }
+}
+
+/// Counters of a finished multigrid solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MultigridStats {
+    /// Cycles on the finest level; the last one stops after its residual check when that
+    /// passes, so that the values returned are the values checked.
+    pub cycles: usize,
+    /// The largest change the next Jacobi sweep would make (the Jacobi residual).
+    pub residual: f64,
+    /// Whether `residual` fell below the tolerance.
+    pub converged: bool,
+    /// Whether the iteration blew up.
+    pub diverged: bool,
+    /// Levels used, the finest included.
+    pub levels: usize,
+    /// Work in units of one finest-level sweep (a coarse level counts a quarter of the one
+    /// above; a residual pass counts as a sweep).
+    pub work: f64,
+}
+
+/// A multigrid solver for one image size: its level hierarchy is allocated once and reused by
+/// every solve.
+#[derive(Debug, Clone)]
+pub(crate) struct Multigrid {
+    width: usize,
+    height: usize,
+    levels: Vec<Level>,
+    /// Levels in use for the current problem (≤ levels.len()).
+    used: usize,
+    /// Work counter (finest-sweep units) of the current solve.
+    work: f64,
+    /// The most levels to use (tests restrict it to check the pieces).
+    max_levels: usize,
+    /// Sweeps before and after the coarse correction, and coarse visits per level (1: V-cycle).
+    schedule: (usize, usize, usize),
+}
+
+impl Multigrid {
+    /// A hierarchy for `width` × `height` images, coarsened down to 2 × 2 or less.
+    pub(crate) fn new(width: usize, height: usize) -> Multigrid {
+        let mut levels = vec![Level::new(width, height, false)];
+        let (mut w, mut h) = (width, height);
+        while w > 2 || h > 2 {
+            w = w.div_ceil(2);
+            h = h.div_ceil(2);
+            levels.push(Level::new(w, h, true));
+        }
+        Multigrid {
+            width,
+            height,
+            levels,
+            used: 1,
+            work: 0.0,
+            max_levels: usize::MAX,
+            schedule: (PRE_SWEEPS, POST_SWEEPS, COARSE_VISITS),
+        }
+    }
+
+    /// Solves the problem given by `image`, `bc` and `reflectance` with `options` (checked by
+    /// the caller); `progress` is called after every cycle.
+    pub(crate) fn solve(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> (Image, Image, MultigridStats) {
+        let lambda = options.lambda;
+        let mut inv_k = [0.0; 5];
+        let mut data_k = [0.0; 5];
+        for k in 1..5 {
+            inv_k[k] = 1.0 / k as f64;
+            data_k[k] = lambda * 4.0 / k as f64;
+        }
+        let ctx = Context {
+            image: image.data(),
+            reflectance,
+            inv_k,
+            data_k,
+            data: 4.0 * lambda,
+        };
+        self.work = 0.0;
+        self.setup(image, bc, reflectance.ambient());
+        let mut stats = MultigridStats {
+            cycles: 0,
+            residual: 0.0,
+            converged: self.levels[0].unknowns == 0,
+            diverged: false,
+            levels: self.used,
+            work: 0.0,
+        };
+        while !stats.converged {
+            for _ in 0..self.schedule.0 {
+                self.smooth(0, &ctx);
+            }
+            let residual = self.restrict(0, &ctx);
+            stats.residual = residual;
+            stats.cycles += 1;
+            progress(&Progress {
+                iteration: stats.cycles,
+                max_iter: options.max_iter,
+                last_update: residual,
+            });
+            if residual.is_nan() || residual > DIVERGENCE_UPDATE {
+                stats.diverged = true;
+                break;
+            }
+            if residual < options.tol {
+                stats.converged = true;
+                break;
+            }
+            if stats.cycles >= options.max_iter {
+                break;
+            }
+            if self.used > 1 {
+                self.cycle(1, &ctx);
+                self.prolongate(0);
+            }
+            for _ in 0..self.schedule.1 {
+                self.smooth(0, &ctx);
+            }
+        }
+        stats.work = self.work;
+        let (f, g) = self.fine_values();
+        (f, g, stats)
+    }
+
+    /// Lays out every level for `bc`: flags and neighbour counts, the fixed values and a start
+    /// of (0, 0) at the unknowns of the finest level.
+    fn setup(&mut self, image: &Image, bc: &BoundaryConditions, ambient: f64) {
+        let (w, h) = (self.width, self.height);
+        let fine = &mut self.levels[0];
+        fine.kind.fill(0);
+        for v in fine.val.iter_mut() {
+            v.fill([0.0; 2]);
+        }
+        let roles = bc.roles.data();
+        let in_domain = |c: isize, r: isize| {
+            c >= 0
+                && r >= 0
+                && (c as usize) < w
+                && (r as usize) < h
+                && roles[r as usize * w + c as usize] != Role::Outside
+        };
+        let mut unknowns = 0;
+        for r in 0..h {
+            for c in 0..w {
+                let p = r * w + c;
+                let at = (r + 1) * fine.wp + c + 1;
+                match roles[p] {
+                    Role::Outside => {}
+                    Role::Fixed => {
+                        fine.kind[at] = FIXED;
+                        fine.set_value(r + 1, c + 1, [bc.f.data()[p], bc.g.data()[p]]);
+                    }
+                    Role::Unknown => {
+                        let (ci, ri) = (c as isize, r as isize);
+                        let k = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                            .iter()
+                            .filter(|(dc, dr)| in_domain(ci + dc, ri + dr))
+                            .count() as u8;
+                        // An isolated pixel has nothing to be smooth with: Jacobi leaves it at
+                        // (0, 0), and so does this solver, by keeping it out of the problem.
+                        if k > 0 {
+                            let lit = if image.data()[p] > ambient { LIT } else { 0 };
+                            fine.kind[at] = UNKNOWN | lit | k;
+                            unknowns += 1;
+                        }
+                    }
+                }
+            }
+        }
+        fine.unknowns = unknowns;
+        self.used = 1;
+        while self.used < self.levels.len().min(self.max_levels)
+            && self.levels[self.used - 1].unknowns > COARSEST_UNKNOWNS
+        {
+            let l = self.used;
+            let (upper, lower) = self.levels.split_at_mut(l);
+            coarsen(&upper[l - 1], &mut lower[0]);
+            if lower[0].unknowns == 0 {
+                break;
+            }
+            self.used += 1;
+        }
+    }
+
+    /// One V-cycle for the correction on level `l` ≥ 1, from zero.
+    fn cycle(&mut self, l: usize, ctx: &Context) {
+        if l + 1 == self.used {
+            let mut first = 0.0;
+            for sweep in 0..COARSEST_SWEEPS {
+                let change = self.smooth(l, ctx);
+                if sweep == 0 {
+                    first = change;
+                }
+                if change.is_nan() || change <= COARSEST_REDUCTION * first {
+                    break;
+                }
+            }
+            return;
+        }
+        for visit in 0..self.schedule.2 {
+            if visit > 0 {
+                // Later visits correct what the earlier ones left: start from zero again.
+                let next = &mut self.levels[l + 1];
+                for v in next.val.iter_mut() {
+                    v.fill([0.0; 2]);
+                }
+            }
+            for _ in 0..self.schedule.0 {
+                self.smooth(l, ctx);
+            }
+            self.restrict(l, ctx);
+            self.cycle(l + 1, ctx);
+            self.prolongate(l);
+            for _ in 0..self.schedule.1 {
+                self.smooth(l, ctx);
+            }
+        }
+    }
+
+    /// One red-black Gauss–Seidel sweep on level `l`; returns the largest change.
+    fn smooth(&mut self, l: usize, ctx: &Context) -> f64 {
+        self.work += 0.25f64.powi(l as i32);
+        let a = self.half_sweep(l, 0, ctx);
+        let b = self.half_sweep(l, 1, ctx);
+        worst_of(a, b)
+    }
+
+    /// Updates the cells of colour `colour` on level `l`.
+    fn half_sweep(&mut self, l: usize, colour: usize, ctx: &Context) -> f64 {
+        let level = &mut self.levels[l];
+        let parallel = level.parallel();
+        let (wp, hp, hw, w) = (level.wp, level.hp, level.hw, level.w);
+        let kind = &level.kind[..];
+        let (rhs, reaction) = (&level.rhs[..], &level.reaction[..]);
+        let [red, black] = &mut level.val;
+        let (out, other): (&mut [Pair], &[Pair]) = if colour == 0 {
+            (red, black)
+        } else {
+            (black, red)
+        };
+        over_rows(out, hw, parallel, |r, row| {
+            if r == 0 || r + 1 >= hp {
+                return 0.0;
+            }
+            let start = (r + colour) & 1;
+            let mut worst = 0.0;
+            for (j, slot) in row.iter_mut().enumerate() {
+                let c = 2 * j + start;
+                if c == 0 || c + 1 >= wp {
+                    continue;
+                }
+                let at = r * wp + c;
+                let kd = kind[at];
+                if kd & UNKNOWN == 0 {
+                    continue;
+                }
+                let s = neighbour_sum(other, hw, r, c, j);
+                let new = if l == 0 {
+                    ctx.fine_target(kd, s, (r - 1) * w + c - 1).0
+                } else {
+                    let b = rhs[at];
+                    solve2(
+                        (kd & K_BITS) as f64,
+                        reaction[at],
+                        [b[0] + s[0], b[1] + s[1]],
+                    )
+                };
+                worst = track(worst, *slot, new);
+                *slot = new;
+            }
+            worst
+        })
+    }
+
+    /// Restricts the residual and the reaction matrices of level `l` to level `l + 1` (sums over
+    /// the unknown children) and zeroes the correction there. Returns the largest residual on
+    /// level `l` divided by k: on the finest level, the Jacobi residual.
+    fn restrict(&mut self, l: usize, ctx: &Context) -> f64 {
+        // On the finest level only the red half is evaluated (see below).
+        self.work += 0.25f64.powi(l as i32) * if l == 0 { 0.5 } else { 1.0 };
+        if l + 1 >= self.used {
+            return self.residual_only(ctx);
+        }
+        let (upper, lower) = self.levels.split_at_mut(l + 1);
+        let fine = &upper[l];
+        let coarse = &mut lower[0];
+        let parallel = fine.parallel();
+        let (cwp, chp) = (coarse.wp, coarse.hp);
+        let ckind = &coarse.kind[..];
+        for v in coarse.val.iter_mut() {
+            v.fill([0.0; 2]);
+        }
+        let body = |(r, (rhs_row, reaction_row)): (usize, (&mut [Pair], &mut [Sym]))| {
+            if r == 0 || r + 1 >= chp {
+                return 0.0;
+            }
+            let mut worst = 0.0;
+            for c in 1..cwp - 1 {
+                let coarse_unknown = ckind[r * cwp + c] & UNKNOWN != 0;
+                let mut res = [0.0; 2];
+                let mut react = [0.0; 3];
+                let (mut unknown, mut evaluated) = (0.0, 0.0);
+                for (fr, fc) in children(fine, r, c) {
+                    let fk = fine.kind[fr * fine.wp + fc];
+                    if fk & UNKNOWN == 0 {
+                        continue;
+                    }
+                    unknown += 1.0;
+                    // The last thing done on the finest level is a full red-black sweep, which
+                    // leaves every black cell exactly at its Jacobi target (the same function
+                    // of the same red values): its residual is zero, bit for bit, and is not
+                    // evaluated. Its reaction matrix is taken as its red neighbours'.
+                    if l == 0 && (fr + fc) & 1 == 1 {
+                        continue;
+                    }
+                    evaluated += 1.0;
+                    let (d, a) = residual_at(fine, l, fr, fc, fk, ctx);
+                    let k = (fk & K_BITS) as f64;
+                    worst = track(worst, [0.0; 2], [d[0] / k, d[1] / k]);
+                    if coarse_unknown {
+                        res[0] += d[0];
+                        res[1] += d[1];
+                        react[0] += a[0];
+                        react[1] += a[1];
+                        react[2] += a[2];
+                    }
+                }
+                if evaluated > 0.0 && evaluated < unknown {
+                    let scale = unknown / evaluated;
+                    react = [react[0] * scale, react[1] * scale, react[2] * scale];
+                }
+                rhs_row[c] = res;
+                reaction_row[c] = react;
+            }
+            worst
+        };
+        if parallel {
+            coarse
+                .rhs
+                .par_chunks_mut(cwp)
+                .zip(coarse.reaction.par_chunks_mut(cwp))
+                .enumerate()
+                .with_min_len((TASK_CELLS / (4 * cwp)).max(1))
+                .map(body)
+                .reduce(|| 0.0, worst_of)
+        } else {
+            coarse
+                .rhs
+                .chunks_mut(cwp)
+                .zip(coarse.reaction.chunks_mut(cwp))
+                .enumerate()
+                .map(body)
+                .fold(0.0, worst_of)
+        }
+    }
+
+    /// The largest Jacobi residual of the finest level, when it is the only level.
+    fn residual_only(&self, ctx: &Context) -> f64 {
+        let level = &self.levels[0];
+        let mut worst = 0.0;
+        for r in 1..level.hp - 1 {
+            for c in 1..level.wp - 1 {
+                let kd = level.kind[r * level.wp + c];
+                if kd & UNKNOWN != 0 {
+                    let (d, _) = residual_at(level, 0, r, c, kd, ctx);
+                    let k = (kd & K_BITS) as f64;
+                    worst = track(worst, [0.0; 2], [d[0] / k, d[1] / k]);
+                }
+            }
+        }
+        worst
+    }
+
+    /// Adds the correction of level `l + 1`, interpolated bilinearly, to the unknowns of level
+    /// `l`.
+    fn prolongate(&mut self, l: usize) {
+        self.work += 0.25f64.powi(l as i32) * 0.5;
+        let (upper, lower) = self.levels.split_at_mut(l + 1);
+        let fine = &mut upper[l];
+        let coarse = &lower[0];
+        let parallel = fine.parallel();
+        let (wp, hp, hw) = (fine.wp, fine.hp, fine.hw);
+        let kind = &fine.kind[..];
+        let cwp = coarse.wp;
+        let ckind = &coarse.kind[..];
+        for colour in 0..2 {
+            over_rows(&mut fine.val[colour], hw, parallel, |r, row| {
+                if r == 0 || r + 1 >= hp {
+                    return 0.0;
+                }
+                let start = (r + colour) & 1;
+                // The parent row, and the coarse row on this fine row's side of it.
+                let pr = ((r - 1) >> 1) + 1;
+                let nr = if (r - 1) & 1 == 0 { pr - 1 } else { pr + 1 };
+                for (j, slot) in row.iter_mut().enumerate() {
+                    let c = 2 * j + start;
+                    if c == 0 || c + 1 >= wp || kind[r * wp + c] & UNKNOWN == 0 {
+                        continue;
+                    }
+                    let pc = ((c - 1) >> 1) + 1;
+                    let nc = if (c - 1) & 1 == 0 { pc - 1 } else { pc + 1 };
+                    let p = coarse.value(pr, pc);
+                    let get = |rr: usize, cc: usize| {
+                        if ckind[rr * cwp + cc] & IN_DOMAIN != 0 {
+                            coarse.value(rr, cc)
+                        } else {
+                            p
+                        }
+                    };
+                    let (x, y, d) = (get(pr, nc), get(nr, pc), get(nr, nc));
+                    slot[0] += (9.0 * p[0] + 3.0 * (x[0] + y[0]) + d[0]) / 16.0;
+                    slot[1] += (9.0 * p[1] + 3.0 * (x[1] + y[1]) + d[1]) / 16.0;
+                }
+                0.0
+            });
+        }
+    }
+
+    /// The finest level's f and g as image grids (0 outside the domain).
+    fn fine_values(&self) -> (Image, Image) {
+        let fine = &self.levels[0];
+        let f = Grid::from_fn(self.width, self.height, |c, r| fine.value(r + 1, c + 1)[0]);
+        let g = Grid::from_fn(self.width, self.height, |c, r| fine.value(r + 1, c + 1)[1]);
+        (f, g)
+    }
+}
+
+/// The residual (k-scaled) of unknown cell (r, c) on level `l`, and its reaction matrix.
+#[inline]
+fn residual_at(level: &Level, l: usize, r: usize, c: usize, kd: u8, ctx: &Context) -> (Pair, Sym) {
+    let s = level.neighbours(r, c);
+    let u = level.value(r, c);
+    let k = (kd & K_BITS) as f64;
+    if l == 0 {
+        let (t, a) = ctx.fine_target(kd, s, (r - 1) * level.w + c - 1);
+        ([k * (t[0] - u[0]), k * (t[1] - u[1])], a)
+    } else {
+        let at = r * level.wp + c;
+        let (b, a) = (level.rhs[at], level.reaction[at]);
+        let res = [
+            b[0] + s[0] - (k + a[0]) * u[0] - a[1] * u[1],
+            b[1] + s[1] - a[1] * u[0] - (k + a[2]) * u[1],
+        ];
+        (res, a)
+    }
+}
+
+/// Lays out `coarse` from `fine`: fixed where any child is fixed, unknown where any child is
+/// unknown, with neighbour counts; a coarse unknown without domain neighbours is held fixed.
+fn coarsen(fine: &Level, coarse: &mut Level) {
+    coarse.kind.fill(0);
+    let cwp = coarse.wp;
+    for r in 1..=coarse.h {
+        for c in 1..=coarse.w {
+            let mut kind = 0;
+            for (fr, fc) in children(fine, r, c) {
+                let fk = fine.kind[fr * fine.wp + fc];
+                if fk & FIXED != 0 {
+                    kind = FIXED;
+                } else if fk & UNKNOWN != 0 && kind == 0 {
+                    kind = UNKNOWN;
+                }
+            }
+            coarse.kind[r * cwp + c] = kind;
+        }
+    }
+    let mut unknowns = 0;
+    for r in 1..=coarse.h {
+        for c in 1..=coarse.w {
+            let at = r * cwp + c;
+            if coarse.kind[at] & UNKNOWN == 0 {
+                continue;
+            }
+            let k = [at - 1, at + 1, at - cwp, at + cwp]
+                .iter()
+                .filter(|&&q| coarse.kind[q] & IN_DOMAIN != 0)
+                .count() as u8;
+            if k == 0 {
+                coarse.kind[at] = FIXED;
+            } else {
+                coarse.kind[at] |= k;
+                unknowns += 1;
+            }
+        }
+    }
+    coarse.unknowns = unknowns;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::boundary::{boundary_conditions, Boundary};
+    use crate::gradient_space::{angle_deg, normal_from_fg};
+    use crate::light::Light;
+    use crate::reflectance::Lambertian;
+    use crate::render::{render, RenderOptions};
+    use crate::solver::{Method, Solver};
+    use crate::surface::{sphere, Surface};
+
+    fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
+        let map = Lambertian {
+            light,
+            albedo: 1.0,
+            ambient: 0.0,
+        };
+        let image = render(surface, &map, &RenderOptions::default()).image;
+        (image, map)
+    }
+
+    /// Multigrid with two, three or all levels reaches one fixed point; one level (plain
+    /// Gauss–Seidel) follows Jacobi's path to Jacobi's own. The two fixed points differ only
+    /// beside the terminator, where a lit pixel whose neighbour average faces away from the
+    /// light gets no pull from R (R and ∇R vanish there), so several values are fixed points;
+    /// on average the normals agree to a few thousandths of a degree.
+    #[test]
+    fn every_depth_reaches_the_same_fixed_point() {
+        let size = 48;
+        let s = sphere(size, size, 0.45 * size as f64).unwrap();
+        let (image, map) = picture(&s, Light::from_vector(0.5, 0.3, 1.0).unwrap());
+        let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+        let opts = SolveOptions {
+            tol: 1e-10,
+            ..SolveOptions::default()
+        };
+        let mut answers = Vec::new();
+        for max_levels in [1, 2, 3, usize::MAX] {
+            let mut mg = Multigrid::new(size, size);
+            mg.max_levels = max_levels;
+            let (f, g, stats) = mg.solve(&image, &bc, &map, &opts, &mut |_| {});
+            assert!(stats.converged && stats.residual < 1e-10, "{stats:?}");
+            assert_eq!(stats.levels, max_levels.min(4), "{stats:?}");
+            if max_levels > 1 {
+                assert!(stats.cycles <= 20, "{max_levels} levels: {stats:?}");
+            } else {
+                assert!(stats.cycles > 100, "{stats:?}");
+            }
+            answers.push((f, g));
+        }
+        let largest = |a: &Image, b: &Image| {
+            a.data()
+                .iter()
+                .zip(b.data())
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+        };
+        for (f, g) in &answers[1..3] {
+            assert!(largest(f, &answers[3].0) < 1e-8);
+            assert!(largest(g, &answers[3].1) < 1e-8);
+        }
+        let mut solver = Solver::new(size, size).unwrap();
+        let jacobi_options = SolveOptions {
+            method: Method::Jacobi,
+            ..opts
+        };
+        let jacobi = solver
+            .solve_conditions(&image, &bc, &map, &jacobi_options, &mut |_| {})
+            .unwrap();
+        assert!(largest(&answers[0].0, &jacobi.f) < 1e-7);
+        assert!(largest(&answers[0].1, &jacobi.g) < 1e-7);
+        let (f, g) = &answers[3];
+        let (mut sum, mut n) = (0.0, 0);
+        for (p, role) in bc.roles.data().iter().enumerate() {
+            if *role == Role::Unknown {
+                let a = normal_from_fg(f.data()[p], g.data()[p]);
+                let b = normal_from_fg(jacobi.f.data()[p], jacobi.g.data()[p]);
+                sum += angle_deg(&a, &b);
+                n += 1;
+            }
+        }
+        assert!(sum / (n as f64) < 0.01, "{}°", sum / n as f64);
+    }
+
+    /// The coarse layout keeps the Dirichlet ring closed: no coarse unknown touches a coarse
+    /// cell outside the domain unless the fine domain's unknowns touch the outside there too.
+    #[test]
+    fn coarse_levels_keep_the_fixed_ring_closed() {
+        for size in [64, 101] {
+            let s = sphere(size, size, 0.45 * size as f64).unwrap();
+            let (image, map) = picture(&s, Light::FRONT);
+            let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+            let mut mg = Multigrid::new(size, size);
+            mg.setup(&image, &bc, map.ambient);
+            assert!(mg.used >= 3);
+            for level in &mg.levels[1..mg.used] {
+                let mut fixed = 0;
+                for r in 1..=level.h {
+                    for c in 1..=level.w {
+                        let at = r * level.wp + c;
+                        let kd = level.kind[at];
+                        fixed += usize::from(kd & FIXED != 0);
+                        if kd & UNKNOWN == 0 {
+                            continue;
+                        }
+                        for q in [at - 1, at + 1, at - level.wp, at + level.wp] {
+                            assert!(
+                                level.kind[q] & IN_DOMAIN != 0,
+                                "level {}x{}",
+                                level.w,
+                                level.h
+                            );
+                        }
+                        let k = [at - 1, at + 1, at - level.wp, at + level.wp]
+                            .iter()
+                            .filter(|&&q| level.kind[q] & IN_DOMAIN != 0)
+                            .count();
+                        assert_eq!(usize::from(kd & K_BITS), k);
+                    }
+                }
+                assert!(fixed > 0 && level.unknowns > 0);
+            }
+        }
+    }
+}
