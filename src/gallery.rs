@@ -73,6 +73,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
     ("sphere", include_str!("../stimuli/sphere.json")),
     ("vase", include_str!("../stimuli/vase.json")),
+    ("bunny", include_str!("../stimuli/bunny.json")),
 ];
 
 /// The file that marks a folder as a shadelab gallery.

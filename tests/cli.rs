@@ -213,9 +213,28 @@ fn bad_input_gets_one_line_and_nothing_written() {
             "does not exist",
         ),
         (&["render", "sphere", "--frobnicate"], 2, "--frobnicate"),
-        (&["render", "mesh", "--out", "x.png"], 2, "give the mesh file"),
-        (&["render", "mesh", "--set", "path=nothing.ply", "--out", "x.png"], 1, "nothing.ply"),
-        (&["render", "bunny", "--set", "fill=0", "--out", "x.png"], 2, "fill"),
+        (
+            &["render", "mesh", "--out", "x.png"],
+            2,
+            "give the mesh file",
+        ),
+        (
+            &[
+                "render",
+                "mesh",
+                "--set",
+                "path=nothing.ply",
+                "--out",
+                "x.png",
+            ],
+            1,
+            "nothing.ply",
+        ),
+        (
+            &["render", "bunny", "--set", "fill=0", "--out", "x.png"],
+            2,
+            "fill",
+        ),
         (&["describe", "teapot"], 2, "teapot"),
     ];
     for (args, code, needle) in cases {
@@ -301,11 +320,23 @@ fn list_and_describe() {
 #[test]
 fn the_built_in_bunny_renders_upright() {
     let d = scratch("bunny");
-    let out = shadelab(&d, &["render", "bunny", "--light", "above", "--size", "96", "--layers", "--out", "b.png"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = shadelab(
+        &d,
+        &[
+            "render", "bunny", "--light", "above", "--size", "96", "--layers", "--out", "b.png",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let mask = shadelab::io::read_mask(&d.join("b_mask.png"), 1 << 20).unwrap();
     let frac = mask.count() as f64 / mask.len() as f64;
-    assert!((0.25..0.6).contains(&frac), "bunny covers {frac} of the frame");
+    assert!(
+        (0.25..0.6).contains(&frac),
+        "bunny covers {frac} of the frame"
+    );
     let normals = shadelab::io::read_normals(&d.join("b_normals.npy"), 1 << 20).unwrap();
     // Ears up: the topmost object row lies in the top fifth of the frame, and the normals along
     // the top of the silhouette point up.

@@ -4,6 +4,9 @@
 
 mod fading;
 mod lightness;
+mod observer;
+mod perception;
+mod prior_sweep;
 
 use super::{CliError, CliResult, Global};
 use serde_json::{json, Map, Value};
@@ -28,6 +31,12 @@ enum Command {
     /// The fading (Troxler) disk: border band-pass energy of a blurred vs a sharp disk and a
     /// temporal adaptation model with fixational jitter, as numbers and an animation.
     Fading(fading::Args),
+    /// Shape from shading under each assumed light tilt: each token's convexity, residual and
+    /// smoothness, and the tilts where it flips between convex and concave.
+    PriorSweep(prior_sweep::Args),
+    /// A Bayesian observer (von Mises light prior, convexity prior, residual likelihood):
+    /// P(convex) against the picture's rotation.
+    Observer(observer::Args),
 }
 
 /// Runs `analyze`.
@@ -35,6 +44,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     match args.command {
         Command::Lightness(a) => lightness::run(a, global),
         Command::Fading(a) => fading::run(a, global),
+        Command::PriorSweep(a) => prior_sweep::run(a, global),
+        Command::Observer(a) => observer::run(a, global),
     }
 }
 

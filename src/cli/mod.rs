@@ -9,6 +9,7 @@ mod gallery;
 mod progress;
 mod render;
 mod solve;
+mod study;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -59,6 +60,8 @@ enum Command {
     Analyze(analyze::Args),
     /// Time the shape-from-shading solvers (multigrid, Jacobi, the NumPy reference) as a table.
     Bench(bench::Args),
+    /// Run a grid of stimuli × parameters × priors (whole or one shard), or merge shards.
+    Study(study::Args),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -126,11 +129,26 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            let text = format!("{:#}", e.error).replace('\n', " ");
-            eprintln!("error: {text}");
+            eprintln!("error: {}", one_line(&e.error));
             ExitCode::from(if e.usage { 2 } else { 1 })
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: library errors already name their
+/// cause (`file: No such file or directory`), so a cause whose text is shown is not repeated.
+fn one_line(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in error.chain() {
+        let part = cause.to_string();
+        if !text.contains(&part) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&part);
+        }
+    }
+    text.replace('\n', " ")
 }
 
 fn configure_threads(global: &Global) -> CliResult {
@@ -155,5 +173,6 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Solve(args) => solve::run(args, global),
         Command::Analyze(args) => analyze::run(args, global),
         Command::Bench(args) => bench::run(args, global),
+        Command::Study(args) => study::run(args, global),
     }
 }

@@ -284,7 +284,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             "seconds": solve_seconds,
         },
         "integration": {
-            "method": "least-squares Poisson on the mask (conjugate gradients)",
+            "method": "least-squares Poisson on the mask (conjugate gradients, multigrid-preconditioned)",
             "min_nz": DEFAULT_MIN_NZ,
             "iterations": integration.iterations,
             "relative_residual": integration.relative_residual,

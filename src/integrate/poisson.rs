@@ -1,4 +1,13 @@
-//! Mask-aware least-squares integration: the masked Poisson equation by conjugate gradients.
+//! Mask-aware least-squares integration: the masked Poisson equation by conjugate gradients,
+//! preconditioned by a multigrid V-cycle.
+//!
+//! The matrix is the graph Laplacian of the mask's 4-neighbour graph. Plain (diagonally
+//! preconditioned) CG needs O(N) iterations on an N×N domain; a V-cycle that smooths with
+//! symmetric Gauss–Seidel and corrects from 2×2-aggregated coarse grids brings that down to about
+//! 15 from 256² to 1024². The coarse operators are the exact Galerkin products PᵀAP for the
+//! piecewise-constant prolongation P, which on a grid are again weighted 5-point Laplacians
+//! (the weight of a coarse edge counts the fine mask edges crossing it), so masks, holes and
+//! separate parts need no special handling at any level.
 
 use super::check_gradients;
 use crate::error::{Error, Result};
@@ -46,7 +55,8 @@ pub struct Integration {
 ///
 /// The normal equations are the Poisson equation L z = b with L the graph Laplacian of the
 /// mask's 4-neighbour graph (natural boundary conditions on the silhouette and the image
-/// border), solved by conjugate gradients with a diagonal preconditioner. L is singular (a
+/// border), solved by conjugate gradients preconditioned with a multigrid V-cycle (see the
+/// module documentation). L is singular (a
 /// constant can be added to each connected part); the solution is fixed by zero mean per part.
 /// Every sum is taken in a fixed order: the result does not depend on threads.
 pub fn integrate_differences(
@@ -55,60 +65,9 @@ pub fn integrate_differences(
     mask: &Mask,
     options: &PoissonOptions,
 ) -> Result<Integration> {
-    check_gradients(right, down)?;
-    if !right.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "difference fields are {}x{} but the mask is {}x{}",
-            right.width(),
-            right.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
-    if !(options.tol.is_finite() && options.tol > 0.0) || options.max_iter == 0 {
-        return Err(Error::invalid(format!(
-            "integration tolerance {} must be positive and max_iter {} at least 1",
-            options.tol, options.max_iter
-        )));
-    }
-    if mask.count() == 0 {
-        return Err(Error::invalid(
-            "the mask is empty: there is nothing to integrate",
-        ));
-    }
-    let (w, h) = (mask.width(), mask.height());
-    let problem = Laplacian::new(mask);
-    let n = problem.pixels.len();
-    // b_k = Σ over pairs (i → k) of d − Σ over pairs (k → j) of d, for d the wanted z_j − z_i.
-    let mut b = vec![0.0; n];
-    for (k, &p) in problem.pixels.iter().enumerate() {
-        let (c, r) = (p % w, p / w);
-        let inside = |cc: usize, rr: usize| *mask.get(cc, rr);
-        if c + 1 < w && inside(c + 1, r) {
-            b[k] -= right.get(c, r);
-        }
-        if c > 0 && inside(c - 1, r) {
-            b[k] += right.get(c - 1, r);
-        }
-        if r + 1 < h && inside(c, r + 1) {
-            b[k] -= down.get(c, r);
-        }
-        if r > 0 && inside(c, r - 1) {
-            b[k] += down.get(c, r - 1);
-        }
-    }
-    let (mut z, iterations, relative_residual, converged) = problem.solve(&b, options);
-    problem.remove_part_means(&mut z);
-    let mut depth = Grid::new(w, h, 0.0);
-    for (k, &p) in problem.pixels.iter().enumerate() {
-        depth.data_mut()[p] = z[k];
-    }
-    Ok(Integration {
-        depth,
-        iterations,
-        relative_residual,
-        converged,
-    })
+    check_inputs(right, down, mask, options)?;
+    let b = build_rhs(mask, |c, r| *right.get(c, r), |c, r| *down.get(c, r));
+    solve(mask, b, options)
 }
 
 /// The depth on `mask` whose slopes best match (`dz_dx`, `dz_dy`) in least squares (world axes:
@@ -130,166 +89,108 @@ pub fn integrate_gradients(
             mask.height()
         )));
     }
+    check_options(options)?;
+    check_mask(mask)?;
+    // The differences are formed on the fly rather than as two more images: this path runs at
+    // the end of `solve`, where memory peaks.
+    let b = build_rhs(
+        mask,
+        |c, r| 0.5 * (dz_dx.get(c, r) + dz_dx.get(c + 1, r)),
+        // One row down is one pixel toward −y.
+        |c, r| -0.5 * (dz_dy.get(c, r) + dz_dy.get(c, r + 1)),
+    );
+    solve(mask, b, options)
+}
+
+/// Checks sizes, finiteness, options and a non-empty mask, in the order the original
+/// integrator did (so its error messages are unchanged).
+fn check_inputs(right: &Image, down: &Image, mask: &Mask, options: &PoissonOptions) -> Result<()> {
+    check_gradients(right, down)?;
+    if !right.same_size(mask) {
+        return Err(Error::invalid(format!(
+            "difference fields are {}x{} but the mask is {}x{}",
+            right.width(),
+            right.height(),
+            mask.width(),
+            mask.height()
+        )));
+    }
+    check_options(options)?;
+    check_mask(mask)
+}
+
+fn check_options(options: &PoissonOptions) -> Result<()> {
+    if !(options.tol.is_finite() && options.tol > 0.0) || options.max_iter == 0 {
+        return Err(Error::invalid(format!(
+            "integration tolerance {} must be positive and max_iter {} at least 1",
+            options.tol, options.max_iter
+        )));
+    }
+    Ok(())
+}
+
+fn check_mask(mask: &Mask) -> Result<()> {
+    if mask.count() == 0 {
+        return Err(Error::invalid(
+            "the mask is empty: there is nothing to integrate",
+        ));
+    }
+    Ok(())
+}
+
+/// The right-hand side of the normal equations on the full grid (0 outside the mask):
+/// b_k = Σ over pairs (i → k) of d − Σ over pairs (k → j) of d, for d the wanted z_j − z_i.
+/// `right(c, r)` is only asked for when both (c, r) and (c+1, r) are inside, `down(c, r)` when
+/// both (c, r) and (c, r+1) are.
+fn build_rhs(
+    mask: &Mask,
+    right: impl Fn(usize, usize) -> f64,
+    down: impl Fn(usize, usize) -> f64,
+) -> Vec<f64> {
     let (w, h) = (mask.width(), mask.height());
-    let right = Grid::from_fn(w, h, |c, r| {
-        if c + 1 < w {
-            0.5 * (dz_dx.get(c, r) + dz_dx.get(c + 1, r))
-        } else {
-            0.0
-        }
-    });
-    // One row down is one pixel toward −y.
-    let down = Grid::from_fn(w, h, |c, r| {
-        if r + 1 < h {
-            -0.5 * (dz_dy.get(c, r) + dz_dy.get(c, r + 1))
-        } else {
-            0.0
-        }
-    });
-    integrate_differences(&right, &down, mask, options)
-}
-
-/// The graph Laplacian of a mask's 4-neighbour graph, over its pixels in row-major order.
-struct Laplacian {
-    /// Pixel index of each unknown.
-    pixels: Vec<usize>,
-    /// Unknown indices of each unknown's neighbours; missing ones point at index n, which
-    /// holds 0 in every vector the operator reads.
-    neighbours: Vec<[u32; 4]>,
-    /// Number of neighbours.
-    degree: Vec<f64>,
-}
-
-impl Laplacian {
-    fn new(mask: &Mask) -> Laplacian {
-        let (w, h) = (mask.width(), mask.height());
-        let mut index = vec![u32::MAX; w * h];
-        let mut pixels = Vec::new();
-        for (p, &m) in mask.data().iter().enumerate() {
-            if m {
-                index[p] = pixels.len() as u32;
-                pixels.push(p);
-            }
-        }
-        let missing = pixels.len() as u32;
-        let mut neighbours = Vec::with_capacity(pixels.len());
-        let mut degree = Vec::with_capacity(pixels.len());
-        for &p in &pixels {
-            let (c, r) = (p % w, p / w);
-            let mut nb = [missing; 4];
-            let mut k = 0;
-            let candidates = [
-                (c > 0).then(|| p - 1),
-                (c + 1 < w).then(|| p + 1),
-                (r > 0).then(|| p - w),
-                (r + 1 < h).then(|| p + w),
-            ];
-            for q in candidates.into_iter().flatten() {
-                if index[q] != u32::MAX {
-                    nb[k] = index[q];
-                    k += 1;
-                }
-            }
-            neighbours.push(nb);
-            degree.push(k as f64);
-        }
-        Laplacian {
-            pixels,
-            neighbours,
-            degree,
-        }
-    }
-
-    /// out = L x, for x holding n + 1 values (the last one 0).
-    fn apply(&self, x: &[f64], out: &mut [f64]) {
-        for (k, (nb, d)) in self.neighbours.iter().zip(&self.degree).enumerate() {
-            let [a, b, c, e] = *nb;
-            out[k] = d * x[k] - (x[a as usize] + x[b as usize] + x[c as usize] + x[e as usize]);
-        }
-    }
-
-    /// Preconditioned conjugate gradients from z = 0; returns (z, iterations, relative
-    /// residual, converged).
-    fn solve(&self, b: &[f64], options: &PoissonOptions) -> (Vec<f64>, usize, f64, bool) {
-        let n = b.len();
-        let dot = |u: &[f64], v: &[f64]| -> f64 { u.iter().zip(v).map(|(a, b)| a * b).sum() };
-        let b_norm = dot(b, b).sqrt();
-        let mut z = vec![0.0; n];
-        if b_norm == 0.0 {
-            return (z, 0, 0.0, true);
-        }
-        // Isolated pixels have no equation (degree 0): their preconditioner entry is 0, which
-        // keeps them at 0 and out of the Krylov space.
-        let inv_degree: Vec<f64> = self
-            .degree
-            .iter()
-            .map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 })
-            .collect();
-        let mut r = b.to_vec();
-        let mut s: Vec<f64> = r.iter().zip(&inv_degree).map(|(r, m)| r * m).collect();
-        let mut p = s.clone();
-        p.push(0.0);
-        let mut lp = vec![0.0; n];
-        let mut rs = dot(&r, &s);
-        let target = options.tol * b_norm;
-        let mut residual = b_norm;
-        for iteration in 1..=options.max_iter {
-            self.apply(&p, &mut lp);
-            let curvature = dot(&p[..n], &lp);
-            if curvature <= 0.0 {
-                return (z, iteration - 1, residual / b_norm, residual <= target);
-            }
-            let alpha = rs / curvature;
-            for k in 0..n {
-                z[k] += alpha * p[k];
-                r[k] -= alpha * lp[k];
-            }
-            residual = dot(&r, &r).sqrt();
-            if residual <= target {
-                return (z, iteration, residual / b_norm, true);
-            }
-            for k in 0..n {
-                s[k] = r[k] * inv_degree[k];
-            }
-            let rs_next = dot(&r, &s);
-            let beta = rs_next / rs;
-            rs = rs_next;
-            for k in 0..n {
-                p[k] = s[k] + beta * p[k];
-            }
-        }
-        (z, options.max_iter, residual / b_norm, false)
-    }
-
-    /// Subtracts from z the mean of each connected part of the graph.
-    fn remove_part_means(&self, z: &mut [f64]) {
-        let n = z.len();
-        let mut part = vec![usize::MAX; n];
-        let mut stack = Vec::new();
-        let mut members = Vec::new();
-        for start in 0..n {
-            if part[start] != usize::MAX {
+    let inside = |c: usize, r: usize| *mask.get(c, r);
+    let mut b = vec![0.0; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            if !inside(c, r) {
                 continue;
             }
-            part[start] = start;
-            stack.push(start);
-            members.clear();
-            while let Some(k) = stack.pop() {
-                members.push(k);
-                for &q in &self.neighbours[k] {
-                    let q = q as usize;
-                    if q < n && part[q] == usize::MAX {
-                        part[q] = start;
-                        stack.push(q);
-                    }
-                }
+            let mut v = 0.0;
+            if c + 1 < w && inside(c + 1, r) {
+                v -= right(c, r);
             }
-            // Sum in index order, whatever order the search visited them in.
-            members.sort_unstable();
-            let mean = members.iter().map(|&k| z[k]).sum::<f64>() / members.len() as f64;
-            for &k in &members {
-                z[k] -= mean;
+            if c > 0 && inside(c - 1, r) {
+                v += right(c - 1, r);
             }
+            if r + 1 < h && inside(c, r + 1) {
+                v -= down(c, r);
+            }
+            if r > 0 && inside(c, r - 1) {
+                v += down(c, r - 1);
+            }
+            b[r * w + c] = v;
         }
     }
+    b
 }
+
+/// Solves L z = b on the mask by multigrid-preconditioned CG and fixes the gauge.
+fn solve(mask: &Mask, b: Vec<f64>, options: &PoissonOptions) -> Result<Integration> {
+    let (w, h) = (mask.width(), mask.height());
+    let hierarchy = multigrid::Hierarchy::new(mask);
+    let (mut z, iterations, relative_residual, converged) = hierarchy.pcg(b, options);
+    drop(hierarchy);
+    multigrid::remove_part_means(mask, &mut z);
+    Ok(Integration {
+        depth: Grid::from_vec(w, h, z)?,
+        iterations,
+        relative_residual,
+        converged,
+    })
+}
+
+mod multigrid;
+#[cfg(test)]
+pub(crate) mod reference;
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,160 @@
+//! The prior sweep: one picture interpreted under each of a range of assumed light tilts.
+//!
+//! Every tilt is an independent solve, so the sweep runs them in parallel (rayon), each worker
+//! with its own [`Interpreter`], and collects the results in tilt order: the output does not
+//! depend on the number of threads. For each token the sweep reports where its convexity
+//! changes sign: the assumed tilts at which a bump becomes a dimple.
+
+use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
+use crate::error::{Error, Result};
+use crate::solver::SolveOptions;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Convexities of smaller magnitude than this count as zero (no verdict) when locating flips:
+/// values that small are the solver's tolerance showing through, not a shape.
+pub const CONVEXITY_ZERO: f64 = 1e-6;
+
+/// A finished sweep.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Sweep {
+    /// What was assumed besides the tilt.
+    pub lighting: Lighting,
+    /// The tokens' labels and names, in reading order.
+    pub tokens: Vec<(u16, String)>,
+    /// One interpretation per assumed tilt, in the order the tilts were given.
+    pub interpretations: Vec<Interpretation>,
+}
+
+impl Sweep {
+    /// The tilts, in order.
+    pub fn tilts(&self) -> Vec<f64> {
+        self.interpretations.iter().map(|i| i.tilt_deg).collect()
+    }
+
+    /// Token `k`'s convexity at every tilt.
+    pub fn convexities(&self, k: usize) -> Vec<f64> {
+        self.interpretations
+            .iter()
+            .map(|i| i.tokens[k].convexity)
+            .collect()
+    }
+
+    /// Whether the tilts are equally spaced and cover the circle exactly once (step s, n·s =
+    /// 360), so that the last tilt is followed by the first.
+    pub fn covers_circle(&self) -> bool {
+        circle_step(&self.tilts()).is_some()
+    }
+
+    /// The assumed tilts at which token `k`'s convexity changes sign, by linear interpolation
+    /// between neighbouring tilts (and across the wrap from the last tilt to the first when the
+    /// sweep covers the circle); angles are wrapped into [0, 360).
+    pub fn flips(&self, k: usize) -> Vec<f64> {
+        sign_changes(&self.tilts(), &self.convexities(k), self.covers_circle())
+    }
+}
+
+/// The step of `tilts` when they are equally spaced, increasing, and cover 360° exactly once.
+pub fn circle_step(tilts: &[f64]) -> Option<f64> {
+    if tilts.len() < 2 {
+        return None;
+    }
+    let step = 360.0 / tilts.len() as f64;
+    let ok = tilts
+        .iter()
+        .enumerate()
+        .all(|(i, &t)| (t - (tilts[0] + i as f64 * step)).abs() < 1e-6);
+    ok.then_some(step)
+}
+
+/// Where `values` (sampled at `angles`) change sign: linear interpolation between neighbours,
+/// stepping over values within [`CONVEXITY_ZERO`] of zero; `cyclic` also checks the wrap from
+/// the last sample back to the first. Angles are wrapped into [0, 360).
+pub fn sign_changes(angles: &[f64], values: &[f64], cyclic: bool) -> Vec<f64> {
+    let n = angles.len().min(values.len());
+    // The samples with a verdict, as (angle, value), unwrapped along the sweep.
+    let signed: Vec<(f64, f64)> = (0..n)
+        .filter(|&i| values[i].abs() > CONVEXITY_ZERO)
+        .map(|i| (angles[i], values[i]))
+        .collect();
+    let mut pairs: Vec<((f64, f64), (f64, f64))> =
+        signed.windows(2).map(|w| (w[0], w[1])).collect();
+    if cyclic && signed.len() >= 2 {
+        let (first, last) = (signed[0], signed[signed.len() - 1]);
+        pairs.push((last, (first.0 + 360.0, first.1)));
+    }
+    pairs
+        .into_iter()
+        .filter(|((_, a), (_, b))| a.signum() != b.signum())
+        .map(|((ta, a), (tb, b))| super::wrap_360(ta + (tb - ta) * a / (a - b)))
+        .collect()
+}
+
+/// Interprets `scene` under the light of each tilt in `tilts` with `lighting`, in parallel.
+/// `progress` is called once per finished tilt (from any thread).
+///
+/// Fails on no tilts, a bad scene or lighting, or a solve that diverges.
+pub fn sweep(
+    scene: &Scene,
+    tilts: &[f64],
+    lighting: &Lighting,
+    options: &SolveOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Sweep> {
+    if tilts.is_empty() {
+        return Err(Error::invalid("the sweep has no tilts"));
+    }
+    if let Some(t) = tilts.iter().find(|t| !t.is_finite()) {
+        return Err(Error::invalid(format!("tilt {t} is not a finite number")));
+    }
+    lighting.validate()?;
+    check_scene(scene)?;
+    // Plan once here so that a bad scene fails before any work, then clone per worker.
+    let first = Interpreter::new(scene, options)?;
+    drop(first);
+    let interpretations = tilts
+        .par_iter()
+        .map_init(
+            || Interpreter::new(scene, options),
+            |interpreter, &tilt| {
+                let result = match interpreter {
+                    Ok(it) => it.interpret(scene, tilt, lighting),
+                    Err(e) => Err(Error::Compute(format!("cannot plan the solve: {e}"))),
+                };
+                progress();
+                result
+            },
+        )
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Sweep {
+        lighting: *lighting,
+        tokens: scene
+            .tokens
+            .iter()
+            .map(|t| (t.label, t.name.clone()))
+            .collect(),
+        interpretations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sign_changes_interpolate_and_wrap() {
+        let angles = [0.0, 90.0, 180.0, 270.0];
+        // cos-like: flips at 45 (between 0 and 90: 1 → −1) and the wrap.
+        let v = [1.0, -1.0, -1.0, 1.0];
+        assert_eq!(sign_changes(&angles, &v, false), [45.0, 225.0]);
+        let v = [1.0, 1.0, -1.0, -1.0];
+        assert_eq!(sign_changes(&angles, &v, true), [135.0, 315.0]);
+        // A zero sample is stepped over: one flip, at the zero.
+        let v = [1.0, 0.0, -1.0, -1.0];
+        assert_eq!(sign_changes(&angles, &v, false), [90.0]);
+        assert!(sign_changes(&angles, &[1.0; 4], true).is_empty());
+        assert_eq!(circle_step(&[0.0, 90.0, 180.0, 270.0]), Some(90.0));
+        assert_eq!(circle_step(&[-180.0, -60.0, 60.0]), Some(120.0));
+        assert_eq!(circle_step(&[0.0, 90.0, 180.0]), None);
+    }
+}

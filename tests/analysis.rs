@@ -1,0 +1,670 @@
+//! Perception analyses: the demonstrations of SUBJECT §2 as facts of the engine, the Bayesian
+//! observer, and studies (sharded runs merged byte for byte).
+
+use crate::cli::{assert_error, scratch, shadelab};
+use serde_json::{Map, Value};
+use shadelab::analysis::binding::{binding, GlobalLight};
+use shadelab::analysis::convexity::tokens_from_labels;
+use shadelab::analysis::interpretation::analysis_solve_options;
+use shadelab::analysis::observer::{observe, LightPrior, ObserverOptions};
+use shadelab::analysis::rotation::rotate_quarter_turns;
+use shadelab::analysis::{
+    sweep, Domain, Interpretation, Interpreter, Lighting, Picture, Scene, Sweep,
+};
+use shadelab::boundary::Boundary;
+use shadelab::grid::Mask;
+use shadelab::stimulus;
+use shadelab::visual_size::SizeRequest;
+use std::path::Path;
+
+/// Renders `name` at `w`×`h` pixels and `ppd` with `pairs` as parameters.
+fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Picture {
+    let given: Map<String, Value> = shadelab::params::Params::parse_pairs(pairs).unwrap();
+    let size = SizeRequest {
+        visual_size: Some((w as f64 / ppd, h as f64 / ppd)),
+        ppd: Some(ppd),
+        shape: None,
+    };
+    let (request, output) = stimulus::generate(name, &given, &size, 1, 1 << 24).unwrap();
+    let p = Picture::from_stimulus(&request, &output).unwrap();
+    assert_eq!((p.image.width(), p.image.height()), (w, h), "{name}");
+    p
+}
+
+/// The picture's interpretations under each tilt (flat boundary, whole-picture domain unless
+/// `domain` says otherwise, slant 45°).
+fn interpretations(p: &Picture, domain: Domain, tilts: &[f64]) -> (Sweep, Lighting) {
+    let mask = p.domain(domain);
+    let lighting = p.lighting(&mask, 45.0, None, None).unwrap();
+    let scene = Scene {
+        image: &p.image,
+        domain: &mask,
+        boundary: &Boundary::Flat,
+        tokens: &p.tokens,
+    };
+    let s = sweep(&scene, tilts, &lighting, &analysis_solve_options(), &|| {}).unwrap();
+    for i in &s.interpretations {
+        assert!(i.converged, "tilt {}: not converged", i.tilt_deg);
+    }
+    (s, lighting)
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(1e-300)
+}
+
+/// Convexity of token `k` under the interpretation at `tilt`.
+fn convexity(s: &Sweep, tilt: f64, k: usize) -> f64 {
+    at(s, tilt).tokens[k].convexity
+}
+
+fn at(s: &Sweep, tilt: f64) -> &Interpretation {
+    s.interpretations
+        .iter()
+        .find(|i| i.tilt_deg == tilt)
+        .expect("tilt in sweep")
+}
+
+#[test]
+fn bumps_are_convex_under_light_from_above_and_concave_from_below_with_equal_residuals() {
+    // A bump and a dimple side by side, lit from above.
+    let p = picture(
+        "bumps",
+        &[
+            "rows=1",
+            "columns=2",
+            "pattern=alternate",
+            "radius=1",
+            "spacing=3",
+        ],
+        (96, 48),
+        16.0,
+    );
+    assert!(p.tokens[0].name.starts_with("bump") && p.tokens[1].name.starts_with("dimple"));
+    let (s, _) = interpretations(&p, Domain::Image, &[0.0, 180.0]);
+    let (above, below) = (at(&s, 0.0), at(&s, 180.0));
+    let (bump, dimple) = (0, 1);
+    assert!(above.tokens[bump].convexity > 0.05, "{:?}", above.tokens);
+    assert!(below.tokens[bump].convexity < -0.05);
+    assert!(above.tokens[dimple].convexity < -0.05);
+    assert!(below.tokens[dimple].convexity > 0.05);
+    // The solve under the turned light is the exact negation: residuals tie.
+    for k in [bump, dimple] {
+        let (a, b) = (above.tokens[k], below.tokens[k]);
+        assert!(rel(a.convexity, -b.convexity) < 0.01);
+        assert!(rel(a.residual, b.residual) < 0.01, "{a:?} {b:?}");
+        assert!(rel(a.surface_residual, b.surface_residual) < 0.01);
+    }
+    assert!(rel(above.residual, below.residual) < 0.01);
+}
+
+#[test]
+fn sideways_discs_are_ambiguous_under_above_and_below_and_flip_between_left_and_right() {
+    // Lit from the left: a bump above a dimple.
+    let p = picture(
+        "sideways",
+        &["rows=2", "columns=1", "pattern=rows"],
+        (64, 128),
+        24.0,
+    );
+    let (s, _) = interpretations(&p, Domain::Image, &[0.0, 90.0, 180.0, 270.0]);
+    for k in 0..2 {
+        let (up, left, down, right) = (
+            convexity(&s, 0.0, k),
+            convexity(&s, 90.0, k),
+            convexity(&s, 180.0, k),
+            convexity(&s, 270.0, k),
+        );
+        let clear = left.abs();
+        assert!(clear > 0.05, "token {k}: {left}");
+        // Left and right: clear, and opposite.
+        assert!(rel(left, -right) < 0.01, "{left} {right}");
+        // Above and below: no verdict worth the name, and no residual to choose by.
+        assert!(
+            up.abs() < 0.01 * clear && down.abs() < 0.01 * clear,
+            "{up} {down}"
+        );
+        let e = |t: f64| at(&s, t).tokens[k];
+        assert!(rel(e(0.0).surface_residual, e(180.0).surface_residual) < 0.01);
+        // The surface recovered under a sideways assumption explains the picture better.
+        assert!(e(90.0).surface_residual < e(0.0).surface_residual);
+    }
+    // The bump (row 1) is convex under its own light from the left, the dimple concave.
+    assert!(convexity(&s, 90.0, 0) > 0.0 && convexity(&s, 90.0, 1) < 0.0);
+}
+
+#[test]
+fn a_crater_on_a_mound_turned_upside_down_is_a_mound_in_a_crater() {
+    let mut centre_minus_ring = Vec::new();
+    for rotation in ["0", "180"] {
+        let p = picture("crater", &[&format!("rotation={rotation}")], (64, 64), 10.0);
+        let names: Vec<&str> = p.tokens.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(names, ["crater", "mound"]);
+        let (s, _) = interpretations(&p, Domain::Image, &[0.0]);
+        let (crater, mound) = (convexity(&s, 0.0, 0), convexity(&s, 0.0, 1));
+        centre_minus_ring.push(crater);
+        if rotation == "0" {
+            // Light from above: the centre lies below the ring, on a raised mound.
+            assert!(crater < -0.05 && mound > 0.01, "{crater} {mound}");
+        } else {
+            assert!(crater > 0.05 && mound < -0.01, "{crater} {mound}");
+        }
+    }
+    assert!(rel(centre_minus_ring[0], -centre_minus_ring[1]) < 0.05);
+}
+
+#[test]
+fn one_light_binds_an_array_into_rows_of_opposite_convexity_and_per_token_lights_do_not() {
+    // Three rows (light top, light bottom, light top): the global estimate is well defined.
+    let p = picture(
+        "circles-gradient",
+        &["rows=3", "columns=2", "radius=0.8", "spacing=1.8"],
+        (96, 128),
+        24.0,
+    );
+    let domain = p.domain(Domain::Image);
+    let lighting = p.lighting(&domain, 45.0, None, None).unwrap();
+    let scene = Scene {
+        image: &p.image,
+        domain: &domain,
+        boundary: &Boundary::Flat,
+        tokens: &p.tokens,
+    };
+    let light_top: Vec<bool> = p
+        .tokens
+        .iter()
+        .map(|t| t.name.contains("light top"))
+        .collect();
+    assert_eq!(light_top, [true, true, false, false, true, true]);
+    let options = analysis_solve_options();
+    let b = binding(&scene, &lighting, GlobalLight::Estimated, &options).unwrap();
+    assert!(b.global_light.tilt_deg.abs() < 10.0, "{:?}", b.global_light);
+    for (k, &top) in light_top.iter().enumerate() {
+        assert_eq!(b.global[k] > 0.0, top, "token {k}: {:?}", b.global);
+        assert!(b.per_token[k] > 0.0, "token {k}: {:?}", b.per_token);
+    }
+    assert!(b.global_has_both_signs() && !b.per_token_has_both_signs());
+
+    // Strips under a given light from above: alternate; each with its own light: all convex.
+    let p = picture(
+        "strips",
+        &["strips=4", "length=3", "strip_width=0.75", "gap=0.25"],
+        (96, 96),
+        24.0,
+    );
+    let domain = p.domain(Domain::Image);
+    let lighting = p.lighting(&domain, 45.0, None, None).unwrap();
+    let scene = Scene {
+        image: &p.image,
+        domain: &domain,
+        boundary: &Boundary::Flat,
+        tokens: &p.tokens,
+    };
+    let b = binding(&scene, &lighting, GlobalLight::Given(0.0), &options).unwrap();
+    for (k, t) in p.tokens.iter().enumerate() {
+        assert_eq!(
+            b.global[k] > 0.0,
+            t.name.contains("bright top"),
+            "{}: {:?}",
+            t.name,
+            b.global
+        );
+        assert!(b.per_token[k] > 0.0, "{}: {:?}", t.name, b.per_token);
+    }
+}
+
+#[test]
+fn a_strong_convexity_prior_makes_the_hollow_mask_convex_lit_from_below() {
+    let p = picture("hollow-mask", &["face_width=4"], (48, 64), 10.0);
+    let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
+    let (s, _) = interpretations(&p, Domain::Tokens, &tilts);
+    // The engine alone: hollow under light from above, convex under light from below.
+    assert!(convexity(&s, 0.0, 0) < -0.02 && convexity(&s, 180.0, 0) > 0.02);
+    let percept = |bias: f64| {
+        let o = ObserverOptions {
+            prior: LightPrior {
+                convexity_bias: bias,
+                ..LightPrior::default()
+            },
+            ..ObserverOptions::default()
+        };
+        observe(&s, &o, &[0.0]).unwrap().remove(0)
+    };
+    let plain = percept(0.0);
+    assert!(plain.p_convex[0] < 0.1, "{plain:?}");
+    assert!(plain.p_light_above > 0.9);
+    let familiar = percept(7.0);
+    assert!(familiar.p_convex[0] > 0.9, "{familiar:?}");
+    assert!(familiar.p_light_above < 0.1);
+    assert!((familiar.map_tilt_deg - 180.0).abs() < 1e-9, "{familiar:?}");
+}
+
+#[test]
+fn the_observer_prefers_the_bright_side_26_degrees_left_of_up_and_kappa_sharpens_it() {
+    let p = picture(
+        "bumps",
+        &["rows=1", "columns=1", "pattern=bumps"],
+        (48, 48),
+        16.0,
+    );
+    let tilts: Vec<f64> = (0..36).map(|i| i as f64 * 10.0).collect();
+    let (s, _) = interpretations(&p, Domain::Image, &tilts);
+    let rotations: Vec<f64> = (0..360).map(f64::from).collect();
+    let curve = |kappa: f64| -> Vec<f64> {
+        let o = ObserverOptions {
+            prior: LightPrior {
+                kappa,
+                ..LightPrior::default()
+            },
+            ..ObserverOptions::default()
+        };
+        observe(&s, &o, &rotations)
+            .unwrap()
+            .iter()
+            .map(|p| p.p_convex[0])
+            .collect()
+    };
+    let (base, sharp) = (curve(2.0), curve(4.0));
+    let peak = |c: &[f64]| (0..c.len()).fold(0, |b, i| if c[i] > c[b] { i } else { b });
+    // Rotating the bump by r turns its bright side to tilt r: the peak is the prior's mean.
+    assert_eq!(peak(&base), 26);
+    assert_eq!(peak(&sharp), 26);
+    assert!(
+        sharp[26] > base[26] && base[26] > 0.9,
+        "{} {}",
+        base[26],
+        sharp[26]
+    );
+    // Steeper through P = ½ (at 26 + 90 = 116°).
+    let slope = |c: &[f64]| (c[111] - c[121]) / 10.0;
+    assert!(
+        slope(&sharp) > 1.5 * slope(&base),
+        "{} {}",
+        slope(&base),
+        slope(&sharp)
+    );
+    assert!((base[116] - 0.5).abs() < 0.05);
+}
+
+#[test]
+fn rotating_the_picture_is_turning_the_assumed_light() {
+    // A bump beside a dimple, not symmetric under a quarter turn: a real test.
+    let p = picture(
+        "bumps",
+        &[
+            "rows=1",
+            "columns=2",
+            "pattern=alternate",
+            "radius=1",
+            "spacing=3",
+        ],
+        (96, 48),
+        16.0,
+    );
+    let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
+    let (s, lighting) = interpretations(&p, Domain::Image, &tilts);
+    let labels = {
+        let mut l = shadelab::grid::Labels::new(96, 48, 0);
+        for t in &p.tokens {
+            for &px in t.pixels() {
+                l.data_mut()[px] = t.label;
+            }
+        }
+        l
+    };
+    let options = analysis_solve_options();
+    for turns in 1..4 {
+        let theta = 90.0 * turns as f64;
+        let image = rotate_quarter_turns(&p.image, turns);
+        let tokens = tokens_from_labels(&rotate_quarter_turns(&labels, turns), &[]).unwrap();
+        let domain = Mask::new(image.width(), image.height(), true);
+        let scene = Scene {
+            image: &image,
+            domain: &domain,
+            boundary: &Boundary::Flat,
+            tokens: &tokens,
+        };
+        let mut it = Interpreter::new(&scene, &options).unwrap();
+        for t in [30.0, 120.0] {
+            let turned = it.interpret(&scene, t, &lighting).unwrap();
+            let upright = at(&s, (t - theta).rem_euclid(360.0));
+            for k in 0..2 {
+                let (a, b) = (turned.tokens[k], upright.tokens[k]);
+                assert!(
+                    rel(a.convexity, b.convexity) < 1e-3,
+                    "{theta}° at {t}: {a:?} vs {b:?}"
+                );
+                assert!(
+                    rel(a.surface_residual, b.surface_residual) < 1e-3,
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        // The observer's shortcut agrees with sweeping the turned picture itself.
+        let turned_sweep = sweep(&scene, &tilts, &lighting, &options, &|| {}).unwrap();
+        let o = ObserverOptions::default();
+        let shortcut = observe(&s, &o, &[theta]).unwrap().remove(0);
+        let direct = observe(&turned_sweep, &o, &[0.0]).unwrap().remove(0);
+        for k in 0..2 {
+            assert!((shortcut.p_convex[k] - direct.p_convex[k]).abs() < 1e-3);
+        }
+    }
+}
+
+fn read(path: &Path) -> Vec<u8> {
+    std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn prior_sweep_writes_its_table_report_and_plots() {
+    let d = scratch("prior-sweep");
+    let out = shadelab(
+        &d,
+        &[
+            "analyze",
+            "prior-sweep",
+            "--stimulus",
+            "bumps",
+            "--set",
+            "rows=1",
+            "--set",
+            "columns=1",
+            "--set",
+            "pattern=bumps",
+            "--size",
+            "48",
+            "--ppd",
+            "16",
+            "--tilts",
+            "0:360:30",
+            "--binding",
+            "0",
+            "--out",
+            "sweep",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8(read(&d.join("sweep/sweep.csv"))).unwrap();
+    let mut lines = csv.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("tilt_deg,token,label,convexity,residual"));
+    assert_eq!(lines.count(), 12);
+    let report: Value = serde_json::from_slice(&read(&d.join("sweep/sweep.json"))).unwrap();
+    let flips: Vec<f64> = report["tokens"][0]["flips_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    // A bump lit from above flips where the assumed light turns sideways.
+    assert_eq!(flips.len(), 2, "{flips:?}");
+    assert!(
+        (flips[0] - 90.0).abs() < 5.0 && (flips[1] - 270.0).abs() < 5.0,
+        "{flips:?}"
+    );
+    assert!(report["binding"]["global"].is_array());
+    let png = read(&d.join("sweep/sweep.png"));
+    assert_eq!(&png[1..4], b"PNG");
+    let svg = String::from_utf8(read(&d.join("sweep/sweep.svg"))).unwrap();
+    assert!(svg.contains("convexity"));
+}
+
+#[test]
+fn observer_writes_p_convex_against_rotation() {
+    let d = scratch("observer");
+    let out = shadelab(
+        &d,
+        &[
+            "analyze",
+            "observer",
+            "--stimulus",
+            "bumps",
+            "--set",
+            "rows=1",
+            "--set",
+            "columns=1",
+            "--set",
+            "pattern=bumps",
+            "--size",
+            "48",
+            "--ppd",
+            "16",
+            "--tilts",
+            "0:360:20",
+            "--rotations",
+            "0:360:90",
+            "--out",
+            "obs",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8(read(&d.join("obs/observer.csv"))).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    let p: Vec<f64> = rows.iter().map(|r| r[4].parse().unwrap()).collect();
+    // Upright the bump looks convex, upside down concave; sideways in between.
+    assert!(p[0] > 0.8 && p[2] < 0.2, "{p:?}");
+    assert!(
+        p[1] > p[3],
+        "light from the left beats light from the right: {p:?}"
+    );
+    assert!(d.join("obs/p_convex.png").exists() && d.join("obs/observer.json").exists());
+}
+
+/// A small study: two stimuli, varied parameters and slants, two priors, two rotations.
+const SPEC: &str = r#"{
+  "stimuli": [
+    {"stimulus": "bumps", "params": {"rows": 1, "columns": 1, "pattern": ["bumps", "dimples"]},
+     "shape": [32, 32], "ppd": 12},
+    {"stimulus": "sideways", "params": {"rows": 2, "columns": 1, "side": ["left", "right"]},
+     "shape": [32, 64], "ppd": 12}
+  ],
+  "tilts": "0:360:45",
+  "slants": [30, 45],
+  "priors": {"kappa": [1, 3]},
+  "rotations": "0,90"
+}"#;
+
+#[test]
+fn a_sharded_study_merges_byte_for_byte_into_the_unsharded_run() {
+    let d = scratch("study");
+    std::fs::write(d.join("spec.json"), SPEC).unwrap();
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    ok(shadelab(
+        &d,
+        &["study", "run", "spec.json", "--out", "whole"],
+    ));
+    let mut shards = Vec::new();
+    for i in 0..3 {
+        let dir = format!("shard-{i}");
+        ok(shadelab(
+            &d,
+            &[
+                "--threads",
+                "1",
+                "study",
+                "run",
+                "spec.json",
+                "--shard",
+                &format!("{i}/3"),
+                "--out",
+                &dir,
+            ],
+        ));
+        shards.push(dir);
+    }
+    let mut args = vec!["study", "merge"];
+    // Any order of folders.
+    args.extend(shards.iter().rev().map(String::as_str));
+    args.extend(["--out", "merged"]);
+    ok(shadelab(&d, &args));
+    for file in ["results.csv", "sweep.csv"] {
+        let (a, b) = (
+            read(&d.join("whole").join(file)),
+            read(&d.join("merged").join(file)),
+        );
+        assert_eq!(a, b, "{file} differs");
+    }
+    let results = String::from_utf8(read(&d.join("whole/results.csv"))).unwrap();
+    // 8 points × 2 priors × 2 rotations × tokens (1 for bumps, 2 for sideways).
+    assert_eq!(results.lines().count(), 1 + 4 * 2 * 2 + 4 * 2 * 2 * 2);
+    // A shard left out is named.
+    let out = shadelab(
+        &d,
+        &["study", "merge", "shard-0", "shard-2", "--out", "partial"],
+    );
+    assert_error(&out, 2, "1/3");
+    assert!(!d.join("partial").exists());
+}
+
+#[test]
+fn bad_input_is_one_line_and_leaves_nothing() {
+    let d = scratch("analysis-bad");
+    let sweep_args = |extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = [
+            "analyze",
+            "prior-sweep",
+            "--stimulus",
+            "bumps",
+            "--set",
+            "rows=1",
+            "--set",
+            "columns=1",
+            "--size",
+            "48",
+            "--ppd",
+            "16",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v.extend(["--out".to_string(), "out".to_string()]);
+        v
+    };
+    let run = |args: Vec<String>| {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        shadelab(&d, &refs)
+    };
+    assert_error(&run(sweep_args(&["--tilts", "0:0:15"])), 2, "--tilts");
+    assert_error(
+        &run(sweep_args(&["--tilts", "up:down:15"])),
+        2,
+        "not a number",
+    );
+    assert_error(&run(sweep_args(&["--slant", "90"])), 2, "--slant");
+    let out = shadelab(
+        &d,
+        &[
+            "analyze",
+            "prior-sweep",
+            "--stimulus",
+            "teapot",
+            "--out",
+            "out",
+        ],
+    );
+    assert_error(&out, 2, "unknown stimulus 'teapot'");
+    // A mask with no tokens.
+    let empty = shadelab::grid::Labels::new(48, 48, 0);
+    shadelab::io::write_labels(&d.join("empty.png"), &empty).unwrap();
+    assert_error(&run(sweep_args(&["--mask", "empty.png"])), 2, "no tokens");
+    // A spec with an unknown key, a shard that does not exist.
+    std::fs::write(
+        d.join("bad.json"),
+        r#"{"stimuli":[{"stimulus":"bumps"}],"tilt":"0:360:15"}"#,
+    )
+    .unwrap();
+    std::fs::write(d.join("spec.json"), SPEC).unwrap();
+    let out = shadelab(&d, &["study", "run", "bad.json", "--out", "out"]);
+    assert_error(&out, 1, "unknown field `tilt`");
+    let out = shadelab(
+        &d,
+        &[
+            "study",
+            "run",
+            "spec.json",
+            "--shard",
+            "3/2",
+            "--out",
+            "out",
+        ],
+    );
+    assert_error(&out, 2, "--shard '3/2'");
+    let out = shadelab(
+        &d,
+        &[
+            "analyze",
+            "observer",
+            "--stimulus",
+            "bumps",
+            "--tilts",
+            "0:180:10",
+            "--out",
+            "out",
+        ],
+    );
+    assert_error(&out, 2, "cover the circle");
+    // Nothing was written: no output folder, no temporary left behind.
+    let mut left: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["bad.json", "empty.png", "spec.json"]);
+}
+
+#[test]
+fn the_engine_follows_the_shading_not_the_outline_of_boundary_strips() {
+    // A documented limitation (docs/perception.md): with the outline as an occluding boundary
+    // the sawtooth cut should give facets (bending concentrated at folds, share near 1) and
+    // the sinusoidal cut smooth corrugations (about 0.31); the engine gives the sinusoid's
+    // spread in both. If this fails, the engine has learned to show the effect: update the doc.
+    use shadelab::analysis::outline::outline_shapes;
+    let p = picture(
+        "boundary-strips",
+        &["boundary=sinusoidal,sawtooth"],
+        (132, 96),
+        12.0,
+    );
+    let domain = p.domain(Domain::Tokens);
+    let lighting = p.lighting(&domain, 45.0, None, None).unwrap();
+    let r = outline_shapes(
+        &p,
+        &Boundary::Occluding,
+        90.0,
+        &lighting,
+        &analysis_solve_options(),
+    )
+    .unwrap();
+    let (sine, saw) = (&r[0], &r[1]);
+    assert_eq!(
+        (sine.token.as_str(), saw.token.as_str()),
+        ("sinusoidal strip", "sawtooth strip")
+    );
+    assert!(
+        (sine.core_concentration - saw.core_concentration).abs() < 0.05,
+        "{r:?}"
+    );
+    assert!(saw.core_concentration < 0.45, "{r:?}");
+}
