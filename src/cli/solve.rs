@@ -5,7 +5,7 @@ use serde_json::json;
 use shadelab::boundary::{Boundary, BOUNDARY_NAMES};
 use shadelab::grid::{Grid, Image, Mask};
 use shadelab::integrate::{
-    gradients_from_normals, integrate_gradients, mesh_obj, PoissonOptions, DEFAULT_MIN_NZ,
+    gradients_from_normals, integrate_gradients, write_mesh_obj, PoissonOptions, DEFAULT_MIN_NZ,
 };
 use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
@@ -228,11 +228,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         BitDepth::Eight,
         None,
     )?;
-    let obj = mesh_obj(&depth, &mask)?;
     let obj_path = dir.join("surface.obj");
     io::write_atomic(&obj_path, |out| {
-        out.write_all(obj.as_bytes())
-            .map_err(|e| shadelab::Error::io(&obj_path, e))
+        write_mesh_obj(&depth, &mask, out, &obj_path)
     })?;
 
     let direction = light.direction();

@@ -3,13 +3,23 @@
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask};
 use crate::surface::world_xy;
-use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
 
 /// The masked part of `depth` as a Wavefront OBJ mesh: one vertex per masked pixel at world
 /// (x, y, z) (x right, y up, z toward the viewer, pixel units, origin at the image centre), and
 /// two triangles per 2×2 block of masked pixels (one where only three are masked), wound
 /// counter-clockwise as seen by the viewer so that face normals point toward +z.
 pub fn mesh_obj(depth: &Image, mask: &Mask) -> Result<String> {
+    let mut bytes = Vec::new();
+    write_mesh_obj(depth, mask, &mut bytes, Path::new("surface.obj"))?;
+    String::from_utf8(bytes)
+        .map_err(|e| Error::Compute(format!("internal: OBJ text is not UTF-8: {e}")))
+}
+
+/// [`mesh_obj`] written straight to `out` (a buffered file, say), without holding the text in
+/// memory: at 1024² the text is tens of megabytes. `path` names the destination in errors.
+pub fn write_mesh_obj(depth: &Image, mask: &Mask, out: &mut dyn Write, path: &Path) -> Result<()> {
     if !depth.same_size(mask) {
         return Err(Error::invalid(format!(
             "depth map is {}x{} but the mask is {}x{}",
@@ -20,19 +30,20 @@ pub fn mesh_obj(depth: &Image, mask: &Mask) -> Result<String> {
         )));
     }
     let (w, h) = (depth.width(), depth.height());
+    let io = |e| Error::io(path, e);
     let mut index = vec![0usize; w * h];
-    let mut text = String::new();
-    let _ = writeln!(
-        text,
+    writeln!(
+        out,
         "# shadelab {} surface: x right, y up, z toward the viewer (pixels)",
         crate::io::PROGRAM_VERSION
-    );
+    )
+    .map_err(io)?;
     let mut next = 1;
     for r in 0..h {
         for c in 0..w {
             if *mask.get(c, r) {
                 let (x, y) = world_xy(c, r, w, h);
-                let _ = writeln!(text, "v {x} {y} {}", depth.get(c, r));
+                writeln!(out, "v {x} {y} {}", depth.get(c, r)).map_err(io)?;
                 index[r * w + c] = next;
                 next += 1;
             }
@@ -55,11 +66,11 @@ pub fn mesh_obj(depth: &Image, mask: &Mask) -> Result<String> {
                 _ => &[],
             };
             for f in faces {
-                let _ = writeln!(text, "f {} {} {}", f[0], f[1], f[2]);
+                writeln!(out, "f {} {} {}", f[0], f[1], f[2]).map_err(io)?;
             }
         }
     }
-    Ok(text)
+    Ok(())
 }
 
 #[cfg(test)]

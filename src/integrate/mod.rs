@@ -20,7 +20,7 @@ mod mesh;
 mod poisson;
 
 pub use fourier::FrankotChellappa;
-pub use mesh::mesh_obj;
+pub use mesh::{mesh_obj, write_mesh_obj};
 pub use poisson::{integrate_differences, integrate_gradients, Integration, PoissonOptions};
 
 use crate::error::{Error, Result};

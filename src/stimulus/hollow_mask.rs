@@ -10,13 +10,12 @@
 //! face under (−s_x, −s_y, s_z) (tilt + 180°).
 
 use super::frame::{smoothstep, Frame};
-use super::surfaces::lighting_params;
+use super::surfaces::{lighting_params, reflectance_from_params, render_options_from_params};
 use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::params::ParamSpec;
-use crate::reflectance::BrdfSpec;
-use crate::render::{render, RenderOptions};
+use crate::render::render;
 use crate::surface::Surface;
 use serde_json::{json, Map};
 
@@ -156,19 +155,8 @@ impl Stimulus for HollowMask {
         let hollow = p.str("mode")? == "hollow";
         let surface = if hollow { convex.negated() } else { convex };
         let light = p.light("light")?;
-        let brdf = BrdfSpec {
-            model: p.str("brdf")?.to_string(),
-            albedo: p.f64("albedo")?,
-            ambient: p.f64("ambient")?,
-            specular: p.f64("specular")?,
-            shininess: p.f64("shininess")?,
-            roughness_deg: p.f64("roughness")?,
-        };
-        let reflectance = brdf.build(light)?;
-        let options = RenderOptions {
-            background: p.f64("background")?,
-            cast_shadows: p.bool("cast_shadows")?,
-        };
+        let reflectance = reflectance_from_params(p)?;
+        let options = render_options_from_params(p)?;
         let rendering = render(&surface, reflectance.as_ref(), &options);
         let s = light.direction();
         let mut notes = Map::new();

@@ -3,14 +3,13 @@
 //! highlighted: every orientation on it explains that pixel equally well, which is why one
 //! image alone does not fix the shape.
 
-use super::surfaces::lighting_params;
+use super::surfaces::{lighting_params, reflectance_from_params};
 use super::{Info, Output, Pixels, Request, Stimulus};
 use crate::colormap::viridis;
 use crate::error::Result;
 use crate::gradient_space::{normal_from_fg, normal_from_pq};
 use crate::grid::Grid;
 use crate::params::ParamSpec;
-use crate::reflectance::BrdfSpec;
 use serde_json::Value;
 
 struct ReflectanceMapFigure;
@@ -68,15 +67,7 @@ impl Stimulus for ReflectanceMapFigure {
     fn generate(&self, request: &Request) -> Result<Output> {
         let p = &request.params;
         let light = p.light("light")?;
-        let reflectance = BrdfSpec {
-            model: p.str("brdf")?.to_string(),
-            albedo: p.f64("albedo")?,
-            ambient: p.f64("ambient")?,
-            specular: p.f64("specular")?,
-            shininess: p.f64("shininess")?,
-            roughness_deg: p.f64("roughness")?,
-        }
-        .build(light)?;
+        let reflectance = reflectance_from_params(p)?;
         let fg = p.str("space")? == "fg";
         let extent = if fg { 2.2 } else { p.f64("extent")? };
         let contours = p.usize("contours")?;

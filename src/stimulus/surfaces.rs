@@ -7,7 +7,7 @@
 use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
 use crate::error::{Error, Result};
 use crate::params::{ParamSpec, Params};
-use crate::reflectance::{BrdfSpec, BRDF_NAMES};
+use crate::reflectance::{BrdfSpec, ReflectanceMap, BRDF_NAMES};
 use crate::render::{render, RenderOptions};
 use crate::surface::{self, Mesh, MeshShading, Surface};
 
@@ -65,23 +65,35 @@ pub fn lighting_params(default_light: &'static str, default_background: f64) -> 
     ]
 }
 
-/// Renders `surface` with the lighting parameters of [`lighting_params`].
-pub fn render_surface(surface: Surface, params: &Params) -> Result<Output> {
-    let light = params.light("light")?;
-    let brdf = BrdfSpec {
+/// The reflectance map that the lighting parameters of [`lighting_params`] describe.
+pub fn reflectance_from_params(params: &Params) -> Result<Box<dyn ReflectanceMap>> {
+    BrdfSpec {
         model: params.str("brdf")?.to_string(),
         albedo: params.f64("albedo")?,
         ambient: params.f64("ambient")?,
         specular: params.f64("specular")?,
         shininess: params.f64("shininess")?,
         roughness_deg: params.f64("roughness")?,
-    };
-    let reflectance = brdf.build(light)?;
-    let options = RenderOptions {
+    }
+    .build(params.light("light")?)
+}
+
+/// The background and cast-shadow options of [`lighting_params`].
+pub fn render_options_from_params(params: &Params) -> Result<RenderOptions> {
+    Ok(RenderOptions {
         background: params.f64("background")?,
         cast_shadows: params.bool("cast_shadows")?,
-    };
-    let rendering = render(&surface, reflectance.as_ref(), &options);
+    })
+}
+
+/// Renders `surface` with the lighting parameters of [`lighting_params`].
+pub fn render_surface(surface: Surface, params: &Params) -> Result<Output> {
+    let reflectance = reflectance_from_params(params)?;
+    let rendering = render(
+        &surface,
+        reflectance.as_ref(),
+        &render_options_from_params(params)?,
+    );
     let labels = surface.mask.map(|&m| u16::from(m));
     Ok(Output {
         pixels: Pixels::Gray(rendering.image),
