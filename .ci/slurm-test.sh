@@ -42,7 +42,9 @@ fi
 [ "$(id -u)" = 0 ] || skip "starting munged, slurmctld and slurmd here needs root"
 
 step "building shadelab (release)"
-cargo build --release --quiet --bin shadelab
+# Through `cargo test` so that the features (unified with the dev-dependencies) match the
+# build .ci/run has just made: then this is a no-op rather than a second release build.
+cargo test --release --quiet --no-run
 bin="$PWD/target/release/shadelab"
 
 work=$(mktemp -d /tmp/shadelab-slurm.XXXXXX)
