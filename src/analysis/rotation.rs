@@ -14,7 +14,7 @@ pub fn rotate_quarter_turns<T: Clone>(grid: &Grid<T>, quarter_turns: i32) -> Gri
         0 => grid.clone(),
         // Counter-clockwise: the top-right corner goes to the top-left.
         1 => Grid::from_fn(h, w, |c, r| grid.get(w - 1 - r, c).clone()),
-        2 => Grid::from_fn(w, h, |c, r| grid.get(w - 1 - c, h - 1 - r).clone()),
+        2 => grid.rotated_180(),
         _ => Grid::from_fn(h, w, |c, r| grid.get(r, h - 1 - c).clone()),
     }
 }
