@@ -25,7 +25,7 @@
 
 use crate::error::{Error, Result};
 use crate::gradient_space::{fg_from_normal, Normal, FG_RADIUS};
-use crate::grid::{Grid, Image, Mask};
+use crate::grid::{Grid, Mask};
 use nalgebra::Vector3;
 
 /// The factor by which occluding-boundary values are pulled in from the rim of the f–g disc:
@@ -98,14 +98,15 @@ pub enum Role {
 
 /// The domain of a shape-from-shading problem: each pixel's role and the values of the fixed
 /// ones.
+///
+/// The fixed values are kept per fixed pixel, not as two full images: they are a thin ring, and
+/// a full-size copy would be 16 bytes per pixel at the moment a large solve's memory peaks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoundaryConditions {
     /// Each pixel's role.
     pub roles: Grid<Role>,
-    /// f at fixed pixels (0 elsewhere).
-    pub f: Image,
-    /// g at fixed pixels (0 elsewhere).
-    pub g: Image,
+    /// (row-major pixel index, (f, g)) of every fixed pixel, in increasing index order.
+    fixed: Vec<(usize, [f64; 2])>,
 }
 
 impl BoundaryConditions {
@@ -120,11 +121,28 @@ impl BoundaryConditions {
 
     /// The number of fixed pixels.
     pub fn fixed_count(&self) -> usize {
-        self.roles
-            .data()
-            .iter()
-            .filter(|&&r| r == Role::Fixed)
-            .count()
+        self.fixed.len()
+    }
+
+    /// The (f, g) held at pixel (`col`, `row`), or `None` where the pixel is not fixed.
+    pub fn fixed_value(&self, col: usize, row: usize) -> Option<[f64; 2]> {
+        let index = row * self.roles.width() + col;
+        self.fixed
+            .binary_search_by_key(&index, |&(i, _)| i)
+            .ok()
+            .map(|k| self.fixed[k].1)
+    }
+
+    /// Conditions from their parts: `fixed` must be in increasing index order, and exactly the
+    /// pixels whose role is [`Role::Fixed`].
+    pub(crate) fn from_parts(roles: Grid<Role>, fixed: Vec<(usize, [f64; 2])>) -> Self {
+        debug_assert!(fixed.windows(2).all(|w| w[0].0 < w[1].0));
+        BoundaryConditions { roles, fixed }
+    }
+
+    /// Every fixed pixel as (row-major pixel index, (f, g)), in increasing index order.
+    pub fn fixed_values(&self) -> &[(usize, [f64; 2])] {
+        &self.fixed
     }
 }
 
@@ -173,78 +191,105 @@ pub fn is_occluding(mask: &Mask, col: usize, row: usize) -> bool {
 /// left out. The mask is extended past the image frame by replicating its edge, since an object
 /// cut by the frame continues beyond it.
 pub fn occluding_normals(mask: &Mask) -> Grid<Option<Normal>> {
+    let mut normals = Grid::new(mask.width(), mask.height(), None);
+    for (index, n) in occluding_normal_list(mask) {
+        normals.data_mut()[index] = Some(n);
+    }
+    normals
+}
+
+/// [`occluding_normals`] as (row-major pixel index, normal) of the occluding pixels, in
+/// increasing index order: the contour is a thin set, and per-pixel grids of it would cost tens
+/// of bytes per pixel of the whole image.
+fn occluding_normal_list(mask: &Mask) -> Vec<(usize, Normal)> {
     let (w, h) = (mask.width(), mask.height());
     let rough = rough_outward_normals(mask);
-    // Contour midpoints, listed per occluding pixel: (world x, world y, owner's rough normal).
-    let mut points: Vec<Vec<(f64, f64, [f64; 2])>> = vec![Vec::new(); w * h];
-    for row in 0..h {
-        for col in 0..w {
-            let Some(o) = rough.get(col, row) else {
-                continue;
-            };
-            let (x, y) = crate::surface::world_xy(col, row, w, h);
-            let (c, r) = (col as isize, row as isize);
-            for (dc, dr) in [(1isize, 0isize), (-1, 0), (0, 1), (0, -1)] {
-                if mask.checked(c + dc, r + dr) == Some(&false) {
-                    // World y = −row.
-                    points[row * w + col].push((x + 0.5 * dc as f64, y - 0.5 * dr as f64, *o));
-                }
+    // Which entry of `rough` each pixel is (NONE where it is not occluding).
+    const NONE: u32 = u32::MAX;
+    let mut entry = vec![NONE; w * h];
+    for (k, &(index, _)) in rough.iter().enumerate() {
+        entry[index] = k as u32;
+    }
+    // Contour midpoints of each occluding pixel, (world x, world y, owner's rough normal), in
+    // `rough`'s order: those of entry k are points[start[k]..start[k + 1]].
+    let mut points: Vec<(f64, f64, [f64; 2])> = Vec::new();
+    let mut start = Vec::with_capacity(rough.len() + 1);
+    for &(index, o) in &rough {
+        start.push(points.len());
+        let (col, row) = (index % w, index / w);
+        let (x, y) = crate::surface::world_xy(col, row, w, h);
+        let (c, r) = (col as isize, row as isize);
+        for (dc, dr) in [(1isize, 0isize), (-1, 0), (0, 1), (0, -1)] {
+            if mask.checked(c + dc, r + dr) == Some(&false) {
+                // World y = −row.
+                points.push((x + 0.5 * dc as f64, y - 0.5 * dr as f64, o));
             }
         }
     }
+    start.push(points.len());
     let sigma = CONTOUR_FIT_PX;
     let reach = (3.0 * sigma).ceil() as isize;
-    Grid::from_fn(w, h, |col, row| {
-        let o = (*rough.get(col, row))?;
-        let t = [-o[1], o[0]];
-        let (x0, y0) = crate::surface::world_xy(col, row, w, h);
-        // Weighted normal equations of the fit v = a + b·u + c·u² + d·u³.
-        let mut ata = nalgebra::Matrix4::<f64>::zeros();
-        let mut atv = nalgebra::Vector4::<f64>::zeros();
-        let mut count = 0;
-        let (c0, r0) = (col as isize, row as isize);
-        for r in (r0 - reach).max(0)..=(r0 + reach).min(h as isize - 1) {
-            for c in (c0 - reach).max(0)..=(c0 + reach).min(w as isize - 1) {
-                for &(px, py, po) in &points[r as usize * w + c as usize] {
-                    if po[0] * o[0] + po[1] * o[1] <= 0.0 {
+    rough
+        .iter()
+        .map(|&(index, o)| {
+            let (col, row) = (index % w, index / w);
+            let t = [-o[1], o[0]];
+            let (x0, y0) = crate::surface::world_xy(col, row, w, h);
+            // Weighted normal equations of the fit v = a + b·u + c·u² + d·u³.
+            let mut ata = nalgebra::Matrix4::<f64>::zeros();
+            let mut atv = nalgebra::Vector4::<f64>::zeros();
+            let mut count = 0;
+            let (c0, r0) = (col as isize, row as isize);
+            for r in (r0 - reach).max(0)..=(r0 + reach).min(h as isize - 1) {
+                for c in (c0 - reach).max(0)..=(c0 + reach).min(w as isize - 1) {
+                    let k = entry[r as usize * w + c as usize];
+                    if k == NONE {
                         continue;
                     }
-                    let (dx, dy) = (px - x0, py - y0);
-                    let d2 = dx * dx + dy * dy;
-                    if d2 > (3.0 * sigma) * (3.0 * sigma) {
-                        continue;
+                    let k = k as usize;
+                    for &(px, py, po) in &points[start[k]..start[k + 1]] {
+                        if po[0] * o[0] + po[1] * o[1] <= 0.0 {
+                            continue;
+                        }
+                        let (dx, dy) = (px - x0, py - y0);
+                        let d2 = dx * dx + dy * dy;
+                        if d2 > (3.0 * sigma) * (3.0 * sigma) {
+                            continue;
+                        }
+                        let wt = (-d2 / (2.0 * sigma * sigma)).exp();
+                        let u = dx * t[0] + dy * t[1];
+                        let v = dx * o[0] + dy * o[1];
+                        let basis = nalgebra::Vector4::new(1.0, u, u * u, u * u * u);
+                        ata += basis * basis.transpose() * wt;
+                        atv += basis * (v * wt);
+                        count += 1;
                     }
-                    let wt = (-d2 / (2.0 * sigma * sigma)).exp();
-                    let u = dx * t[0] + dy * t[1];
-                    let v = dx * o[0] + dy * o[1];
-                    let basis = nalgebra::Vector4::new(1.0, u, u * u, u * u * u);
-                    ata += basis * basis.transpose() * wt;
-                    atv += basis * (v * wt);
-                    count += 1;
                 }
             }
-        }
-        let slope = if count >= 5 {
-            ata.cholesky().map(|ch| ch.solve(&atv)[1])
-        } else {
-            None
-        };
-        // Without enough contour to fit (a speck, a one-pixel line), the rough normal stands.
-        let b = slope.filter(|b| b.is_finite()).unwrap_or(0.0);
-        // The contour runs along (1, b) in the (t, o) frame; its outward normal is (−b, 1).
-        let (nx, ny) = (o[0] - b * t[0], o[1] - b * t[1]);
-        let len = nx.hypot(ny);
-        // Counter-clockwise tangent: the object lies to its left, so e = outward turned +90°.
-        let e = Vector3::new(-ny / len, nx / len, 0.0);
-        Some(e.cross(&Vector3::z()))
-    })
+            let slope = if count >= 5 {
+                ata.cholesky().map(|ch| ch.solve(&atv)[1])
+            } else {
+                None
+            };
+            // Without enough contour to fit (a speck, a one-pixel line), the rough normal
+            // stands.
+            let b = slope.filter(|b| b.is_finite()).unwrap_or(0.0);
+            // The contour runs along (1, b) in the (t, o) frame; its outward normal is (−b, 1).
+            let (nx, ny) = (o[0] - b * t[0], o[1] - b * t[1]);
+            let len = nx.hypot(ny);
+            // Counter-clockwise tangent: the object lies to its left, so e = outward turned
+            // +90°.
+            let e = Vector3::new(-ny / len, nx / len, 0.0);
+            (index, e.cross(&Vector3::z()))
+        })
+        .collect()
 }
 
 /// The rough outward unit normal (world x, y) at each occluding pixel: minus the gradient of
 /// the mask smoothed by a Gaussian of [`CONTOUR_SMOOTHING_PX`], with the mask replicated past
 /// the image frame. Where that gradient vanishes (a one-pixel line) the direction away from the
 /// pixel's inside neighbours is used.
-fn rough_outward_normals(mask: &Mask) -> Grid<Option<[f64; 2]>> {
+fn rough_outward_normals(mask: &Mask) -> Vec<(usize, [f64; 2])> {
     let (w, h) = (mask.width(), mask.height());
     let sigma = CONTOUR_SMOOTHING_PX;
     let radius = (3.0 * sigma).ceil() as isize;
@@ -265,9 +310,10 @@ fn rough_outward_normals(mask: &Mask) -> Grid<Option<[f64; 2]>> {
             0.0
         }
     };
-    Grid::from_fn(w, h, |col, row| {
+    let mut rough = Vec::new();
+    for (index, (col, row)) in (0..h).flat_map(|r| (0..w).map(move |c| (c, r))).enumerate() {
         if !is_occluding(mask, col, row) {
-            return None;
+            continue;
         }
         let (c, r) = (col as isize, row as isize);
         // Gradient of the smoothed mask along +col and +row; it points into the object.
@@ -297,8 +343,9 @@ fn rough_outward_normals(mask: &Mask) -> Grid<Option<[f64; 2]>> {
             }
         }
         let len = ox.hypot(oy);
-        Some([ox / len, oy / len])
-    })
+        rough.push((index, [ox / len, oy / len]));
+    }
+    rough
 }
 
 /// The domain and fixed values that `boundary` gives on `mask`.
@@ -313,32 +360,24 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
         ));
     }
     let mut roles = mask.map(|&m| if m { Role::Unknown } else { Role::Outside });
-    let mut f = Grid::new(w, h, 0.0);
-    let mut g = Grid::new(w, h, 0.0);
+    let mut fixed = Vec::new();
     match boundary {
         Boundary::Free => {}
         Boundary::Flat => {
             for row in 0..h {
                 for col in 0..w {
                     if is_rim(mask, col, row) {
-                        *roles.get_mut(col, row) = Role::Fixed;
+                        fixed.push((row * w + col, [0.0, 0.0]));
                     }
                 }
             }
         }
         Boundary::Occluding => {
-            let normals = occluding_normals(mask);
             let radius = FG_RADIUS * OCCLUDING_SHRINK;
-            for row in 0..h {
-                for col in 0..w {
-                    if let Some(n) = normals.get(col, row) {
-                        *roles.get_mut(col, row) = Role::Fixed;
-                        // An in-plane unit normal maps to 2(n_x, n_y); scale to the radius.
-                        let r = n.x.hypot(n.y);
-                        *f.get_mut(col, row) = radius * n.x / r;
-                        *g.get_mut(col, row) = radius * n.y / r;
-                    }
-                }
+            for (index, n) in occluding_normal_list(mask) {
+                // An in-plane unit normal maps to 2(n_x, n_y); scale to the radius.
+                let r = n.x.hypot(n.y);
+                fixed.push((index, [radius * n.x / r, radius * n.y / r]));
             }
         }
         Boundary::Given(normals) => {
@@ -364,14 +403,15 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
                         )));
                     }
                     let (fv, gv) = fg_from_normal(&(n / len));
-                    *roles.get_mut(col, row) = Role::Fixed;
-                    *f.get_mut(col, row) = fv;
-                    *g.get_mut(col, row) = gv;
+                    fixed.push((row * w + col, [fv, gv]));
                 }
             }
         }
     }
-    Ok(BoundaryConditions { roles, f, g })
+    for &(index, _) in &fixed {
+        roles.data_mut()[index] = Role::Fixed;
+    }
+    Ok(BoundaryConditions { roles, fixed })
 }
 
 #[cfg(test)]
@@ -400,7 +440,7 @@ mod tests {
                     continue;
                 }
                 fixed += 1;
-                let (f, g) = (*bc.f.get(col, row), *bc.g.get(col, row));
+                let [f, g] = bc.fixed_value(col, row).unwrap();
                 // The stated shrink: radius 2 × 0.9.
                 assert!(
                     (f.hypot(g) - 1.8).abs() < 1e-12,
@@ -543,7 +583,7 @@ mod tests {
                 let border = col == 0 || row == 0 || col == 9 || row == 7;
                 let want = if border { Role::Fixed } else { Role::Unknown };
                 assert_eq!(bc.roles.get(col, row), &want);
-                assert_eq!((*bc.f.get(col, row), *bc.g.get(col, row)), (0.0, 0.0));
+                assert_eq!(bc.fixed_value(col, row).unwrap_or([0.0, 0.0]), [0.0, 0.0]);
             }
         }
         assert_eq!(bc.fixed_count(), 2 * 10 + 2 * 6);
@@ -563,8 +603,9 @@ mod tests {
             for col in 0..20 {
                 if bc.roles.get(col, row) == &Role::Fixed {
                     assert!(is_rim(&mask, col, row));
-                    assert!((bc.f.get(col, row) - fv).abs() < 1e-12);
-                    assert!((bc.g.get(col, row) - gv).abs() < 1e-12);
+                    let [f, g] = bc.fixed_value(col, row).unwrap();
+                    assert!((f - fv).abs() < 1e-12);
+                    assert!((g - gv).abs() < 1e-12);
                 }
             }
         }

@@ -140,6 +140,10 @@ pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
         .collect()
 }
 
+/// Where the links to the explanations point by default: a gallery folder one level below the
+/// repository root (README's `gallery/`) reaches `docs/` as `../docs/`.
+pub const DOCS_BASE: &str = "../";
+
 /// How to build a gallery.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -147,6 +151,10 @@ pub struct Options {
     pub force: bool,
     /// Largest image made, in pixels.
     pub max_pixels: usize,
+    /// The prefix put before each preset's `docs` link (`docs/priors.md#…`, relative to the
+    /// repository root): [`DOCS_BASE`], or a URL of the repository's files, or an absolute path,
+    /// for a gallery rendered elsewhere.
+    pub docs_base: String,
 }
 
 impl Default for Options {
@@ -154,6 +162,7 @@ impl Default for Options {
         Options {
             force: false,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+            docs_base: DOCS_BASE.to_string(),
         }
     }
 }
@@ -207,7 +216,7 @@ pub fn build(
         BitDepth::Eight,
         Some(THUMBNAIL_GAMMA),
     )?;
-    let html = index_html(&rendered);
+    let html = index_html(&rendered, &options.docs_base);
     io::write_atomic(&dir.path().join(MARKER), |w| {
         w.write_all(html.as_bytes())
             .map_err(|e| Error::io(out.join(MARKER), e))
@@ -307,7 +316,17 @@ fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn index_html(rendered: &[Rendered]) -> String {
+/// The link from the gallery to a preset's explanation: `base` then the preset's `docs` path.
+/// A base without a trailing slash gets one, so `https://host/repo/blob/main` works too.
+pub fn docs_link(base: &str, docs: &str) -> String {
+    if base.is_empty() || base.ends_with('/') {
+        format!("{base}{docs}")
+    } else {
+        format!("{base}/{docs}")
+    }
+}
+
+fn index_html(rendered: &[Rendered], docs_base: &str) -> String {
     let mut h = String::new();
     let _ = write!(
         h,
@@ -331,7 +350,10 @@ code {{ background: #f3f3f3; padding: 0 0.2em; }}
 Full images (click a thumbnail) are 16-bit PNGs of <em>linear</em> luminance 0..1, for a calibrated
 (linearised) display; thumbnails are display-encoded with gamma {gamma} so they look right on an
 ordinary screen. Beside each image lie its JSON sidecar (every parameter, the seed, an md5) and
-its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named targets).</p>
+its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named targets).
+Each picture links to the page of shadelab's documentation that explains it (the links assume
+this folder sits one level below the repository, as <code>gallery/</code> does; see
+<code>shadelab gallery --help</code>, <code>--docs-base</code>, for a gallery kept elsewhere).</p>
 "#,
         version = io::PROGRAM_VERSION,
         gamma = THUMBNAIL_GAMMA,
@@ -348,7 +370,7 @@ its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named target
 <div>
 <h2>{title}</h2>
 <p>{caption}</p>
-<p>Stimulus <code>{stimulus}</code>, {wd:.2}&times;{hd:.2}&deg; at {ppd} pixels per degree = {w}&times;{h} pixels, seed {seed}.
+{explained}<p>Stimulus <code>{stimulus}</code>, {wd:.2}&times;{hd:.2}&deg; at {ppd} pixels per degree = {w}&times;{h} pixels, seed {seed}.
 Reproduce: <code>shadelab render --spec stimuli/{id}.json --out {id}.png</code></p>
 <table>
 "#,
@@ -356,6 +378,14 @@ Reproduce: <code>shadelab render --spec stimuli/{id}.json --out {id}.png</code><
             alt = escape(&title),
             title = escape(&title),
             caption = escape(&caption),
+            explained = match &p.spec.docs {
+                Some(d) => format!(
+                    "<p class=\"explained\">Explained in <a href=\"{href}\">{text}</a>.</p>\n",
+                    href = escape(&docs_link(docs_base, d)),
+                    text = escape(d),
+                ),
+                None => String::new(),
+            },
             stimulus = escape(&p.spec.stimulus),
             wd = g.width_deg(),
             hd = g.height_deg(),
@@ -405,7 +435,7 @@ mod tests {
         for p in &presets {
             assert!(names.contains(&p.spec.stimulus.as_str()), "{}", p.name);
             assert!(
-                p.spec.title.is_some() && p.spec.caption.is_some(),
+                p.spec.title.is_some() && p.spec.caption.is_some() && p.spec.docs.is_some(),
                 "{}",
                 p.name
             );
@@ -423,5 +453,15 @@ mod tests {
         out.pixels = Pixels::Gray(Grid::new(10, 10, 0.5));
         assert_eq!(thumbnail(&out).width(), 10);
         assert!(escape("<a & \"b\">").contains("&lt;a &amp; &quot;b&quot;&gt;"));
+    }
+
+    #[test]
+    fn docs_links_join_base_and_page_with_one_slash() {
+        assert_eq!(docs_link("../", "docs/a.md#b"), "../docs/a.md#b");
+        assert_eq!(docs_link("", "docs/a.md"), "docs/a.md");
+        assert_eq!(
+            docs_link("https://x.org/r/blob/main", "docs/a.md#b"),
+            "https://x.org/r/blob/main/docs/a.md#b"
+        );
     }
 }

@@ -18,6 +18,7 @@ pub mod analysis;
 pub mod boundary;
 pub mod colormap;
 pub mod error;
+pub mod evaluation;
 pub mod gallery;
 pub mod gradient_space;
 pub mod grid;

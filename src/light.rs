@@ -42,9 +42,12 @@ impl Light {
     /// A light toward `(x, y, z)`, normalised. Fails for a zero, non-finite or below-horizon
     /// (z < 0) direction.
     pub fn from_vector(x: f64, y: f64, z: f64) -> Result<Self> {
-        let v = Vector3::new(x, y, z);
+        // Scaled by its largest component first, so that a finite vector as long as 1e308 has
+        // a direction too (its norm would overflow).
+        let largest = x.abs().max(y.abs()).max(z.abs());
+        let v = Vector3::new(x, y, z) / largest;
         let norm = v.norm();
-        if !norm.is_finite() || norm < 1e-12 {
+        if !(largest.is_finite() && largest > 0.0 && norm.is_finite()) {
             return Err(Error::invalid(format!(
                 "light ({x}, {y}, {z}) is not a direction (it must be a non-zero finite vector)"
             )));

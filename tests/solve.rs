@@ -64,6 +64,8 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     assert_eq!(
         names_in(&result),
         [
+            "convergence.csv",
+            "convergence.png",
             "depth.npy",
             "depth.png",
             "normals.npy",
@@ -75,6 +77,23 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     let r = report(&result);
     assert_eq!(r["solver"]["converged"], true);
     assert!(r["solver"]["iterations"].as_u64().unwrap() >= 1);
+    // One line per cycle, the last one the update the report gives.
+    let csv = std::fs::read_to_string(result.join("convergence.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "cycle,largest_update");
+    assert_eq!(
+        lines.len() as u64 - 1,
+        r["solver"]["iterations"].as_u64().unwrap()
+    );
+    let last: f64 = lines[lines.len() - 1]
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(last, r["solver"]["last_update"].as_f64().unwrap());
+    let png = image::open(result.join("convergence.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (900, 540));
     assert_eq!(r["solver"]["iteration_unit"], "cycles");
     assert!(r["solver"]["last_update"].as_f64().unwrap() < 1e-6);
     assert_eq!(r["parameters"]["lambda"], 1.0);

@@ -1,8 +1,14 @@
 //! shadelab's integration tests: one binary (one link step) with a module per area.
 
 mod analysis;
+mod browser;
 mod cli;
+mod determinism;
+mod docs;
+mod evaluation;
 mod fast_solver;
+mod fuzz_regressions;
+mod hostile;
 mod lightness;
 mod mesh;
 mod solve;

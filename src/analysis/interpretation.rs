@@ -249,7 +249,7 @@ impl Interpreter {
             )));
         }
         let (dz_dx, dz_dy) =
-            gradients_from_normals(&solution.normals, scene.domain, DEFAULT_MIN_NZ)?;
+            gradients_from_normals(&solution.normals(), scene.domain, DEFAULT_MIN_NZ)?;
         let depth = match &mut self.fourier {
             Some(fc) => fc.integrate(&dz_dx, &dz_dy)?,
             None => {

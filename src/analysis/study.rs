@@ -236,15 +236,22 @@ pub struct Study {
     pub domain: Domain,
     /// Every grid point, in order.
     pub points: Vec<Point>,
+    /// The largest picture a point may make, in pixels (`--max-pixels`).
+    pub max_pixels: usize,
 }
 
 impl Study {
-    /// Reads and checks a spec file.
+    /// Reads and checks a spec file, with pictures of at most the default number of pixels.
     pub fn load(path: &Path) -> Result<Study> {
+        Study::load_with_max_pixels(path, crate::grid::DEFAULT_MAX_PIXELS)
+    }
+
+    /// Reads and checks a spec file whose pictures may have up to `max_pixels` pixels.
+    pub fn load_with_max_pixels(path: &Path, max_pixels: usize) -> Result<Study> {
         let bytes = io::read_bytes(path)?;
         let spec: StudySpec = serde_json::from_slice(&bytes)
             .map_err(|e| Error::format(path, format!("bad study spec: {e}")))?;
-        Study::new(spec).map_err(|e| match e {
+        Study::new_with_max_pixels(spec, max_pixels).map_err(|e| match e {
             Error::Invalid(m) => Error::format(path, m),
             Error::Unknown { kind, name, valid } => {
                 Error::format(path, format!("unknown {kind} '{name}' (valid: {valid})"))
@@ -256,6 +263,12 @@ impl Study {
     /// Checks a spec and expands its grid. Every stimulus is checked by name and parameters
     /// here, so a bad spec fails before any work.
     pub fn new(spec: StudySpec) -> Result<Study> {
+        Study::new_with_max_pixels(spec, crate::grid::DEFAULT_MAX_PIXELS)
+    }
+
+    /// [`Study::new`] with pictures of up to `max_pixels` pixels; each stimulus's size is
+    /// resolved here too, so that an impossible size fails before any work.
+    pub fn new_with_max_pixels(spec: StudySpec, max_pixels: usize) -> Result<Study> {
         if spec.stimuli.is_empty() {
             return Err(Error::invalid("the study has no stimuli"));
         }
@@ -307,6 +320,16 @@ impl Study {
                 // Checked now against the stimulus's declarations, so typos fail at once.
                 crate::params::Params::resolve(&info.params, &combo)
                     .map_err(|e| Error::invalid(format!("{}: {e}", entry.stimulus)))?;
+                let size = SizeRequest {
+                    visual_size: entry.visual_size,
+                    ppd: entry.ppd,
+                    shape: entry.shape,
+                };
+                crate::stimulus::prepare(&entry.stimulus, &combo, &size, entry.seed, max_pixels)
+                    .map_err(|e| match e {
+                        Error::Invalid(m) => Error::invalid(format!("{}: {m}", entry.stimulus)),
+                        other => other,
+                    })?;
                 for &slant in &spec.slants {
                     if points.len() >= MAX_POINTS {
                         return Err(Error::invalid(format!(
@@ -336,6 +359,7 @@ impl Study {
             boundary,
             domain,
             points,
+            max_pixels,
         })
     }
 
@@ -393,7 +417,7 @@ impl Study {
             &point.params,
             &size,
             entry.seed,
-            crate::grid::DEFAULT_MAX_PIXELS,
+            self.max_pixels,
         )?;
         let picture = Picture::from_stimulus(&request, &output)?;
         let domain = picture.domain(self.domain);

@@ -58,10 +58,10 @@ pub struct Source {
     #[arg(long, value_name = "NAME", conflicts_with = "image")]
     pub stimulus: Option<String>,
     /// A stimulus parameter (repeatable; with --stimulus).
-    #[arg(long = "set", value_name = "KEY=VALUE", requires = "stimulus")]
+    #[arg(long = "set", value_name = "KEY=VALUE", requires = "stimulus", value_parser = super::render::utf8_text())]
     pub set: Vec<String>,
     /// The stimulus seed (with --stimulus).
-    #[arg(long, requires = "stimulus")]
+    #[arg(long, requires = "stimulus", allow_hyphen_values = true)]
     pub seed: Option<u64>,
     /// Pixels per degree: the image's resolution (the filter models work in degrees), or the
     /// resolution to render the stimulus at.

@@ -22,7 +22,8 @@ pub struct Args {
         long,
         value_name = "N,N,…",
         default_value = "128,256,512,1024",
-        value_delimiter = ','
+        value_delimiter = ',',
+        allow_hyphen_values = true
     )]
     pub sizes: Vec<usize>,
     /// The shape: sphere (radius 0.45 of the side) or vase.
@@ -33,16 +34,31 @@ pub struct Args {
     pub light: String,
     /// Time plain Jacobi up to this side (it needs thousands of sweeps: 256² takes seconds,
     /// 1024² would take many minutes).
-    #[arg(long, value_name = "N", default_value_t = 256)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 256,
+        allow_hyphen_values = true
+    )]
     pub jacobi_up_to: usize,
     /// The folder of the NumPy reference (`run_reference.py`).
     #[arg(long, value_name = "PATH", default_value = "../shared/reference")]
     pub reference: PathBuf,
     /// Run the NumPy reference (red-black SOR) up to this side (512² takes minutes there).
-    #[arg(long, value_name = "N", default_value_t = 256)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 256,
+        allow_hyphen_values = true
+    )]
     pub reference_up_to: usize,
     /// Time multigrid this many times per size and keep the fastest.
-    #[arg(long, value_name = "N", default_value_t = 3)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 3,
+        allow_hyphen_values = true
+    )]
     pub repeat: usize,
 }
 
@@ -78,7 +94,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             d.x, d.y, d.z
         )));
     }
-    if let Some(&n) = args.sizes.iter().find(|&&n| n * n > global.max_pixels) {
+    if let Some(&n) = args
+        .sizes
+        .iter()
+        .find(|&&n| !matches!(n.checked_mul(n), Some(a) if a <= global.max_pixels))
+    {
         return Err(CliError::usage(format!(
             "--sizes {n} exceeds --max-pixels {}",
             global.max_pixels
@@ -191,7 +211,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     match &reference {
         Ok(_) => {
-            if args.sizes.iter().any(|&n| n > args.reference_up_to) {
+            if args.sizes.iter().all(|&n| n > args.reference_up_to) {
+                notes.push(format!(
+                    "numpy-sor is not run: every size is above --reference-up-to {}",
+                    args.reference_up_to
+                ));
+            } else if args.sizes.iter().any(|&n| n > args.reference_up_to) {
                 notes.push(format!(
                     "numpy-sor (the reference's red-black SOR, same stopping rule) is run up to \
                      {0}² (--reference-up-to {0})",
@@ -246,8 +271,8 @@ fn mean_difference(surface: &Surface, a: &Solution, b: &Solution) -> f64 {
         .mask
         .data()
         .iter()
-        .zip(a.normals.data())
-        .zip(b.normals.data())
+        .zip(a.normals().data())
+        .zip(b.normals().data())
     {
         if *m {
             sum += angle_deg(x, y);

@@ -13,6 +13,9 @@ pub struct Args {
     /// A folder of stimulus specs (*.json) to use instead of the built-in presets of stimuli/.
     #[arg(long, value_name = "DIR")]
     pub presets: Option<PathBuf>,
+    /// Prefix of the links from each picture to its explanation in docs/: the default suits a gallery one level below the repository root (README's `gallery/`); elsewhere give the repository's path or a URL of its files (e.g. https://github.com/OWNER/shadelab/blob/main/).
+    #[arg(long, value_name = "PREFIX", default_value = gallery::DOCS_BASE)]
+    pub docs_base: String,
 }
 
 /// Runs `gallery`.
@@ -25,6 +28,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let options = gallery::Options {
         force: global.force,
         max_pixels: global.max_pixels,
+        docs_base: args.docs_base,
     };
     let dir = gallery::build(&presets, &args.out, &options, &|_| bar.inc(1))?;
     bar.finish_and_clear();

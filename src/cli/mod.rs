@@ -5,6 +5,7 @@
 mod analyze;
 mod bench;
 mod describe;
+mod eval;
 mod gallery;
 mod progress;
 mod render;
@@ -62,6 +63,8 @@ enum Command {
     Bench(bench::Args),
     /// Run a grid of stimuli × parameters × priors (whole or one shard), or merge shards.
     Study(study::Args),
+    /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
+    Eval(eval::Args),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -114,13 +117,22 @@ pub fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 };
             }
-            // clap's message is several lines (tips, usage); keep the first, as one line.
+            // clap's message is several lines (tips, usage); keep the first, as one line, with
+            // the indented lines that complete it (the names of missing arguments).
             let text = e.render().to_string();
-            let first = text
-                .lines()
+            let mut lines = text.lines();
+            let mut first = lines
                 .next()
                 .unwrap_or("invalid arguments")
-                .trim_start_matches("error: ");
+                .trim_start_matches("error: ")
+                .to_string();
+            if first.ends_with(':') {
+                let names: Vec<&str> = lines
+                    .take_while(|l| l.starts_with("  "))
+                    .map(str::trim)
+                    .collect();
+                first = format!("{} {}", first, names.join(", "));
+            }
             eprintln!("error: {first} (see shadelab --help)");
             return ExitCode::from(2);
         }
@@ -174,5 +186,6 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Analyze(args) => analyze::run(args, global),
         Command::Bench(args) => bench::run(args, global),
         Command::Study(args) => study::run(args, global),
+        Command::Eval(args) => eval::run(args, global),
     }
 }

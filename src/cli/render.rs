@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE.json")]
     pub spec: Option<PathBuf>,
     /// Set a parameter (repeatable); `shadelab describe NAME` lists them.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = utf8_text())]
     pub set: Vec<String>,
     /// The light: x,y,z or tilt=T,slant=S or a name (front, above, below, left, right, above-left, above-right).
     #[arg(long, value_name = "L")]
@@ -25,23 +25,26 @@ pub struct Args {
     /// The reflectance model (lambertian, blinn-phong, oren-nayar).
     #[arg(long, value_name = "NAME")]
     pub brdf: Option<String>,
+    /// The space of a reflectance-map figure: pq (gradient space) or fg (stereographic); the same as --set space=…
+    #[arg(long, value_name = "pq|fg")]
+    pub space: Option<String>,
     /// Size in pixels: N (square) or WxH.
-    #[arg(long, value_name = "N|WxH", conflicts_with_all = ["width", "height"])]
+    #[arg(long, value_name = "N|WxH", conflicts_with_all = ["width", "height"], allow_hyphen_values = true)]
     pub size: Option<String>,
     /// Width in pixels (with --height).
-    #[arg(long, requires = "height")]
+    #[arg(long, requires = "height", allow_hyphen_values = true)]
     pub width: Option<usize>,
     /// Height in pixels (with --width).
-    #[arg(long, requires = "width")]
+    #[arg(long, requires = "width", allow_hyphen_values = true)]
     pub height: Option<usize>,
     /// Visual size in degrees: D (square) or WxH.
-    #[arg(long, value_name = "DEG|WxH")]
+    #[arg(long, value_name = "DEG|WxH", allow_hyphen_values = true)]
     pub visual_size: Option<String>,
     /// Pixels per degree of visual angle.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub ppd: Option<f64>,
     /// Seed for random layouts (recorded in the sidecar).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
     /// Also write the ground-truth layers: FILE_depth.npy, FILE_normals.npy, FILE_shading.npy (FILE_mask.png, the target mask, is always written)
     #[arg(long)]
@@ -50,7 +53,7 @@ pub struct Args {
     #[arg(long, value_name = "8|16", default_value_t = 16, value_parser = clap::builder::PossibleValuesParser::new(["8", "16"]).map(|s| if s == "8" { 8u8 } else { 16u8 }))]
     pub bit_depth: u8,
     /// Display gamma for PNG output (recorded); default: linear values.
-    #[arg(long, value_name = "G")]
+    #[arg(long, value_name = "G", allow_hyphen_values = true)]
     pub gamma: Option<f64>,
     /// Value range of float output: unit (0..1) or psychopy (-1..1).
     #[arg(long, value_name = "unit|psychopy", default_value = "unit", value_parser = ["unit", "psychopy"])]
@@ -58,6 +61,17 @@ pub struct Args {
     /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5, double) or .svg (vector stimuli); the sidecar goes beside it as .json.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+}
+
+/// Text of a flag such as `--set KEY=VALUE`, refused with a message naming the flag when it is
+/// not UTF-8: parameter values (mesh and depth-map paths among them) are recorded as text in
+/// the sidecar.
+pub fn utf8_text() -> impl TypedValueParser<Value = String> {
+    clap::builder::OsStringValueParser::new().try_map(|text| {
+        text.into_string().map_err(|_| {
+            "not valid UTF-8 (parameter values are recorded as text in the sidecar; rename the file)"
+        })
+    })
 }
 
 /// Runs `render`.
@@ -85,6 +99,19 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     if let Some(b) = &args.brdf {
         given.insert("brdf".into(), Value::from(b.as_str()));
+    }
+    if let Some(space) = &args.space {
+        let has_space = stimulus::find(&name)?
+            .info()
+            .params
+            .iter()
+            .any(|p| p.name == "space");
+        if !has_space {
+            return Err(CliError::usage(format!(
+                "--space applies to figures drawn in a space (reflectance-map); '{name}' has no space parameter"
+            )));
+        }
+        given.insert("space".into(), Value::from(space.as_str()));
     }
     let mut size = spec.as_ref().map(Spec::size).unwrap_or_default();
     if let Some(s) = &args.size {

@@ -2,16 +2,17 @@
 
 use super::{progress, CliError, CliResult, Global};
 use serde_json::json;
+use shadelab::analysis::plot::{LinePlot, Series};
 use shadelab::boundary::{Boundary, BOUNDARY_NAMES};
 use shadelab::grid::{Grid, Image, Mask};
 use shadelab::integrate::{
-    gradients_from_normals, integrate_gradients, write_mesh_obj, PoissonOptions, DEFAULT_MIN_NZ,
+    gradients_from_fg, integrate_owned_gradients, write_mesh_obj, PoissonOptions, DEFAULT_MIN_NZ,
 };
 use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
 use shadelab::light_estimation::estimate_light;
 use shadelab::reflectance::BrdfSpec;
-use shadelab::solver::{Method, Progress, SolveOptions, Solver};
+use shadelab::solver::{Method, Progress, Solution, SolveOptions, Solver};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -69,7 +70,12 @@ pub struct Args {
     )]
     pub tol: f64,
     /// Stop after this many sweeps (multigrid: cycles).
-    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100_000,
+        allow_hyphen_values = true
+    )]
     pub max_iter: usize,
     /// Output folder (written whole or not at all).
     #[arg(long, value_name = "DIR")]
@@ -152,25 +158,31 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
 
     let bar = progress::bar(options.max_iter as u64, "solving", global.quiet);
-    let mut solver = Solver::new(w, h)?;
+    // The largest update after each sweep (cycle), for convergence.csv and its plot.
+    let mut history: Vec<f64> = Vec::new();
     let solve_started = Instant::now();
-    let solution = solver.solve_with_progress(
-        &image,
-        &mask,
-        &boundary,
-        reflectance.as_ref(),
-        &options,
-        &mut |p: &Progress| {
-            bar.set_position(p.iteration as u64);
-            if p.iteration % 64 == 0 {
-                bar.set_message(format!("solving (last update {:.2e})", p.last_update));
-            }
-        },
-    )?;
+    let solution = {
+        // The solver's buffers live only for the solve: the integration and the outputs make
+        // their own, and memory peaks there.
+        let mut solver = Solver::new(w, h)?;
+        solver.solve_with_progress(
+            &image,
+            &mask,
+            &boundary,
+            reflectance.as_ref(),
+            &options,
+            &mut |p: &Progress| {
+                history.push(p.last_update);
+                bar.set_position(p.iteration as u64);
+                if p.iteration % 64 == 0 {
+                    bar.set_message(format!("solving (last update {:.2e})", p.last_update));
+                }
+            },
+        )?
+    };
     bar.finish_and_clear();
-    // The solver's buffers are not needed past this point: give their memory back before the
-    // integration and the outputs, which make their own.
-    drop(solver);
+    let boundary_kind = boundary.name();
+    drop((image, boundary));
     let solve_seconds = solve_started.elapsed().as_secs_f64();
     let unit = if method == Method::Multigrid {
         "cycles"
@@ -194,40 +206,59 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         )
     });
 
-    let integrate_started = Instant::now();
-    let (dz_dx, dz_dy) = gradients_from_normals(&solution.normals, &mask, DEFAULT_MIN_NZ)?;
-    let integration = integrate_gradients(&dz_dx, &dz_dy, &mask, &PoissonOptions::default())?;
-    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
-    // Depth from differences has no offset: put the lowest point of the object at 0.
-    let lowest = masked_range(&integration.depth, &mask).0;
-    let depth = Grid::from_fn(w, h, |c, r| {
-        if *mask.get(c, r) {
-            integration.depth.get(c, r) - lowest
-        } else {
-            0.0
-        }
-    });
-    let (_, highest) = masked_range(&depth, &mask);
-    let depth_picture = depth.map(|z| if highest > 0.0 { z / highest } else { 0.0 });
-    let normals_picture = solution
-        .normals
-        .map(|n| [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]);
-
+    // Outputs are made one at a time and each dropped once written, so that no more than two
+    // full-size layers are alive beside the integration's own vectors (`docs/performance.md`).
     let dir = folder.path().to_path_buf();
-    io::write_normals(&dir.join("normals.npy"), &solution.normals)?;
-    io::write_image(&dir.join("depth.npy"), &depth)?;
-    io::write_gray(
-        &dir.join("depth.png"),
-        &depth_picture,
-        BitDepth::Sixteen,
-        None,
-    )?;
+    io::write_normals(&dir.join("normals.npy"), &solution.normals())?;
+    let normals_picture = Grid::from_fn(w, h, |c, r| {
+        let n = solution.normal(c, r);
+        [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
+    });
     io::write_rgb(
         &dir.join("normals.png"),
         &normals_picture,
         BitDepth::Eight,
         None,
     )?;
+    drop(normals_picture);
+    write_convergence(&dir, &history, &method, unit, options.tol)?;
+    let Solution {
+        f,
+        g,
+        iterations,
+        converged,
+        last_update,
+        unknowns,
+        smoothness_energy,
+        brightness_energy,
+        ..
+    } = solution;
+
+    let integrate_started = Instant::now();
+    let (dz_dx, dz_dy) = gradients_from_fg(f, g, &mask, DEFAULT_MIN_NZ)?;
+    let integration = integrate_owned_gradients(dz_dx, dz_dy, &mask, &PoissonOptions::default())?;
+    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    let (iterations_cg, relative_residual, integration_converged) = (
+        integration.iterations,
+        integration.relative_residual,
+        integration.converged,
+    );
+    // Depth from differences has no offset: put the lowest point of the object at 0.
+    let mut depth = integration.depth;
+    let lowest = masked_range(&depth, &mask).0;
+    for (z, &inside) in depth.data_mut().iter_mut().zip(mask.data()) {
+        *z = if inside { *z - lowest } else { 0.0 };
+    }
+    let (_, highest) = masked_range(&depth, &mask);
+    io::write_image(&dir.join("depth.npy"), &depth)?;
+    let depth_picture = depth.map(|z| if highest > 0.0 { z / highest } else { 0.0 });
+    io::write_gray(
+        &dir.join("depth.png"),
+        &depth_picture,
+        BitDepth::Sixteen,
+        None,
+    )?;
+    drop(depth_picture);
     let obj_path = dir.join("surface.obj");
     io::write_atomic(&obj_path, |out| {
         write_mesh_obj(&depth, &mask, out, &obj_path)
@@ -266,27 +297,27 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             "estimate": estimate,
         },
         "boundary": {
-            "kind": boundary.name(),
+            "kind": boundary_kind,
             "occluding_shrink": shadelab::boundary::OCCLUDING_SHRINK,
         },
         "solver": {
             "method": method.to_string(),
-            "iterations": solution.iterations,
+            "iterations": iterations,
             "iteration_unit": unit,
-            "converged": solution.converged,
+            "converged": converged,
             "warning": warning,
-            "last_update": solution.last_update,
-            "unknowns": solution.unknowns,
-            "smoothness_energy": solution.smoothness_energy,
-            "brightness_energy": solution.brightness_energy,
+            "last_update": last_update,
+            "unknowns": unknowns,
+            "smoothness_energy": smoothness_energy,
+            "brightness_energy": brightness_energy,
             "seconds": solve_seconds,
         },
         "integration": {
             "method": "least-squares Poisson on the mask (conjugate gradients, multigrid-preconditioned)",
             "min_nz": DEFAULT_MIN_NZ,
-            "iterations": integration.iterations,
-            "relative_residual": integration.relative_residual,
-            "converged": integration.converged,
+            "iterations": iterations_cg,
+            "relative_residual": relative_residual,
+            "converged": integration_converged,
             "seconds": integrate_seconds,
         },
         "outputs": {
@@ -295,6 +326,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             "depth.png": format!("16-bit depth / {highest} (the depth range), 0 outside the mask"),
             "normals.png": "8-bit RGB n·0.5+0.5",
             "surface.obj": "triangle mesh of the masked depth, world axes, pixel units",
+            "convergence.csv": format!("the largest update of f or g after each {}", &unit[..unit.len() - 1]),
+            "convergence.png": "convergence.csv as a plot (log10 of the update)",
         },
         "depth_range": [0.0, highest],
         "seconds": started.elapsed().as_secs_f64(),
@@ -305,7 +338,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         eprintln!("warning: {warning}");
     }
     if !global.quiet {
-        let state = if solution.converged {
+        let state = if converged {
             "converged"
         } else {
             "did NOT converge (raise --max-iter or --tol)"
@@ -313,11 +346,48 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         eprintln!(
             "{}: {state} after {} {unit}, last update {:.2e}, {:.2} s",
             target.display(),
-            solution.iterations,
-            solution.last_update,
+            iterations,
+            last_update,
             started.elapsed().as_secs_f64()
         );
     }
+    Ok(())
+}
+
+/// Writes the update history as `convergence.csv` and `convergence.png` (log10 of the update
+/// against the sweep or cycle, with the tolerance as a reference line).
+fn write_convergence(
+    dir: &Path,
+    history: &[f64],
+    method: &Method,
+    unit: &str,
+    tol: f64,
+) -> CliResult {
+    let mut csv = format!("{},largest_update\n", &unit[..unit.len() - 1]);
+    for (i, u) in history.iter().enumerate() {
+        csv.push_str(&format!("{},{u:e}\n", i + 1));
+    }
+    io::write_atomic(&dir.join("convergence.csv"), |out| {
+        out.write_all(csv.as_bytes())
+            .map_err(|e| shadelab::Error::io(dir.join("convergence.csv"), e))
+    })?;
+    let mut plot = LinePlot::new(
+        &format!("{method} convergence"),
+        unit,
+        "log10 of the largest update of f or g",
+        (1.0, history.len().max(2) as f64),
+    );
+    plot.reference_y = Some(tol.log10());
+    plot.series.push(Series {
+        name: method.to_string(),
+        points: history
+            .iter()
+            .enumerate()
+            .filter(|(_, u)| **u > 0.0)
+            .map(|(i, u)| ((i + 1) as f64, u.log10()))
+            .collect(),
+    });
+    plot.write_png(&dir.join("convergence.png"))?;
     Ok(())
 }
 

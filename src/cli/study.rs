@@ -2,7 +2,7 @@
 //! in parallel on one machine or in shards on many (see docs/studies.md), merged into the
 //! files a single run writes.
 
-use super::{progress, CliResult, Global};
+use super::{progress, CliError, CliResult, Global};
 use shadelab::analysis::study::{merge, Shard, Study, REPORT, RESULTS, SWEEP};
 use shadelab::io::{self, AtomicDir};
 use std::path::{Path, PathBuf};
@@ -61,7 +61,7 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
         Some(text) => Shard::parse(text)?,
         None => Shard::WHOLE,
     };
-    let study = Study::load(&args.spec)?;
+    let study = Study::load_with_max_pixels(&args.spec, global.max_pixels)?;
     let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
     let count = study.shard_points(shard).len();
     let bar = progress::bar(count as u64, "study", global.quiet);
@@ -87,6 +87,19 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
 }
 
 fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
+    // Replacing one of its own inputs would lose that shard if anything went wrong later.
+    let out = std::fs::canonicalize(&args.out).ok();
+    if let Some(dir) = args
+        .dirs
+        .iter()
+        .find(|d| out.is_some() && std::fs::canonicalize(d).ok() == out)
+    {
+        return Err(CliError::usage(format!(
+            "--out {} is one of the shard folders being merged ({}); choose another folder",
+            args.out.display(),
+            dir.display()
+        )));
+    }
     let merged = merge(&args.dirs)?;
     let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
     let dir = folder.path().to_path_buf();

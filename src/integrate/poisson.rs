@@ -79,6 +79,33 @@ pub fn integrate_gradients(
     mask: &Mask,
     options: &PoissonOptions,
 ) -> Result<Integration> {
+    check_gradient_inputs(dz_dx, dz_dy, mask, options)?;
+    let b = gradient_rhs(dz_dx, dz_dy, mask);
+    solve(mask, b, options)
+}
+
+/// [`integrate_gradients`] taking the slopes by value: they are freed as soon as the
+/// right-hand side is built, before the solve allocates its own vectors. Same result, bit for
+/// bit; it is what `shadelab solve` uses, where memory peaks at this step.
+pub fn integrate_owned_gradients(
+    dz_dx: Image,
+    dz_dy: Image,
+    mask: &Mask,
+    options: &PoissonOptions,
+) -> Result<Integration> {
+    check_gradient_inputs(&dz_dx, &dz_dy, mask, options)?;
+    let b = gradient_rhs(&dz_dx, &dz_dy, mask);
+    drop((dz_dx, dz_dy));
+    solve(mask, b, options)
+}
+
+/// The checks of [`integrate_gradients`].
+fn check_gradient_inputs(
+    dz_dx: &Image,
+    dz_dy: &Image,
+    mask: &Mask,
+    options: &PoissonOptions,
+) -> Result<()> {
     check_gradients(dz_dx, dz_dy)?;
     if !dz_dx.same_size(mask) {
         return Err(Error::invalid(format!(
@@ -90,16 +117,18 @@ pub fn integrate_gradients(
         )));
     }
     check_options(options)?;
-    check_mask(mask)?;
-    // The differences are formed on the fly rather than as two more images: this path runs at
-    // the end of `solve`, where memory peaks.
-    let b = build_rhs(
+    check_mask(mask)
+}
+
+/// The right-hand side for slopes: the difference between two neighbours is the mean of their
+/// slopes (the trapezoid rule), formed on the fly rather than as two more images.
+fn gradient_rhs(dz_dx: &Image, dz_dy: &Image, mask: &Mask) -> Vec<f64> {
+    build_rhs(
         mask,
         |c, r| 0.5 * (dz_dx.get(c, r) + dz_dx.get(c + 1, r)),
         // One row down is one pixel toward −y.
         |c, r| -0.5 * (dz_dy.get(c, r) + dz_dy.get(c, r + 1)),
-    );
-    solve(mask, b, options)
+    )
 }
 
 /// Checks sizes, finiteness, options and a non-empty mask, in the order the original

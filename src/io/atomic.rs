@@ -31,10 +31,7 @@ fn parent_of(target: &Path) -> &Path {
 /// renamed over `target` only when everything succeeded. On failure the temporary file is
 /// removed and `target` is untouched.
 pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let parent = parent_of(target);
-    if !parent.is_dir() {
-        return Err(Error::format(parent, "output folder does not exist"));
-    }
+    check_parent(target)?;
     if target.is_dir() {
         return Err(Error::format(
             target,
@@ -58,8 +55,49 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
     result
 }
 
+/// The folder that will hold `target` must exist and be a folder; a path under a regular file
+/// gets its own message rather than "does not exist".
+fn check_parent(target: &Path) -> Result<()> {
+    let parent = parent_of(target);
+    if parent.is_dir() {
+        Ok(())
+    } else if parent.exists() {
+        Err(Error::format(
+            parent,
+            "is not a folder, so it cannot hold the output",
+        ))
+    } else {
+        Err(Error::format(parent, "output folder does not exist"))
+    }
+}
+
+/// Whether `marker` is a sidecar or report that shadelab wrote: a JSON object whose `program`
+/// is `shadelab`, or (an `index.html`) a page that names shadelab. A user's own `photo.json`
+/// beside their `photo.png` must not license replacing either.
+fn written_by_shadelab(marker: &Path) -> bool {
+    if !marker.is_file() {
+        return false;
+    }
+    let Ok(bytes) = fs::read(marker) else {
+        return false;
+    };
+    if super::extension(marker) == "json" {
+        serde_json::from_slice::<serde_json::Value>(&bytes)
+            .is_ok_and(|v| v.get("program").and_then(|p| p.as_str()) == Some("shadelab"))
+    } else {
+        bytes.windows(8).any(|w| w == b"shadelab")
+    }
+}
+
+fn file_name_of(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
 /// Refuses to replace an existing file that shadelab did not write: a file is shadelab's when
-/// `marker` (its sidecar or report) exists beside it. `force` overrides.
+/// `marker` (its sidecar or report) beside it was written by shadelab. The marker itself may be
+/// given as `target`: it is then replaced only when it is shadelab's own. `force` overrides.
 pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> {
     if force || !target.exists() {
         return Ok(());
@@ -70,18 +108,22 @@ pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> 
             "is a directory; expected a file name",
         ));
     }
-    if marker.exists() {
+    if written_by_shadelab(marker) {
         return Ok(());
     }
+    let why = if target == marker {
+        "it is not a shadelab sidecar".to_string()
+    } else if marker.exists() {
+        format!(
+            "{} beside it is not a shadelab sidecar",
+            file_name_of(marker)
+        )
+    } else {
+        format!("no {} beside it", file_name_of(marker))
+    };
     Err(Error::format(
         target,
-        format!(
-            "exists and was not written by shadelab (no {} beside it); use --force to replace it",
-            marker
-                .file_name()
-                .map(|n| n.to_string_lossy())
-                .unwrap_or_default()
-        ),
+        format!("exists and was not written by shadelab ({why}); use --force to replace it"),
     ))
 }
 
@@ -108,20 +150,19 @@ impl AtomicDir {
                 .map_err(|e| Error::io(target, e))?
                 .next()
                 .is_none();
-            if !empty && !force && !target.join(marker).exists() {
+            if !empty && !force && !written_by_shadelab(&target.join(marker)) {
+                let why = if target.join(marker).exists() {
+                    format!("its {marker} is not shadelab's")
+                } else {
+                    format!("no {marker} in it")
+                };
                 return Err(Error::format(
                     target,
-                    format!("folder exists and was not written by shadelab (no {marker} in it); use --force or another folder"),
+                    format!("folder exists and was not written by shadelab ({why}); use --force or another folder"),
                 ));
             }
         }
-        let parent = parent_of(target);
-        if !parent.is_dir() {
-            return Err(Error::format(
-                parent,
-                "output folder's parent does not exist",
-            ));
-        }
+        check_parent(target)?;
         let temp = temp_name(target)?;
         fs::create_dir(&temp).map_err(|e| Error::io(target, e))?;
         Ok(AtomicDir {
@@ -196,6 +237,8 @@ mod tests {
         assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
     }
 
+    const OURS: &str = r#"{"program": "shadelab"}"#;
+
     #[test]
     fn dir_is_removed_unless_committed_and_foreign_dirs_are_kept() {
         let d = scratch("dir");
@@ -206,18 +249,27 @@ mod tests {
         }
         assert_eq!(fs::read_dir(&d).unwrap().count(), 0);
         let a = AtomicDir::create(&target, "report.json", false).unwrap();
-        fs::write(a.path().join("report.json"), "{}").unwrap();
+        fs::write(a.path().join("report.json"), OURS).unwrap();
         a.commit().unwrap();
         assert!(target.join("report.json").exists());
         // Replacing our own output is fine; a folder of someone else's is refused.
         let a = AtomicDir::create(&target, "report.json", false).unwrap();
-        fs::write(a.path().join("report.json"), "{}").unwrap();
+        fs::write(a.path().join("report.json"), OURS).unwrap();
         a.commit().unwrap();
         let foreign = d.join("photos");
         fs::create_dir(&foreign).unwrap();
         fs::write(foreign.join("holiday.jpg"), "x").unwrap();
         assert!(AtomicDir::create(&foreign, "report.json", false).is_err());
         assert!(foreign.join("holiday.jpg").exists());
+        // A report.json of someone else's does not make the folder shadelab's.
+        fs::write(foreign.join("report.json"), r#"{"program": "darktable"}"#).unwrap();
+        let e = AtomicDir::create(&foreign, "report.json", false).unwrap_err();
+        assert!(e.to_string().contains("not shadelab's"), "{e}");
+        // A path under a regular file is named as such.
+        let e = AtomicDir::create(&foreign.join("holiday.jpg/out"), "report.json", false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("holiday.jpg: is not a folder"), "{e}");
     }
 
     #[test]
@@ -228,7 +280,12 @@ mod tests {
         let marker = d.join("img.json");
         assert!(check_overwrite(&target, &marker, false).is_err());
         assert!(check_overwrite(&target, &marker, true).is_ok());
+        // A JSON file of the user's beside it is not a sidecar, and is itself protected.
         fs::write(&marker, "{}").unwrap();
+        assert!(check_overwrite(&target, &marker, false).is_err());
+        assert!(check_overwrite(&marker, &marker, false).is_err());
+        fs::write(&marker, OURS).unwrap();
         assert!(check_overwrite(&target, &marker, false).is_ok());
+        assert!(check_overwrite(&marker, &marker, false).is_ok());
     }
 }

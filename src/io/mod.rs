@@ -9,11 +9,12 @@ mod sidecar;
 
 pub use atomic::{check_overwrite, write_atomic, AtomicDir};
 pub use npy::{
-    read_array, read_image, read_normals, write_f32, write_image, write_normals, NpyArray,
+    read_array, read_array_from_bytes, read_image, read_image_from_bytes, read_normals, write_f32,
+    write_image, write_normals, NpyArray,
 };
 pub use png::{
-    read_gray, read_labels, read_mask, read_rgb, write_gray, write_labels, write_mask, write_rgb,
-    BitDepth, GrayInfo, LUMINANCE_FORMULA,
+    read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes, read_rgb,
+    write_gray, write_labels, write_mask, write_rgb, BitDepth, GrayInfo, LUMINANCE_FORMULA,
 };
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
 
@@ -37,11 +38,15 @@ pub fn extension(path: &Path) -> String {
 }
 
 /// `path` with `suffix` inserted before the extension and the extension replaced by `ext`:
-/// `out/a.png` + `_mask`, `png` → `out/a_mask.png`.
+/// `out/a.png` + `_mask`, `png` → `out/a_mask.png`. The stem is kept as the OS gave it, so a
+/// name that is not UTF-8 keeps its siblings beside it.
 pub fn sibling(path: &Path, suffix: &str, ext: &str) -> std::path::PathBuf {
-    let stem = path
+    let mut name = path
         .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
+        .map(|s| s.to_os_string())
         .unwrap_or_default();
-    path.with_file_name(format!("{stem}{suffix}.{ext}"))
+    name.push(suffix);
+    name.push(".");
+    name.push(ext);
+    path.with_file_name(name)
 }

@@ -18,9 +18,13 @@ pub struct NpyArray {
 /// Reads a `.npy` file of any float, integer or boolean dtype, either memory order, refusing
 /// arrays of more than `max_elements` values and files shorter than their header declares.
 pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
-    let bytes = super::read_bytes(path)?;
-    precheck_header(&bytes, max_elements).map_err(|m| Error::format(path, m))?;
-    let file = npyz::NpyFile::new(&bytes[..])
+    read_array_from_bytes(&super::read_bytes(path)?, path, max_elements)
+}
+
+/// [`read_array`] of `.npy` bytes held in memory; `path` names them in errors.
+pub fn read_array_from_bytes(bytes: &[u8], path: &Path, max_elements: usize) -> Result<NpyArray> {
+    precheck_header(bytes, max_elements).map_err(|m| Error::format(path, m))?;
+    let file = npyz::NpyFile::new(bytes)
         .map_err(|e| Error::format(path, format!("not a .npy file ({e})")))?;
     let shape: Vec<usize> = file.shape().iter().map(|&d| d as usize).collect();
     let count = shape
@@ -107,6 +111,12 @@ pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
     Ok(NpyArray { shape, data })
 }
 
+/// The longest `.npy` header accepted (NumPy's own reader refuses longer ones by default).
+const MAX_HEADER_BYTES: usize = 10_000;
+
+/// The deepest bracket nesting accepted in a `.npy` header.
+const MAX_HEADER_NESTING: usize = 4;
+
 /// Checks the preamble and the header's shape by hand before npyz parses them, so that a
 /// corrupt or hostile header (a shape whose product overflows, a header longer than the file)
 /// is an error rather than an overflow or a huge allocation.
@@ -123,9 +133,34 @@ fn precheck_header(bytes: &[u8], max_elements: usize) -> std::result::Result<(),
         2 | 3 => return Err("the .npy header is truncated".into()),
         v => return Err(format!("unsupported .npy format version {v}")),
     };
+    // A header longer than the file is reported as truncated (the more precise of the two).
     let text = bytes
         .get(start..start.saturating_add(length))
         .ok_or("the .npy header is truncated")?;
+    if length > MAX_HEADER_BYTES {
+        return Err(format!(
+            "the .npy header is {length} bytes long (more than {MAX_HEADER_BYTES}: not an array \
+             header)"
+        ));
+    }
+    // npyz parses the header with a backtracking grammar whose time grows exponentially with
+    // the nesting of brackets; a plain array's header nests two deep ({'shape': (H, W)}).
+    let mut depth = 0usize;
+    for &b in text {
+        match b {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                if depth > MAX_HEADER_NESTING {
+                    return Err(format!(
+                        "the .npy header nests brackets more than {MAX_HEADER_NESTING} deep \
+                         (not a plain array header)"
+                    ));
+                }
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
     let text = String::from_utf8_lossy(text);
     if text.matches("shape").count() != 1 {
         return Err("the .npy header does not name one shape".into());
@@ -197,7 +232,19 @@ fn check_finite(path: &Path, data: &[f64], width: usize, per_pixel: usize) -> Re
 
 /// Reads an H×W (or H×W×1) array as an image, rejecting NaN and Inf.
 pub fn read_image(path: &Path, max_pixels: usize) -> Result<Image> {
-    let a = read_array(path, max_pixels)?;
+    image_from(read_array(path, max_pixels)?, path, max_pixels)
+}
+
+/// [`read_image`] of `.npy` bytes held in memory; `path` names them in errors.
+pub fn read_image_from_bytes(bytes: &[u8], path: &Path, max_pixels: usize) -> Result<Image> {
+    image_from(
+        read_array_from_bytes(bytes, path, max_pixels)?,
+        path,
+        max_pixels,
+    )
+}
+
+fn image_from(a: NpyArray, path: &Path, max_pixels: usize) -> Result<Image> {
     let (h, w) = match a.shape[..] {
         [h, w] | [h, w, 1] => (h, w),
         _ => {

@@ -35,31 +35,89 @@ fn decode(path: &Path, max_pixels: usize) -> Result<DynamicImage> {
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not an image"));
     }
-    let open = || -> Result<ImageReader<std::io::BufReader<std::fs::File>>> {
-        ImageReader::open(path)
-            .map_err(|e| Error::io(path, e))?
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_bytes(&bytes, path, max_pixels)
+}
+
+/// Decodes an image held in memory; `source` names it in errors. The declared size is checked
+/// against `max_pixels` before any pixel buffer is allocated.
+fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<DynamicImage> {
+    check_png_palette(bytes).map_err(|m| Error::format(source, m))?;
+    let open = || -> Result<ImageReader<std::io::Cursor<&[u8]>>> {
+        let mut reader = ImageReader::new(std::io::Cursor::new(bytes));
+        // As `ImageReader::open`: the extension names the format when the content does not.
+        if let Ok(format) = image::ImageFormat::from_path(source) {
+            reader.set_format(format);
+        }
+        reader
             .with_guessed_format()
-            .map_err(|e| Error::io(path, e))
+            .map_err(|e| Error::io(source, e))
     };
     let (w, h) = open()?
         .into_dimensions()
-        .map_err(|e| Error::format(path, format!("not a readable image ({e})")))?;
+        .map_err(|e| Error::format(source, format!("not a readable image ({e})")))?;
     check_size(w as usize, h as usize, max_pixels)
-        .map_err(|e| Error::format(path, e.to_string()))?;
+        .map_err(|e| Error::format(source, e.to_string()))?;
     let mut reader = open()?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(w);
     limits.max_image_height = Some(h);
+    // The size was checked against `max_pixels` above; the decoder's own allocation cap
+    // (512 MiB by default) must not stop what `--max-pixels` allows: the largest pixel is RGBA
+    // at 16 bits, 8 bytes.
+    let buffer = u64::from(w) * u64::from(h) * 8;
+    limits.max_alloc = Some(limits.max_alloc.unwrap_or(0).max(buffer));
     reader.limits(limits);
     reader
         .decode()
-        .map_err(|e| Error::format(path, format!("cannot decode image ({e})")))
+        .map_err(|e| Error::format(source, format!("cannot decode image ({e})")))
+}
+
+/// Walks the chunks of a PNG and refuses a palette (PLTE) whose length is not a positive
+/// multiple of 3 up to 768: the `png` crate (0.18) panics expanding such a palette. Anything else
+/// wrong with the chunks is left to the decoder.
+fn check_png_palette(bytes: &[u8]) -> std::result::Result<(), String> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    let Some(mut rest) = bytes.strip_prefix(SIGNATURE) else {
+        return Ok(());
+    };
+    while rest.len() >= 8 {
+        let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
+        let kind = &rest[4..8];
+        if kind == b"PLTE" && (length == 0 || length % 3 != 0 || length > 768) {
+            return Err(format!(
+                "corrupt PNG: its palette (PLTE) is {length} bytes long, which is not 3 bytes \
+                 for each of 1 to 256 colours"
+            ));
+        }
+        if kind == b"IEND" {
+            break;
+        }
+        // Chunk: length, type, data, CRC.
+        match rest.get(length.saturating_add(12)..) {
+            Some(next) => rest = next,
+            None => break,
+        }
+    }
+    Ok(())
 }
 
 /// Reads a PNG (or another format the `image` crate knows) as linear luminance 0..1.
 /// Grayscale is scaled by its maximum code; colour becomes luminance by [`LUMINANCE_FORMULA`].
 pub fn read_gray(path: &Path, max_pixels: usize) -> Result<(Image, GrayInfo)> {
-    let img = decode(path, max_pixels)?;
+    gray_from(decode(path, max_pixels)?)
+}
+
+/// [`read_gray`] of an image held in memory; `source` names it in errors.
+pub fn read_gray_from_bytes(
+    bytes: &[u8],
+    source: &Path,
+    max_pixels: usize,
+) -> Result<(Image, GrayInfo)> {
+    gray_from(decode_bytes(bytes, source, max_pixels)?)
+}
+
+fn gray_from(img: DynamicImage) -> Result<(Image, GrayInfo)> {
     let color = img.color();
     let channels = color.channel_count();
     let bit_depth = (color.bits_per_pixel() / channels as u16) as u8;
@@ -121,7 +179,16 @@ pub fn read_rgb(path: &Path, max_pixels: usize) -> Result<RgbImage> {
 
 /// Reads a mask: any non-zero pixel (in any channel) is inside.
 pub fn read_mask(path: &Path, max_pixels: usize) -> Result<Mask> {
-    let img = decode(path, max_pixels)?.into_rgba16();
+    mask_from(decode(path, max_pixels)?)
+}
+
+/// [`read_mask`] of an image held in memory; `source` names it in errors.
+pub fn read_mask_from_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Mask> {
+    mask_from(decode_bytes(bytes, source, max_pixels)?)
+}
+
+fn mask_from(img: DynamicImage) -> Result<Mask> {
+    let img = img.into_rgba16();
     let (w, h) = (img.width() as usize, img.height() as usize);
     Grid::from_vec(
         w,

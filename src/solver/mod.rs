@@ -33,7 +33,6 @@ use crate::error::{Error, Result};
 use crate::gradient_space::{normal_from_fg, Normal};
 use crate::grid::{Grid, Image, Mask};
 use crate::reflectance::ReflectanceMap;
-use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
@@ -145,8 +144,6 @@ pub struct Solution {
     pub f: Image,
     /// Stereographic g at every pixel (0 outside the mask).
     pub g: Image,
-    /// Unit normals from (f, g); (0, 0, 1) outside the mask.
-    pub normals: Grid<Normal>,
     /// Sweeps done (cycles for multigrid).
     pub iterations: usize,
     /// Whether the last update fell below the tolerance.
@@ -163,6 +160,20 @@ pub struct Solution {
     pub last_update: f64,
     /// The number of unknown pixels.
     pub unknowns: usize,
+}
+
+impl Solution {
+    /// The unit normal at pixel (`col`, `row`) from its (f, g); (0, 0, 1) outside the mask,
+    /// where f = g = 0.
+    pub fn normal(&self, col: usize, row: usize) -> Normal {
+        normal_from_fg(*self.f.get(col, row), *self.g.get(col, row))
+    }
+
+    /// The unit normals of every pixel (see [`Solution::normal`]). Computed on demand rather
+    /// than kept: 24 bytes per pixel that a large solve need not hold while it runs.
+    pub fn normals(&self) -> Grid<Normal> {
+        Grid::from_fn(self.f.width(), self.f.height(), |c, r| self.normal(c, r))
+    }
 }
 
 /// A change of f or g larger than this in one sweep means the iteration has blown up: the
@@ -226,12 +237,14 @@ impl Solver {
             height,
             // Filled on the first Jacobi or literal solve: multigrid does not need it.
             slot: Vec::new(),
-            pixels: Vec::with_capacity(n),
-            nodes: Vec::with_capacity(n),
-            cur_f: Vec::with_capacity(n + 1),
-            cur_g: Vec::with_capacity(n + 1),
-            next_f: Vec::with_capacity(n + 1),
-            next_g: Vec::with_capacity(n + 1),
+            // The Jacobi buffers are sized on the first Jacobi or literal solve (and kept for
+            // the next), so a multigrid solver never holds them.
+            pixels: Vec::new(),
+            nodes: Vec::new(),
+            cur_f: Vec::new(),
+            cur_g: Vec::new(),
+            next_f: Vec::new(),
+            next_g: Vec::new(),
             multigrid: None,
         })
     }
@@ -394,12 +407,10 @@ impl Solver {
             }
         }
         let n_unknown = self.pixels.len();
-        for (i, role) in roles.iter().enumerate() {
-            if *role == Role::Fixed {
-                self.slot[i] = self.cur_f.len() as u32;
-                self.cur_f.push(bc.f.data()[i]);
-                self.cur_g.push(bc.g.data()[i]);
-            }
+        for &(i, [f, g]) in bc.fixed_values() {
+            self.slot[i] = self.cur_f.len() as u32;
+            self.cur_f.push(f);
+            self.cur_g.push(g);
         }
         let zero = self.cur_f.len() as u32;
         self.cur_f.push(0.0);
@@ -512,13 +523,6 @@ fn finish(
 ) -> Solution {
     let (w, h) = (f.width(), f.height());
     let inside = |c: usize, r: usize| *bc.roles.get(c, r) != Role::Outside;
-    let normals = Grid::from_fn(w, h, |c, r| {
-        if inside(c, r) {
-            normal_from_fg(*f.get(c, r), *g.get(c, r))
-        } else {
-            Vector3::z()
-        }
-    });
     let mut smoothness = 0.0;
     for r in 0..h {
         for c in 0..w {
@@ -548,7 +552,6 @@ fn finish(
     Solution {
         f,
         g,
-        normals,
         iterations: stats.iterations,
         converged: stats.converged,
         diverged: stats.diverged,

@@ -23,7 +23,7 @@ fn mean_error(solution: &Solution, truth: &Surface, boundary: &Boundary) -> f64 
     let (mut sum, mut n) = (0.0, 0);
     for (i, role) in bc.roles.data().iter().enumerate() {
         if *role == Role::Unknown {
-            sum += angle_deg(&solution.normals.data()[i], &truth.normals.data()[i]);
+            sum += angle_deg(&solution.normals().data()[i], &truth.normals.data()[i]);
             n += 1;
         }
     }
@@ -49,7 +49,7 @@ fn solve(surface: &Surface, light: Light, assumed: Light, boundary: &Boundary) -
 
 /// Depth from the solution's normals by least squares on the mask.
 fn depth(solution: &Solution, mask: &Mask) -> Image {
-    let (dx, dy) = gradients_from_normals(&solution.normals, mask, 0.05).unwrap();
+    let (dx, dy) = gradients_from_normals(&solution.normals(), mask, 0.05).unwrap();
     integrate_gradients(&dx, &dy, mask, &PoissonOptions::default())
         .unwrap()
         .depth
@@ -71,10 +71,10 @@ fn sphere_with_frontal_light_is_within_a_quarter_degree() {
         sol.iterations
     );
     // Normals are unit, and face the viewer outside the mask.
-    for (n, m) in sol.normals.data().iter().zip(s.mask.data()) {
+    for (n, m) in sol.normals().data().iter().zip(s.mask.data()) {
         assert!((n.norm() - 1.0).abs() < 1e-12);
         if !m {
-            assert_eq!(*n, Vector3::z());
+            assert_eq!(*n, nalgebra::Vector3::z());
         }
     }
 }

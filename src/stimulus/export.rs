@@ -93,7 +93,13 @@ pub fn write_output(
         ));
     }
     let sidecar = io::sibling(path, "", "json");
-    io::check_overwrite(path, &sidecar, options.force)?;
+    // Every file this call will write is checked before the first is written: the image and
+    // its companions are replaced only when the sidecar beside them is shadelab's, and the
+    // sidecar only when it is one.
+    for target in planned_files(path, output, options) {
+        io::check_overwrite(&target, &sidecar, options.force)?;
+    }
+    io::check_overwrite(&sidecar, &sidecar, options.force)?;
     let mut written: Vec<PathBuf> = Vec::new();
     let result = write_all(
         name,
@@ -111,6 +117,25 @@ pub fn write_output(
         }
     }
     result.map(|_| written)
+}
+
+/// The image and the companion files `write_all` writes beside it (not the sidecar).
+fn planned_files(path: &Path, output: &Output, options: &ExportOptions) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    if output.targets.is_some() {
+        files.push(io::sibling(path, "_mask", "png"));
+    }
+    if let (true, Some(s)) = (options.layers, &output.surface) {
+        files.push(io::sibling(path, "_depth", "npy"));
+        files.push(io::sibling(path, "_normals", "npy"));
+        if s.albedo.is_some() {
+            files.push(io::sibling(path, "_albedo", "npy"));
+        }
+        if s.shading.is_some() {
+            files.push(io::sibling(path, "_shading", "npy"));
+        }
+    }
+    files
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -207,6 +207,10 @@ pub struct Spec {
     /// A title for the gallery.
     #[serde(default)]
     pub title: Option<String>,
+    /// The docs page and anchor that explain it, from the repository root
+    /// (`docs/priors.md#light-from-above`); the gallery links to it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub docs: Option<String>,
 }
 
 impl Spec {

@@ -126,8 +126,25 @@ impl Stimulus for ReflectanceMapFigure {
             None
         };
         let dot = 4.0 * scale * thick as f64;
+        let line = scale * thick as f64 / 2.0;
+        // Ticks at every unit of the axes, so the figure can be read without a plot frame.
+        let tick = 3.0 * dot;
+        let on_tick = |x: f64| (x - x.round()).abs() <= line && x.round() != 0.0;
+        let axis_grey = [0.35, 0.35, 0.35];
         let image = Grid::from_fn(w, h, |c, r| {
             let (a, b) = coord(c, r);
+            if fg {
+                // The limb normals (1,0,0) and (0,1,0) as rings that reach past the disc's rim,
+                // where they lie, so they are visible on white as well as on the map.
+                let ring = |x: f64, y: f64| ((a - x).hypot(b - y) - 2.0 * dot).abs() <= line * 1.5;
+                if ring(2.0, 0.0) || ring(0.0, 2.0) {
+                    return [1.0, 0.45, 0.0];
+                }
+                // The rim f² + g² = 4: the occluding boundary.
+                if (a.hypot(b) - 2.0).abs() <= line {
+                    return [0.0, 0.0, 0.0];
+                }
+            }
             let Some(v) = *values.get(c, r) else {
                 return [1.0, 1.0, 1.0];
             };
@@ -140,13 +157,16 @@ impl Stimulus for ReflectanceMapFigure {
                 }
             }
             if fg && ((a - 2.0).hypot(b) < dot || a.hypot(b - 2.0) < dot) {
-                return [1.0, 0.6, 0.0];
+                return [1.0, 0.45, 0.0];
             }
             if (1..=contours).any(|k| crosses(c, r, top * k as f64 / (contours + 1) as f64)) {
                 return [0.0, 0.0, 0.0];
             }
             if a.abs() <= scale / 2.0 || b.abs() <= scale / 2.0 {
-                return [0.35, 0.35, 0.35];
+                return axis_grey;
+            }
+            if (b.abs() <= tick && on_tick(a)) || (a.abs() <= tick && on_tick(b)) {
+                return axis_grey;
             }
             viridis(v / top)
         });
@@ -154,7 +174,7 @@ impl Stimulus for ReflectanceMapFigure {
         out.pixels = Pixels::Rgb(image);
         out.notes
             .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
-        out.notes.insert("axes".into(), Value::from(if fg { "f right, g up; white: outside the visible disc f²+g² ≤ 4; orange dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up" }));
+        out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));
         out.notes
             .insert("window_half_width".into(), Value::from(extent));
         out.notes.insert("max_R".into(), Value::from(top));
@@ -199,5 +219,48 @@ mod tests {
         assert_eq!(params.str("space").unwrap(), "fg");
         let lum = |p: [f64; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
         assert!(lum(*img.get(30, 50)) > lum(*img.get(70, 50)));
+        // The rings marking (2,0) and (0,2) reach past the rim, where the map is white: one
+        // unit is 50.5/2.2 pixels and a ring's radius 8 pixels, so the ring's top point over
+        // (2,0) is pixel (96, 42), just outside the disc, and likewise (58, 4) beside (0,2).
+        let orange = [1.0, 0.45, 0.0];
+        assert_eq!(
+            *img.get(96, 42),
+            orange,
+            "ring around (2,0) outside the disc"
+        );
+        assert_eq!(
+            *img.get(58, 4),
+            orange,
+            "ring around (0,2) outside the disc"
+        );
+        assert_eq!(*img.get(100, 42), [1.0; 3], "outside the disc and the ring");
+    }
+
+    #[test]
+    fn the_measured_contour_is_the_iso_brightness_curve_of_that_intensity() {
+        // Light from the front: R = n_z = 1/√(1+p²+q²), so R = 0.6 is the circle p²+q² = (1/0.36 − 1).
+        let mut given = serde_json::Map::new();
+        given.insert("light".into(), Value::from("front"));
+        given.insert("contours".into(), Value::from(0));
+        let size = SizeRequest {
+            shape: Some((201, 201)),
+            ..Default::default()
+        };
+        let (_, out) =
+            super::super::generate("reflectance-map", &given, &size, 0, 1 << 20).unwrap();
+        let Pixels::Rgb(img) = &out.pixels else {
+            panic!("rgb expected")
+        };
+        let radius = (1.0f64 / 0.36 - 1.0).sqrt() * 100.0 / 3.0;
+        let red = [1.0, 0.1, 0.05];
+        // On the circle (along the diagonal, away from the axes and their ticks): red; well
+        // inside and outside it: not.
+        let at = |r: f64| {
+            let d = (r / std::f64::consts::SQRT_2).round() as usize;
+            *img.get(100 + d, 100 + d)
+        };
+        assert_eq!(at(radius), red);
+        assert_ne!(at(radius - 6.0), red);
+        assert_ne!(at(radius + 6.0), red);
     }
 }

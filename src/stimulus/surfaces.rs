@@ -347,6 +347,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
                     ));
                 }
                 rasterize_mesh(&Mesh::load(path)?, r)
+                    .map_err(|e| Error::format(path, e.to_string()))
             },
             natural: None,
         }),

@@ -61,7 +61,12 @@ pub struct Args {
     )]
     jitter: f64,
     /// Seed of the jitter.
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        allow_hyphen_values = true
+    )]
     jitter_seed: u64,
     /// Centre σ of the difference-of-Gaussians band-pass filter, degrees (surround 2σ).
     #[arg(

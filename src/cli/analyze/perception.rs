@@ -18,7 +18,12 @@ pub struct PictureArgs {
     #[command(flatten)]
     pub source: Source,
     /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
-    #[arg(long, value_name = "N|WxH", requires = "stimulus")]
+    #[arg(
+        long,
+        value_name = "N|WxH",
+        requires = "stimulus",
+        allow_hyphen_values = true
+    )]
     pub size: Option<String>,
     /// Where the engine solves: image (the whole picture, a relief on a plane), tokens (only
     /// the target regions), or a PNG mask (nonzero = inside).
@@ -65,7 +70,7 @@ pub struct PictureArgs {
     pub tol: f64,
     /// Most multigrid cycles per solve; a solve that has not converged by then is repeated
     /// with Jacobi sweeps (same answer, slower).
-    #[arg(long, value_name = "N", default_value_t = shadelab::analysis::interpretation::MULTIGRID_CYCLES)]
+    #[arg(long, value_name = "N", default_value_t = shadelab::analysis::interpretation::MULTIGRID_CYCLES, allow_hyphen_values = true)]
     pub max_iter: usize,
 }
 

@@ -1,0 +1,191 @@
+//! `shadelab eval`: the engine on the evaluation data, as a table (and a folder of results).
+
+use super::{progress, CliResult, Global};
+use serde_json::json;
+use shadelab::boundary::Boundary;
+use shadelab::evaluation::{self, report, Config, Set, Step};
+use shadelab::io::{self, AtomicDir, BitDepth};
+use shadelab::light::Light;
+use shadelab::solver::Method;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The file that marks an output folder as written by `eval`.
+const REPORT: &str = "evaluation.json";
+
+/// Arguments of `eval`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The evaluation data folder (bunny/, mozart/, diligent_normals/, diligent_ball/,
+    /// beethoven/ as in ../shared/data).
+    #[arg(long, value_name = "DIR")]
+    pub data: PathBuf,
+    /// Output folder for evaluation.md, evaluation.json and one picture per case (written
+    /// whole or not at all); default: only print the table.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Run only these sets (comma separated): bunny, mozart, diligent, ball, beethoven.
+    #[arg(long, value_name = "SETS", value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// The DiLiGenT objects to run (comma separated; default all nine).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub objects: Vec<String>,
+    /// The light the DiLiGenT normals are rendered under.
+    #[arg(long, value_name = "L", default_value = "tilt=0,slant=30")]
+    pub diligent_light: String,
+    /// The ball photographs to run (comma separated; default 052,076,008,029,049,041).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub ball_images: Vec<String>,
+    /// One boundary condition for every case (occluding, flat, free); default: occluding, and
+    /// both occluding and free (a row each) for Mozart and the ball.
+    #[arg(long, value_name = "occluding|flat|free")]
+    pub boundary: Option<String>,
+    /// The quantile of a photograph's brightness (on its mask) taken as its albedo.
+    #[arg(long, value_name = "Q", default_value_t = shadelab::evaluation::albedo::BRIGHT_QUANTILE)]
+    pub albedo_quantile: f64,
+    /// Divide the ball photographs by the albedo their true normals give (a reference for
+    /// what the albedo estimate costs; not available for real use).
+    #[arg(long)]
+    pub ball_albedo_from_truth: bool,
+    /// Side of the square frame the bunny is rasterised into, in pixels.
+    #[arg(long, value_name = "N", default_value_t = 256)]
+    pub bunny_size: usize,
+    /// Weight λ of the brightness term (> 0).
+    #[arg(
+        long = "lambda",
+        value_name = "L",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
+    pub lambda: f64,
+    /// Solver tolerance (the largest change a Jacobi sweep would still make).
+    #[arg(
+        long,
+        value_name = "T",
+        default_value_t = 1e-6,
+        allow_hyphen_values = true
+    )]
+    pub tol: f64,
+    /// Iteration: multigrid (the default) or jacobi (the same fixed point, slowly; for
+    /// comparison).
+    #[arg(long, value_name = "multigrid|jacobi", default_value = "multigrid")]
+    pub method: String,
+    /// Most multigrid cycles (Jacobi sweeps) per case.
+    #[arg(long, value_name = "N", default_value_t = evaluation::MAX_CYCLES)]
+    pub max_iter: usize,
+    /// The commit to record in the report; default: `git rev-parse --short HEAD` in the
+    /// current folder (with `-dirty` when tracked files are modified), or "unknown".
+    #[arg(long, value_name = "ID")]
+    pub commit: Option<String>,
+}
+
+/// Runs `eval`.
+pub fn run(args: Args, global: &Global) -> CliResult {
+    let started = Instant::now();
+    let mut config = Config::new(&args.data)?;
+    if !args.only.is_empty() {
+        config.sets = args
+            .only
+            .iter()
+            .map(|s| s.trim().parse::<Set>())
+            .collect::<Result<_, _>>()?;
+    }
+    if !args.objects.is_empty() {
+        config.diligent_objects = args.objects.iter().map(|s| s.trim().to_string()).collect();
+    }
+    if !args.ball_images.is_empty() {
+        config.ball_images = args
+            .ball_images
+            .iter()
+            .map(|s| s.trim().trim_end_matches(".png").to_string())
+            .collect();
+    }
+    config.diligent_light = args.diligent_light.parse::<Light>()?;
+    config.boundary = args.boundary.as_deref().map(Boundary::named).transpose()?;
+    config.bunny_size = args.bunny_size;
+    config.albedo_quantile = args.albedo_quantile;
+    config.ball_albedo_from_truth = args.ball_albedo_from_truth;
+    config.options.lambda = args.lambda;
+    config.options.tol = args.tol;
+    config.options.max_iter = args.max_iter;
+    config.options.method = args.method.parse::<Method>()?;
+    config.validate()?;
+    let commit = match &args.commit {
+        Some(c) => c.clone(),
+        None => git_commit().unwrap_or_else(|| "unknown".into()),
+    };
+
+    // Claim the output folder first, so an unwritable one fails before the long part.
+    let folder = match &args.out {
+        Some(out) => Some(AtomicDir::create(out, REPORT, global.force)?),
+        None => None,
+    };
+    let bar = progress::bar(config.case_count() as u64, "evaluating", global.quiet);
+    let picture_dir = folder.as_ref().map(|f| f.path().to_path_buf());
+    let results = evaluation::run(
+        &config,
+        picture_dir.is_some(),
+        &mut |step: Step<'_>| {
+            bar.set_position(step.done as u64);
+            bar.set_message(step.label.to_string());
+        },
+        &mut |name, image| match &picture_dir {
+            Some(dir) => io::write_rgb(&dir.join(name), image, BitDepth::Eight, None),
+            None => Ok(()),
+        },
+    )?;
+    bar.finish_and_clear();
+    let table = report::markdown_table(&results);
+    print!("{table}");
+
+    if let Some(folder) = folder {
+        let dir = folder.path().to_path_buf();
+        let command: Vec<String> = std::env::args().collect();
+        let text = format!(
+            "# shadelab evaluation\n\nshadelab {} at commit {commit}\n\n`{}`\n\n{table}",
+            io::PROGRAM_VERSION,
+            command.join(" ")
+        );
+        io::write_atomic(&dir.join("evaluation.md"), |out| {
+            out.write_all(text.as_bytes())
+                .map_err(|e| shadelab::Error::io(dir.join("evaluation.md"), e))
+        })?;
+        let report = json!({
+            "program": "shadelab",
+            "version": io::PROGRAM_VERSION,
+            "commit": commit,
+            "command": command,
+            "data": args.data.display().to_string(),
+            "conventions": io::conventions_json(),
+            "parameters": config.describe(),
+            "cases": results,
+            "seconds": started.elapsed().as_secs_f64(),
+        });
+        io::write_json(&dir.join(REPORT), &report)?;
+        let target = folder.commit()?;
+        if !global.quiet {
+            eprintln!(
+                "{}: {} cases, {:.1} s",
+                target.display(),
+                results.len(),
+                started.elapsed().as_secs_f64()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The short commit of the git checkout in the current folder, `-dirty` when tracked files
+/// differ from it; `None` outside a checkout or without git.
+fn git_commit() -> Option<String> {
+    let run = |args: &[&str]| -> Option<String> {
+        let out = std::process::Command::new("git").args(args).output().ok()?;
+        out.status
+            .success()
+            .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    let head = run(&["rev-parse", "--short", "HEAD"]).filter(|s| !s.is_empty())?;
+    let dirty =
+        run(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    Some(if dirty { format!("{head}-dirty") } else { head })
+}

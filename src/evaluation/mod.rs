@@ -1,0 +1,530 @@
+//! Evaluation of the shape-from-shading engine on data nobody here made.
+//!
+//! Each case is an image with its light and the object's mask, solved by the engine as a user
+//! would run it ([`crate::solver::Solver`] with the multigrid method, a boundary condition
+//! from [`crate::boundary`], Lambertian reflectance, then [`crate::integrate`] to depth), and
+//! measured against the truth the data set has:
+//!
+//! - **bunny**: the Stanford bunny mesh rasterised (its interpolated vertex normals are the
+//!   truth, as is its depth) and rendered under several lights;
+//! - **mozart**: the survey's depth map (holes filled, see [`holes`]), its finite-difference
+//!   normals rendered and solved; depth error against the true depth;
+//! - **diligent**: the true normals of the nine DiLiGenT objects rendered as max(n·l, 0)
+//!   under one chosen light;
+//! - **ball**: photographs of the DiLiGenT ball under calibrated lights, with its true
+//!   normals; the albedo is estimated from the image ([`albedo`]);
+//! - **beethoven**: photographs without truth: only the shading residual is measured.
+//!
+//! Rendered images have albedo 1 and no ambient light, and the solver is told the light and
+//! the albedo; every image is cropped to its object ([`crop`]) first. The numbers are in
+//! [`case::CaseResult`]; [`report::markdown_table`] makes the table and [`pictures`] the
+//! picture of each case.
+
+pub mod albedo;
+pub mod case;
+pub mod crop;
+pub mod datasets;
+pub mod holes;
+pub mod metrics;
+pub mod pictures;
+pub mod report;
+
+pub use case::{solve_case, Albedo, Case, CaseOutput, CaseResult};
+pub use datasets::{Set, BALL_IMAGES, DILIGENT_OBJECTS, SETS, SET_NAMES};
+
+use crate::boundary::Boundary;
+use crate::error::{Error, Result};
+use crate::gradient_space::Normal;
+use crate::grid::{Grid, Image, Mask, RgbImage};
+use crate::light::Light;
+use crate::reflectance::Lambertian;
+use crate::render::{render, RenderOptions};
+use crate::solver::SolveOptions;
+use crate::surface::Surface;
+use crop::Crop;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+/// Pixels kept around the object's bounding box when cropping.
+pub const CROP_MARGIN: usize = 2;
+
+/// What to evaluate, and how.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// The data folder.
+    pub data: PathBuf,
+    /// The sets to run, in this order.
+    pub sets: Vec<Set>,
+    /// Side of the square frame the bunny is rasterised into, in pixels.
+    pub bunny_size: usize,
+    /// The lights the bunny is rendered under.
+    pub bunny_lights: Vec<Light>,
+    /// The lights the Mozart depth map is rendered under.
+    pub mozart_lights: Vec<Light>,
+    /// The DiLiGenT objects to run.
+    pub diligent_objects: Vec<String>,
+    /// The light the DiLiGenT normals are rendered under.
+    pub diligent_light: Light,
+    /// The ball photographs to run (names without `.png`).
+    pub ball_images: Vec<String>,
+    /// The boundary conditions the ball and Mozart are solved with, each giving a row: the
+    /// two sets where the choice is open (see [`default_boundary`]).
+    pub compared_boundaries: Vec<Boundary>,
+    /// One boundary condition for every case; `None`: [`default_boundary`] per set, and
+    /// [`Config::compared_boundaries`] for the ball and Mozart.
+    pub boundary: Option<Boundary>,
+    /// The quantile of a photograph's brightness on the mask taken as its albedo
+    /// ([`albedo::brightness_quantile`]).
+    pub albedo_quantile: f64,
+    /// Divide the ball photographs by the albedo their true normals give instead of the
+    /// estimate: not a user's situation, a reference for how much the estimate costs.
+    pub ball_albedo_from_truth: bool,
+    /// The solver's parameters.
+    pub options: SolveOptions,
+}
+
+/// The solver parameters of the evaluation: the defaults of `shadelab solve`, but at most
+/// [`MAX_CYCLES`] multigrid cycles.
+pub fn default_options() -> SolveOptions {
+    SolveOptions {
+        max_iter: MAX_CYCLES,
+        ..SolveOptions::default()
+    }
+}
+
+/// The most multigrid cycles a case may take.
+pub const MAX_CYCLES: usize = 200;
+
+/// The boundary condition of the bunny, the DiLiGenT objects and Beethoven unless told
+/// otherwise: the occluding contour, since each is an object seen whole against a background.
+/// The ball and Mozart are solved with each of [`Config::compared_boundaries`] instead: the
+/// ball because which condition suits a photograph is the question users ask, Mozart because
+/// its edge is partly where the scan ends (a cliff 24 to 69 pixels high, whose finite-
+/// difference normals are not edge-on) rather than where the surface turns away.
+pub fn default_boundary(_set: Set) -> Boundary {
+    Boundary::Occluding
+}
+
+impl Config {
+    /// Every set with its default lights, objects and images.
+    pub fn new(data: impl Into<PathBuf>) -> Result<Config> {
+        let light = |t, s| Light::from_tilt_slant(t, s);
+        Ok(Config {
+            data: data.into(),
+            sets: SETS.to_vec(),
+            bunny_size: 256,
+            bunny_lights: vec![
+                Light::FRONT,
+                light(0.0, 30.0)?,
+                light(90.0, 45.0)?,
+                light(-135.0, 60.0)?,
+            ],
+            // The two lights of the survey's Mozart images: (0, 0, 1) and (1, 0, 1).
+            mozart_lights: vec![Light::FRONT, Light::from_vector(1.0, 0.0, 1.0)?],
+            diligent_objects: DILIGENT_OBJECTS.iter().map(|s| s.to_string()).collect(),
+            diligent_light: light(0.0, 30.0)?,
+            ball_images: BALL_IMAGES.iter().map(|s| s.to_string()).collect(),
+            compared_boundaries: vec![Boundary::Occluding, Boundary::Free],
+            boundary: None,
+            albedo_quantile: albedo::BRIGHT_QUANTILE,
+            ball_albedo_from_truth: false,
+            options: default_options(),
+        })
+    }
+
+    /// Checks the parameters, naming the bad one.
+    pub fn validate(&self) -> Result<()> {
+        self.options.validate()?;
+        if !(16..=4096).contains(&self.bunny_size) {
+            return Err(Error::invalid(format!(
+                "bunny size {} must be from 16 to 4096 pixels",
+                self.bunny_size
+            )));
+        }
+        for o in &self.diligent_objects {
+            if !DILIGENT_OBJECTS.contains(&o.as_str()) {
+                return Err(Error::unknown("DiLiGenT object", o, DILIGENT_OBJECTS));
+            }
+        }
+        for i in &self.ball_images {
+            if !BALL_IMAGES.contains(&i.as_str()) {
+                return Err(Error::unknown("ball image", i, BALL_IMAGES));
+            }
+        }
+        let lights = self
+            .bunny_lights
+            .iter()
+            .chain(&self.mozart_lights)
+            .chain(std::iter::once(&self.diligent_light));
+        for l in lights {
+            if l.direction().z <= 0.0 {
+                return Err(Error::invalid(format!(
+                    "light (tilt {:.1}°, slant {:.1}°) must be in front of the surface (slant \
+                     below 90°)",
+                    l.tilt_deg(),
+                    l.slant_deg()
+                )));
+            }
+        }
+        if !(self.albedo_quantile > 0.0 && self.albedo_quantile <= 1.0) {
+            return Err(Error::invalid(format!(
+                "albedo quantile {} must be in (0, 1]",
+                self.albedo_quantile
+            )));
+        }
+        if self.sets.is_empty() {
+            return Err(Error::invalid("no evaluation set chosen"));
+        }
+        Ok(())
+    }
+
+    /// The number of cases [`run`] will solve.
+    pub fn case_count(&self) -> usize {
+        let compared = self.boundaries_compared().len();
+        self.sets
+            .iter()
+            .map(|s| match s {
+                Set::Bunny => self.bunny_lights.len(),
+                Set::Mozart => self.mozart_lights.len() * compared,
+                Set::Diligent => self.diligent_objects.len(),
+                Set::Ball => self.ball_images.len() * compared,
+                Set::Beethoven => datasets::BEETHOVEN_IMAGES.len(),
+            })
+            .sum()
+    }
+
+    /// The boundary conditions the ball and Mozart are solved with.
+    pub fn boundaries_compared(&self) -> Vec<Boundary> {
+        match &self.boundary {
+            Some(b) => vec![b.clone()],
+            None => self.compared_boundaries.clone(),
+        }
+    }
+
+    /// Everything that determines the numbers, for the JSON report.
+    pub fn describe(&self) -> Value {
+        let lights = |ls: &[Light]| -> Vec<Value> { ls.iter().map(light_json).collect() };
+        json!({
+            "sets": self.sets.iter().map(|s| s.name()).collect::<Vec<_>>(),
+            "bunny": {
+                "mesh": datasets::BUNNY_MESH,
+                "size_px": self.bunny_size,
+                "fill": 0.85,
+                "view": "front (the mesh's own axes)",
+                "normals": "interpolated area-weighted vertex normals",
+                "lights": lights(&self.bunny_lights),
+            },
+            "mozart": {
+                "lights": lights(&self.mozart_lights),
+                "normals": "central finite differences of the depth (one-sided at the edge)",
+                "holes": "background pixels enclosed by the object are filled by Laplace interpolation, solved on, and left out of the errors",
+            },
+            "diligent": {
+                "objects": self.diligent_objects,
+                "light": light_json(&self.diligent_light),
+                "image": "max(n·l, 0) of the true normals (albedo 1)",
+            },
+            "ball": {
+                "images": self.ball_images,
+                "boundaries": self.boundaries_compared().iter().map(Boundary::name).collect::<Vec<_>>(),
+                "gray": "each channel divided by intensity_rgb, then Y = 0.2126 R + 0.7152 G + 0.0722 B",
+                "albedo": if self.ball_albedo_from_truth {
+                    "least squares with the true normals (reference only)".to_string()
+                } else {
+                    format!("quantile {} of the gray image on the mask, image then clipped at 1", self.albedo_quantile)
+                },
+            },
+            "beethoven": {
+                "images": datasets::BEETHOVEN_IMAGES,
+                "gray": "8-bit value / 255 / the light's relative intensity",
+                "albedo": format!("quantile {} of the image on the mask, image then clipped at 1", self.albedo_quantile),
+            },
+            "boundary": {
+                "bunny, diligent, beethoven": self.boundary.as_ref().map_or("occluding", Boundary::name),
+                "mozart, ball": self.boundaries_compared().iter().map(Boundary::name).collect::<Vec<_>>(),
+            },
+            "occluding_shrink": crate::boundary::OCCLUDING_SHRINK,
+            "solver": {
+                "method": self.options.method.to_string(),
+                "lambda": self.options.lambda,
+                "tol": self.options.tol,
+                "max_iter": self.options.max_iter,
+                "reflectance": "Lambertian, albedo 1 (images divided by the albedo), no ambient",
+            },
+            "integration": {
+                "method": "least-squares Poisson on the mask",
+                "min_nz": crate::integrate::DEFAULT_MIN_NZ,
+            },
+            "crop_margin_px": CROP_MARGIN,
+            "normal_error": "angle between recovered and true unit normals, degrees, on the object's mask",
+            "depth_error": "RMS of truth − (scale·depth + offset) after a least-squares fit of scale and offset, pixels and % of the true depth range on the mask",
+            "residual": "mean |R(n) − I| on the mask, in units of the albedo",
+            "seconds": "solve + integration, excluding loading and rendering",
+        })
+    }
+}
+
+fn light_json(l: &Light) -> Value {
+    let d = l.direction();
+    json!({ "vector": [d.x, d.y, d.z], "tilt_deg": l.tilt_deg(), "slant_deg": l.slant_deg() })
+}
+
+/// A light as the table shows it.
+pub fn light_label(light: &Light) -> String {
+    let slant = light.slant_deg();
+    if slant < 0.05 {
+        "frontal".into()
+    } else {
+        format!("tilt {:.0}°, slant {:.0}°", light.tilt_deg(), slant)
+    }
+}
+
+/// Where a run stands, for a progress display.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Step<'a> {
+    /// Cases finished.
+    pub done: usize,
+    /// Cases in all.
+    pub total: usize,
+    /// The case about to run.
+    pub label: &'a str,
+}
+
+/// Runs the evaluation. `progress` is told before each case; `picture` receives each case's
+/// picture ([`pictures::case_panel`]) with a file name for it, when `want_pictures` is set.
+/// Fails before any work when a file is missing ([`datasets::check_files`]).
+pub fn run(
+    config: &Config,
+    want_pictures: bool,
+    progress: &mut dyn FnMut(Step<'_>),
+    picture: &mut dyn FnMut(&str, &RgbImage) -> Result<()>,
+) -> Result<Vec<CaseResult>> {
+    config.validate()?;
+    datasets::check_files(
+        &config.data,
+        &config.sets,
+        &config.diligent_objects,
+        &config.ball_images,
+    )?;
+    let total = config.case_count();
+    let mut results = Vec::with_capacity(total);
+    let mut finish = |case: Case, file: String, results: &mut Vec<CaseResult>| -> Result<()> {
+        let label = format!("{} {}", case.object, case.light_label);
+        progress(Step {
+            done: results.len(),
+            total,
+            label: &label,
+        });
+        let output = solve_case(&case, &config.options)?;
+        if want_pictures {
+            picture(&file, &pictures::case_panel(&case, &output))?;
+        }
+        results.push(output.result);
+        Ok(())
+    };
+    let boundary_for = |set: Set| {
+        config
+            .boundary
+            .clone()
+            .unwrap_or_else(|| default_boundary(set))
+    };
+    for &set in &config.sets {
+        match set {
+            Set::Bunny => {
+                let surface = datasets::bunny(&config.data, config.bunny_size)?;
+                for light in &config.bunny_lights {
+                    let case = rendered_case(
+                        "bunny",
+                        "bunny".into(),
+                        &surface,
+                        &surface.mask,
+                        *light,
+                        boundary_for(set),
+                        true,
+                    )?;
+                    let file = format!("bunny-{}.png", file_label(light));
+                    finish(case, file, &mut results)?;
+                }
+            }
+            Set::Mozart => {
+                let m = datasets::mozart(&config.data)?;
+                let surface = Surface::from_depth(m.filled.depth.clone(), m.filled.domain.clone())?;
+                for light in &config.mozart_lights {
+                    for boundary in config.boundaries_compared() {
+                        let file = format!("mozart-{}-{}.png", file_label(light), boundary.name());
+                        let case = rendered_case(
+                            "mozart",
+                            "mozart".into(),
+                            &surface,
+                            &m.measured,
+                            *light,
+                            boundary,
+                            true,
+                        )?;
+                        finish(case, file, &mut results)?;
+                    }
+                }
+            }
+            Set::Diligent => {
+                for object in &config.diligent_objects {
+                    let truth = datasets::diligent_object(&config.data, object)?;
+                    let surface = Surface {
+                        depth: Grid::new(truth.mask.width(), truth.mask.height(), 0.0),
+                        normals: truth.normals,
+                        mask: truth.mask,
+                    };
+                    let case = rendered_case(
+                        "diligent",
+                        object.clone(),
+                        &surface,
+                        &surface.mask,
+                        config.diligent_light,
+                        boundary_for(set),
+                        false,
+                    )?;
+                    finish(case, format!("diligent-{object}.png"), &mut results)?;
+                }
+            }
+            Set::Ball => {
+                let ball = datasets::ball(&config.data, &config.ball_images)?;
+                let crop = Crop::around(&ball.truth.mask, CROP_MARGIN)?;
+                let mask = crop.apply(&ball.truth.mask);
+                let normals = crop.apply(&ball.truth.normals);
+                let boundaries = config.boundaries_compared();
+                for photo in &ball.photos {
+                    let image = crop.apply(&photo.image);
+                    let fitted = albedo::albedo_with_normals(&image, &normals, &mask, &photo.light);
+                    let albedo = match (config.ball_albedo_from_truth, fitted) {
+                        (true, Some(value)) => Albedo {
+                            value,
+                            method: "least squares with the true normals (reference only)",
+                            with_true_normals: fitted,
+                        },
+                        _ => Albedo {
+                            value: albedo::brightness_quantile(
+                                &image,
+                                &mask,
+                                config.albedo_quantile,
+                            )?,
+                            method: "quantile of the brightness on the mask",
+                            with_true_normals: fitted,
+                        },
+                    };
+                    for boundary in &boundaries {
+                        let case = photo_case(
+                            "ball",
+                            "ball",
+                            &photo.name,
+                            &image,
+                            &mask,
+                            photo.light,
+                            boundary.clone(),
+                            albedo.clone(),
+                            Some(normals.clone()),
+                        );
+                        let file = format!("ball-{}-{}.png", photo.name, boundary.name());
+                        finish(case, file, &mut results)?;
+                    }
+                }
+            }
+            Set::Beethoven => {
+                let b = datasets::beethoven(&config.data)?;
+                let crop = Crop::around(&b.mask, CROP_MARGIN)?;
+                let mask = crop.apply(&b.mask);
+                for photo in &b.photos {
+                    let image = crop.apply(&photo.image);
+                    let albedo = Albedo {
+                        value: albedo::brightness_quantile(&image, &mask, config.albedo_quantile)?,
+                        method: "quantile of the brightness on the mask",
+                        with_true_normals: None,
+                    };
+                    let case = photo_case(
+                        "beethoven",
+                        "beethoven",
+                        &photo.name,
+                        &image,
+                        &mask,
+                        photo.light,
+                        boundary_for(set),
+                        albedo,
+                        None,
+                    );
+                    let file = format!("beethoven-{}.png", photo.name);
+                    finish(case, file, &mut results)?;
+                }
+            }
+        }
+    }
+    Ok(results)
+}
+
+/// A case rendered from true normals: max(n·l, 0) with albedo 1 on `surface`'s mask, cropped
+/// to it; errors on `scored`; the depth is truth when `depth_known`.
+fn rendered_case(
+    set: &'static str,
+    object: String,
+    surface: &Surface,
+    scored: &Mask,
+    light: Light,
+    boundary: Boundary,
+    depth_known: bool,
+) -> Result<Case> {
+    let map = Lambertian {
+        light,
+        albedo: 1.0,
+        ambient: 0.0,
+    };
+    let image = render(surface, &map, &RenderOptions::default()).image;
+    let crop = Crop::around(&surface.mask, CROP_MARGIN)?;
+    Ok(Case {
+        set,
+        object,
+        light_label: light_label(&light),
+        image: crop.apply(&image),
+        domain: crop.apply(&surface.mask),
+        scored: crop.apply(scored),
+        light,
+        boundary,
+        truth_normals: Some(crop.apply(&surface.normals)),
+        truth_depth: depth_known.then(|| crop.apply(&surface.depth)),
+        albedo: Albedo::known(),
+    })
+}
+
+/// A case from a photograph (already cropped), divided by its estimated albedo.
+#[allow(clippy::too_many_arguments)]
+fn photo_case(
+    set: &'static str,
+    object: &str,
+    name: &str,
+    image: &Image,
+    mask: &Mask,
+    light: Light,
+    boundary: Boundary,
+    albedo: Albedo,
+    truth_normals: Option<Grid<Normal>>,
+) -> Case {
+    let scale = 1.0 / albedo.value;
+    Case {
+        set,
+        object: object.into(),
+        light_label: format!("{name} (slant {:.0}°)", light.slant_deg()),
+        image: image.map(|v| (v * scale).min(1.0)),
+        domain: mask.clone(),
+        scored: mask.clone(),
+        light,
+        boundary,
+        truth_normals,
+        truth_depth: None,
+        albedo,
+    }
+}
+
+/// A light as part of a file name: `frontal`, `tilt0-slant30`.
+fn file_label(light: &Light) -> String {
+    if light.slant_deg() < 0.05 {
+        "frontal".into()
+    } else {
+        format!("tilt{:.0}-slant{:.0}", light.tilt_deg(), light.slant_deg())
+    }
+}

@@ -1,0 +1,78 @@
+//! The evaluation as a Markdown table.
+
+use super::case::CaseResult;
+
+/// The table's header: what each column means is in docs/evaluation.md.
+const HEADER: &str = "| set | object | light | boundary | mean error | median error | depth error (RMS after scale+offset fit) | residual | seconds |\n|---|---|---|---|---:|---:|---:|---:|---:|\n";
+
+/// One Markdown table row per case: normal errors in degrees on the object's mask, the depth
+/// error in pixels and as a percentage of the true depth range, the shading residual
+/// mean |R(n) − I| in units of the albedo, and the seconds spent solving and integrating;
+/// "—" where there is no truth to compare with.
+pub fn markdown_table(results: &[CaseResult]) -> String {
+    let mut text = String::from(HEADER);
+    for r in results {
+        let (mean, median) = match &r.normal_error {
+            Some(e) => (
+                format!("{:.2}°", e.mean_deg),
+                format!("{:.2}°", e.median_deg),
+            ),
+            None => ("—".into(), "—".into()),
+        };
+        let depth = match &r.depth_error {
+            Some(d) => format!("{:.2} px ({:.1} %)", d.rms_px, d.rms_percent_of_range),
+            None => "—".into(),
+        };
+        let flag = if r.converged { "" } else { " (not converged)" };
+        text.push_str(&format!(
+            "| {} | {} | {} | {} | {mean} | {median} | {depth} | {:.3} | {:.2}{flag} |\n",
+            r.set, r.object, r.light_label, r.boundary, r.residual, r.seconds
+        ));
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::evaluation::case::Albedo;
+    use crate::evaluation::metrics::AngularError;
+
+    #[test]
+    fn rows_show_dashes_where_there_is_no_truth() {
+        let row = CaseResult {
+            set: "beethoven",
+            object: "beethoven".into(),
+            light_label: "image0".into(),
+            light: [0.0, 0.0, 1.0],
+            tilt_deg: 0.0,
+            slant_deg: 0.0,
+            boundary: "occluding",
+            albedo: Albedo::known(),
+            normal_error: None,
+            depth_error: None,
+            residual: 0.0123,
+            width: 10,
+            height: 10,
+            domain_pixels: 50,
+            iterations: 3,
+            converged: true,
+            seconds: 0.5,
+        };
+        let mut with_truth = row.clone();
+        with_truth.normal_error = Some(AngularError {
+            mean_deg: 3.14567,
+            median_deg: 2.5,
+            p90_deg: 6.0,
+            pixels: 50,
+        });
+        let table = markdown_table(&[row, with_truth]);
+        let lines: Vec<&str> = table.lines().collect();
+        assert_eq!(lines.len(), 4);
+        assert_eq!(
+            lines[2],
+            "| beethoven | beethoven | image0 | occluding | — | — | — | 0.012 | 0.50 |"
+        );
+        assert!(lines[3].contains("| 3.15° | 2.50° | — |"), "{}", lines[3]);
+    }
+}

@@ -1,0 +1,170 @@
+//! `shadelab eval` and the evaluation library on the shared data (skipped when it is absent),
+//! and its errors when data is missing.
+
+use crate::cli::{assert_error, scratch, shadelab};
+use shadelab::boundary::Boundary;
+use shadelab::evaluation::{self, CaseResult, Config, Set};
+use shadelab::light::Light;
+use std::path::PathBuf;
+
+/// The shared evaluation data, or `None` (with the reason printed) when it is not there.
+fn data() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    if dir.join("README.md").is_file() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: the evaluation data {} is not present",
+            dir.display()
+        );
+        None
+    }
+}
+
+fn run(config: &Config) -> Vec<CaseResult> {
+    let mut steps = Vec::new();
+    let results = evaluation::run(
+        config,
+        false,
+        &mut |s| steps.push((s.done, s.total)),
+        &mut |_, _| panic!("no pictures were asked for"),
+    )
+    .unwrap();
+    assert_eq!(steps.len(), config.case_count());
+    assert_eq!(steps.last().map(|s| s.1), Some(results.len()));
+    results
+}
+
+/// The engine's errors on a fast subset, against bounds measured on the working tree at commit
+/// 4d4e493 (November 2026) with a margin (measured: bunny 128² frontal mean 18.3°, median
+/// 11.7°, depth 8.3 % of its range; ball 052 occluding 2.06° / 1.76°; Mozart lit from
+/// (1, 0, 1), free boundary, 18.7° and 14.9 %).
+#[test]
+fn errors_on_real_data_stay_within_measured_bounds() {
+    let Some(dir) = data() else { return };
+    let mut config = Config::new(&dir).unwrap();
+    config.sets = vec![Set::Ball, Set::Bunny];
+    config.bunny_size = 128;
+    config.bunny_lights = vec![Light::FRONT];
+    config.ball_images = vec!["052".into()];
+    config.compared_boundaries = vec![Boundary::Occluding];
+    let r = run(&config);
+    assert_eq!(r.len(), 2);
+    let (ball, bunny) = (&r[0], &r[1]);
+    assert_eq!((ball.set, ball.boundary), ("ball", "occluding"));
+    let e = ball.normal_error.unwrap();
+    assert!(e.mean_deg < 3.0 && e.median_deg < 2.7, "ball 052: {e:?}");
+    assert!(ball.depth_error.is_none());
+    // The albedo estimate is within 10 % of what the true normals give.
+    let fitted = ball.albedo.with_true_normals.unwrap();
+    assert!(
+        (ball.albedo.value / fitted - 1.0).abs() < 0.1,
+        "{:?}",
+        ball.albedo
+    );
+    assert!(ball.residual < 0.02, "{}", ball.residual);
+
+    let e = bunny.normal_error.unwrap();
+    assert!(e.mean_deg < 21.0 && e.median_deg < 14.0, "bunny: {e:?}");
+    let d = bunny.depth_error.unwrap();
+    assert!(d.rms_percent_of_range < 10.5, "bunny depth: {d:?}");
+    assert!(d.scale > 0.0, "the bunny came out hollow: {d:?}");
+
+    let mut config = Config::new(&dir).unwrap();
+    config.sets = vec![Set::Mozart];
+    config.mozart_lights = vec![Light::from_vector(1.0, 0.0, 1.0).unwrap()];
+    config.compared_boundaries = vec![Boundary::Free];
+    let r = run(&config);
+    let e = r[0].normal_error.unwrap();
+    assert!(e.mean_deg < 22.0, "mozart: {e:?}");
+    let d = r[0].depth_error.unwrap();
+    assert!(d.rms_percent_of_range < 18.0, "mozart depth: {d:?}");
+    // Holes are solved on but not scored: fewer scored pixels than domain pixels.
+    assert!(
+        e.pixels < r[0].domain_pixels,
+        "{} {}",
+        e.pixels,
+        r[0].domain_pixels
+    );
+}
+
+#[test]
+fn eval_writes_table_report_and_pictures() {
+    let Some(dir) = data() else { return };
+    let d = scratch("eval-out");
+    let data = dir.display().to_string();
+    let out = shadelab(
+        &d,
+        &[
+            "eval",
+            "--data",
+            &data,
+            "--only",
+            "ball",
+            "--ball-images",
+            "052",
+            "--boundary",
+            "occluding",
+            "--commit",
+            "abc1234",
+            "--out",
+            "res",
+            "--quiet",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("| ball | ball | 052 (slant 4°) | occluding |"),
+        "{stdout}"
+    );
+    let res = d.join("res");
+    let md = std::fs::read_to_string(res.join("evaluation.md")).unwrap();
+    assert!(
+        md.contains("abc1234") && md.contains("| ball | ball |"),
+        "{md}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(res.join("evaluation.json")).unwrap()).unwrap();
+    assert_eq!(report["commit"], "abc1234");
+    assert_eq!(report["cases"].as_array().unwrap().len(), 1);
+    assert!(
+        report["cases"][0]["normal_error"]["mean_deg"]
+            .as_f64()
+            .unwrap()
+            < 3.0
+    );
+    assert_eq!(report["parameters"]["solver"]["method"], "multigrid");
+    // One picture: input, recovered normals, true normals, error, shaded depth side by side.
+    let (w, h) = image_size(&res.join("ball-052-occluding.png"));
+    assert_eq!(h, 146);
+    assert_eq!(w, 5 * 146 + 4 * 4);
+}
+
+fn image_size(path: &std::path::Path) -> (usize, usize) {
+    let rgb = shadelab::io::read_rgb(path, 1 << 24).unwrap();
+    (rgb.width(), rgb.height())
+}
+
+#[test]
+fn missing_data_is_a_one_line_error_naming_what_was_expected() {
+    let d = scratch("eval-missing");
+    let out = shadelab(&d, &["eval", "--data", "no-such-folder"]);
+    assert_error(&out, 1, "no-such-folder: evaluation data folder not found");
+    // A folder without the file a chosen set needs: the file is named, nothing is written.
+    std::fs::create_dir_all(d.join("data/bunny")).unwrap();
+    let out = shadelab(
+        &d,
+        &["eval", "--data", "data", "--only", "bunny", "--out", "res"],
+    );
+    assert_error(&out, 1, "bunny/bun_zipper_res2.ply");
+    assert!(!d.join("res").exists());
+    let out = shadelab(&d, &["eval", "--data", "data", "--only", "teapot"]);
+    assert_error(&out, 2, "unknown evaluation set 'teapot'");
+    let out = shadelab(&d, &["eval", "--data", "data", "--objects", "teapot"]);
+    assert_error(&out, 2, "unknown DiLiGenT object 'teapot'");
+}
