@@ -141,7 +141,9 @@ pub fn sin_cos_deg(degrees: f64) -> (f64, f64) {
     let r = degrees.rem_euclid(360.0);
     let quadrant = (r / 90.0).floor();
     let (s, c) = (r - 90.0 * quadrant).to_radians().sin_cos();
-    match quadrant as i64 {
+    // A tiny negative angle wraps to 360 − ε, which rounds to exactly 360: quadrant 4, which is
+    // quadrant 0 (it once turned a tilt of −1e-17° into 270°).
+    match quadrant as i64 % 4 {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),
@@ -238,6 +240,12 @@ mod tests {
         assert_eq!(sin_cos_deg(-90.0), (-1.0, 0.0));
         assert_eq!(sin_cos_deg(180.0), (0.0, -1.0));
         assert!((sin_cos_deg(123.0).0 - 123f64.to_radians().sin()).abs() < 1e-15);
+        // −1e-17 wraps to 360 − 1e-17, which is exactly 360.0 in f64: still the top.
+        for tiny in [-1e-17, -1.1134687610987288e-17, -1e-14, -0.0] {
+            let (s, c) = sin_cos_deg(tiny);
+            assert!(s.abs() < 1e-15 && c == 1.0, "{tiny}: ({s}, {c})");
+        }
+        assert_eq!(sin_cos_deg(360.0), (0.0, 1.0));
         for tilt in [0.0, 26.0, 45.0, 90.0, 137.5] {
             let a = Light::from_tilt_slant(tilt, 45.0).unwrap().direction();
             let b = Light::from_tilt_slant(tilt + 180.0, 45.0)

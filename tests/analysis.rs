@@ -181,9 +181,36 @@ fn one_light_binds_an_array_into_rows_of_opposite_convexity_and_per_token_lights
     assert!(b.global_light.tilt_deg.abs() < 10.0, "{:?}", b.global_light);
     for (k, &top) in light_top.iter().enumerate() {
         assert_eq!(b.global[k] > 0.0, top, "token {k}: {:?}", b.global);
+        // A clear reading, not a sign of round-off (a tilt of −1e-17° once read as 270°).
+        assert!(b.global[k].abs() > 0.02, "token {k}: {:?}", b.global);
         assert!(b.per_token[k] > 0.0, "token {k}: {:?}", b.per_token);
     }
     assert!(b.global_has_both_signs() && !b.per_token_has_both_signs());
+    // A 3 × 3 array: the rows cancel, the estimate lands within round-off of 0°, and the reading
+    // is the one under a light from exactly above.
+    let p = picture(
+        "circles-gradient",
+        &["rows=3", "columns=3"],
+        (128, 128),
+        16.0,
+    );
+    let domain = p.domain(Domain::Image);
+    let lighting = p.lighting(&domain, 45.0, None, None).unwrap();
+    let scene = Scene {
+        image: &p.image,
+        domain: &domain,
+        boundary: &Boundary::Flat,
+        tokens: &p.tokens,
+    };
+    let estimated = binding(&scene, &lighting, GlobalLight::Estimated, &options).unwrap();
+    let above = binding(&scene, &lighting, GlobalLight::Given(0.0), &options).unwrap();
+    assert!(estimated.global_light.tilt_deg.abs() < 1e-9);
+    for (e, a) in estimated.global.iter().zip(&above.global) {
+        assert!(
+            (e - a).abs() < 1e-6 && a.abs() > 0.02,
+            "{estimated:?} vs {above:?}"
+        );
+    }
 
     // Strips under a given light from above: alternate; each with its own light: all convex.
     let p = picture(

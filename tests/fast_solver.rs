@@ -410,4 +410,19 @@ fn solve_command_uses_multigrid_and_reports_non_convergence() {
     let r = report("jac");
     assert_eq!(r["solver"]["iteration_unit"], "sweeps");
     assert_eq!(r["solver"]["iterations"], 3);
+    // Without --max-iter, Jacobi's cap is in sweeps.
+    let args = [
+        &base[..],
+        &[
+            "--out",
+            "jac-default",
+            "--method",
+            "jacobi",
+            "--tol",
+            "1e-2",
+        ],
+    ]
+    .concat();
+    assert!(shadelab(&d, &args).status.success());
+    assert_eq!(report("jac-default")["parameters"]["max_iter"], 100_000);
 }

@@ -97,6 +97,8 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     assert_eq!(r["solver"]["iteration_unit"], "cycles");
     assert!(r["solver"]["last_update"].as_f64().unwrap() < 1e-6);
     assert_eq!(r["parameters"]["lambda"], 1.0);
+    // The default cap counts cycles for multigrid: far fewer than Jacobi's sweeps.
+    assert_eq!(r["parameters"]["max_iter"], 1000);
     assert_eq!(r["parameters"]["method"], "multigrid");
     assert_eq!(r["parameters"]["boundary"], "occluding");
     assert_eq!(r["light"]["vector"], serde_json::json!([0.0, 0.0, 1.0]));

@@ -69,14 +69,10 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub tol: f64,
-    /// Stop after this many sweeps (multigrid: cycles).
-    #[arg(
-        long,
-        value_name = "N",
-        default_value_t = 100_000,
-        allow_hyphen_values = true
-    )]
-    pub max_iter: usize,
+    /// Stop after this many sweeps, or cycles for multigrid [default: 1000 cycles for
+    /// multigrid, 100000 sweeps for jacobi and literal].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub max_iter: Option<usize>,
     /// Output folder (written whole or not at all).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -90,7 +86,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let options = SolveOptions {
         lambda: args.lambda,
         tol: args.tol,
-        max_iter: args.max_iter,
+        // A multigrid solve settles in tens of cycles; one that has not after a thousand will
+        // not, and a cycle costs a few sweeps, so its cap is far lower than the sweeps'.
+        max_iter: args.max_iter.unwrap_or(match method {
+            Method::Multigrid => 1_000,
+            Method::Jacobi | Method::Literal => 100_000,
+        }),
         method,
     };
     options.validate()?;
