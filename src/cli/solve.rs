@@ -12,7 +12,7 @@ use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
 use shadelab::light_estimation::estimate_light;
 use shadelab::reflectance::BrdfSpec;
-use shadelab::solver::{Method, Progress, Solution, SolveOptions, Solver};
+use shadelab::solver::{Method, Progress, Solution, SolveOptions, Solver, MULTIGRID_MAX_CYCLES};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -86,10 +86,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let options = SolveOptions {
         lambda: args.lambda,
         tol: args.tol,
-        // A multigrid solve settles in tens of cycles; one that has not after a thousand will
-        // not, and a cycle costs a few sweeps, so its cap is far lower than the sweeps'.
         max_iter: args.max_iter.unwrap_or(match method {
-            Method::Multigrid => 1_000,
+            Method::Multigrid => MULTIGRID_MAX_CYCLES,
             Method::Jacobi | Method::Literal => 100_000,
         }),
         method,

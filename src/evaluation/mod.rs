@@ -83,8 +83,8 @@ pub struct Config {
     pub options: SolveOptions,
 }
 
-/// The solver parameters of the evaluation: the defaults of `shadelab solve`, but at most
-/// [`MAX_CYCLES`] multigrid cycles.
+/// The solver parameters of the evaluation: the defaults of `shadelab solve`, at most
+/// [`MAX_CYCLES`] multigrid cycles as there.
 pub fn default_options() -> SolveOptions {
     SolveOptions {
         max_iter: MAX_CYCLES,
@@ -92,8 +92,8 @@ pub fn default_options() -> SolveOptions {
     }
 }
 
-/// The most multigrid cycles a case may take.
-pub const MAX_CYCLES: usize = 200;
+/// The most multigrid cycles a case may take: `shadelab solve`'s default.
+pub const MAX_CYCLES: usize = crate::solver::MULTIGRID_MAX_CYCLES;
 
 /// The boundary condition of the bunny, the DiLiGenT objects and Beethoven unless told
 /// otherwise: the occluding contour, since each is an object seen whole against a background.

@@ -176,6 +176,11 @@ impl Solution {
     }
 }
 
+/// The default cap on multigrid cycles (`shadelab solve`, `shadelab eval`): a solve settles in
+/// tens of cycles, and one that has not after a thousand will not; a cycle costs a few sweeps,
+/// so the cap is far below Jacobi's [`SolveOptions::default`] 100,000 sweeps.
+pub const MULTIGRID_MAX_CYCLES: usize = 1_000;
+
 /// A change of f or g larger than this in one sweep means the iteration has blown up: the
 /// whole visible hemisphere spans |(f, g)| ≤ 2, and a stable sweep moves a pixel by less than
 /// its distance to the neighbour average.
