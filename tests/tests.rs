@@ -9,6 +9,7 @@ mod evaluation;
 mod fast_solver;
 mod fuzz_regressions;
 mod hostile;
+mod interrupt;
 mod lightness;
 mod mesh;
 mod solve;

@@ -100,6 +100,17 @@ pub type CliResult = Result<(), CliError>;
 
 /// Parses the command line, runs the subcommand and turns the outcome into an exit code.
 pub fn main() -> ExitCode {
+    // Ctrl-C, SIGTERM or SIGHUP: remove the temporary files and folders of the outputs being
+    // written (a finished output is never touched) and stop, instead of leaving them behind.
+    let _ = ctrlc::set_handler(|| {
+        let removed = shadelab::io::remove_pending();
+        if removed > 0 {
+            eprintln!("error: interrupted; the unfinished output was removed");
+        } else {
+            eprintln!("error: interrupted");
+        }
+        std::process::exit(130);
+    });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

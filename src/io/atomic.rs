@@ -5,8 +5,44 @@ use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary files and folders of the atomic writes under way, so that a run stopped by a
+/// signal can remove them ([`remove_pending`]) instead of leaving them beside the outputs.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    // The list stays valid even if a thread panicked while holding the lock.
+    PENDING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+fn register(path: &Path) {
+    pending().push(path.to_path_buf());
+}
+
+fn unregister(path: &Path) {
+    pending().retain(|p| p != path);
+}
+
+/// Removes the temporary file or folder of every atomic write under way and returns how many
+/// there were. For a signal handler that then ends the process: the writes it interrupts are
+/// never finished, so no output is replaced and nothing half-written is left behind.
+pub fn remove_pending() -> usize {
+    let paths = std::mem::take(&mut *pending());
+    // Files first: a folder's own files are registered after it.
+    for path in paths.iter().rev() {
+        if path.is_dir() {
+            let _ = fs::remove_dir_all(path);
+        } else {
+            let _ = fs::remove_file(path);
+        }
+    }
+    paths.len()
+}
 
 fn temp_name(target: &Path) -> Result<PathBuf> {
     let name = target
@@ -39,6 +75,7 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
         ));
     }
     let tmp = temp_name(target)?;
+    register(&tmp);
     let result = (|| {
         let file = fs::File::create(&tmp).map_err(|e| Error::io(target, e))?;
         let mut out = BufWriter::new(file);
@@ -52,6 +89,7 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
+    unregister(&tmp);
     result
 }
 
@@ -164,7 +202,11 @@ impl AtomicDir {
         }
         check_parent(target)?;
         let temp = temp_name(target)?;
-        fs::create_dir(&temp).map_err(|e| Error::io(target, e))?;
+        register(&temp);
+        if let Err(e) = fs::create_dir(&temp) {
+            unregister(&temp);
+            return Err(Error::io(target, e));
+        }
         Ok(AtomicDir {
             temp,
             target: target.to_path_buf(),
@@ -196,6 +238,7 @@ impl AtomicDir {
         }
         fs::rename(&self.temp, &self.target).map_err(|e| Error::io(&self.target, e))?;
         self.committed = true;
+        unregister(&self.temp);
         Ok(self.target.clone())
     }
 }
@@ -204,6 +247,7 @@ impl Drop for AtomicDir {
     fn drop(&mut self) {
         if !self.committed {
             let _ = fs::remove_dir_all(&self.temp);
+            unregister(&self.temp);
         }
     }
 }
