@@ -202,7 +202,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             row(size, "numpy-sor", t, "sweeps", "—", "1×", "—");
         }
     }
-    if args.sizes.iter().any(|&n| n > args.jacobi_up_to) {
+    if args.sizes.iter().all(|&n| n > args.jacobi_up_to) {
+        notes.push(format!(
+            "jacobi is not run: every size is above --jacobi-up-to {}",
+            args.jacobi_up_to
+        ));
+    } else if args.sizes.iter().any(|&n| n > args.jacobi_up_to) {
         notes.push(format!(
             "jacobi is timed up to {0}² (--jacobi-up-to {0}); its sweeps grow about 3.4× per \
              doubling of the side",
