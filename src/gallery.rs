@@ -21,6 +21,8 @@ pub struct Preset {
     pub name: String,
     /// The spec.
     pub spec: Spec,
+    /// Where the spec came from (`stimuli/bumps.json`, or the file read), for errors.
+    pub source: PathBuf,
 }
 
 /// The presets shipped in `stimuli/`, in gallery order.
@@ -99,6 +101,7 @@ pub fn builtin_presets() -> Result<Vec<Preset>> {
             Ok(Preset {
                 name: name.to_string(),
                 spec,
+                source: PathBuf::from(format!("stimuli/{name}.json")),
             })
         })
         .collect()
@@ -135,6 +138,7 @@ pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
             Ok(Preset {
                 name,
                 spec: Spec::load(p)?,
+                source: p.clone(),
             })
         })
         .collect()
@@ -226,7 +230,7 @@ pub fn build(
 
 fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {
     let spec = &preset.spec;
-    let context = |e: Error| Error::invalid(format!("preset {}: {e}", preset.name));
+    let context = |e: Error| Error::format(&preset.source, e.to_string());
     let (request, output) = stimulus::generate(
         &spec.stimulus,
         &spec.params,

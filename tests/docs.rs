@@ -442,6 +442,7 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
     let presets = [Preset {
         name: "disc".into(),
         spec,
+        source: "disc.json".into(),
     }];
     let html = |dir: &str, base: &str| {
         let options = Options {

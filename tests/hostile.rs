@@ -1464,11 +1464,11 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         ),
         (
             "gallery --presets in/presets_teapot --out o",
-            &["preset a", "teapot"],
+            &["in/presets_teapot/a.json", "teapot"],
         ),
         (
             "gallery --presets in/presets_huge --out o",
-            &["preset a", "exceeds", "--max-pixels"],
+            &["in/presets_huge/a.json", "exceeds", "--max-pixels"],
         ),
         (
             "gallery --presets in/presets_bad_name --out o",
