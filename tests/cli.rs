@@ -31,7 +31,8 @@ pub fn assert_error(out: &Output, code: i32, needle: &str) {
     assert!(lines[0].contains(needle), "'{needle}' not in: {err}");
 }
 
-fn files_in(dir: &Path) -> Vec<String> {
+/// The names in `dir`, sorted (hidden ones included).
+pub fn files_in(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -1,24 +1,15 @@
 //! A run stopped by a signal removes the temporary files of its unfinished outputs.
 
-use crate::cli::{assert_error, scratch, shadelab};
+use crate::cli::{assert_error, files_in, scratch, shadelab};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn names(dir: &std::path::Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 #[test]
 fn a_terminated_solve_leaves_neither_output_nor_temporary_folder() {
     let d = scratch("interrupt");
     let out = shadelab(&d, &["render", "sphere", "--size", "400", "--out", "s.png"]);
     assert!(out.status.success());
-    let before = names(&d);
+    let before = files_in(&d);
     // Jacobi sweeps to a tolerance they take many seconds to reach: time to stop the run.
     let child = Command::new(env!("CARGO_BIN_EXE_shadelab"))
         .args(["solve", "s.png", "--mask", "s_mask.png", "--light", "front"])
@@ -31,11 +22,11 @@ fn a_terminated_solve_leaves_neither_output_nor_temporary_folder() {
         .unwrap();
     // Wait until the output folder is being written (under its temporary name).
     let started = Instant::now();
-    while !names(&d).iter().any(|n| n.starts_with(".res.tmp-")) {
+    while !files_in(&d).iter().any(|n| n.starts_with(".res.tmp-")) {
         assert!(
             started.elapsed() < Duration::from_secs(30),
             "no temporary folder appeared: {:?}",
-            names(&d)
+            files_in(&d)
         );
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -46,5 +37,5 @@ fn a_terminated_solve_leaves_neither_output_nor_temporary_folder() {
     assert!(killed.success());
     let out = child.wait_with_output().unwrap();
     assert_error(&out, 130, "interrupted; the unfinished output was removed");
-    assert_eq!(names(&d), before);
+    assert_eq!(files_in(&d), before);
 }

@@ -1,7 +1,7 @@
 //! `shadelab solve` through the binary: the output folder, the report, and one-line errors
 //! that leave no half-filled folder behind.
 
-use crate::cli::{assert_error, scratch, shadelab};
+use crate::cli::{assert_error, files_in, scratch, shadelab};
 use shadelab::gradient_space::angle_deg;
 use shadelab::io::{self, BitDepth};
 use shadelab::reflectance::Lambertian;
@@ -23,15 +23,6 @@ fn sphere_inputs(dir: &Path, light: Light) -> Surface {
     io::write_gray(&dir.join("image.png"), &image, BitDepth::Sixteen, None).unwrap();
     io::write_mask(&dir.join("mask.png"), &s.mask).unwrap();
     s
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 fn report(dir: &Path) -> serde_json::Value {
@@ -62,7 +53,7 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     );
     let result = d.join("result");
     assert_eq!(
-        names_in(&result),
+        files_in(&result),
         [
             "convergence.csv",
             "convergence.png",
@@ -162,7 +153,7 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     assert_eq!(r["input"]["image_info"]["bit_depth"], 16);
     assert!(r["light"]["estimate"]["albedo"].as_f64().unwrap() > 0.5);
     assert_eq!(
-        names_in(&d),
+        files_in(&d),
         ["image.npy", "image.png", "mask.png", "result"]
     );
 }
@@ -218,10 +209,10 @@ fn fails(name: &str, args: &[&str], code: i32, needle: &str) {
     io::write_mask(&d.join("small.png"), &Grid::new(32, 64, true)).unwrap();
     io::write_mask(&d.join("empty.png"), &Grid::new(64, 64, false)).unwrap();
     std::fs::write(d.join("a-file"), "x").unwrap();
-    let before = names_in(&d);
+    let before = files_in(&d);
     let out = shadelab(&d, args);
     assert_error(&out, code, needle);
-    assert_eq!(names_in(&d), before, "{args:?} left files behind");
+    assert_eq!(files_in(&d), before, "{args:?} left files behind");
 }
 
 #[test]
