@@ -4,9 +4,10 @@ use super::{progress, CliError, CliResult, Global};
 use serde_json::json;
 use shadelab::analysis::plot::{LinePlot, Series};
 use shadelab::boundary::{Boundary, BOUNDARY_NAMES};
-use shadelab::grid::{Grid, Image, Mask};
+use shadelab::grid::{Grid, Image};
 use shadelab::integrate::{
-    gradients_from_fg, integrate_owned_gradients, write_mesh_obj, PoissonOptions, DEFAULT_MIN_NZ,
+    gradients_from_fg, integrate_owned_gradients, rest_on_zero, write_mesh_obj, PoissonOptions,
+    DEFAULT_MIN_NZ,
 };
 use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
@@ -242,13 +243,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         integration.relative_residual,
         integration.converged,
     );
-    // Depth from differences has no offset: put the lowest point of the object at 0.
     let mut depth = integration.depth;
-    let lowest = masked_range(&depth, &mask).0;
-    for (z, &inside) in depth.data_mut().iter_mut().zip(mask.data()) {
-        *z = if inside { *z - lowest } else { 0.0 };
-    }
-    let (_, highest) = masked_range(&depth, &mask);
+    let highest = rest_on_zero(&mut depth, &mask)?;
     io::write_image(&dir.join("depth.npy"), &depth)?;
     let depth_picture = depth.map(|z| if highest > 0.0 { z / highest } else { 0.0 });
     io::write_gray(
@@ -442,18 +438,4 @@ fn read_boundary(text: &str, w: usize, h: usize, max_pixels: usize) -> Result<Bo
         )));
     }
     Ok(Boundary::Given(normals))
-}
-
-/// The smallest and largest value of `grid` inside `mask` ((0, 0) for an empty mask).
-fn masked_range(grid: &Image, mask: &Mask) -> (f64, f64) {
-    grid.data()
-        .iter()
-        .zip(mask.data())
-        .filter(|(_, &m)| m)
-        .map(|(v, _)| *v)
-        .fold(None, |acc: Option<(f64, f64)>, v| match acc {
-            None => Some((v, v)),
-            Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
-        })
-        .unwrap_or((0.0, 0.0))
 }

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
 use crate::integrate::{
-    gradients_from_normals, integrate_gradients, PoissonOptions, DEFAULT_MIN_NZ,
+    gradients_from_normals, integrate_gradients, rest_on_zero, PoissonOptions, DEFAULT_MIN_NZ,
 };
 use crate::light::Light;
 use crate::reflectance::Lambertian;
@@ -142,41 +142,29 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             case.object, case.light_label, solution.iterations
         )));
     }
-    let (dz_dx, dz_dy) = gradients_from_normals(&solution.normals(), &case.domain, DEFAULT_MIN_NZ)?;
+    let normals = solution.normals();
+    let (dz_dx, dz_dy) = gradients_from_normals(&normals, &case.domain, DEFAULT_MIN_NZ)?;
     let integration =
         integrate_gradients(&dz_dx, &dz_dy, &case.domain, &PoissonOptions::default())?;
     let seconds = started.elapsed().as_secs_f64();
-    let lowest = case
-        .domain
-        .data()
-        .iter()
-        .zip(integration.depth.data())
-        .filter(|(&m, _)| m)
-        .map(|(_, z)| *z)
-        .fold(f64::INFINITY, f64::min);
-    let depth = Grid::from_fn(w, h, |c, r| {
-        if *case.domain.get(c, r) {
-            integration.depth.get(c, r) - lowest
-        } else {
-            0.0
-        }
-    });
+    let mut depth = integration.depth;
+    rest_on_zero(&mut depth, &case.domain)?;
     let normal_error = case
         .truth_normals
         .as_ref()
-        .map(|t| angular_error(&solution.normals(), t, &case.scored))
+        .map(|t| angular_error(&normals, t, &case.scored))
         .transpose()?;
     let error_map = case
         .truth_normals
         .as_ref()
-        .map(|t| angular_error_map(&solution.normals(), t, &case.scored))
+        .map(|t| angular_error_map(&normals, t, &case.scored))
         .transpose()?;
     let depth_error = case
         .truth_depth
         .as_ref()
         .map(|t| depth_error(&depth, t, &case.scored))
         .transpose()?;
-    let residual = shading_residual(&solution.normals(), &case.image, &case.domain, &reflectance)?;
+    let residual = shading_residual(&normals, &case.image, &case.domain, &reflectance)?;
     let d = case.light.direction();
     Ok(CaseOutput {
         result: CaseResult {
@@ -198,7 +186,7 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             converged: solution.converged,
             seconds,
         },
-        normals: solution.normals(),
+        normals,
         depth,
         error_map,
     })

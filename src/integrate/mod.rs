@@ -51,17 +51,54 @@ pub fn gradients_from_normals(
         )));
     }
     check_min_nz(min_nz)?;
-    let slope = |pick: fn(&Normal) -> f64| {
+    let slope = |pick: fn((f64, f64)) -> f64| {
         Grid::from_fn(normals.width(), normals.height(), |c, r| {
             if *mask.get(c, r) {
-                let n = normals.get(c, r);
-                -pick(n) / n.z.max(min_nz)
+                pick(slopes_of(normals.get(c, r), min_nz))
             } else {
                 0.0
             }
         })
     };
-    Ok((slope(|n| n.x), slope(|n| n.y)))
+    Ok((slope(|s| s.0), slope(|s| s.1)))
+}
+
+/// (∂z/∂x, ∂z/∂y) of the unit normal `n`, with n_z clamped to at least `min_nz`.
+fn slopes_of(n: &Normal, min_nz: f64) -> (f64, f64) {
+    let nz = n.z.max(min_nz);
+    (-n.x / nz, -n.y / nz)
+}
+
+/// Puts the lowest point of `depth` inside `mask` at 0 and sets 0 outside it (depth from slopes
+/// has no offset of its own); returns the height of the highest point inside.
+pub fn rest_on_zero(depth: &mut Image, mask: &Mask) -> Result<f64> {
+    if !depth.same_size(mask) {
+        return Err(Error::invalid(format!(
+            "depth is {}x{} but the mask is {}x{}",
+            depth.width(),
+            depth.height(),
+            mask.width(),
+            mask.height()
+        )));
+    }
+    // An empty mask has no lowest point: everything is outside, and becomes 0.
+    let lowest = Some(masked_fold(depth, mask, f64::INFINITY, f64::min))
+        .filter(|z| z.is_finite())
+        .unwrap_or(0.0);
+    for (z, &m) in depth.data_mut().iter_mut().zip(mask.data()) {
+        *z = if m { *z - lowest } else { 0.0 };
+    }
+    Ok(masked_fold(depth, mask, 0.0, f64::max))
+}
+
+/// `values` inside `mask` folded from `start` with `op`.
+fn masked_fold(values: &Image, mask: &Mask, start: f64, op: fn(f64, f64) -> f64) -> f64 {
+    values
+        .data()
+        .iter()
+        .zip(mask.data())
+        .filter(|(_, &m)| m)
+        .fold(start, |acc, (v, _)| op(acc, *v))
 }
 
 /// [`gradients_from_normals`] for normals given by their stereographic (f, g) (as the solver
@@ -93,8 +130,7 @@ pub fn gradients_from_fg(
         .zip(mask.data())
     {
         (*f, *g) = if inside {
-            let n = normal_from_fg(*f, *g);
-            (-n.x / n.z.max(min_nz), -n.y / n.z.max(min_nz))
+            slopes_of(&normal_from_fg(*f, *g), min_nz)
         } else {
             (0.0, 0.0)
         };

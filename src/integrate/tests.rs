@@ -188,6 +188,23 @@ fn slopes_from_fg_in_place_equal_slopes_from_normals_and_integrate_bit_for_bit()
 }
 
 #[test]
+fn rest_on_zero_lifts_the_masked_minimum_to_zero_and_clears_the_outside() {
+    let mut depth = Grid::from_vec(3, 2, vec![5.0, -2.0, 7.0, 9.0, 1.0, -8.0]).unwrap();
+    let mask = Grid::from_vec(3, 2, vec![true, true, false, false, true, false]).unwrap();
+    let highest = rest_on_zero(&mut depth, &mask).unwrap();
+    assert_eq!(depth.data(), &[7.0, 0.0, 0.0, 0.0, 3.0, 0.0]);
+    assert_eq!(highest, 7.0);
+    let mut flat = Grid::new(2, 2, 4.0);
+    assert_eq!(
+        rest_on_zero(&mut flat, &Grid::new(2, 2, false)).unwrap(),
+        0.0
+    );
+    assert_eq!(flat.data(), &[0.0; 4]);
+    let e = rest_on_zero(&mut flat, &Grid::new(3, 2, true)).unwrap_err();
+    assert!(e.to_string().contains("depth is 2x2"), "{e}");
+}
+
+#[test]
 fn consistent_differences_are_integrated_exactly_on_any_mask() {
     // A quadratic on an annulus with a hole and a notch: exact differences give it back.
     let (w, h) = (40, 30);
