@@ -221,10 +221,7 @@ pub fn build(
         Some(THUMBNAIL_GAMMA),
     )?;
     let html = index_html(&rendered, &options.docs_base);
-    io::write_atomic(&dir.path().join(MARKER), |w| {
-        w.write_all(html.as_bytes())
-            .map_err(|e| Error::io(out.join(MARKER), e))
-    })?;
+    io::write_text(&dir.path().join(MARKER), &html)?;
     dir.commit()
 }
 

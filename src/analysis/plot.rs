@@ -258,7 +258,7 @@ impl LinePlot {
 
     /// Writes the plot as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
-        write_text(path, &self.svg()?)
+        io::write_text(path, &self.svg()?)
     }
 }
 
@@ -320,7 +320,7 @@ impl Figure {
             let root = SVGBackend::with_string(&mut text, self.size).into_drawing_area();
             self.draw(root)?;
         }
-        write_text(path, &text)
+        io::write_text(path, &text)
     }
 }
 
@@ -340,13 +340,6 @@ fn write_rgb_png(path: &Path, buf: &[u8], (w, h): (u32, u32)) -> Result<()> {
             .collect(),
     )?;
     io::write_rgb(path, &image, BitDepth::Eight, None)
-}
-
-fn write_text(path: &Path, text: &str) -> Result<()> {
-    io::write_atomic(path, |out| {
-        out.write_all(text.as_bytes())
-            .map_err(|e| Error::io(path, e))
-    })
 }
 
 #[cfg(test)]

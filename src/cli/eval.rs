@@ -146,10 +146,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             io::PROGRAM_VERSION,
             command.join(" ")
         );
-        io::write_atomic(&dir.join("evaluation.md"), |out| {
-            out.write_all(text.as_bytes())
-                .map_err(|e| shadelab::Error::io(dir.join("evaluation.md"), e))
-        })?;
+        io::write_text(&dir.join("evaluation.md"), &text)?;
         let report = json!({
             "program": "shadelab",
             "version": io::PROGRAM_VERSION,

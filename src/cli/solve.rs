@@ -362,10 +362,7 @@ fn write_convergence(
     for (i, u) in history.iter().enumerate() {
         csv.push_str(&format!("{},{u:e}\n", i + 1));
     }
-    io::write_atomic(&dir.join("convergence.csv"), |out| {
-        out.write_all(csv.as_bytes())
-            .map_err(|e| shadelab::Error::io(dir.join("convergence.csv"), e))
-    })?;
+    io::write_text(&dir.join("convergence.csv"), &csv)?;
     let mut plot = LinePlot::new(
         &format!("{method} convergence"),
         unit,

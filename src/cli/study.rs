@@ -4,8 +4,8 @@
 
 use super::{progress, CliError, CliResult, Global};
 use shadelab::analysis::study::{merge, Shard, Study, REPORT, RESULTS, SWEEP};
-use shadelab::io::{self, AtomicDir};
-use std::path::{Path, PathBuf};
+use shadelab::io::{self, write_text, AtomicDir};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `study`.
@@ -114,13 +114,5 @@ fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
             args.dirs.len()
         );
     }
-    Ok(())
-}
-
-fn write_text(path: &Path, text: &str) -> CliResult {
-    io::write_atomic(path, |out| {
-        out.write_all(text.as_bytes())
-            .map_err(|e| shadelab::Error::io(path, e))
-    })?;
     Ok(())
 }

@@ -93,6 +93,14 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
     result
 }
 
+/// Writes `text` to `target` atomically (see [`write_atomic`]).
+pub fn write_text(target: &Path, text: &str) -> Result<()> {
+    write_atomic(target, |out| {
+        out.write_all(text.as_bytes())
+            .map_err(|e| Error::io(target, e))
+    })
+}
+
 /// The folder that will hold `target` must exist and be a folder; a path under a regular file
 /// gets its own message rather than "does not exist".
 fn check_parent(target: &Path) -> Result<()> {

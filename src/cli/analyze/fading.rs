@@ -151,10 +151,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ));
     }
     let csv_path = dir.join("time_course.csv");
-    io::write_atomic(&csv_path, |out| {
-        out.write_all(csv.as_bytes())
-            .map_err(|e| shadelab::Error::io(&csv_path, e))
-    })?;
+    io::write_text(&csv_path, &csv)?;
 
     let every = ((1.0 / FPS) / options.dt_s).round().max(1.0) as usize;
     let same_picture = blurred.picture == sharp.picture;

@@ -167,10 +167,7 @@ fn write_targets(dir: &Path, targets: &[(Model, Vec<TargetMean>)]) -> CliResult 
         }
     }
     let path = dir.join("targets.csv");
-    io::write_atomic(&path, |out| {
-        out.write_all(csv.as_bytes())
-            .map_err(|e| shadelab::Error::io(&path, e))
-    })?;
+    io::write_text(&path, &csv)?;
     let json = serde_json::Value::Array(
         targets
             .iter()

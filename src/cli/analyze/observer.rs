@@ -1,7 +1,7 @@
 //! `shadelab analyze observer`: a Bayesian observer's P(convex) for each token against the
 //! picture's rotation, from one fine sweep of the upright picture.
 
-use super::perception::{parameters, write_text, PictureArgs};
+use super::perception::{parameters, PictureArgs};
 use super::{CliError, CliResult, Global};
 use crate::cli::progress;
 use serde_json::json;
@@ -11,6 +11,7 @@ use shadelab::analysis::study::csv_field;
 use shadelab::analysis::{
     observe, parse_angles, sweep, LightPrior, ObserverOptions, Percept, Scene, Sweep,
 };
+use shadelab::io::write_text;
 use shadelab::io::{self, AtomicDir};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -286,12 +286,3 @@ pub fn parameters(loaded: &Loaded, args: &PictureArgs) -> Value {
         "method": loaded.options.method.to_string(),
     })
 }
-
-/// Writes `text` to `path` atomically.
-pub fn write_text(path: &Path, text: &str) -> Result<(), CliError> {
-    io::write_atomic(path, |out| {
-        out.write_all(text.as_bytes())
-            .map_err(|e| shadelab::Error::io(path, e))
-    })?;
-    Ok(())
-}

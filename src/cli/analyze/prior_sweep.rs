@@ -1,7 +1,7 @@
 //! `shadelab analyze prior-sweep`: the picture interpreted under each assumed light tilt, with
 //! each token's convexity, residual and smoothness, and the tilts where it flips.
 
-use super::perception::{parameters, write_text, PictureArgs};
+use super::perception::{parameters, PictureArgs};
 use super::{CliError, CliResult, Global};
 use crate::cli::progress;
 use serde_json::json;
@@ -9,6 +9,7 @@ use shadelab::analysis::binding::{binding, GlobalLight};
 use shadelab::analysis::plot::{Figure, Legend, LinePlot, Marker, Series};
 use shadelab::analysis::study::csv_field;
 use shadelab::analysis::{parse_angles, sweep, Interpreter, Scene, Sweep};
+use shadelab::io::write_text;
 use shadelab::io::{self, AtomicDir};
 use std::path::PathBuf;
 use std::time::Instant;
