@@ -38,7 +38,7 @@ mod tests {
 
     #[test]
     fn ends_and_monotone_luminance() {
-        let lum = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        let lum = crate::grid::luminance;
         let mut last = -1.0;
         for i in 0..=100 {
             let l = lum(viridis(i as f64 / 100.0));

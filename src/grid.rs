@@ -22,6 +22,16 @@ pub type Labels = Grid<u16>;
 /// A linear RGB image (each channel nominally 0..1).
 pub type RgbImage = Grid<[f64; 3]>;
 
+/// The Rec. 709 / sRGB luminance weights of R, G and B: every colour-to-gray conversion of
+/// shadelab uses them (see `io::LUMINANCE_FORMULA`).
+pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+/// The luminance of a linear RGB value, by [`LUMINANCE_WEIGHTS`].
+pub fn luminance(rgb: [f64; 3]) -> f64 {
+    let [r, g, b] = LUMINANCE_WEIGHTS;
+    r * rgb[0] + g * rgb[1] + b * rgb[2]
+}
+
 /// The largest grid shadelab makes unless told otherwise (about 64 megapixels).
 pub const DEFAULT_MAX_PIXELS: usize = 64 * 1024 * 1024;
 

@@ -14,7 +14,7 @@
 use super::holes::{fill_enclosed_holes, FilledDepth};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
-use crate::grid::{Grid, Image, Mask, DEFAULT_MAX_PIXELS};
+use crate::grid::{Grid, Image, Mask, DEFAULT_MAX_PIXELS, LUMINANCE_WEIGHTS};
 use crate::io;
 use crate::light::Light;
 use crate::surface::{Mesh, Surface};
@@ -246,10 +246,6 @@ pub struct Ball {
     pub photos: Vec<Photo>,
 }
 
-/// How the colour photographs become one gray image: each channel divided by the light's
-/// `intensity_rgb`, then these Rec. 709 weights (the crate's luminance weights).
-pub const GRAY_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
 /// Loads the DiLiGenT ball with the photographs `images` (names without `.png`).
 pub fn ball(data: &Path, images: &[String]) -> Result<Ball> {
     let dir = data.join("diligent_ball");
@@ -298,9 +294,11 @@ pub fn ball(data: &Path, images: &[String]) -> Result<Ball> {
         let path = dir.join(&file);
         let rgb = io::read_rgb(&path, DEFAULT_MAX_PIXELS)?;
         same_size(&rgb, &mask, &path, &mask_path)?;
+        // Calibrated: each channel divided by the light's intensity_rgb, then the crate's
+        // Rec. 709 luminance weights.
         let image = rgb.map(|v| {
             (0..3)
-                .map(|k| GRAY_WEIGHTS[k] * v[k] / intensity[k])
+                .map(|k| LUMINANCE_WEIGHTS[k] * v[k] / intensity[k])
                 .sum::<f64>()
         });
         photos.push(Photo {

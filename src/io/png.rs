@@ -146,9 +146,7 @@ fn gray_from(img: DynamicImage) -> Result<(Image, GrayInfo)> {
             let rgb = other.into_rgb32f();
             (
                 rgb.pixels()
-                    .map(|p| {
-                        0.2126 * p.0[0] as f64 + 0.7152 * p.0[1] as f64 + 0.0722 * p.0[2] as f64
-                    })
+                    .map(|p| crate::grid::luminance(p.0.map(f64::from)))
                     .collect(),
                 Some(LUMINANCE_FORMULA.to_string()),
             )

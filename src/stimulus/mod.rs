@@ -77,7 +77,7 @@ impl Pixels {
     pub fn luminance(&self) -> Image {
         match self {
             Pixels::Gray(i) => i.clone(),
-            Pixels::Rgb(i) => i.map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]),
+            Pixels::Rgb(i) => i.map(|&p| crate::grid::luminance(p)),
         }
     }
 }

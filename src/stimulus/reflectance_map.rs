@@ -217,7 +217,7 @@ mod tests {
         let info = ReflectanceMapFigure.info();
         let params = Params::resolve(&info.params, &given).unwrap();
         assert_eq!(params.str("space").unwrap(), "fg");
-        let lum = |p: [f64; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+        let lum = crate::grid::luminance;
         assert!(lum(*img.get(30, 50)) > lum(*img.get(70, 50)));
         // The rings marking (2,0) and (0,2) reach past the rim, where the map is white: one
         // unit is 50.5/2.2 pixels and a ring's radius 8 pixels, so the ring's top point over
