@@ -9,7 +9,7 @@ use std::path::Path;
 
 /// Every file under `dir`, by relative path. JSON files are compared without their timings
 /// (`seconds` at any depth) and thread counts (`threads`), which legitimately differ.
-fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+pub fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     fn strip(v: &mut Value) {
         match v {
             Value::Object(map) => {

@@ -8,6 +8,7 @@ mod docs;
 mod evaluation;
 mod fast_solver;
 mod fuzz_regressions;
+mod golden_outputs;
 mod hostile;
 mod interrupt;
 mod lightness;

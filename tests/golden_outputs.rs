@@ -1,0 +1,188 @@
+//! The library-first refactor (issue 13) must not change what any command writes: every file
+//! of a render, a solve, a prior sweep, an observer, a study, a lightness analysis, the fading
+//! analysis and the gallery is compared, by MD5 digest, with the digests recorded before the
+//! refactor (`tests/data/golden-outputs.json`). JSON is compared without its timings and
+//! thread counts, as in the determinism test. `SHADELAB_BLESS=1` records the digests anew;
+//! do that only for a change that means to alter outputs, and say so in its commit.
+
+use super::cli::{scratch, shadelab};
+use super::determinism::outputs;
+use md5::{Digest, Md5};
+use std::collections::BTreeMap;
+
+const MANIFEST: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/golden-outputs.json"
+);
+
+/// The commands whose outputs are recorded, run in order in one folder.
+const RUNS: &[&[&str]] = &[
+    &[
+        "render",
+        "sphere",
+        "--size",
+        "64",
+        "--layers",
+        "--light",
+        "tilt=30,slant=40",
+        "--out",
+        "sphere.png",
+    ],
+    &["render", "bumps", "--ppd", "16", "--out", "bumps.png"],
+    &[
+        "render",
+        "crater",
+        "--set",
+        "rotation=180",
+        "--ppd",
+        "20",
+        "--out",
+        "crater.npy",
+    ],
+    &[
+        "solve",
+        "sphere.png",
+        "--mask",
+        "sphere_mask.png",
+        "--light",
+        "tilt=30,slant=40",
+        "--out",
+        "solved",
+    ],
+    &[
+        "solve",
+        "sphere.png",
+        "--light",
+        "estimate",
+        "--boundary",
+        "flat",
+        "--out",
+        "solved-estimate",
+    ],
+    &[
+        "solve",
+        "sphere.png",
+        "--mask",
+        "sphere_mask.png",
+        "--light",
+        "tilt=30,slant=40",
+        "--method",
+        "jacobi",
+        "--max-iter",
+        "300",
+        "--out",
+        "solved-jacobi",
+    ],
+    &[
+        "analyze",
+        "prior-sweep",
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=2",
+        "--ppd",
+        "16",
+        "--size",
+        "80x32",
+        "--tilts",
+        "0:360:30",
+        "--binding",
+        "estimate",
+        "--out",
+        "sweep",
+    ],
+    &[
+        "analyze",
+        "observer",
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=2",
+        "--ppd",
+        "12",
+        "--size",
+        "64x24",
+        "--tilts",
+        "0:360:45",
+        "--rotations",
+        "0:360:90",
+        "--out",
+        "observer",
+    ],
+    &[
+        "analyze",
+        "lightness",
+        "--stimulus",
+        "checker-shadow",
+        "--ppd",
+        "12",
+        "--model",
+        "all",
+        "--out",
+        "lightness",
+    ],
+    &[
+        "analyze",
+        "fading",
+        "--stimulus",
+        "fading-disk",
+        "--ppd",
+        "12",
+        "--duration",
+        "2",
+        "--out",
+        "fading",
+    ],
+    &["study", "run", "study.json", "--out", "study"],
+    &["gallery", "--out", "gallery"],
+];
+
+const STUDY: &str = r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": [1, 2]},
+    "shape": [64, 24], "ppd": 12}], "tilts": "0:360:90", "slants": [30, 45]}"#;
+
+#[test]
+fn every_command_writes_what_it_wrote_before_the_refactor() {
+    let dir = scratch("golden-outputs");
+    std::fs::write(dir.join("study.json"), STUDY).unwrap();
+    for args in RUNS {
+        let mut full = vec!["--quiet"];
+        full.extend_from_slice(args);
+        let out = shadelab(&dir, &full);
+        assert!(
+            out.status.success(),
+            "{full:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let digests: BTreeMap<String, String> = outputs(&dir)
+        .into_iter()
+        .filter(|(name, _)| name != "study.json")
+        .map(|(name, bytes)| (name, format!("{:x}", Md5::digest(&bytes))))
+        .collect();
+    if std::env::var_os("SHADELAB_BLESS").is_some() {
+        let text = serde_json::to_string_pretty(&digests).unwrap() + "\n";
+        std::fs::write(MANIFEST, text).unwrap();
+        eprintln!("recorded {} digests in {MANIFEST}", digests.len());
+        return;
+    }
+    let recorded: BTreeMap<String, String> =
+        serde_json::from_str(&std::fs::read_to_string(MANIFEST).unwrap()).unwrap();
+    let differing: Vec<&String> = recorded
+        .iter()
+        .filter(|(name, digest)| digests.get(*name) != Some(digest))
+        .map(|(name, _)| name)
+        .collect();
+    let new: Vec<&String> = digests
+        .keys()
+        .filter(|n| !recorded.contains_key(*n))
+        .collect();
+    assert!(
+        differing.is_empty() && new.is_empty(),
+        "outputs changed: {differing:?}; files not recorded: {new:?}"
+    );
+    assert!(recorded.len() >= 60, "{} files compared", recorded.len());
+}
