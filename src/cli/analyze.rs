@@ -9,11 +9,7 @@ mod perception;
 mod prior_sweep;
 
 use super::{CliError, CliResult, Global};
-use serde_json::{json, Map, Value};
-use shadelab::grid::{Image, Labels};
-use shadelab::io;
-use shadelab::stimulus::{self, Pixels};
-use shadelab::visual_size::SizeRequest;
+use shadelab::pipeline::PictureSource;
 use std::path::PathBuf;
 
 /// Arguments of `analyze`.
@@ -73,24 +69,8 @@ pub struct Source {
     pub mask: Option<PathBuf>,
 }
 
-/// A loaded picture with what is known about it.
-pub struct Input {
-    /// The pixels (gray or RGB).
-    pub pixels: Pixels,
-    /// Pixels per degree, when known.
-    pub ppd: Option<f64>,
-    /// Target labels and names, when known.
-    pub labels: Option<(Labels, Vec<String>)>,
-    /// Where it came from, for the report.
-    pub origin: Value,
-}
-
-impl Input {
-    /// The luminance of the pixels.
-    pub fn luminance(&self) -> Image {
-        self.pixels.luminance()
-    }
-}
+/// A loaded picture (the library's [`shadelab::pipeline::Picture`]).
+pub type Input = shadelab::pipeline::Picture;
 
 impl Source {
     /// Checks the flags that need no file: --ppd and that exactly one source is given.
@@ -110,90 +90,22 @@ impl Source {
         Ok(())
     }
 
+    /// The library's description of the picture, from the flags.
+    pub fn to_library(&self, global: &Global) -> Result<PictureSource, CliError> {
+        self.check()?;
+        Ok(PictureSource {
+            image: self.image.clone(),
+            stimulus: self.stimulus.clone(),
+            params: shadelab::params::Params::parse_pairs(&self.set)?,
+            seed: self.seed,
+            ppd: self.ppd,
+            mask: self.mask.clone(),
+            max_pixels: global.max_pixels,
+        })
+    }
+
     /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
     pub fn load(&self, colour: bool, global: &Global) -> Result<Input, CliError> {
-        self.check()?;
-        let mut input = match (&self.image, &self.stimulus) {
-            (Some(path), _) => {
-                let pixels = match io::extension(path).as_str() {
-                    "png" if colour => Pixels::Rgb(io::read_rgb(path, global.max_pixels)?),
-                    "png" => Pixels::Gray(io::read_gray(path, global.max_pixels)?.0),
-                    "npy" => Pixels::Gray(io::read_image(path, global.max_pixels)?),
-                    other => {
-                        return Err(CliError::usage(format!(
-                            "{}: IMAGE must be a .png or .npy file (got '.{other}')",
-                            path.display()
-                        )))
-                    }
-                };
-                check_finite(&pixels, &path.display().to_string())?;
-                Input {
-                    pixels,
-                    ppd: self.ppd,
-                    labels: None,
-                    origin: json!({ "image": path.display().to_string() }),
-                }
-            }
-            (None, Some(name)) => {
-                let given: Map<String, Value> = shadelab::params::Params::parse_pairs(&self.set)?;
-                let size = SizeRequest {
-                    ppd: self.ppd,
-                    ..Default::default()
-                };
-                let seed = self.seed.unwrap_or(0);
-                let (request, output) =
-                    stimulus::generate(name, &given, &size, seed, global.max_pixels)?;
-                Input {
-                    pixels: output.pixels,
-                    ppd: Some(request.geometry.ppd),
-                    labels: output.targets.map(|t| (t.labels, t.names)),
-                    origin: json!({
-                        "stimulus": name,
-                        "parameters": request.params.to_json(),
-                        "seed": seed,
-                        "geometry": request.geometry,
-                        "notes": output.notes,
-                    }),
-                }
-            }
-            (None, None) => {
-                return Err(CliError::usage(
-                    "give an IMAGE (.png or .npy) or --stimulus NAME",
-                ))
-            }
-        };
-        if let Some(path) = &self.mask {
-            let labels = io::read_labels(path, global.max_pixels)?;
-            let (w, h) = input.pixels.size();
-            if (labels.width(), labels.height()) != (w, h) {
-                return Err(CliError::usage(format!(
-                    "mask {} is {}x{} but the image is {w}x{h}",
-                    path.display(),
-                    labels.width(),
-                    labels.height()
-                )));
-            }
-            input.labels = Some((labels, Vec::new()));
-        }
-        Ok(input)
+        Ok(self.to_library(global)?.load(colour)?)
     }
-}
-
-fn check_finite(pixels: &Pixels, what: &str) -> CliResult {
-    let bad = match pixels {
-        Pixels::Gray(i) => i.data().iter().position(|v| !v.is_finite()),
-        Pixels::Rgb(i) => i
-            .data()
-            .iter()
-            .position(|p| p.iter().any(|v| !v.is_finite())),
-    };
-    if let Some(i) = bad {
-        let w = pixels.size().0;
-        return Err(CliError::usage(format!(
-            "{what}: the image has a non-finite value (NaN or Inf) at column {}, row {}",
-            i % w,
-            i / w
-        )));
-    }
-    Ok(())
 }

@@ -1,0 +1,9 @@
+//! Every command of the `shadelab` program as a library pipeline: a `Config` built and checked
+//! from plain values, a `run(&config, &dyn Progress)` that does the work, and a typed,
+//! serialisable `Report`. The command line, the Python module and the browser page call these
+//! and nothing else; the command line only parses flags into a `Config`, draws progress and
+//! writes what the report says.
+
+pub mod source;
+
+pub use source::{Picture, PictureSource};
