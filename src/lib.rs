@@ -31,6 +31,7 @@ pub mod params;
 pub mod pipeline;
 pub mod progress;
 pub mod random;
+pub mod reconstruct;
 pub mod reflectance;
 pub mod render;
 pub mod solver;
@@ -38,7 +39,13 @@ pub mod stimulus;
 pub mod surface;
 pub mod visual_size;
 
+pub use boundary::Boundary;
 pub use error::{Error, Result};
 pub use grid::{Grid, Image, Labels, Mask, RgbImage};
 pub use light::Light;
 pub use progress::{NoProgress, Progress};
+pub use reconstruct::{
+    DepthMethod, Lighting, NonConvergence, ReconstructOptions, Reconstruction, Reconstructor,
+};
+pub use reflectance::{Lambertian, ReflectanceMap};
+pub use solver::{Method, SolveOptions};
