@@ -27,6 +27,7 @@ pub mod io;
 pub mod light;
 pub mod light_estimation;
 pub mod lightness;
+pub mod parallel;
 pub mod params;
 pub mod pipeline;
 pub mod progress;

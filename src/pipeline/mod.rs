@@ -4,6 +4,7 @@
 //! and nothing else; the command line only parses flags into a `Config`, draws progress and
 //! writes what the report says.
 
+pub mod bench;
 pub mod solve;
 pub mod source;
 
