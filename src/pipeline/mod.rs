@@ -4,6 +4,9 @@
 //! and nothing else; the command line only parses flags into a `Config`, draws progress and
 //! writes what the report says.
 
+pub mod gallery;
+pub mod render;
 pub mod source;
+pub mod study;
 
 pub use source::{Picture, PictureSource};
