@@ -97,3 +97,22 @@ pub fn run(config: &GalleryConfig, progress: &dyn Progress) -> Result<GalleryRep
     progress.finish();
     report
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn configs_refuse_no_presets_and_twins() {
+        let mut config = GalleryConfig::builtin("g").unwrap();
+        config.validate().unwrap();
+        config.presets.truncate(1);
+        config.presets.push(config.presets[0].clone());
+        let e = config.validate().unwrap_err().to_string();
+        assert!(e.contains("two presets are called"), "{e}");
+        config.presets.clear();
+        assert!(config.validate().is_err());
+        assert!(run(&config, &crate::progress::NoProgress).is_err());
+        assert!(!Path::new("g").exists());
+    }
+}

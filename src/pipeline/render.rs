@@ -6,14 +6,14 @@
 //! use shadelab::pipeline::render::{run, RenderConfig};
 //! use shadelab::NoProgress;
 //!
-//! let mut config = RenderConfig::new("bumps", "bumps.png");
+//! let mut config = RenderConfig::new("sphere", "sphere.png");
 //! config.size.shape = Some((32, 24));
 //! config.validate().unwrap();
 //! let report = run(&config, &NoProgress).unwrap();
 //! assert_eq!((report.geometry.width, report.geometry.height), (32, 24));
 //! assert_eq!(report.output.pixels.size(), (32, 24));
 //! // Nothing is written until `write` is called.
-//! assert!(!std::path::Path::new("bumps.png").exists());
+//! assert!(!std::path::Path::new("sphere.png").exists());
 //! ```
 
 use crate::error::{Error, Result};
@@ -242,4 +242,43 @@ pub fn describe(name: &str) -> Result<Description> {
             })
             .collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    #[test]
+    fn configs_are_checked_and_specs_fill_them() {
+        assert!(RenderConfig::new("teapot", "a.png").validate().is_err());
+        assert!(RenderConfig::new("sphere", "a.tiff").validate().is_err());
+        let mut config = RenderConfig::new("sphere", "a.png");
+        let e = config.set_space("fg").unwrap_err().to_string();
+        assert!(e.contains("'sphere' has no space parameter"), "{e}");
+        assert!(!e.contains("--"), "{e}");
+        let mut figure = RenderConfig::new("reflectance-map", "a.png");
+        figure.set_space("fg").unwrap();
+        assert_eq!(figure.params["space"], "fg");
+        let spec: Spec =
+            serde_json::from_str(r#"{"stimulus": "sphere", "shape": [20, 10], "seed": 7}"#)
+                .unwrap();
+        config = RenderConfig::from_spec(&spec, "b.png");
+        assert_eq!((config.seed, config.size.shape), (7, Some((20, 10))));
+        let report = run(&config, &NoProgress).unwrap();
+        assert_eq!(report.output.pixels.size(), (20, 10));
+        let json = serde_json::to_value(&report).unwrap();
+        assert_eq!(json["stimulus"], "sphere");
+        assert_eq!(json["geometry"]["width"], 20);
+    }
+
+    #[test]
+    fn list_and_describe_agree_with_the_library() {
+        let all = list();
+        assert_eq!(all.len(), stimulus::names().len());
+        for s in &all {
+            let d = describe(s.name).unwrap();
+            assert_eq!((d.name, d.summary), (s.name, s.summary));
+        }
+    }
 }

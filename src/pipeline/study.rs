@@ -9,7 +9,7 @@
 //!
 //! let spec: StudySpec = serde_json::from_str(
 //!     r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": 1},
-//!         "shape": [24, 24]}], "tilts": "0:360:90"}"#,
+//!         "visual_size": [2, 2], "ppd": 12}], "tilts": "0:360:90"}"#,
 //! )
 //! .unwrap();
 //! let config = StudyRunConfig::new(spec, Shard::WHOLE, 1 << 20).unwrap();
@@ -263,4 +263,68 @@ fn write_study_files(
     let value = serde_json::to_value(report)
         .map_err(|e| Error::Compute(format!("cannot serialise the study report: {e}")))?;
     io::write_json(&dir.join(REPORT), &value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    fn spec() -> StudySpec {
+        serde_json::from_str(
+            r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": 1,
+                "pattern": ["bumps", "dimples"]}, "visual_size": [2, 2], "ppd": 10}],
+                "tilts": "0:360:90", "slants": [30, 45]}"#,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn shards_written_and_merged_give_the_whole_run() {
+        let dir =
+            std::env::temp_dir().join(format!("shadelab-pipeline-study-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let whole = run(
+            &StudyRunConfig::new(spec(), Shard::WHOLE, 1 << 20).unwrap(),
+            &NoProgress,
+        )
+        .unwrap();
+        assert_eq!(whole.points, vec![0, 1, 2, 3]);
+        let mut dirs = Vec::new();
+        for index in [1, 0] {
+            let config = StudyRunConfig::new(spec(), Shard { index, count: 2 }, 1 << 20).unwrap();
+            assert_eq!(config.point_count(), 2);
+            let report = run(&config, &NoProgress).unwrap();
+            let out = dir.join(format!("s{index}"));
+            assert_eq!(report.write(&out, false).unwrap(), out);
+            dirs.push(out);
+        }
+        let out = dir.join("merged");
+        let merged = merge(
+            &StudyMergeConfig::new(dirs.clone(), &out).unwrap(),
+            &NoProgress,
+        )
+        .unwrap();
+        assert_eq!(
+            (merged.results.as_str(), merged.sweep.as_str()),
+            (whole.results.as_str(), whole.sweep.as_str())
+        );
+        assert_eq!(merged.spec_md5, whole.spec_md5);
+        assert_eq!(merged.merged_from[0].shard.index, 0);
+        merged.write(&out, false).unwrap();
+        let report: Value =
+            serde_json::from_slice(&std::fs::read(out.join(REPORT)).unwrap()).unwrap();
+        assert_eq!(report["command"], "study merge");
+        assert_eq!(report["point_count"], 4);
+        assert_eq!(
+            std::fs::read_to_string(out.join(RESULTS)).unwrap(),
+            whole.results
+        );
+        // The merge may not write over one of its own shards.
+        let e = StudyMergeConfig::new(dirs.clone(), &dirs[1])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("one of the shard folders"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -8,7 +8,6 @@ use crate::analysis::picture::Picture;
 use crate::analysis::prior_sweep::sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_field;
-use crate::visual_size::SizeRequest;
 use rayon::prelude::*;
 
 impl Study {
@@ -56,11 +55,7 @@ impl Study {
     /// One point's result rows and sweep rows.
     fn run_point(&self, point: &Point) -> Result<(String, String)> {
         let entry = &self.spec.stimuli[point.entry];
-        let size = SizeRequest {
-            visual_size: entry.visual_size,
-            ppd: entry.ppd,
-            shape: entry.shape,
-        };
+        let size = entry.size();
         let (request, output) = crate::stimulus::generate(
             &entry.stimulus,
             &point.params,

@@ -85,6 +85,17 @@ pub struct StimulusEntry {
     pub seed: u64,
 }
 
+impl StimulusEntry {
+    /// The size request this entry makes.
+    pub fn size(&self) -> SizeRequest {
+        SizeRequest {
+            visual_size: self.visual_size,
+            ppd: self.ppd,
+            shape: self.shape,
+        }
+    }
+}
+
 /// The observer priors of a study: every combination is applied to every point.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -221,11 +232,7 @@ impl Study {
                 // Checked now against the stimulus's declarations, so typos fail at once.
                 crate::params::Params::resolve(&info.params, &combo)
                     .map_err(|e| Error::invalid(format!("{}: {e}", entry.stimulus)))?;
-                let size = SizeRequest {
-                    visual_size: entry.visual_size,
-                    ppd: entry.ppd,
-                    shape: entry.shape,
-                };
+                let size = entry.size();
                 crate::stimulus::prepare(&entry.stimulus, &combo, &size, entry.seed, max_pixels)
                     .map_err(|e| match e {
                         Error::Invalid(m) => Error::invalid(format!("{}: {m}", entry.stimulus)),
