@@ -116,7 +116,7 @@ pub struct RenderReport {
     pub output: Output,
 }
 
-/// Renders the config's stimulus (nothing is written; see [`write`]).
+/// Renders the config's stimulus (nothing is written; see [`write()`]).
 pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderReport> {
     progress.start(1, "render");
     let rendered = stimulus::generate(

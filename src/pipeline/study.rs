@@ -200,7 +200,7 @@ pub struct StudyMergeReport {
     pub sweep: String,
 }
 
-/// Merges the shards' folders (see [`study::merge`] for what is refused).
+/// Merges the shards' folders (see [`study::merge()`] for what is refused).
 pub fn merge(config: &StudyMergeConfig, progress: &dyn Progress) -> Result<StudyMergeReport> {
     progress.start(config.dirs.len() as u64, "merge");
     let merged = study::merge(&config.dirs);
