@@ -6,6 +6,9 @@
 
 pub mod bench;
 pub mod solve;
+pub mod gallery;
+pub mod render;
 pub mod source;
+pub mod study;
 
 pub use source::{Picture, PictureSource};
