@@ -4,6 +4,8 @@
 //! and nothing else; the command line only parses flags into a `Config`, draws progress and
 //! writes what the report says.
 
+pub mod fading;
+pub mod lightness;
 pub mod source;
 
 pub use source::{Picture, PictureSource};
