@@ -20,5 +20,5 @@ pub use blur::gaussian_blur;
 pub use composite::{shrink, side_by_side};
 pub use fft::RealFft2;
 pub use holes::fill_holes;
-pub use parts::{graph_parts, parts, Parts};
+pub use parts::{graph_parts, parts, Parts, SumOrder};
 pub use sample::bilinear;
