@@ -33,6 +33,25 @@ pub struct DogBand {
     pub border_half_width_deg: f64,
 }
 
+impl DogBand {
+    /// Checks that both σ and the half-width are positive and the ratio is above 1.
+    pub fn check(&self) -> Result<()> {
+        let band = self;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let ratio_ok = band.surround_ratio.is_finite() && band.surround_ratio > 1.0;
+        let band_ok =
+            positive(band.centre_sigma_deg) && ratio_ok && positive(band.border_half_width_deg);
+        if !band_ok {
+            return Err(Error::invalid(format!(
+                "DoG band (centre σ {}°, surround ratio {}, border half-width {}°): σ and \
+                 half-width must be positive and the ratio above 1",
+                band.centre_sigma_deg, band.surround_ratio, band.border_half_width_deg
+            )));
+        }
+        Ok(())
+    }
+}
+
 impl Default for DogBand {
     fn default() -> Self {
         DogBand {
@@ -83,6 +102,39 @@ pub struct AdaptationOptions {
     pub jitter_tau_s: f64,
     /// Seed of the jitter.
     pub seed: u64,
+}
+
+impl AdaptationOptions {
+    /// Checks that the times are positive, the jitter is not negative and the steps are not
+    /// too many.
+    pub fn check(&self) -> Result<()> {
+        let o = self;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(o.tau_s)
+            || !positive(o.duration_s)
+            || !positive(o.dt_s)
+            || !positive(o.jitter_tau_s)
+        {
+            return Err(Error::invalid(format!(
+                "τ {} s, duration {} s, time step {} s and jitter correlation time {} s must be \
+                 positive",
+                o.tau_s, o.duration_s, o.dt_s, o.jitter_tau_s
+            )));
+        }
+        if !(o.jitter_deg.is_finite() && o.jitter_deg >= 0.0) {
+            return Err(Error::invalid(format!(
+                "jitter amplitude {}° must be ≥ 0",
+                o.jitter_deg
+            )));
+        }
+        if o.duration_s / o.dt_s > 100_000.0 {
+            return Err(Error::invalid(format!(
+                "{} s in steps of {} s is more than 100000 steps",
+                o.duration_s, o.dt_s
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Default for AdaptationOptions {
@@ -172,7 +224,7 @@ pub fn adaptation_time_course(
     options: &AdaptationOptions,
 ) -> Result<TimeCourse> {
     check_inputs(&[("blurred", blurred), ("sharp", sharp)], ppd, band)?;
-    check_adaptation(options)?;
+    options.check()?;
     let half = band.border_half_width_deg * ppd;
     let disks = [blurred, sharp];
     // Per disk: its band-pass channels and the pixels of its border band.
@@ -441,46 +493,7 @@ fn check_inputs(disks: &[(&str, Disk<'_>)], ppd: f64, band: &DogBand) -> Result<
             "ppd {ppd} must be a positive number of pixels per degree"
         )));
     }
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    let ratio_ok = band.surround_ratio.is_finite() && band.surround_ratio > 1.0;
-    let band_ok =
-        positive(band.centre_sigma_deg) && ratio_ok && positive(band.border_half_width_deg);
-    if !band_ok {
-        return Err(Error::invalid(format!(
-            "DoG band (centre σ {}°, surround ratio {}, border half-width {}°): σ and \
-             half-width must be positive and the ratio above 1",
-            band.centre_sigma_deg, band.surround_ratio, band.border_half_width_deg
-        )));
-    }
-    Ok(())
-}
-
-fn check_adaptation(o: &AdaptationOptions) -> Result<()> {
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    if !positive(o.tau_s)
-        || !positive(o.duration_s)
-        || !positive(o.dt_s)
-        || !positive(o.jitter_tau_s)
-    {
-        return Err(Error::invalid(format!(
-            "τ {} s, duration {} s, time step {} s and jitter correlation time {} s must be \
-             positive",
-            o.tau_s, o.duration_s, o.dt_s, o.jitter_tau_s
-        )));
-    }
-    if !(o.jitter_deg.is_finite() && o.jitter_deg >= 0.0) {
-        return Err(Error::invalid(format!(
-            "jitter amplitude {}° must be ≥ 0",
-            o.jitter_deg
-        )));
-    }
-    if o.duration_s / o.dt_s > 100_000.0 {
-        return Err(Error::invalid(format!(
-            "{} s in steps of {} s is more than 100000 steps",
-            o.duration_s, o.dt_s
-        )));
-    }
-    Ok(())
+    band.check()
 }
 
 #[cfg(test)]

@@ -57,9 +57,12 @@ impl FadingConfig {
         Ok(config)
     }
 
-    /// Checks what needs no file: the source, and for an image its resolution and labels.
+    /// Checks what needs no file: the source, the filter and the adaptation settings, and for
+    /// an image its resolution and labels.
     pub fn validate(&self) -> Result<()> {
         self.source.check()?;
+        self.band.check()?;
+        self.adaptation.check()?;
         if self.source.image.is_some() {
             if self.source.ppd.is_none() {
                 return Err(Error::invalid(
