@@ -22,6 +22,7 @@ pub mod evaluation;
 pub mod gallery;
 pub mod gradient_space;
 pub mod grid;
+pub mod imageops;
 pub mod integrate;
 pub mod io;
 pub mod light;

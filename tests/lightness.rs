@@ -375,3 +375,44 @@ mod cli {
         assert!(gif.starts_with(b"GIF89a"));
     }
 }
+
+/// The lightness and fading analyses run as library pipelines, without the command line, and
+/// write the same folder layout the command writes.
+#[test]
+fn lightness_and_fading_pipelines_run_from_plain_values() {
+    use shadelab::lightness::fading::{AdaptationOptions, DogBand};
+    use shadelab::pipeline::{fading, lightness, PictureSource};
+    use shadelab::NoProgress;
+    let source = |name: &str| PictureSource {
+        stimulus: Some(name.into()),
+        ppd: Some(12.0),
+        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        ..Default::default()
+    };
+    let models = lightness::LightnessConfig::parse_models("retinex").unwrap();
+    let config = lightness::LightnessConfig::new(source("checker-shadow"), models).unwrap();
+    let report = lightness::run(&config, &NoProgress).unwrap();
+    assert_eq!(report.models, ["retinex"]);
+    assert_eq!(report.outputs[0].npy, "lightness.npy");
+    let checker = report.checker_shadow.as_ref().unwrap();
+    assert!(checker.identical_pixels);
+    assert_eq!(report.images[0].1.width(), report.width);
+
+    let adaptation = AdaptationOptions {
+        duration_s: 1.0,
+        ..Default::default()
+    };
+    let config =
+        fading::FadingConfig::new(source("fading-disk"), DogBand::default(), adaptation).unwrap();
+    let report = fading::run(&config, &NoProgress).unwrap();
+    assert_eq!(report.course.times.len(), 21);
+    assert!(report.border_energy.ratio < 1.0);
+    assert_eq!(report.animation.frames, report.frames.len());
+    let dir = std::env::temp_dir().join(format!("shadelab-fading-pipeline-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let written = report.write(&dir, false).unwrap();
+    for file in ["fading.json", "fading.gif", "time_course.csv"] {
+        assert!(written.join(file).is_file(), "{file}");
+    }
+    std::fs::remove_dir_all(&written).unwrap();
+}

@@ -11,6 +11,7 @@
 //! stretched over the hole). Its true depth is unknown, so it is left out of every error.
 
 use crate::grid::{Grid, Image, Mask};
+use crate::imageops::{fill_holes, parts};
 
 /// A depth map whose enclosed holes have been filled.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,28 +33,10 @@ const MAX_SWEEPS: usize = 20_000;
 /// `depth` and `mask` must have the same size (checked by the caller).
 pub fn fill_enclosed_holes(depth: &Image, mask: &Mask) -> FilledDepth {
     let (w, h) = (mask.width(), mask.height());
-    // Background reachable from the frame.
-    let mut outside = Grid::new(w, h, false);
-    let mut stack: Vec<(usize, usize)> = Vec::new();
-    for r in 0..h {
-        for c in 0..w {
-            if (r == 0 || c == 0 || r + 1 == h || c + 1 == w) && !*mask.get(c, r) {
-                *outside.get_mut(c, r) = true;
-                stack.push((c, r));
-            }
-        }
-    }
-    while let Some((c, r)) = stack.pop() {
-        for (nc, nr) in neighbours(c, r, w, h) {
-            if !*mask.get(nc, nr) && !*outside.get(nc, nr) {
-                *outside.get_mut(nc, nr) = true;
-                stack.push((nc, nr));
-            }
-        }
-    }
-    let holes = Grid::from_fn(w, h, |c, r| !*mask.get(c, r) && !*outside.get(c, r));
-    let hole_count = count_components(&holes);
-    let domain = outside.map(|o| !o);
+    // The object and the background the frame cannot reach.
+    let domain = fill_holes(mask);
+    let holes = Grid::from_fn(w, h, |c, r| *domain.get(c, r) && !*mask.get(c, r));
+    let hole_count = parts(&holes).count();
 
     let mut depth = Grid::from_fn(w, h, |c, r| {
         if *mask.get(c, r) {
@@ -118,32 +101,6 @@ fn neighbours(c: usize, r: usize, w: usize, h: usize) -> Vec<(usize, usize)> {
         v.push((c, r + 1));
     }
     v
-}
-
-/// The number of 4-connected components of `set`.
-fn count_components(set: &Mask) -> usize {
-    let (w, h) = (set.width(), set.height());
-    let mut seen = Grid::new(w, h, false);
-    let mut count = 0;
-    for r in 0..h {
-        for c in 0..w {
-            if !*set.get(c, r) || *seen.get(c, r) {
-                continue;
-            }
-            count += 1;
-            *seen.get_mut(c, r) = true;
-            let mut stack = vec![(c, r)];
-            while let Some((c, r)) = stack.pop() {
-                for (nc, nr) in neighbours(c, r, w, h) {
-                    if *set.get(nc, nr) && !*seen.get(nc, nr) {
-                        *seen.get_mut(nc, nr) = true;
-                        stack.push((nc, nr));
-                    }
-                }
-            }
-        }
-    }
-    count
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@
 use super::check_gradients;
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
+use crate::imageops::parts::{parts, SumOrder};
 
 /// Stopping rule of the conjugate-gradient solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -209,7 +210,8 @@ fn solve(mask: &Mask, b: Vec<f64>, options: &PoissonOptions) -> Result<Integrati
     let hierarchy = multigrid::Hierarchy::new(mask);
     let (mut z, iterations, relative_residual, converged) = hierarchy.pcg(b, options);
     drop(hierarchy);
-    multigrid::remove_part_means(mask, &mut z);
+    // Means summed in row-major order.
+    parts(mask).subtract_means(&mut z, SumOrder::Index);
     Ok(Integration {
         depth: Grid::from_vec(w, h, z)?,
         iterations,

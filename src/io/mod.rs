@@ -1,15 +1,17 @@
-//! Reading and writing files: PNG (8/16-bit), float `.npy`, JSON sidecars, all written
+//! Reading and writing files: PNG (8/16-bit), float `.npy`, JSON sidecars, animated GIF, all written
 //! atomically (a temporary name in the same folder, then a rename), so that no half-written file
 //! is ever left where the user asked for one.
 
 mod atomic;
 mod csv;
+mod gif;
 mod npy;
 mod png;
 mod sidecar;
 
 pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, AtomicDir};
 pub use csv::csv_field;
+pub use gif::write_gif;
 pub use npy::{
     read_array, read_array_from_bytes, read_image, read_image_from_bytes, read_normals, write_f32,
     write_image, write_normals, NpyArray,

@@ -17,10 +17,9 @@
 
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask, RgbImage};
+use crate::imageops::{bilinear, fill_holes, gaussian_blur};
 use crate::random::SplitMix64;
-use rayon::prelude::*;
 use serde::Serialize;
-use std::path::Path;
 
 /// The band-pass filter: a difference of isotropic Gaussians, each of unit sum.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -32,6 +31,25 @@ pub struct DogBand {
     /// Half-width, in degrees, of the band on both sides of a disk's outline where energy is
     /// measured.
     pub border_half_width_deg: f64,
+}
+
+impl DogBand {
+    /// Checks that both σ and the half-width are positive and the ratio is above 1.
+    pub fn check(&self) -> Result<()> {
+        let band = self;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let ratio_ok = band.surround_ratio.is_finite() && band.surround_ratio > 1.0;
+        let band_ok =
+            positive(band.centre_sigma_deg) && ratio_ok && positive(band.border_half_width_deg);
+        if !band_ok {
+            return Err(Error::invalid(format!(
+                "DoG band (centre σ {}°, surround ratio {}, border half-width {}°): σ and \
+                 half-width must be positive and the ratio above 1",
+                band.centre_sigma_deg, band.surround_ratio, band.border_half_width_deg
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Default for DogBand {
@@ -84,6 +102,39 @@ pub struct AdaptationOptions {
     pub jitter_tau_s: f64,
     /// Seed of the jitter.
     pub seed: u64,
+}
+
+impl AdaptationOptions {
+    /// Checks that the times are positive, the jitter is not negative and the steps are not
+    /// too many.
+    pub fn check(&self) -> Result<()> {
+        let o = self;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(o.tau_s)
+            || !positive(o.duration_s)
+            || !positive(o.dt_s)
+            || !positive(o.jitter_tau_s)
+        {
+            return Err(Error::invalid(format!(
+                "τ {} s, duration {} s, time step {} s and jitter correlation time {} s must be \
+                 positive",
+                o.tau_s, o.duration_s, o.dt_s, o.jitter_tau_s
+            )));
+        }
+        if !(o.jitter_deg.is_finite() && o.jitter_deg >= 0.0) {
+            return Err(Error::invalid(format!(
+                "jitter amplitude {}° must be ≥ 0",
+                o.jitter_deg
+            )));
+        }
+        if o.duration_s / o.dt_s > 100_000.0 {
+            return Err(Error::invalid(format!(
+                "{} s in steps of {} s is more than 100000 steps",
+                o.duration_s, o.dt_s
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Default for AdaptationOptions {
@@ -173,7 +224,7 @@ pub fn adaptation_time_course(
     options: &AdaptationOptions,
 ) -> Result<TimeCourse> {
     check_inputs(&[("blurred", blurred), ("sharp", sharp)], ppd, band)?;
-    check_adaptation(options)?;
+    options.check()?;
     let half = band.border_half_width_deg * ppd;
     let disks = [blurred, sharp];
     // Per disk: its band-pass channels and the pixels of its border band.
@@ -287,19 +338,6 @@ impl Jitter {
     }
 }
 
-/// The image sampled at fractional (x, y) = (column, row), clamped at the edges.
-fn bilinear(image: &Image, x: f64, y: f64) -> f64 {
-    let (w, h) = (image.width(), image.height());
-    let x = x.clamp(0.0, (w - 1) as f64);
-    let y = y.clamp(0.0, (h - 1) as f64);
-    let (c0, r0) = (x.floor() as usize, y.floor() as usize);
-    let (c1, r1) = ((c0 + 1).min(w - 1), (r0 + 1).min(h - 1));
-    let (fx, fy) = (x - c0 as f64, y - r0 as f64);
-    let top = image.get(c0, r0) * (1.0 - fx) + image.get(c1, r0) * fx;
-    let bottom = image.get(c0, r1) * (1.0 - fx) + image.get(c1, r1) * fx;
-    top * (1.0 - fy) + bottom * fy
-}
-
 /// The DoG band-pass response of `image` (centre minus surround Gaussian, each of unit sum),
 /// the image extended by repeating its edge pixels so that its border makes no edge.
 pub fn band_pass(image: &Image, ppd: f64, band: &DogBand) -> Image {
@@ -308,78 +346,6 @@ pub fn band_pass(image: &Image, ppd: f64, band: &DogBand) -> Image {
     Grid::from_fn(image.width(), image.height(), |c, r| {
         centre.get(c, r) - surround.get(c, r)
     })
-}
-
-/// Separable Gaussian blur of σ `sigma_px` pixels with edge-replicating borders.
-pub fn gaussian_blur(image: &Image, sigma_px: f64) -> Image {
-    let (w, h) = (image.width(), image.height());
-    if sigma_px <= 0.0 {
-        return image.clone();
-    }
-    let radius = (4.0 * sigma_px).ceil() as isize;
-    let taps: Vec<f64> = (-radius..=radius)
-        .map(|d| (-(d * d) as f64 / (2.0 * sigma_px * sigma_px)).exp())
-        .collect();
-    let total: f64 = taps.iter().sum();
-    let taps: Vec<f64> = taps.iter().map(|t| t / total).collect();
-    let mut rows = vec![0.0; w * h];
-    rows.par_chunks_mut(w).enumerate().for_each(|(r, out)| {
-        let src = image.row(r);
-        for (c, o) in out.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (k, t) in taps.iter().enumerate() {
-                let cc = (c as isize + k as isize - radius).clamp(0, w as isize - 1) as usize;
-                acc += t * src[cc];
-            }
-            *o = acc;
-        }
-    });
-    let mut out = vec![0.0; w * h];
-    out.par_chunks_mut(w).enumerate().for_each(|(r, o)| {
-        for (k, t) in taps.iter().enumerate() {
-            let rr = (r as isize + k as isize - radius).clamp(0, h as isize - 1) as usize;
-            for (ov, v) in o.iter_mut().zip(&rows[rr * w..(rr + 1) * w]) {
-                *ov += t * v;
-            }
-        }
-    });
-    Grid::from_fn(w, h, |c, r| out[r * w + c])
-}
-
-/// The mask with its holes filled: every pixel that the outside (what is connected to the
-/// image border outside the mask) cannot reach. A stimulus's disk mask may leave out a
-/// fixation mark at its centre; that hole's edge is no part of the disk's outline.
-pub fn fill_holes(mask: &Mask) -> Mask {
-    let (w, h) = (mask.width(), mask.height());
-    let mut outside = Grid::new(w, h, false);
-    let mut stack: Vec<(usize, usize)> = Vec::new();
-    for c in 0..w {
-        stack.push((c, 0));
-        stack.push((c, h - 1));
-    }
-    for r in 0..h {
-        stack.push((0, r));
-        stack.push((w - 1, r));
-    }
-    while let Some((c, r)) = stack.pop() {
-        if *mask.get(c, r) || *outside.get(c, r) {
-            continue;
-        }
-        *outside.get_mut(c, r) = true;
-        if c > 0 {
-            stack.push((c - 1, r));
-        }
-        if c + 1 < w {
-            stack.push((c + 1, r));
-        }
-        if r > 0 {
-            stack.push((c, r - 1));
-        }
-        if r + 1 < h {
-            stack.push((c, r + 1));
-        }
-    }
-    outside.map(|&o| !o)
 }
 
 /// Pixels within `half_width` pixels (Euclidean) of the outline of `mask` (its holes filled),
@@ -485,87 +451,8 @@ pub fn perceived_frames(
     Ok(frames)
 }
 
-/// `left` and `right` side by side, `gap` columns of `fill` between them, top-aligned (the
-/// shorter one padded with `fill` below).
-pub fn side_by_side(left: &RgbImage, right: &RgbImage, gap: usize, fill: [f64; 3]) -> RgbImage {
-    let (w, h) = (
-        left.width() + gap + right.width(),
-        left.height().max(right.height()),
-    );
-    Grid::from_fn(w, h, |c, r| {
-        if c < left.width() {
-            left.checked(c as isize, r as isize)
-                .copied()
-                .unwrap_or(fill)
-        } else if c >= left.width() + gap {
-            let cc = (c - left.width() - gap) as isize;
-            right.checked(cc, r as isize).copied().unwrap_or(fill)
-        } else {
-            fill
-        }
-    })
-}
-
-/// `image` reduced by an integer `factor` by averaging factor × factor blocks (edge blocks
-/// average what they hold).
-pub fn shrink(image: &RgbImage, factor: usize) -> RgbImage {
-    let f = factor.max(1);
-    if f == 1 {
-        return image.clone();
-    }
-    let (w, h) = (image.width().div_ceil(f), image.height().div_ceil(f));
-    Grid::from_fn(w, h, |c, r| {
-        let mut sum = [0.0; 3];
-        let mut n = 0.0;
-        for rr in r * f..((r + 1) * f).min(image.height()) {
-            for cc in c * f..((c + 1) * f).min(image.width()) {
-                let p = image.get(cc, rr);
-                for k in 0..3 {
-                    sum[k] += p[k];
-                }
-                n += 1.0;
-            }
-        }
-        sum.map(|v| v / n)
-    })
-}
-
 fn union(a: &Mask, b: &Mask) -> Mask {
     Grid::from_fn(a.width(), a.height(), |c, r| *a.get(c, r) || *b.get(c, r))
-}
-
-/// Writes `frames` (linear 0..1, written as 8-bit codes without gamma, as shadelab writes its
-/// stimuli) as a looping GIF, `delay_ms` per frame, atomically.
-pub fn write_gif(path: &Path, frames: &[RgbImage], delay_ms: u32) -> Result<()> {
-    use image::codecs::gif::{GifEncoder, Repeat};
-    use image::{Delay, Frame, RgbaImage};
-    let first = frames
-        .first()
-        .ok_or_else(|| Error::invalid("an animation needs at least one frame"))?;
-    let (w, h) = (first.width() as u32, first.height() as u32);
-    crate::io::write_atomic(path, |out| {
-        let mut encoder = GifEncoder::new_with_speed(out, 10);
-        encoder
-            .set_repeat(Repeat::Infinite)
-            .map_err(|e| Error::format(path, format!("cannot write GIF ({e})")))?;
-        for f in frames {
-            let bytes: Vec<u8> = f
-                .data()
-                .iter()
-                .flat_map(|p| {
-                    let q = |v: f64| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                    [q(p[0]), q(p[1]), q(p[2]), 255]
-                })
-                .collect();
-            let rgba = RgbaImage::from_raw(w, h, bytes)
-                .ok_or_else(|| Error::invalid("animation frames differ in size"))?;
-            let frame = Frame::from_parts(rgba, 0, 0, Delay::from_numer_denom_ms(delay_ms, 1));
-            encoder
-                .encode_frame(frame)
-                .map_err(|e| Error::format(path, format!("cannot write GIF ({e})")))?;
-        }
-        Ok(())
-    })
 }
 
 fn check_inputs(disks: &[(&str, Disk<'_>)], ppd: f64, band: &DogBand) -> Result<()> {
@@ -606,51 +493,13 @@ fn check_inputs(disks: &[(&str, Disk<'_>)], ppd: f64, band: &DogBand) -> Result<
             "ppd {ppd} must be a positive number of pixels per degree"
         )));
     }
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    let ratio_ok = band.surround_ratio.is_finite() && band.surround_ratio > 1.0;
-    let band_ok =
-        positive(band.centre_sigma_deg) && ratio_ok && positive(band.border_half_width_deg);
-    if !band_ok {
-        return Err(Error::invalid(format!(
-            "DoG band (centre σ {}°, surround ratio {}, border half-width {}°): σ and \
-             half-width must be positive and the ratio above 1",
-            band.centre_sigma_deg, band.surround_ratio, band.border_half_width_deg
-        )));
-    }
-    Ok(())
-}
-
-fn check_adaptation(o: &AdaptationOptions) -> Result<()> {
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    if !positive(o.tau_s)
-        || !positive(o.duration_s)
-        || !positive(o.dt_s)
-        || !positive(o.jitter_tau_s)
-    {
-        return Err(Error::invalid(format!(
-            "τ {} s, duration {} s, time step {} s and jitter correlation time {} s must be \
-             positive",
-            o.tau_s, o.duration_s, o.dt_s, o.jitter_tau_s
-        )));
-    }
-    if !(o.jitter_deg.is_finite() && o.jitter_deg >= 0.0) {
-        return Err(Error::invalid(format!(
-            "jitter amplitude {}° must be ≥ 0",
-            o.jitter_deg
-        )));
-    }
-    if o.duration_s / o.dt_s > 100_000.0 {
-        return Err(Error::invalid(format!(
-            "{} s in steps of {} s is more than 100000 steps",
-            o.duration_s, o.dt_s
-        )));
-    }
-    Ok(())
+    band.check()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::imageops::{shrink, side_by_side};
 
     /// A 12°×6° field at 20 ppd: a blurred disk (σ 0.4°) on the left, a sharp one on the
     /// right, both radius 1.5°, luminance 0.3 on 0.6.

@@ -15,7 +15,6 @@
 
 pub mod checker;
 pub mod fading;
-mod fft2;
 pub mod odog;
 pub mod retinex;
 
@@ -63,7 +62,7 @@ impl Model {
             Model::Odog(v) => {
                 let ppd = ppd.ok_or_else(|| {
                     Error::invalid(format!(
-                        "the {} model needs the resolution in pixels per degree (give --ppd)",
+                        "the {} model needs the resolution in pixels per degree",
                         v.name()
                     ))
                 })?;
@@ -167,7 +166,7 @@ mod tests {
             .predict(&Grid::new(8, 8, 0.5), None)
             .unwrap_err()
             .to_string();
-        assert!(err.contains("--ppd"), "{err}");
+        assert!(err.contains("pixels per degree"), "{err}");
     }
 
     #[test]

@@ -24,12 +24,13 @@
 //! the image size (plus twelve for the LODOG windows). The filters are symmetric about the
 //! grid centre, so each spectrum is stored as a real array times a shared shift phase.
 
-use super::fft2::{dft_1d, fast_len, shift_phase, Fft2, C64};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image};
+use crate::imageops::fft::{dft_1d, fast_len, shift_phase, RealFft2, C64};
 use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Mutex;
 
 /// Filter orientations in degrees, as multyscale's `gaussian2d` turns them: at 0° the surround
 /// is elongated along y (vertically), so the filter responds to horizontal edges; x is the
@@ -153,7 +154,9 @@ pub struct Odog {
     ppd: f64,
     variant: Variant,
     options: OdogOptions,
-    fft: Fft2,
+    fft: RealFft2,
+    /// The transforms' scratch, kept between calls (see [`RealFft2::scratch`]).
+    scratch: Mutex<Vec<C64>>,
     /// Shift phase of a kernel centred on the grid: horizontal (nfx) and vertical (my).
     phase_x: Vec<C64>,
     phase_y: Vec<C64>,
@@ -205,7 +208,7 @@ impl Odog {
     ) -> Result<Self> {
         check_geometry(width, height, ppd)?;
         check_options(&options)?;
-        let fft = Fft2::new(fast_len(2 * width - 1), fast_len(2 * height - 1));
+        let fft = RealFft2::new(fast_len(2 * width - 1), fast_len(2 * height - 1));
         let phase_x = shift_phase((width - 1) as f64 / 2.0, fft.mx(), fft.nfx());
         let phase_y = shift_phase((height - 1) as f64 / 2.0, fft.my(), fft.my());
         let mut model = Odog {
@@ -214,6 +217,7 @@ impl Odog {
             ppd,
             variant,
             options,
+            scratch: Mutex::new(fft.scratch()),
             fft,
             phase_x,
             phase_y,
@@ -335,6 +339,21 @@ impl Odog {
         Ok(())
     }
 
+    /// The forward transform of the image-sized `data` into `spec` (see [`RealFft2::forward`]).
+    fn forward(&self, data: &[f64], spec: &mut [C64]) {
+        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.fft
+            .forward(data, self.width, self.height, spec, &mut scratch);
+    }
+
+    /// The inverse transform of `spec`, the image-sized window at (`x0`, `y0`) into `out` (see
+    /// [`RealFft2::inverse`]).
+    fn inverse(&self, spec: &mut [C64], x0: usize, y0: usize, out: &mut [f64]) {
+        let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.fft
+            .inverse(spec, x0, y0, self.width, self.height, out, &mut scratch);
+    }
+
     /// The buffers of one application, with the spectrum of (image − pad value), zero outside
     /// the image: padding with the pad value is the same as this, since every filter sums to
     /// zero.
@@ -343,7 +362,7 @@ impl Odog {
         let pad = self.options.pad_value;
         let a: Vec<f64> = image.data().iter().map(|v| v - pad).collect();
         let mut x = self.fft.spectrum();
-        self.fft.forward(&a, self.width, self.height, &mut x);
+        self.forward(&a, &mut x);
         Work {
             x,
             spec: self.fft.spectrum(),
@@ -457,7 +476,7 @@ impl Odog {
             .par_iter_mut()
             .zip(r.par_iter())
             .for_each(|(s, v)| *s = v * v);
-        self.fft.forward(squared, self.width, self.height, spec);
+        self.forward(squared, spec);
         let my = self.fft.my();
         spec.par_chunks_mut(my)
             .zip(window.x.par_iter())
@@ -466,14 +485,7 @@ impl Odog {
                     *v *= wx * wy;
                 }
             });
-        self.fft.inverse(
-            spec,
-            (self.width - 1) / 2,
-            (self.height - 1) / 2,
-            self.width,
-            self.height,
-            out,
-        );
+        self.inverse(spec, (self.width - 1) / 2, (self.height - 1) / 2, out);
         out.par_iter_mut()
             .for_each(|a| *a = (a.max(0.0) + EPS).sqrt() + EPS);
     }
@@ -514,20 +526,13 @@ impl Odog {
     /// The inverse transform kept where multyscale's padded convolution puts the image: with
     /// the kernel centred at (N−1)/2, output pixel m sees input position m + 1/2 (even N).
     fn bank_inverse(&self, spec: &mut [C64], out: &mut [f64]) {
-        self.fft.inverse(
-            spec,
-            self.width / 2,
-            self.height / 2,
-            self.width,
-            self.height,
-            out,
-        );
+        self.inverse(spec, self.width / 2, self.height / 2, out);
     }
 
     /// The spectrum of `kernel` with the centring phase divided out; real because every
     /// filter is point-symmetric about the grid centre, so only the real part is kept.
     fn real_spectrum(&self, kernel: &[f64], spec: &mut [C64]) -> Vec<f64> {
-        self.fft.forward(kernel, self.width, self.height, spec);
+        self.forward(kernel, spec);
         let my = self.fft.my();
         let mut real = vec![0.0; spec.len()];
         real.par_chunks_mut(my)
@@ -552,7 +557,7 @@ impl Odog {
     ) {
         kernel.fill(0.0);
         self.add_dog(kernel, surround, o, s, 1.0);
-        self.fft.forward(kernel, self.width, self.height, spec);
+        self.forward(kernel, spec);
     }
 
     /// A normalised isotropic Gaussian window of σ `sigma_deg`, as the spectrum of its two

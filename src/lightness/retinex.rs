@@ -19,6 +19,7 @@
 
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
+use crate::imageops::parts::{parts, SumOrder};
 use crate::integrate::{integrate_differences, Integration, PoissonOptions};
 
 /// Retinex settings.
@@ -155,7 +156,9 @@ pub fn retinex(
             0.0
         }
     });
-    remove_part_means(&mut depth, mask);
+    // The offset between parts is unknown to a model that sees only differences within
+    // them: each part gets zero mean, summed in the search's visiting order.
+    parts(mask).subtract_means(depth.data_mut(), SumOrder::Visit);
     let solved = Integration {
         depth,
         ..illumination
@@ -186,52 +189,6 @@ pub fn retinex(
         iterations: solved.iterations,
         converged: solved.converged,
     })
-}
-
-/// Subtracts from `values` the mean of each 4-connected part of `mask` (the offset between
-/// parts is unknown to a model that sees only differences within them).
-fn remove_part_means(values: &mut Image, mask: &Mask) {
-    let (w, h) = (mask.width(), mask.height());
-    let mut part = vec![usize::MAX; w * h];
-    let mut parts = 0;
-    for start in 0..w * h {
-        if !mask.data()[start] || part[start] != usize::MAX {
-            continue;
-        }
-        let mut stack = vec![start];
-        part[start] = parts;
-        let (mut sum, mut count) = (0.0, 0usize);
-        let mut members = Vec::new();
-        while let Some(i) = stack.pop() {
-            members.push(i);
-            sum += values.data()[i];
-            count += 1;
-            let (c, r) = (i % w, i / w);
-            let mut visit = |j: usize| {
-                if mask.data()[j] && part[j] == usize::MAX {
-                    part[j] = parts;
-                    stack.push(j);
-                }
-            };
-            if c > 0 {
-                visit(i - 1);
-            }
-            if c + 1 < w {
-                visit(i + 1);
-            }
-            if r > 0 {
-                visit(i - w);
-            }
-            if r + 1 < h {
-                visit(i + w);
-            }
-        }
-        let mean = sum / count as f64;
-        for i in members {
-            values.data_mut()[i] -= mean;
-        }
-        parts += 1;
-    }
 }
 
 #[cfg(test)]

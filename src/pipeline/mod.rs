@@ -5,9 +5,11 @@
 //! writes what the report says.
 
 pub mod bench;
-pub mod solve;
+pub mod fading;
 pub mod gallery;
+pub mod lightness;
 pub mod render;
+pub mod solve;
 pub mod source;
 pub mod study;
 

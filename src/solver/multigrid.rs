@@ -1080,6 +1080,7 @@ mod tests {
         let mut solver = Solver::new(size, size).unwrap();
         let jacobi_options = SolveOptions {
             method: Method::Jacobi,
+            max_iter: Method::Jacobi.default_max_iter(),
             ..opts
         };
         let jacobi = solver

@@ -239,7 +239,7 @@ fn progress_is_reported_every_sweep() {
     assert_eq!(seen.len(), sol.iterations);
     for (i, p) in seen.iter().enumerate() {
         assert_eq!(p.iteration, i + 1);
-        assert_eq!(p.max_iter, 100_000);
+        assert_eq!(p.max_iter, MULTIGRID_MAX_CYCLES);
     }
     assert_eq!(seen.last().map(|p| p.last_update), Some(sol.last_update));
 }

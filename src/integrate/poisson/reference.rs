@@ -5,6 +5,7 @@
 use super::{build_rhs, check_inputs, Integration, PoissonOptions};
 use crate::error::Result;
 use crate::grid::{Grid, Image, Mask};
+use crate::imageops::parts::{graph_parts, SumOrder};
 
 /// [`super::integrate_differences`] by the original, unpreconditioned (Jacobi) conjugate
 /// gradients.
@@ -20,7 +21,8 @@ pub(crate) fn integrate_differences_reference(
     let full_b = build_rhs(mask, |c, r| *right.get(c, r), |c, r| *down.get(c, r));
     let b: Vec<f64> = problem.pixels.iter().map(|&p| full_b[p]).collect();
     let (mut z, iterations, relative_residual, converged) = problem.solve(&b, options);
-    problem.remove_part_means(&mut z);
+    // Means summed in index order, whatever order the search visited the nodes in.
+    graph_parts(&problem.neighbours).subtract_means(&mut z, SumOrder::Index);
     let mut depth = Grid::new(w, h, 0.0);
     for (k, &p) in problem.pixels.iter().enumerate() {
         depth.data_mut()[p] = z[k];
@@ -143,37 +145,5 @@ impl Laplacian {
             }
         }
         (z, options.max_iter, residual / b_norm, false)
-    }
-
-    /// Subtracts from z the mean of each connected part of the graph.
-    fn remove_part_means(&self, z: &mut [f64]) {
-        let n = z.len();
-        let mut part = vec![usize::MAX; n];
-        let mut stack = Vec::new();
-        let mut members = Vec::new();
-        for start in 0..n {
-            if part[start] != usize::MAX {
-                continue;
-            }
-            part[start] = start;
-            stack.push(start);
-            members.clear();
-            while let Some(k) = stack.pop() {
-                members.push(k);
-                for &q in &self.neighbours[k] {
-                    let q = q as usize;
-                    if q < n && part[q] == usize::MAX {
-                        part[q] = start;
-                        stack.push(q);
-                    }
-                }
-            }
-            // Sum in index order, whatever order the search visited them in.
-            members.sort_unstable();
-            let mean = members.iter().map(|&k| z[k]).sum::<f64>() / members.len() as f64;
-            for &k in &members {
-                z[k] -= mean;
-            }
-        }
     }
 }

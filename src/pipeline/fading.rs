@@ -1,0 +1,382 @@
+//! The fading (Troxler) disk analysis as a pipeline: which scenes are compared (a blurred and
+//! a sharp disk), the border band-pass energy of each, the perceived-contrast time course of
+//! the adaptation model with fixational jitter, and the animation in which the blurred disk
+//! fades.
+//!
+//! The two disks come from a picture with target labels (label 1 = the blurred disk, 2 = the
+//! sharp disk), or from a stimulus rendered twice: as given (the blurred disk) and with
+//! `blur = 0` (the sharp one), each with its own target named `disk`.
+
+use super::source::{Picture, PictureSource};
+use crate::error::{Error, Result};
+use crate::grid::{Image, Mask, RgbImage};
+use crate::imageops::{shrink, side_by_side};
+use crate::io::{self, AtomicDir};
+use crate::lightness::fading::{
+    adaptation_time_course, border_energy, perceived_frames, AdaptationOptions, BorderEnergy, Disk,
+    DogBand, TimeCourse,
+};
+use crate::progress::Progress;
+use crate::stimulus::Pixels;
+use serde::Serialize;
+use serde_json::{Map, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The file that marks an output folder as written by the fading analysis.
+pub const FADING_REPORT: &str = "fading.json";
+/// The animation's frame rate.
+const FPS: f64 = 10.0;
+/// The animation's largest side in pixels.
+const GIF_SIDE: usize = 480;
+
+/// What to analyse and how.
+#[derive(Debug, Clone)]
+pub struct FadingConfig {
+    /// The picture: an image with labels 1 (blurred disk) and 2 (sharp disk), or a stimulus.
+    pub source: PictureSource,
+    /// The band-pass filter and the border band's half-width.
+    pub band: DogBand,
+    /// The adaptation model.
+    pub adaptation: AdaptationOptions,
+}
+
+impl FadingConfig {
+    /// A checked configuration.
+    pub fn new(
+        source: PictureSource,
+        band: DogBand,
+        adaptation: AdaptationOptions,
+    ) -> Result<Self> {
+        let config = FadingConfig {
+            source,
+            band,
+            adaptation,
+        };
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks what needs no file: the source, the filter and the adaptation settings, and for
+    /// an image its resolution and labels.
+    pub fn validate(&self) -> Result<()> {
+        self.source.check()?;
+        self.band.check()?;
+        self.adaptation.check()?;
+        if self.source.image.is_some() {
+            if self.source.ppd.is_none() {
+                return Err(Error::invalid(
+                    "the fading analysis works in degrees of visual angle: give the image's \
+                     resolution in pixels per degree",
+                ));
+            }
+            if self.source.mask.is_none() {
+                return Err(Error::invalid(
+                    "an image needs target labels with label 1 = the blurred disk and 2 = the \
+                     sharp disk",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The relative perceived contrast of both disks at the end of the time course.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FinalContrast {
+    /// The blurred disk.
+    pub blurred: f64,
+    /// The sharp disk.
+    pub sharp: f64,
+}
+
+/// The animation's facts.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Animation {
+    /// Its file name.
+    pub file: String,
+    /// Number of frames.
+    pub frames: usize,
+    /// Time per frame, milliseconds.
+    pub delay_ms: u32,
+    /// The factor by which the frames were reduced.
+    pub reduced_by: usize,
+    /// What a frame shows.
+    pub rule: String,
+    /// How the disks are laid out.
+    pub layout: String,
+}
+
+/// What the fading analysis found; [`FadingReport::write`] writes it as a folder.
+#[derive(Debug, Clone, Serialize)]
+pub struct FadingReport {
+    /// "shadelab".
+    pub program: String,
+    /// The program's version.
+    pub version: String,
+    /// "analyze fading".
+    pub command: String,
+    /// Where the picture(s) came from.
+    pub input: Value,
+    /// Pixels per degree.
+    pub ppd: f64,
+    /// The band-pass filter.
+    pub band_pass: DogBand,
+    /// Band-pass energy at the two borders.
+    pub border_energy: BorderEnergy,
+    /// The adaptation model's settings.
+    pub adaptation: AdaptationOptions,
+    /// The perceived contrast at the end.
+    pub final_contrast: FinalContrast,
+    /// What the time-course file holds.
+    pub time_course: String,
+    /// The animation.
+    pub animation: Animation,
+    /// Seconds taken.
+    pub seconds: f64,
+    /// The time course (written as `time_course.csv`).
+    #[serde(skip)]
+    pub course: TimeCourse,
+    /// The animation's frames (written as the GIF).
+    #[serde(skip)]
+    pub frames: Vec<RgbImage>,
+}
+
+/// One disk: its picture (RGB for the animation, channels for the analysis) and mask.
+struct Scene {
+    picture: RgbImage,
+    channels: Vec<Image>,
+    mask: Mask,
+}
+
+/// Runs the fading analysis.
+pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingReport> {
+    let started = Instant::now();
+    config.validate()?;
+    let (band, options) = (&config.band, &config.adaptation);
+    progress.start(3, "fading: loading");
+    let (blurred, sharp, ppd, origin) = scenes(&config.source)?;
+    let (b, s) = (
+        Disk {
+            channels: &blurred.channels,
+            mask: &blurred.mask,
+        },
+        Disk {
+            channels: &sharp.channels,
+            mask: &sharp.mask,
+        },
+    );
+    progress.advance(1);
+    let energy = border_energy(b, s, ppd, band)?;
+    let course = adaptation_time_course(b, s, ppd, band, options)?;
+    progress.advance(1);
+
+    let every = ((1.0 / FPS) / options.dt_s).round().max(1.0) as usize;
+    let same_picture = blurred.picture == sharp.picture;
+    let frames = if same_picture {
+        let regions: [(&Mask, &[f64]); 2] = [
+            (&blurred.mask, &course.blurred),
+            (&sharp.mask, &course.sharp),
+        ];
+        perceived_frames(&blurred.picture, &regions, ppd, band, every)?
+    } else {
+        let left = perceived_frames(
+            &blurred.picture,
+            &[(&blurred.mask, &course.blurred)],
+            ppd,
+            band,
+            every,
+        )?;
+        let right = perceived_frames(
+            &sharp.picture,
+            &[(&sharp.mask, &course.sharp)],
+            ppd,
+            band,
+            every,
+        )?;
+        left.iter()
+            .zip(&right)
+            .map(|(l, r)| side_by_side(l, r, (0.25 * ppd).ceil() as usize, [0.0; 3]))
+            .collect()
+    };
+    let side = frames
+        .first()
+        .map(|f| f.width().max(f.height()))
+        .unwrap_or(1);
+    let factor = side.div_ceil(GIF_SIDE);
+    let frames: Vec<RgbImage> = frames.iter().map(|f| shrink(f, factor)).collect();
+    let delay_ms = (every as f64 * options.dt_s * 1000.0).round() as u32;
+    progress.advance(1);
+    progress.finish();
+
+    let last = course.times.len() - 1;
+    Ok(FadingReport {
+        program: "shadelab".into(),
+        version: io::PROGRAM_VERSION.into(),
+        command: "analyze fading".into(),
+        input: origin,
+        ppd,
+        band_pass: *band,
+        border_energy: energy,
+        adaptation: *options,
+        final_contrast: FinalContrast {
+            blurred: course.blurred[last],
+            sharp: course.sharp[last],
+        },
+        time_course: "time_course.csv: relative perceived contrast (RMS adapted band-pass \
+                      response in the border band over its value at onset) and eye position"
+            .into(),
+        animation: Animation {
+            file: "fading.gif".into(),
+            frames: frames.len(),
+            delay_ms,
+            reduced_by: factor,
+            rule: "inside each disk's region the picture is its surround colour plus the \
+                   disk's relative contrast times the difference; values written as 8-bit \
+                   codes without gamma"
+                .into(),
+            layout: if same_picture {
+                "one picture"
+            } else {
+                "blurred disk left, sharp disk right"
+            }
+            .into(),
+        },
+        seconds: started.elapsed().as_secs_f64(),
+        course,
+        frames,
+    })
+}
+
+impl FadingReport {
+    /// Writes the output folder `out` (whole or not at all; an existing folder is replaced
+    /// only with `force` and only when an earlier run wrote it): `time_course.csv`,
+    /// `fading.gif` and `fading.json`. Returns the folder written.
+    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
+        let folder = AtomicDir::create(out, FADING_REPORT, force)?;
+        let dir = folder.path().to_path_buf();
+        let c = &self.course;
+        let mut csv = String::from("time_s,blurred,sharp,eye_x_deg,eye_y_deg\n");
+        for i in 0..c.times.len() {
+            csv.push_str(&format!(
+                "{},{},{},{},{}\n",
+                c.times[i], c.blurred[i], c.sharp[i], c.eye[i].0, c.eye[i].1
+            ));
+        }
+        io::write_text(&dir.join("time_course.csv"), &csv)?;
+        io::write_gif(
+            &dir.join(&self.animation.file),
+            &self.frames,
+            self.animation.delay_ms,
+        )?;
+        let json = serde_json::to_value(self)
+            .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
+        io::write_json(&dir.join(FADING_REPORT), &json)?;
+        folder.commit()
+    }
+}
+
+/// The blurred and the sharp disk, the resolution, and where they came from.
+fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
+    if source.image.is_some() {
+        let input = source.load(true)?;
+        let ppd = input.ppd.unwrap_or_default();
+        let (labels, _) = input
+            .labels
+            .as_ref()
+            .ok_or_else(|| Error::invalid("an image needs target labels"))?;
+        let mask = |l: u16, what: &str| -> Result<Mask> {
+            let m = labels.map(|&v| v == l);
+            if m.count() == 0 {
+                return Err(Error::invalid(format!(
+                    "the mask has no pixel labelled {l} (the {what} disk)"
+                )));
+            }
+            Ok(m)
+        };
+        let (mb, ms) = (mask(1, "blurred")?, mask(2, "sharp")?);
+        let picture = rgb(&input);
+        let channels = channels(&input.pixels);
+        let blurred = Scene {
+            picture: picture.clone(),
+            channels: channels.clone(),
+            mask: mb,
+        };
+        let sharp = Scene {
+            picture,
+            channels,
+            mask: ms,
+        };
+        return Ok((blurred, sharp, ppd, input.origin));
+    }
+    // A stimulus: as given for the blurred disk, with blur = 0 for the sharp one.
+    let blurred_input = source.load(true)?;
+    let mut sharp_source = source.clone();
+    sharp_source.params.insert("blur".into(), Value::from("0"));
+    let sharp_input = sharp_source.load(true)?;
+    let ppd = blurred_input.ppd.unwrap_or_default();
+    let disk = |input: &Picture, what: &str| -> Result<Scene> {
+        let (labels, names) = input.labels.as_ref().ok_or_else(|| {
+            Error::invalid(format!(
+                "the stimulus has no target mask to find the {what} disk in; give target labels"
+            ))
+        })?;
+        let label = names
+            .iter()
+            .position(|n| n == "disk")
+            .map(|i| i as u16 + 1)
+            .unwrap_or(1);
+        let mask = labels.map(|&v| v == label);
+        if mask.count() == 0 {
+            return Err(Error::invalid(format!(
+                "the {what} render has no disk target (label {label})"
+            )));
+        }
+        Ok(Scene {
+            picture: rgb(input),
+            channels: channels(&input.pixels),
+            mask,
+        })
+    };
+    let blurred = disk(&blurred_input, "blurred")?;
+    let sharp = disk(&sharp_input, "sharp")?;
+    let mut origin = Map::new();
+    origin.insert("blurred".into(), blurred_input.origin);
+    origin.insert("sharp".into(), sharp_input.origin);
+    Ok((blurred, sharp, ppd, Value::Object(origin)))
+}
+
+fn rgb(input: &Picture) -> RgbImage {
+    match &input.pixels {
+        Pixels::Rgb(i) => i.clone(),
+        Pixels::Gray(i) => i.map(|&v| [v, v, v]),
+    }
+}
+
+fn channels(pixels: &Pixels) -> Vec<Image> {
+    match pixels {
+        Pixels::Gray(i) => vec![i.clone()],
+        Pixels::Rgb(i) => (0..3).map(|k| i.map(|p| p[k])).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_without_resolution_or_labels_is_refused() {
+        let source = PictureSource {
+            image: Some("x.png".into()),
+            ..Default::default()
+        };
+        let e = FadingConfig::new(source.clone(), DogBand::default(), Default::default());
+        assert!(e.unwrap_err().to_string().contains("pixels per degree"));
+        let with_ppd = PictureSource {
+            ppd: Some(10.0),
+            ..source
+        };
+        let e = FadingConfig::new(with_ppd, DogBand::default(), Default::default());
+        assert!(e.unwrap_err().to_string().contains("label 1"));
+    }
+}

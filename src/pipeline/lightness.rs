@@ -1,0 +1,325 @@
+//! The lightness analysis as a pipeline: one or all of the lightness models on a picture, the
+//! mean output per target, and for the checker-shadow (targets named A and B) the pixel facts
+//! and each model's verdict.
+
+use super::source::PictureSource;
+use crate::error::{Error, Result};
+use crate::grid::{Image, Labels, Mask};
+use crate::io::{self, AtomicDir, BitDepth};
+use crate::lightness::checker::{self, Prediction, SquareFacts};
+use crate::lightness::{target_means, Model, TargetMean};
+use crate::progress::Progress;
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The file that marks an output folder as written by the lightness analysis.
+pub const LIGHTNESS_REPORT: &str = "lightness.json";
+
+/// What to analyse and with which models.
+#[derive(Debug, Clone)]
+pub struct LightnessConfig {
+    /// The picture.
+    pub source: PictureSource,
+    /// The models, run in this order (at least one).
+    pub models: Vec<Model>,
+}
+
+impl LightnessConfig {
+    /// A checked configuration.
+    pub fn new(source: PictureSource, models: Vec<Model>) -> Result<Self> {
+        let config = LightnessConfig { source, models };
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The models named by `text`: one model's name, or `all` for every model in turn.
+    ///
+    /// ```
+    /// use shadelab::pipeline::lightness::LightnessConfig;
+    /// assert_eq!(LightnessConfig::parse_models("all").unwrap().len(), 4);
+    /// assert_eq!(LightnessConfig::parse_models("retinex").unwrap().len(), 1);
+    /// assert!(LightnessConfig::parse_models("blah").is_err());
+    /// ```
+    pub fn parse_models(text: &str) -> Result<Vec<Model>> {
+        if text.trim().eq_ignore_ascii_case("all") {
+            Model::NAMES.iter().map(|n| n.parse()).collect()
+        } else {
+            Ok(vec![text.parse()?])
+        }
+    }
+
+    /// Checks what needs no file: the source, a model to run, and for an image read from a
+    /// file, a resolution when a model works in degrees.
+    pub fn validate(&self) -> Result<()> {
+        self.source.check()?;
+        if self.models.is_empty() {
+            return Err(Error::invalid("no lightness model to run"));
+        }
+        if self.source.image.is_some() && self.source.ppd.is_none() {
+            if let Some(m) = self.models.iter().find(|m| m.needs_ppd()) {
+                return Err(Error::invalid(format!(
+                    "the {m} model works in degrees of visual angle: give the image's \
+                     resolution in pixels per degree"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One model's output files.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LightnessOutput {
+    /// The model's name.
+    pub model: String,
+    /// The output as float `.npy`.
+    pub npy: String,
+    /// The output as a picture.
+    pub png: String,
+    /// What the values mean.
+    pub units: String,
+}
+
+/// One model's mean output per target.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelTargets {
+    /// The model's name.
+    pub model: String,
+    /// Mean output and luminance per target label.
+    pub targets: Vec<TargetMean>,
+}
+
+/// The checker-shadow facts and verdicts.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CheckerSection {
+    /// Whether every pixel of A and of B has one and the same value.
+    pub identical_pixels: bool,
+    /// Square A's pixels.
+    pub a: SquareFacts,
+    /// Square B's pixels.
+    pub b: SquareFacts,
+    /// What people see.
+    pub percept: String,
+    /// Each model's prediction.
+    pub predictions: Vec<Prediction>,
+}
+
+/// Time taken.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Seconds {
+    /// Per model.
+    pub models: BTreeMap<String, f64>,
+    /// In all.
+    pub total: f64,
+}
+
+/// What the lightness analysis found; [`LightnessReport::write`] writes it as a folder.
+#[derive(Debug, Clone, Serialize)]
+pub struct LightnessReport {
+    /// "shadelab".
+    pub program: String,
+    /// The program's version.
+    pub version: String,
+    /// "analyze lightness".
+    pub command: String,
+    /// Where the picture came from.
+    pub input: Value,
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Pixels per degree, when known.
+    pub ppd: Option<f64>,
+    /// The models run.
+    pub models: Vec<String>,
+    /// Each model's output files.
+    pub outputs: Vec<LightnessOutput>,
+    /// Each model's mean output per target (empty without target labels).
+    pub targets: Vec<ModelTargets>,
+    /// The checker-shadow section, when the targets include A and B.
+    pub checker_shadow: Option<CheckerSection>,
+    /// Time taken.
+    pub seconds: Seconds,
+    /// Each model's output, in the order of `outputs`.
+    #[serde(skip)]
+    pub images: Vec<(Model, Image)>,
+}
+
+/// Runs the lightness analysis.
+pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<LightnessReport> {
+    let started = Instant::now();
+    config.validate()?;
+    let input = config.source.load(false)?;
+    let image = input.luminance();
+    let single = config.models.len() == 1;
+    progress.start(config.models.len() as u64, "lightness models");
+    let mut outputs = Vec::new();
+    let mut images = Vec::new();
+    let mut timings = BTreeMap::new();
+    for model in &config.models {
+        let t = Instant::now();
+        let out = model.predict(&image, input.ppd)?;
+        timings.insert(model.name().to_string(), t.elapsed().as_secs_f64());
+        let stem = if single {
+            "lightness".to_string()
+        } else {
+            format!("lightness_{}", model.name())
+        };
+        outputs.push(LightnessOutput {
+            model: model.name().into(),
+            npy: format!("{stem}.npy"),
+            png: format!("{stem}.png"),
+            units: units(*model).into(),
+        });
+        images.push((*model, out));
+        progress.advance(1);
+    }
+    progress.finish();
+
+    let mut targets = Vec::new();
+    if let Some((labels, names)) = &input.labels {
+        for (model, out) in &images {
+            targets.push(ModelTargets {
+                model: model.name().into(),
+                targets: target_means(out, &image, labels, names)?,
+            });
+        }
+    }
+    let checker_shadow = input.labels.as_ref().and_then(|(labels, names)| {
+        let index = |n: &str| names.iter().position(|x| x == n).map(|i| i as u16 + 1);
+        let (a, b) = (index("A")?, index("B")?);
+        Some(checker_section(&image, labels, a, b, &images))
+    });
+    Ok(LightnessReport {
+        program: "shadelab".into(),
+        version: io::PROGRAM_VERSION.into(),
+        command: "analyze lightness".into(),
+        input: input.origin,
+        width: image.width(),
+        height: image.height(),
+        ppd: input.ppd,
+        models: config.models.iter().map(|m| m.name().into()).collect(),
+        outputs,
+        targets,
+        checker_shadow,
+        seconds: Seconds {
+            models: timings,
+            total: started.elapsed().as_secs_f64(),
+        },
+        images,
+    })
+}
+
+impl LightnessReport {
+    /// Writes the output folder `out` (whole or not at all; an existing folder is replaced
+    /// only with `force` and only when an earlier run wrote it): each model's `.npy` and
+    /// `.png`, `targets.csv` and `targets.json` when there are targets, and `lightness.json`.
+    /// Returns the folder written.
+    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
+        let folder = AtomicDir::create(out, LIGHTNESS_REPORT, force)?;
+        let dir = folder.path().to_path_buf();
+        for (files, (model, image)) in self.outputs.iter().zip(&self.images) {
+            io::write_image(&dir.join(&files.npy), image)?;
+            io::write_gray(
+                &dir.join(&files.png),
+                &picture(*model, image),
+                BitDepth::Eight,
+                None,
+            )?;
+        }
+        if !self.targets.is_empty() {
+            write_targets(&dir, &self.targets)?;
+        }
+        io::write_json(&dir.join(LIGHTNESS_REPORT), &to_json(self)?)?;
+        folder.commit()
+    }
+}
+
+fn to_json<T: Serialize>(value: &T) -> Result<Value> {
+    serde_json::to_value(value)
+        .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))
+}
+
+fn units(model: Model) -> &'static str {
+    match model {
+        Model::Retinex => "estimated reflectance, lightest pixel = 1",
+        Model::Odog(_) => "model brightness, arbitrary units, 0 = mid-grey, positive = brighter",
+    }
+}
+
+/// The visualisation: Retinex as it is (0..1); the filter models symmetric about mid-grey,
+/// ±(largest magnitude) mapped to 0..1.
+fn picture(model: Model, out: &Image) -> Image {
+    match model {
+        Model::Retinex => out.clone(),
+        Model::Odog(_) => {
+            let m = out.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            out.map(|v| if m > 0.0 { 0.5 + 0.5 * v / m } else { 0.5 })
+        }
+    }
+}
+
+fn write_targets(dir: &Path, targets: &[ModelTargets]) -> Result<()> {
+    let mut csv = String::from("model,label,name,pixels,luminance,output\n");
+    for rows in targets {
+        for t in &rows.targets {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{}\n",
+                rows.model,
+                t.label,
+                t.name.replace(',', ";"),
+                t.pixels,
+                t.luminance,
+                t.output
+            ));
+        }
+    }
+    io::write_text(&dir.join("targets.csv"), &csv)?;
+    io::write_json(&dir.join("targets.json"), &to_json(&targets)?)
+}
+
+/// The checker-shadow facts (A and B pixels) and each model's verdict.
+fn checker_section(
+    image: &Image,
+    labels: &Labels,
+    a: u16,
+    b: u16,
+    outputs: &[(Model, Image)],
+) -> CheckerSection {
+    let mask = |l: u16| -> Mask { labels.map(|&v| v == l) };
+    let (ma, mb) = (mask(a), mask(b));
+    let facts = checker::pixel_facts(image, &ma, &mb);
+    CheckerSection {
+        identical_pixels: facts.2,
+        a: facts.0,
+        b: facts.1,
+        percept: "B looks much lighter than A".into(),
+        predictions: outputs
+            .iter()
+            .map(|(m, out)| checker::predict(m.name(), out, &ma, &mb))
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_without_resolution_is_refused_for_a_filter_model_only() {
+        let source = PictureSource {
+            image: Some("x.png".into()),
+            ..Default::default()
+        };
+        let odog = LightnessConfig::parse_models("odog").unwrap();
+        let e = LightnessConfig::new(source.clone(), odog).unwrap_err();
+        assert!(e.to_string().contains("pixels per degree"));
+        assert!(!e.to_string().contains("--"));
+        let retinex = LightnessConfig::parse_models("retinex").unwrap();
+        assert!(LightnessConfig::new(source.clone(), retinex).is_ok());
+        assert!(LightnessConfig::new(source, Vec::new()).is_err());
+    }
+}
