@@ -4,6 +4,9 @@
 //! and nothing else; the command line only parses flags into a `Config`, draws progress and
 //! writes what the report says.
 
+pub mod observer;
+pub mod perception;
+pub mod prior_sweep;
 pub mod source;
 
 pub use source::{Picture, PictureSource};
