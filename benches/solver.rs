@@ -32,7 +32,7 @@ fn problem(size: usize) -> (Surface, Image, Lambertian) {
 fn options(method: Method) -> SolveOptions {
     SolveOptions {
         method,
-        ..SolveOptions::default()
+        ..SolveOptions::for_method(method)
     }
 }
 

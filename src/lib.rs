@@ -27,10 +27,12 @@ pub mod io;
 pub mod light;
 pub mod light_estimation;
 pub mod lightness;
+pub mod parallel;
 pub mod params;
 pub mod pipeline;
 pub mod progress;
 pub mod random;
+pub mod reconstruct;
 pub mod reflectance;
 pub mod render;
 pub mod solver;
@@ -38,7 +40,13 @@ pub mod stimulus;
 pub mod surface;
 pub mod visual_size;
 
+pub use boundary::Boundary;
 pub use error::{Error, Result};
 pub use grid::{Grid, Image, Labels, Mask, RgbImage};
 pub use light::Light;
 pub use progress::{NoProgress, Progress};
+pub use reconstruct::{
+    DepthMethod, Lighting, NonConvergence, ReconstructOptions, Reconstruction, Reconstructor,
+};
+pub use reflectance::{Lambertian, ReflectanceMap};
+pub use solver::{Method, SolveOptions};

@@ -21,17 +21,29 @@ fn data() -> Option<PathBuf> {
     }
 }
 
+/// Records the progress reports of a run.
+#[derive(Default)]
+struct Steps(std::sync::Mutex<(u64, Vec<u64>)>);
+
+impl shadelab::Progress for Steps {
+    fn start(&self, total: u64, _what: &str) {
+        self.0.lock().unwrap().0 = total;
+    }
+    fn set_position(&self, done: u64) {
+        self.0.lock().unwrap().1.push(done);
+    }
+}
+
 fn run(config: &Config) -> Vec<CaseResult> {
-    let mut steps = Vec::new();
-    let results = evaluation::run(
-        config,
-        false,
-        &mut |s| steps.push((s.done, s.total)),
-        &mut |_, _| panic!("no pictures were asked for"),
-    )
+    let steps = Steps::default();
+    let results = evaluation::run(config, false, &steps, &mut |_, _| {
+        panic!("no pictures were asked for")
+    })
     .unwrap();
-    assert_eq!(steps.len(), config.case_count());
-    assert_eq!(steps.last().map(|s| s.1), Some(results.len()));
+    let (total, positions) = steps.0.into_inner().unwrap();
+    assert_eq!(positions.len(), config.case_count());
+    assert_eq!(total as usize, results.len());
+    assert_eq!(positions, (0..results.len() as u64).collect::<Vec<_>>());
     results
 }
 

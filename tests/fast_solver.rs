@@ -61,7 +61,7 @@ fn case(shape: &str, size: usize, light: [f64; 3], boundary: Boundary) -> Case {
 fn options(method: Method) -> SolveOptions {
     SolveOptions {
         method,
-        ..SolveOptions::default()
+        ..SolveOptions::for_method(method)
     }
 }
 

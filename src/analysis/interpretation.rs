@@ -24,29 +24,22 @@ use crate::boundary::{boundary_conditions, Boundary, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
-use crate::integrate::{
-    gradients_from_normals, integrate_gradients, FrankotChellappa, PoissonOptions, DEFAULT_MIN_NZ,
-};
+use crate::integrate::PoissonOptions;
 use crate::light::Light;
+use crate::progress::NoProgress;
+use crate::reconstruct::{DepthMethod, ReconstructOptions, Reconstructor};
 use crate::reflectance::{Lambertian, ReflectanceMap};
-use crate::solver::{Method, SolveOptions, Solver};
+use crate::solver::{Method, SolveOptions};
 use serde::Serialize;
 
-/// The most Jacobi sweeps of the fallback solve, when the configured method (multigrid) does
-/// not converge.
-pub const JACOBI_FALLBACK_SWEEPS: usize = 200_000;
+pub use crate::reconstruct::{
+    ANALYSIS_JACOBI_SWEEPS as JACOBI_FALLBACK_SWEEPS, ANALYSIS_MULTIGRID_CYCLES as MULTIGRID_CYCLES,
+};
 
-/// The most multigrid cycles an analysis spends on one solve before falling back to Jacobi:
-/// multigrid settles in a handful of cycles when it settles at all.
-pub const MULTIGRID_CYCLES: usize = 40;
-
-/// The solver settings analyses use: the engine's defaults (its default method), with at most
-/// [`MULTIGRID_CYCLES`] cycles before the Jacobi fallback.
+/// The solver settings analyses use: those of [`ReconstructOptions::for_analysis`] (the
+/// engine's defaults, at most [`MULTIGRID_CYCLES`] cycles before the Jacobi fallback).
 pub fn analysis_solve_options() -> SolveOptions {
-    SolveOptions {
-        max_iter: MULTIGRID_CYCLES,
-        ..SolveOptions::default()
-    }
+    ReconstructOptions::for_analysis().solve_options()
 }
 
 /// What is assumed about the surface and light besides the light's tilt.
@@ -159,37 +152,39 @@ pub struct Interpretation {
     pub g: Option<Image>,
 }
 
-/// Reusable state for interpreting pictures of one scene: the solver, the integrator and the
-/// boundary roles, planned once and used for every assumed light.
+/// Reusable state for interpreting pictures of one scene: the reconstruction planner (solver
+/// and integrator) and the boundary roles, planned once and used for every assumed light.
 #[derive(Debug)]
 pub struct Interpreter {
-    solver: Solver,
-    fourier: Option<FrankotChellappa>,
+    planner: Reconstructor,
     roles: Grid<Role>,
-    options: SolveOptions,
     keep_depth: bool,
 }
 
 impl Interpreter {
-    /// An interpreter for `scene`'s size, domain and boundary, solving with `options`.
+    /// An interpreter for `scene`'s size, domain and boundary, solving with `options` and, when
+    /// they do not converge, falling back to Jacobi
+    /// ([`crate::reconstruct::NonConvergence::FallBackToJacobi`]).
     ///
     /// Fails on mismatched sizes, non-finite luminance, an empty domain, no tokens, or a token
     /// that leaves the domain.
     pub fn new(scene: &Scene, options: &SolveOptions) -> Result<Interpreter> {
         check_scene(scene)?;
-        options.validate()?;
         let (w, h) = (scene.image.width(), scene.image.height());
-        let fourier = if *scene.boundary == Boundary::Flat {
-            Some(FrankotChellappa::new(w, h)?)
-        } else {
-            None
+        let analysis = ReconstructOptions::for_analysis();
+        let policy = ReconstructOptions {
+            depth: if *scene.boundary == Boundary::Flat {
+                DepthMethod::FrankotChellappa
+            } else {
+                DepthMethod::Poisson(PoissonOptions::default())
+            },
+            rest_on_zero: analysis.rest_on_zero,
+            ..ReconstructOptions::from_solve(options, analysis.non_convergence)
         };
         let roles = boundary_conditions(scene.domain, scene.boundary)?.roles;
         Ok(Interpreter {
-            solver: Solver::new(w, h)?,
-            fourier,
+            planner: Reconstructor::new(w, h, policy)?,
             roles,
-            options: *options,
             keep_depth: false,
         })
     }
@@ -203,7 +198,7 @@ impl Interpreter {
 
     /// Whether depth comes from Frankot–Chellappa (true) or the masked Poisson solver.
     pub fn uses_fourier(&self) -> bool {
-        self.fourier.is_some()
+        self.planner.options().depth == DepthMethod::FrankotChellappa
     }
 
     /// Interprets `scene` (the one this interpreter was made for) under the light of tilt
@@ -221,41 +216,17 @@ impl Interpreter {
             albedo: lighting.albedo,
             ambient: lighting.ambient,
         };
-        let mut solution = self.solver.solve(
-            scene.image,
-            scene.domain,
-            scene.boundary,
-            &map,
-            &self.options,
-        )?;
-        let mut method = self.options.method;
-        if (solution.diverged || !solution.converged) && method != Method::Jacobi {
-            // Jacobi reaches the same fixed point, only more slowly; an interpretation that
-            // did not settle would compare unfairly with its neighbours.
-            method = Method::Jacobi;
-            let jacobi = SolveOptions {
-                method,
-                max_iter: JACOBI_FALLBACK_SWEEPS,
-                ..self.options
-            };
-            solution =
-                self.solver
-                    .solve(scene.image, scene.domain, scene.boundary, &map, &jacobi)?;
-        }
-        if solution.diverged {
-            return Err(Error::Compute(format!(
-                "the solve under the light of tilt {tilt_deg}° diverged after {} iterations",
-                solution.iterations
-            )));
-        }
-        let (dz_dx, dz_dy) =
-            gradients_from_normals(&solution.normals(), scene.domain, DEFAULT_MIN_NZ)?;
-        let depth = match &mut self.fourier {
-            Some(fc) => fc.integrate(&dz_dx, &dz_dy)?,
-            None => {
-                integrate_gradients(&dz_dx, &dz_dy, scene.domain, &PoissonOptions::default())?.depth
-            }
-        };
+        let shape = self
+            .planner
+            .solve(scene.image, scene.domain, scene.boundary, &map, &NoProgress)
+            .map_err(|e| match e {
+                Error::Compute(why) => {
+                    Error::Compute(format!("under the light of tilt {tilt_deg}°: {why}"))
+                }
+                other => other,
+            })?;
+        let depth = self.planner.depth(&shape, scene.domain)?.depth;
+        let (solution, method) = (shape.solution, shape.method);
         let rendered = surface_normals(&depth, scene.domain).map(|n| map.radiance(n));
         let misfit = Grid::from_fn(scene.image.width(), scene.image.height(), |c, r| {
             let i = *scene.image.get(c, r);

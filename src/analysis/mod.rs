@@ -32,6 +32,7 @@ pub mod interpretation;
 pub mod observer;
 pub mod outline;
 pub mod picture;
+#[cfg(feature = "plots")]
 pub mod plot;
 pub mod prior_sweep;
 pub mod rotation;

@@ -1,17 +1,13 @@
 //! `shadelab eval`: the engine on the evaluation data, as a table (and a folder of results).
 
-use super::{progress, CliResult, Global};
-use serde_json::json;
+use super::{progress::Bar, CliResult, Global};
 use shadelab::boundary::Boundary;
-use shadelab::evaluation::{self, report, Config, Set, Step};
+use shadelab::evaluation::{self, report, Config, Set};
 use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
 use shadelab::solver::Method;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// The file that marks an output folder as written by `eval`.
-const REPORT: &str = "evaluation.json";
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -117,55 +113,32 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 
     // Claim the output folder first, so an unwritable one fails before the long part.
     let folder = match &args.out {
-        Some(out) => Some(AtomicDir::create(out, REPORT, global.force)?),
+        Some(out) => Some(AtomicDir::create(out, report::REPORT_FILE, global.force)?),
         None => None,
     };
-    let bar = progress::bar(config.case_count() as u64, "evaluating", global.quiet);
+    let bar = Bar::new(global.quiet);
     let picture_dir = folder.as_ref().map(|f| f.path().to_path_buf());
-    let results = evaluation::run(
-        &config,
-        picture_dir.is_some(),
-        &mut |step: Step<'_>| {
-            bar.set_position(step.done as u64);
-            bar.set_message(step.label.to_string());
-        },
-        &mut |name, image| match &picture_dir {
-            Some(dir) => io::write_rgb(&dir.join(name), image, BitDepth::Eight, None),
-            None => Ok(()),
-        },
-    )?;
-    bar.finish_and_clear();
-    let table = report::markdown_table(&results);
-    print!("{table}");
-
+    let results =
+        evaluation::run(
+            &config,
+            picture_dir.is_some(),
+            &bar,
+            &mut |name, image| match &picture_dir {
+                Some(dir) => io::write_rgb(&dir.join(name), image, BitDepth::Eight, None),
+                None => Ok(()),
+            },
+        )?;
+    print!("{}", report::markdown_table(&results));
     if let Some(folder) = folder {
-        let dir = folder.path().to_path_buf();
         let command: Vec<String> = std::env::args().collect();
-        let text = format!(
-            "# shadelab evaluation\n\nshadelab {} at commit {commit}\n\n`{}`\n\n{table}",
-            io::PROGRAM_VERSION,
-            command.join(" ")
-        );
-        io::write_text(&dir.join("evaluation.md"), &text)?;
-        let report = json!({
-            "program": "shadelab",
-            "version": io::PROGRAM_VERSION,
-            "commit": commit,
-            "command": command,
-            "data": args.data.display().to_string(),
-            "conventions": io::conventions_json(),
-            "parameters": config.describe(),
-            "cases": results,
-            "seconds": started.elapsed().as_secs_f64(),
-        });
-        io::write_json(&dir.join(REPORT), &report)?;
+        let seconds = started.elapsed().as_secs_f64();
+        report::write_summary(folder.path(), &config, &results, &commit, &command, seconds)?;
         let target = folder.commit()?;
         if !global.quiet {
             eprintln!(
-                "{}: {} cases, {:.1} s",
+                "{}: {} cases, {seconds:.1} s",
                 target.display(),
-                results.len(),
-                started.elapsed().as_secs_f64()
+                results.len()
             );
         }
     }

@@ -4,18 +4,19 @@
 
 use super::CliError;
 use shadelab::analysis::interpretation::MULTIGRID_CYCLES;
-use shadelab::pipeline::perception::{BadSetting, BoundarySpec, DomainSpec, SolverSettings};
-use shadelab::solver::{Method, SolveOptions, MULTIGRID_MAX_CYCLES};
+use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
+use shadelab::pipeline::solve::BoundarySource;
+use shadelab::solver::{SolveOptions, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES};
 
-/// The solver's settings: λ, the tolerance and the iteration cap (whose default is the
-/// command's, decided by the library).
+/// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
+/// the library's configuration of the command already holds).
 #[derive(Debug, Clone, clap::Args)]
 pub struct SolverFlags {
     /// Weight λ of the brightness term (> 0).
     #[arg(
         long = "lambda",
         value_name = "L",
-        default_value_t = SolverSettings::default().lambda,
+        default_value_t = SolveOptions::default().lambda,
         allow_hyphen_values = true
     )]
     pub lambda: f64,
@@ -24,7 +25,7 @@ pub struct SolverFlags {
     #[arg(
         long,
         value_name = "T",
-        default_value_t = SolverSettings::default().tol,
+        default_value_t = SolveOptions::default().tol,
         allow_hyphen_values = true
     )]
     pub tol: f64,
@@ -38,19 +39,18 @@ fn max_iter_help() -> String {
     format!(
         "Stop a solve after this many sweeps, or cycles for multigrid [default: {MULTIGRID_CYCLES} \
          cycles in the analyses, which repeat a solve that has not converged with Jacobi sweeps; \
-         {MULTIGRID_MAX_CYCLES} cycles or {} sweeps in solve]",
-        SolveOptions::default().max_iter
+         in solve, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} sweeps for \
+         jacobi and literal]"
     )
 }
 
 impl SolverFlags {
-    /// The library's settings for `method`.
-    pub fn settings(&self, method: Method) -> SolverSettings {
-        SolverSettings {
-            lambda: self.lambda,
-            tol: self.tol,
-            max_iter: self.max_iter,
-            method,
+    /// Sets λ, the tolerance and (when given) the cap of `options`.
+    pub fn apply(&self, options: &mut SolveOptions) {
+        options.lambda = self.lambda;
+        options.tol = self.tol;
+        if let Some(n) = self.max_iter {
+            options.max_iter = n;
         }
     }
 }
@@ -67,7 +67,7 @@ pub struct AnalysisFlags {
     #[arg(
         long,
         value_name = "flat|free|occluding|FILE.npy",
-        default_value_t = BoundarySpec::default().to_string()
+        default_value_t = DEFAULT_BOUNDARY.name().to_string()
     )]
     pub boundary: String,
     /// Slant of every assumed light, degrees from the line of sight (0 ≤ S < 90).
@@ -94,7 +94,7 @@ impl AnalysisFlags {
     }
 
     /// The boundary, parsed.
-    pub fn boundary(&self) -> Result<BoundarySpec, CliError> {
+    pub fn boundary(&self) -> Result<BoundarySource, CliError> {
         self.boundary.parse().map_err(|e| usage("--boundary", e))
     }
 }

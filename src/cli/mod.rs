@@ -96,6 +96,18 @@ impl CliError {
     }
 }
 
+/// Prints `text` on stdout; a closed pipe (`| head`) ends the output quietly.
+pub fn print_stdout(text: &str) -> CliResult {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::from(shadelab::Error::io("standard output", e)))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The result of a subcommand.
 pub type CliResult = Result<(), CliError>;
 

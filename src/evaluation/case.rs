@@ -8,12 +8,11 @@ use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
-use crate::integrate::{
-    gradients_from_normals, integrate_gradients, rest_on_zero, PoissonOptions, DEFAULT_MIN_NZ,
-};
 use crate::light::Light;
+use crate::progress::NoProgress;
+use crate::reconstruct::{NonConvergence, ReconstructOptions, Reconstructor};
 use crate::reflectance::Lambertian;
-use crate::solver::{SolveOptions, Solver};
+use crate::solver::SolveOptions;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -128,27 +127,26 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
         ambient: 0.0,
     };
     let started = Instant::now();
-    let mut solver = Solver::new(w, h)?;
-    let solution = solver.solve(
-        &case.image,
-        &case.domain,
-        &case.boundary,
-        &reflectance,
-        options,
-    )?;
-    if solution.diverged {
-        return Err(Error::Compute(format!(
-            "{} {}: the solve diverged after {} iterations",
-            case.object, case.light_label, solution.iterations
-        )));
-    }
-    let normals = solution.normals();
-    let (dz_dx, dz_dy) = gradients_from_normals(&normals, &case.domain, DEFAULT_MIN_NZ)?;
-    let integration =
-        integrate_gradients(&dz_dx, &dz_dy, &case.domain, &PoissonOptions::default())?;
+    let policy = ReconstructOptions::from_solve(options, NonConvergence::Report);
+    let mut planner = Reconstructor::new(w, h, policy)?;
+    let reconstruction = planner
+        .reconstruct(
+            &case.image,
+            &case.domain,
+            &case.boundary,
+            &reflectance,
+            &NoProgress,
+        )
+        .map_err(|e| match e {
+            Error::Compute(why) => {
+                Error::Compute(format!("{} {}: {why}", case.object, case.light_label))
+            }
+            other => other,
+        })?;
     let seconds = started.elapsed().as_secs_f64();
-    let mut depth = integration.depth;
-    rest_on_zero(&mut depth, &case.domain)?;
+    let solution = reconstruction.shape.solution;
+    let depth = reconstruction.depth.depth;
+    let normals = solution.normals();
     let normal_error = case
         .truth_normals
         .as_ref()

@@ -37,6 +37,7 @@ use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask, RgbImage};
 use crate::light::Light;
+use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::solver::SolveOptions;
@@ -279,24 +280,14 @@ pub fn light_label(light: &Light) -> String {
     }
 }
 
-/// Where a run stands, for a progress display.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Step<'a> {
-    /// Cases finished.
-    pub done: usize,
-    /// Cases in all.
-    pub total: usize,
-    /// The case about to run.
-    pub label: &'a str,
-}
-
-/// Runs the evaluation. `progress` is told before each case; `picture` receives each case's
-/// picture ([`pictures::case_panel`]) with a file name for it, when `want_pictures` is set.
+/// Runs the evaluation. `progress` is told before each case (a stage of one step per case, its
+/// message the case's label); `picture` receives each case's picture
+/// ([`pictures::case_panel`]) with a file name for it, when `want_pictures` is set.
 /// Fails before any work when a file is missing ([`datasets::check_files`]).
 pub fn run(
     config: &Config,
     want_pictures: bool,
-    progress: &mut dyn FnMut(Step<'_>),
+    progress: &dyn Progress,
     picture: &mut dyn FnMut(&str, &RgbImage) -> Result<()>,
 ) -> Result<Vec<CaseResult>> {
     config.validate()?;
@@ -307,14 +298,12 @@ pub fn run(
         &config.ball_images,
     )?;
     let total = config.case_count();
+    progress.start(total as u64, "evaluating");
     let mut results = Vec::with_capacity(total);
     let mut finish = |case: Case, file: String, results: &mut Vec<CaseResult>| -> Result<()> {
         let label = format!("{} {}", case.object, case.light_label);
-        progress(Step {
-            done: results.len(),
-            total,
-            label: &label,
-        });
+        progress.set_position(results.len() as u64);
+        progress.message(&label);
         let output = solve_case(&case, &config.options)?;
         if want_pictures {
             picture(&file, &pictures::case_panel(&case, &output))?;
@@ -455,6 +444,7 @@ pub fn run(
             }
         }
     }
+    progress.finish();
     Ok(results)
 }
 

@@ -1,6 +1,45 @@
 //! The evaluation as a Markdown table.
 
 use super::case::CaseResult;
+use super::Config;
+use crate::error::Result;
+use crate::io;
+use serde_json::json;
+use std::path::Path;
+
+/// The file that marks an output folder as written by the evaluation.
+pub const REPORT_FILE: &str = "evaluation.json";
+
+/// Writes `evaluation.md` (the table, with the version, commit and command) and
+/// `evaluation.json` (every number and parameter) into `dir`.
+pub fn write_summary(
+    dir: &Path,
+    config: &Config,
+    results: &[CaseResult],
+    commit: &str,
+    command: &[String],
+    seconds: f64,
+) -> Result<()> {
+    let table = markdown_table(results);
+    let text = format!(
+        "# shadelab evaluation\n\nshadelab {} at commit {commit}\n\n`{}`\n\n{table}",
+        io::PROGRAM_VERSION,
+        command.join(" ")
+    );
+    io::write_text(&dir.join("evaluation.md"), &text)?;
+    let report = json!({
+        "program": "shadelab",
+        "version": io::PROGRAM_VERSION,
+        "commit": commit,
+        "command": command,
+        "data": config.data.display().to_string(),
+        "conventions": io::conventions_json(),
+        "parameters": config.describe(),
+        "cases": results,
+        "seconds": seconds,
+    });
+    io::write_json(&dir.join(REPORT_FILE), &report)
+}
 
 /// The table's header: what each column means is in docs/evaluation.md.
 const HEADER: &str = "| set | object | light | boundary | mean error | median error | depth error (RMS after scale+offset fit) | residual | seconds |\n|---|---|---|---|---:|---:|---:|---:|---:|\n";

@@ -4,9 +4,11 @@
 //! and nothing else; the command line only parses flags into a `Config`, draws progress and
 //! writes what the report says.
 
+pub mod bench;
 pub mod observer;
 pub mod perception;
 pub mod prior_sweep;
+pub mod solve;
 pub mod source;
 
 pub use source::{Picture, PictureSource};

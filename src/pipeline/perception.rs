@@ -1,17 +1,18 @@
 //! What the perception pipelines ([`super::prior_sweep`], [`super::observer`]) share: the
 //! picture (an image or a rendered stimulus), where the engine solves, the boundary at the
-//! domain's rim, the lighting to assume besides its tilt, and the solver settings, with their
+//! domain's rim ([`BoundarySource`], as `solve` takes it), the lighting to assume besides its tilt, and the solver settings, with their
 //! defaults; [`Config::load`] turns them into a [`Setup`] ready to interpret.
 
+use super::solve::{read_boundary, BoundarySource};
 use super::source::PictureSource;
-use crate::analysis::interpretation::{Lighting, Scene, MULTIGRID_CYCLES};
+use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
 use crate::analysis::{Domain, Picture};
 use crate::analysis::{Interpretation, Sweep};
-use crate::boundary::{Boundary, BOUNDARY_NAMES};
+use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
 use crate::io;
-use crate::solver::{Method, SolveOptions};
+use crate::solver::SolveOptions;
 use serde::{Serialize, Serializer};
 use serde_json::Value;
 use std::fmt;
@@ -20,6 +21,9 @@ use std::str::FromStr;
 
 /// The default slant of every assumed light, degrees from the line of sight.
 pub const DEFAULT_SLANT_DEG: f64 = 45.0;
+
+/// The default boundary: flat, since the analysed stimuli lie on a plane.
+pub const DEFAULT_BOUNDARY: Boundary = Boundary::Flat;
 
 /// A setting that failed its check: the name of its [`Config`] field and why. The command line
 /// turns the field into its flag; everyone else may take the [`Error`] (`?` converts it).
@@ -118,129 +122,24 @@ impl DomainSpec {
     }
 }
 
-/// The boundary condition at the domain's rim: a named one or a file of normals.
-///
-/// ```
-/// use shadelab::pipeline::perception::BoundarySpec;
-/// let b: BoundarySpec = "occluding".parse().unwrap();
-/// assert_eq!(b.to_string(), "occluding");
-/// assert_eq!(BoundarySpec::default().to_string(), "flat");
-/// assert!("wobbly".parse::<BoundarySpec>().is_err());
-/// ```
-#[derive(Debug, Clone, PartialEq)]
-pub enum BoundarySpec {
-    /// One of [`BOUNDARY_NAMES`].
-    Named(String),
-    /// An H×W×3 `.npy` of normals for the rim.
-    Normals(PathBuf),
-}
-
-impl Default for BoundarySpec {
-    /// Flat: the analysed stimuli lie on a plane.
-    fn default() -> Self {
-        BoundarySpec::Named("flat".into())
+/// The boundary as the user wrote it, for reports.
+fn boundary_text(boundary: &BoundarySource) -> String {
+    match boundary {
+        BoundarySource::Named(b) => b.name().to_string(),
+        BoundarySource::File(path) => path.display().to_string(),
     }
 }
 
-impl FromStr for BoundarySpec {
-    type Err = Error;
-    fn from_str(text: &str) -> Result<BoundarySpec> {
-        if BOUNDARY_NAMES.contains(&text) {
-            return Ok(BoundarySpec::Named(text.to_string()));
-        }
-        let path = Path::new(text);
-        if io::extension(path) != "npy" {
-            return Err(Error::invalid(format!(
-                "boundary '{text}' is neither {} nor a .npy file of normals",
-                BOUNDARY_NAMES.join(", ")
-            )));
-        }
-        Ok(BoundarySpec::Normals(path.to_path_buf()))
-    }
-}
-
-impl fmt::Display for BoundarySpec {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            BoundarySpec::Named(name) => f.write_str(name),
-            BoundarySpec::Normals(path) => path.display().fmt(f),
-        }
-    }
-}
-
-impl BoundarySpec {
-    /// The boundary for a `w`×`h` picture (a normals file is read and checked against it).
-    pub fn resolve(&self, w: usize, h: usize, max_pixels: usize) -> Result<Boundary> {
-        match self {
-            BoundarySpec::Named(name) => Boundary::named(name),
-            BoundarySpec::Normals(path) => {
-                let normals = io::read_normals(path, max_pixels)?;
-                if (normals.width(), normals.height()) != (w, h) {
-                    return Err(Error::invalid(format!(
-                        "boundary normals {} are {}x{} but the image is {w}x{h}",
-                        path.display(),
-                        normals.width(),
-                        normals.height()
-                    )));
-                }
-                Ok(Boundary::Given(normals))
-            }
-        }
-    }
-}
-
-/// The solver settings a command exposes; the iteration cap, when not given, is the command's.
-///
-/// ```
-/// use shadelab::pipeline::perception::SolverSettings;
-/// let s = SolverSettings::default();
-/// assert_eq!(s.options(40).unwrap().max_iter, 40);
-/// let s = SolverSettings { max_iter: Some(7), ..s };
-/// assert_eq!(s.options(40).unwrap().max_iter, 7);
-/// assert!(SolverSettings { lambda: -1.0, ..s }.options(40).is_err());
-/// ```
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SolverSettings {
-    /// Weight λ of the brightness term (> 0).
-    pub lambda: f64,
-    /// The convergence tolerance (> 0).
-    pub tol: f64,
-    /// The most iterations (sweeps, or multigrid cycles); `None`: the command's default.
-    pub max_iter: Option<usize>,
-    /// How the equations are iterated.
-    pub method: Method,
-}
-
-impl Default for SolverSettings {
-    /// The engine's defaults ([`SolveOptions::default`]), the cap left to the command.
-    fn default() -> Self {
-        let d = SolveOptions::default();
-        SolverSettings {
-            lambda: d.lambda,
-            tol: d.tol,
-            max_iter: None,
-            method: d.method,
-        }
-    }
-}
-
-impl SolverSettings {
-    /// The solver options, with `default_max_iter` when no cap is given; checked.
-    pub fn options(&self, default_max_iter: usize) -> Result<SolveOptions> {
-        let options = SolveOptions {
-            lambda: self.lambda,
-            tol: self.tol,
-            max_iter: self.max_iter.unwrap_or(default_max_iter),
-            method: self.method,
-        };
-        options.validate()?;
-        Ok(options)
-    }
-
-    /// The options of an analysis: at most [`MULTIGRID_CYCLES`] cycles unless given, after
-    /// which an unconverged solve is repeated with Jacobi sweeps.
-    pub fn analysis_options(&self) -> Result<SolveOptions> {
-        self.options(MULTIGRID_CYCLES)
+/// The boundary for a `w`×`h` picture (a normals file is read and checked against it).
+fn resolve_boundary(
+    boundary: &BoundarySource,
+    w: usize,
+    h: usize,
+    max_pixels: usize,
+) -> Result<Boundary> {
+    match boundary {
+        BoundarySource::Named(b) => Ok(b.clone()),
+        BoundarySource::File(path) => read_boundary(path, w, h, max_pixels),
     }
 }
 
@@ -254,7 +153,7 @@ pub struct Config {
     /// Where the engine solves (default: the whole image).
     pub domain: DomainSpec,
     /// The boundary at the domain's rim (default: flat, a relief on a plane).
-    pub boundary: BoundarySpec,
+    pub boundary: BoundarySource,
     /// Slant of every assumed light, degrees from the line of sight (0 ≤ slant < 90).
     pub slant_deg: f64,
     /// Surface albedo; `None`: the stimulus's own, else the one that makes the background a
@@ -262,8 +161,10 @@ pub struct Config {
     pub albedo: Option<f64>,
     /// Ambient level; `None`: the stimulus's own, else 0.
     pub ambient: Option<f64>,
-    /// The solver settings (at most [`MULTIGRID_CYCLES`] cycles per solve by default).
-    pub solver: SolverSettings,
+    /// The solver settings (default: [`analysis_solve_options`], at most
+    /// [`MULTIGRID_CYCLES`](crate::analysis::interpretation::MULTIGRID_CYCLES) multigrid cycles per solve, after which a solve that has not
+    /// converged is repeated with Jacobi sweeps).
+    pub solver: SolveOptions,
 }
 
 impl Config {
@@ -273,11 +174,11 @@ impl Config {
             source,
             size: None,
             domain: DomainSpec::default(),
-            boundary: BoundarySpec::default(),
+            boundary: BoundarySource::Named(DEFAULT_BOUNDARY),
             slant_deg: DEFAULT_SLANT_DEG,
             albedo: None,
             ambient: None,
-            solver: SolverSettings::default(),
+            solver: analysis_solve_options(),
         }
     }
 
@@ -312,24 +213,24 @@ impl Config {
         if let Some(a) = self.ambient {
             field("ambient", lit(0.0, 1.0, a))?;
         }
-        let s = self.solver;
-        let fine = SolverSettings::default();
+        // The solver's own checks, one value at a time with the others at valid values.
+        let fine = analysis_solve_options();
+        let solver = |o: SolveOptions| o.validate();
         field(
             "lambda",
-            SolverSettings {
-                lambda: s.lambda,
+            solver(SolveOptions {
+                lambda: self.solver.lambda,
                 ..fine
-            }
-            .analysis_options()
-            .map(drop),
+            }),
         )?;
         field(
             "tol",
-            SolverSettings { tol: s.tol, ..fine }
-                .analysis_options()
-                .map(drop),
+            solver(SolveOptions {
+                tol: self.solver.tol,
+                ..fine
+            }),
         )?;
-        field("max_iter", s.analysis_options().map(drop))
+        field("max_iter", solver(self.solver))
     }
 
     /// Checks everything that needs no file.
@@ -341,7 +242,7 @@ impl Config {
     /// options.
     pub fn load(&self) -> Result<Setup> {
         self.validate()?;
-        let options = self.solver.analysis_options()?;
+        let options = self.solver;
         let (loaded, request) = self.source.load_shaped(false, self.size)?;
         let labels = loaded.labels.as_ref().map(|(l, n)| (l, n.as_slice()));
         let mut picture =
@@ -353,7 +254,7 @@ impl Config {
         let max_pixels = self.source.max_pixels;
         let domain = self.domain.resolve(&picture, max_pixels)?;
         let (w, h) = (picture.image.width(), picture.image.height());
-        let boundary = self.boundary.resolve(w, h, max_pixels)?;
+        let boundary = resolve_boundary(&self.boundary, w, h, max_pixels)?;
         let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
         picture.albedo = Some(lighting.albedo);
         picture.ambient = Some(lighting.ambient);
@@ -361,7 +262,7 @@ impl Config {
             slant_deg: lighting.slant_deg,
             albedo: lighting.albedo,
             ambient: lighting.ambient,
-            boundary: self.boundary.to_string(),
+            boundary: boundary_text(&self.boundary),
             domain: self.domain.to_string(),
             lambda: options.lambda,
             tol: options.tol,

@@ -91,18 +91,52 @@ pub struct SolveOptions {
     pub method: Method,
 }
 
-impl Default for SolveOptions {
-    fn default() -> Self {
-        SolveOptions {
-            lambda: 1.0,
-            tol: 1e-6,
-            max_iter: 100_000,
-            method: Method::Multigrid,
+impl Method {
+    /// The default cap of this method's iterations: [`MULTIGRID_MAX_CYCLES`] cycles for
+    /// multigrid, [`JACOBI_MAX_SWEEPS`] sweeps for Jacobi and the literal update. The one place
+    /// these caps are decided.
+    pub const fn default_max_iter(self) -> usize {
+        match self {
+            Method::Multigrid => MULTIGRID_MAX_CYCLES,
+            Method::Jacobi | Method::Literal => JACOBI_MAX_SWEEPS,
+        }
+    }
+
+    /// What one iteration of this method is called: `cycles` for multigrid, `sweeps` else.
+    pub const fn iteration_unit(self) -> &'static str {
+        match self {
+            Method::Multigrid => "cycles",
+            Method::Jacobi | Method::Literal => "sweeps",
         }
     }
 }
 
+impl Default for SolveOptions {
+    /// Multigrid, λ = 1, tolerance 10⁻⁶, at most [`MULTIGRID_MAX_CYCLES`] cycles.
+    fn default() -> Self {
+        SolveOptions::for_method(Method::Multigrid)
+    }
+}
+
 impl SolveOptions {
+    /// The defaults (λ = 1, tolerance 10⁻⁶) for `method`, with its default cap
+    /// ([`Method::default_max_iter`]).
+    ///
+    /// ```
+    /// use shadelab::solver::{Method, SolveOptions};
+    /// assert_eq!(SolveOptions::for_method(Method::Multigrid).max_iter, 1_000);
+    /// assert_eq!(SolveOptions::for_method(Method::Jacobi).max_iter, 100_000);
+    /// assert_eq!(SolveOptions::default(), SolveOptions::for_method(Method::Multigrid));
+    /// ```
+    pub const fn for_method(method: Method) -> SolveOptions {
+        SolveOptions {
+            lambda: 1.0,
+            tol: 1e-6,
+            max_iter: method.default_max_iter(),
+            method,
+        }
+    }
+
     /// Checks every parameter, naming the bad one.
     pub fn validate(&self) -> Result<()> {
         if !(self.lambda.is_finite() && self.lambda > 0.0) {
@@ -176,10 +210,14 @@ impl Solution {
     }
 }
 
-/// The default cap on multigrid cycles (`shadelab solve`, `shadelab eval`): a solve settles in
-/// tens of cycles, and one that has not after a thousand will not; a cycle costs a few sweeps,
-/// so the cap is far below Jacobi's [`SolveOptions::default`] 100,000 sweeps.
+/// The default cap on multigrid cycles: a solve settles in tens of cycles, and one that has
+/// not after a thousand will not; a cycle costs a few sweeps, so the cap is far below Jacobi's
+/// [`JACOBI_MAX_SWEEPS`].
 pub const MULTIGRID_MAX_CYCLES: usize = 1_000;
+
+/// The default cap on Jacobi (and literal) sweeps: their count grows with the square of the
+/// image side, thousands at 256².
+pub const JACOBI_MAX_SWEEPS: usize = 100_000;
 
 /// A change of f or g larger than this in one sweep means the iteration has blown up: the
 /// whole visible hemisphere spans |(f, g)| ≤ 2, and a stable sweep moves a pixel by less than

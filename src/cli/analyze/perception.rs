@@ -4,7 +4,6 @@
 use super::{CliError, Global, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
 use shadelab::pipeline::perception::Config;
-use shadelab::solver::Method;
 use shadelab::visual_size::parse_pair;
 
 /// The picture and how to interpret it.
@@ -39,7 +38,7 @@ impl PictureArgs {
         config.slant_deg = self.analysis.slant;
         config.albedo = self.analysis.albedo;
         config.ambient = self.analysis.ambient;
-        config.solver = self.solver.settings(Method::default());
+        self.solver.apply(&mut config.solver);
         Ok(config)
     }
 }

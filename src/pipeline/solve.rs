@@ -1,0 +1,557 @@
+//! `shadelab solve` as a library pipeline: one grayscale image (and its mask) → normals and
+//! depth by the [`Reconstructor`], with a report that records every parameter and number.
+//!
+//! [`SolveConfig`] names the inputs and policy, [`run`] reads them and reconstructs,
+//! [`SolveRun::write`] writes the output folder: `normals.npy`, `normals.png`, `depth.npy`,
+//! `depth.png`, `surface.obj`, `convergence.csv` (and `convergence.png` with the `plots`
+//! feature) and `report.json`.
+
+use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
+use crate::error::{Error, Result};
+use crate::grid::{Grid, Image, Mask};
+use crate::io::{self, BitDepth};
+use crate::light::Light;
+use crate::light_estimation::LightEstimate;
+use crate::progress::Progress;
+use crate::reconstruct::{Depth, Lighting, ReconstructOptions, Reconstructor, Shape};
+use crate::reflectance::BrdfSpec;
+use serde::Serialize;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The file that marks an output folder as written by `solve`.
+pub const REPORT_FILE: &str = "report.json";
+
+/// The light of a solve: given, or estimated from the image (with the albedo).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightChoice {
+    /// This light (z > 0).
+    Given(Light),
+    /// Estimated from the image's shading (Zheng–Chellappa), with the albedo.
+    Estimate,
+}
+
+impl std::str::FromStr for LightChoice {
+    type Err = Error;
+    /// `estimate`, or any light syntax ([`Light`]'s `FromStr`).
+    fn from_str(text: &str) -> Result<Self> {
+        match text.trim() {
+            "estimate" => Ok(LightChoice::Estimate),
+            other => Ok(LightChoice::Given(other.parse()?)),
+        }
+    }
+}
+
+/// The boundary condition of a solve: built in, or normals read from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BoundarySource {
+    /// `occluding`, `flat` or `free`.
+    Named(Boundary),
+    /// An H×W×3 `.npy` of unit normals for the rim.
+    File(PathBuf),
+}
+
+impl std::str::FromStr for BoundarySource {
+    type Err = Error;
+    /// A built-in name, or the path of a `.npy`.
+    fn from_str(text: &str) -> Result<Self> {
+        if BOUNDARY_NAMES.contains(&text) {
+            return Ok(BoundarySource::Named(Boundary::named(text)?));
+        }
+        let path = Path::new(text);
+        if io::extension(path) != "npy" {
+            return Err(Error::invalid(format!(
+                "boundary '{text}' is neither {} nor a .npy file of normals",
+                BOUNDARY_NAMES.join(", ")
+            )));
+        }
+        Ok(BoundarySource::File(path.to_path_buf()))
+    }
+}
+
+/// Everything a solve needs, as plain values.
+#[derive(Debug, Clone)]
+pub struct SolveConfig {
+    /// An 8/16-bit PNG (linear luminance) or a float H×W `.npy`.
+    pub image: PathBuf,
+    /// The object's mask (PNG, nonzero = inside); `None` is the whole image.
+    pub mask: Option<PathBuf>,
+    /// The light, given or estimated.
+    pub light: LightChoice,
+    /// The boundary condition.
+    pub boundary: BoundarySource,
+    /// The reflectance model (its albedo is replaced by [`SolveConfig::albedo`]'s resolution).
+    pub brdf: BrdfSpec,
+    /// The albedo; `None` is 1, or the estimate when the light is estimated.
+    pub albedo: Option<f64>,
+    /// The reconstruction's policy (method, λ, tolerance, cap, non-convergence, integration).
+    pub options: ReconstructOptions,
+    /// The largest image accepted, in pixels.
+    pub max_pixels: usize,
+    /// How the light and boundary were written by the user and where the outputs go, recorded
+    /// as they were given in the report's `parameters` (empty: their canonical form).
+    pub record: SolveRecord,
+}
+
+/// What the report records of the request as the user wrote it.
+#[derive(Debug, Clone, Default)]
+pub struct SolveRecord {
+    /// The light as written.
+    pub light: String,
+    /// The boundary as written.
+    pub boundary: String,
+    /// The output folder as written.
+    pub out: String,
+}
+
+impl SolveConfig {
+    /// A configuration with `shadelab solve`'s defaults: no mask, the occluding boundary,
+    /// Lambertian reflectance, [`ReconstructOptions::default`].
+    pub fn new(image: impl Into<PathBuf>, light: LightChoice) -> SolveConfig {
+        SolveConfig {
+            image: image.into(),
+            mask: None,
+            light,
+            boundary: BoundarySource::Named(Boundary::Occluding),
+            brdf: BrdfSpec::default(),
+            albedo: None,
+            options: ReconstructOptions::default(),
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+            record: SolveRecord::default(),
+        }
+    }
+
+    /// Checks everything that needs no file: the policy, the albedo, a given light in front.
+    pub fn validate(&self) -> Result<()> {
+        self.options.validate()?;
+        if let Some(a) = self.albedo {
+            if !(a.is_finite() && a > 0.0) {
+                return Err(Error::invalid(format!(
+                    "albedo {a} must be a positive number"
+                )));
+            }
+        }
+        if let LightChoice::Given(light) = &self.light {
+            crate::reconstruct::check_light_in_front(light)?;
+        }
+        Ok(())
+    }
+}
+
+/// The report of a solve (`report.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveReport {
+    /// `shadelab`.
+    pub program: &'static str,
+    /// The program's version.
+    pub version: &'static str,
+    /// `solve`.
+    pub command: &'static str,
+    /// The axes and light conventions.
+    pub conventions: Value,
+    /// What was read.
+    pub input: SolveInput,
+    /// The request.
+    pub parameters: SolveParameters,
+    /// The light assumed.
+    pub light: LightReport,
+    /// The boundary condition.
+    pub boundary: BoundaryReport,
+    /// How the solve went.
+    pub solver: SolverReport,
+    /// How the integration went.
+    pub integration: IntegrationSummary,
+    /// What each output file holds.
+    pub outputs: BTreeMap<&'static str, String>,
+    /// Lowest and highest depth inside the mask.
+    pub depth_range: [f64; 2],
+    /// Seconds for the whole run.
+    pub seconds: f64,
+}
+
+/// The inputs as read.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveInput {
+    /// The image file.
+    pub image: String,
+    /// What the reader found (format, bit depth, gamma).
+    pub image_info: Value,
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// The mask file, if any.
+    pub mask: Option<String>,
+    /// Pixels inside the mask.
+    pub mask_pixels: usize,
+}
+
+/// The request, as given.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveParameters {
+    /// The light as written.
+    pub light: String,
+    /// The boundary as written.
+    pub boundary: String,
+    /// The reflectance model.
+    pub brdf: BrdfSpec,
+    /// The albedo used.
+    pub albedo: f64,
+    /// λ.
+    pub lambda: f64,
+    /// The method.
+    pub method: String,
+    /// The tolerance.
+    pub tol: f64,
+    /// The cap of iterations.
+    pub max_iter: usize,
+    /// The output folder as written.
+    pub out: String,
+}
+
+/// The light assumed.
+#[derive(Debug, Clone, Serialize)]
+pub struct LightReport {
+    /// Unit vector toward the light.
+    pub vector: [f64; 3],
+    /// Tilt in degrees (0 = from above, +90 = from the left).
+    pub tilt_deg: f64,
+    /// Slant from the view direction in degrees.
+    pub slant_deg: f64,
+    /// Whether it was estimated.
+    pub estimated: bool,
+    /// The estimate, if estimated.
+    pub estimate: Option<LightEstimate>,
+}
+
+/// The boundary condition used.
+#[derive(Debug, Clone, Serialize)]
+pub struct BoundaryReport {
+    /// Its name (`occluding`, `flat`, `free`, `given`).
+    pub kind: &'static str,
+    /// The factor limb normals are shrunk by (see [`OCCLUDING_SHRINK`]).
+    pub occluding_shrink: f64,
+}
+
+/// How the solve went.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolverReport {
+    /// The method.
+    pub method: String,
+    /// Iterations done.
+    pub iterations: usize,
+    /// `cycles` or `sweeps`.
+    pub iteration_unit: &'static str,
+    /// Whether the tolerance was met.
+    pub converged: bool,
+    /// Why the result may not be trusted, when it did not converge.
+    pub warning: Option<String>,
+    /// The last update.
+    pub last_update: f64,
+    /// Unknown pixels.
+    pub unknowns: usize,
+    /// e_S at the end.
+    pub smoothness_energy: f64,
+    /// e_R at the end.
+    pub brightness_energy: f64,
+    /// Seconds of solving.
+    pub seconds: f64,
+}
+
+/// How the integration went.
+#[derive(Debug, Clone, Serialize)]
+pub struct IntegrationSummary {
+    /// The integrator.
+    pub method: &'static str,
+    /// The smallest n_z used for slopes.
+    pub min_nz: f64,
+    /// Iterations.
+    pub iterations: usize,
+    /// Final relative residual.
+    pub relative_residual: f64,
+    /// Whether it met its tolerance.
+    pub converged: bool,
+    /// Seconds of integrating.
+    pub seconds: f64,
+}
+
+/// A finished solve: the reconstruction and its report.
+#[derive(Debug, Clone)]
+pub struct SolveRun {
+    /// The solved (f, g) with its convergence history.
+    pub shape: Shape,
+    /// The mask solved on.
+    pub mask: Mask,
+    /// The depth.
+    pub depth: Depth,
+    /// The report.
+    pub report: SolveReport,
+}
+
+/// Reads the inputs named by `config`, reconstructs, and reports.
+pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
+    let started = Instant::now();
+    config.validate()?;
+    let (image, image_info) = read_image(&config.image, config.max_pixels)?;
+    let (w, h) = (image.width(), image.height());
+    let mask = read_mask(config, &image)?;
+    let boundary = match &config.boundary {
+        BoundarySource::Named(b) => b.clone(),
+        BoundarySource::File(path) => read_boundary(path, w, h, config.max_pixels)?,
+    };
+    let given = match config.light {
+        LightChoice::Given(l) => Some(l),
+        LightChoice::Estimate => None,
+    };
+    let lighting = Lighting::resolve(given, config.albedo, &image, &mask)?;
+    let mut brdf = config.brdf.clone();
+    brdf.albedo = lighting.albedo;
+    let reflectance = brdf.build(lighting.light)?;
+
+    let mut planner = Reconstructor::new(w, h, config.options)?;
+    let solve_started = Instant::now();
+    let shape = planner.solve(&image, &mask, &boundary, reflectance.as_ref(), progress)?;
+    let solve_seconds = solve_started.elapsed().as_secs_f64();
+    let boundary_kind = boundary.name();
+    drop((image, boundary, reflectance));
+    let integrate_started = Instant::now();
+    let depth = planner.depth(&shape, &mask)?;
+    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+
+    let method = shape.method;
+    let unit = method.iteration_unit();
+    let s = &shape.solution;
+    // Not converging is not an error (the values may still be useful), but it is never silent.
+    let warning = (!s.converged).then(|| {
+        format!(
+            "the {method} solve did not converge within max_iter {} {unit}: the last update \
+             {:.3e} is above tol {:.3e}; raise max_iter or tol",
+            shape.max_iter, s.last_update, config.options.tol
+        )
+    });
+    let record = &config.record;
+    let or = |given: &str, canonical: String| {
+        if given.is_empty() {
+            canonical
+        } else {
+            given.to_string()
+        }
+    };
+    let direction = lighting.light.direction();
+    let singular = &unit[..unit.len() - 1];
+    let mut outputs = BTreeMap::from([
+        ("normals.npy", "H×W×3 float32 unit normals, (0,0,1) outside the mask".to_string()),
+        ("depth.npy", "H×W float32 depth in pixels toward the viewer; lowest masked point 0, 0 outside the mask".to_string()),
+        ("depth.png", format!("16-bit depth / {} (the depth range), 0 outside the mask", depth.range)),
+        ("normals.png", "8-bit RGB n·0.5+0.5".to_string()),
+        ("surface.obj", "triangle mesh of the masked depth, world axes, pixel units".to_string()),
+        ("convergence.csv", format!("the largest update of f or g after each {singular}")),
+    ]);
+    if cfg!(feature = "plots") {
+        outputs.insert(
+            "convergence.png",
+            "convergence.csv as a plot (log10 of the update)".to_string(),
+        );
+    }
+    let report = SolveReport {
+        program: "shadelab",
+        version: io::PROGRAM_VERSION,
+        command: "solve",
+        conventions: io::conventions_json(),
+        input: SolveInput {
+            image: config.image.display().to_string(),
+            image_info,
+            width: w,
+            height: h,
+            mask: config.mask.as_ref().map(|p| p.display().to_string()),
+            mask_pixels: mask.count(),
+        },
+        parameters: SolveParameters {
+            light: or(
+                &record.light,
+                match config.light {
+                    LightChoice::Given(l) => l.to_string(),
+                    LightChoice::Estimate => "estimate".to_string(),
+                },
+            ),
+            boundary: or(&record.boundary, boundary_kind.to_string()),
+            brdf: brdf.clone(),
+            albedo: brdf.albedo,
+            lambda: config.options.lambda,
+            method: config.options.method.to_string(),
+            tol: config.options.tol,
+            max_iter: config.options.max_iter(),
+            out: record.out.clone(),
+        },
+        light: LightReport {
+            vector: [direction.x, direction.y, direction.z],
+            tilt_deg: lighting.light.tilt_deg(),
+            slant_deg: lighting.light.slant_deg(),
+            estimated: lighting.estimate.is_some(),
+            estimate: lighting.estimate,
+        },
+        boundary: BoundaryReport {
+            kind: boundary_kind,
+            occluding_shrink: OCCLUDING_SHRINK,
+        },
+        solver: SolverReport {
+            method: method.to_string(),
+            iterations: s.iterations,
+            iteration_unit: unit,
+            converged: s.converged,
+            warning,
+            last_update: s.last_update,
+            unknowns: s.unknowns,
+            smoothness_energy: s.smoothness_energy,
+            brightness_energy: s.brightness_energy,
+            seconds: solve_seconds,
+        },
+        integration: IntegrationSummary {
+            method:
+                "least-squares Poisson on the mask (conjugate gradients, multigrid-preconditioned)",
+            min_nz: config.options.min_nz,
+            iterations: depth.report.iterations,
+            relative_residual: depth.report.relative_residual,
+            converged: depth.report.converged,
+            seconds: integrate_seconds,
+        },
+        outputs,
+        depth_range: [0.0, depth.range],
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok(SolveRun {
+        shape,
+        mask,
+        depth,
+        report,
+    })
+}
+
+impl SolveRun {
+    /// Writes every output into `dir` (an existing, empty folder: the caller makes it appear
+    /// whole, e.g. with [`io::AtomicDir`]).
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let s = &self.shape.solution;
+        let (w, h) = (s.f.width(), s.f.height());
+        io::write_normals(&dir.join("normals.npy"), &s.normals())?;
+        let picture = Grid::from_fn(w, h, |c, r| {
+            let n = s.normal(c, r);
+            [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
+        });
+        io::write_rgb(&dir.join("normals.png"), &picture, BitDepth::Eight, None)?;
+        drop(picture);
+        self.write_convergence(dir)?;
+        let depth = &self.depth.depth;
+        io::write_image(&dir.join("depth.npy"), depth)?;
+        let highest = self.depth.range;
+        let picture = depth.map(|z| if highest > 0.0 { z / highest } else { 0.0 });
+        io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)?;
+        drop(picture);
+        let obj = dir.join("surface.obj");
+        io::write_atomic(&obj, |out| {
+            crate::integrate::write_mesh_obj(depth, &self.mask, out, &obj)
+        })?;
+        let report = serde_json::to_value(&self.report)
+            .map_err(|e| Error::Compute(format!("the report cannot be serialised: {e}")))?;
+        io::write_json(&dir.join(REPORT_FILE), &report)
+    }
+
+    /// `convergence.csv` and, with plots, `convergence.png`: log10 of the largest update
+    /// against the sweep or cycle, with the tolerance as a reference line.
+    fn write_convergence(&self, dir: &Path) -> Result<()> {
+        let method = self.shape.method;
+        let unit = method.iteration_unit();
+        let history = &self.shape.history;
+        let mut csv = format!("{},largest_update\n", &unit[..unit.len() - 1]);
+        for (i, u) in history.iter().enumerate() {
+            csv.push_str(&format!("{},{u:e}\n", i + 1));
+        }
+        io::write_text(&dir.join("convergence.csv"), &csv)?;
+        #[cfg(feature = "plots")]
+        {
+            use crate::analysis::plot::{LinePlot, Series};
+            let mut plot = LinePlot::new(
+                &format!("{method} convergence"),
+                unit,
+                "log10 of the largest update of f or g",
+                (1.0, history.len().max(2) as f64),
+            );
+            plot.reference_y = Some(self.report.parameters.tol.log10());
+            plot.series.push(Series {
+                name: method.to_string(),
+                points: history
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, u)| **u > 0.0)
+                    .map(|(i, u)| ((i + 1) as f64, u.log10()))
+                    .collect(),
+            });
+            plot.write_png(&dir.join("convergence.png"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Reads a PNG or `.npy` image, with what was read for the report.
+pub fn read_image(path: &Path, max_pixels: usize) -> Result<(Image, Value)> {
+    match io::extension(path).as_str() {
+        "png" => {
+            let (image, info) = io::read_gray(path, max_pixels)?;
+            Ok((image, serde_json::to_value(info).unwrap_or_default()))
+        }
+        "npy" => Ok((
+            io::read_image(path, max_pixels)?,
+            json!({ "format": "npy float" }),
+        )),
+        other => Err(Error::invalid(format!(
+            "{}: the image must be a .png or .npy file (got '.{other}')",
+            path.display()
+        ))),
+    }
+}
+
+/// The mask named by `config` (checked against the image), or the whole image.
+fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
+    let (w, h) = (image.width(), image.height());
+    let Some(path) = &config.mask else {
+        return Ok(Grid::new(w, h, true));
+    };
+    let mask = io::read_mask(path, config.max_pixels)?;
+    if !mask.same_size(image) {
+        return Err(Error::invalid(format!(
+            "mask {} is {}x{} but the image {} is {w}x{h}",
+            path.display(),
+            mask.width(),
+            mask.height(),
+            config.image.display()
+        )));
+    }
+    if mask.count() == 0 {
+        return Err(Error::invalid(format!(
+            "mask {} is empty: no pixel is inside the object",
+            path.display()
+        )));
+    }
+    Ok(mask)
+}
+
+/// Rim normals read from a `.npy` of the image's size.
+pub(crate) fn read_boundary(
+    path: &Path,
+    w: usize,
+    h: usize,
+    max_pixels: usize,
+) -> Result<Boundary> {
+    let normals = io::read_normals(path, max_pixels)?;
+    if (normals.width(), normals.height()) != (w, h) {
+        return Err(Error::invalid(format!(
+            "boundary {} is {}x{} but the image is {w}x{h}",
+            path.display(),
+            normals.width(),
+            normals.height()
+        )));
+    }
+    Ok(Boundary::Given(normals))
+}

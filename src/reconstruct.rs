@@ -1,0 +1,464 @@
+//! The one reconstruction pipeline: a shaded image, its mask, a reflectance map and a boundary
+//! condition → (f, g) by the Ikeuchi–Horn engine → unit normals → depth.
+//!
+//! A [`Reconstructor`] is planned once for an image size (RustFFT style) and owns the solver's
+//! and the integrator's buffers, so the many solves of a prior sweep or a study reuse them. Its
+//! [`ReconstructOptions`] carry every policy explicitly: the iteration method and its cap (one
+//! default per method, [`Method::default_max_iter`]), what happens when the solve does not
+//! converge ([`NonConvergence`]), how depth is integrated ([`DepthMethod`]) and whether it is
+//! put to rest on zero (the lowest point of the domain at 0, 0 outside it).
+//!
+//! The light and albedo may be given or estimated from the image ([`Lighting::resolve`]).
+//!
+//! ```
+//! use shadelab::{Boundary, Grid, Lambertian, Light, ReconstructOptions, Reconstructor};
+//! use shadelab::render::{render, RenderOptions};
+//! use shadelab::surface::sphere;
+//!
+//! // A sphere lit from the front, reconstructed with an occluding boundary.
+//! let surface = sphere(48, 48, 20.0)?;
+//! let map = Lambertian { light: Light::FRONT, albedo: 1.0, ambient: 0.0 };
+//! let image = render(&surface, &map, &RenderOptions::default()).image;
+//! let mut planner = Reconstructor::new(48, 48, ReconstructOptions::default())?;
+//! let r = planner.reconstruct(&image, &surface.mask, &Boundary::Occluding, &map,
+//!                             &shadelab::NoProgress)?;
+//! assert!(r.shape.converged());
+//! // The centre faces the viewer and is the highest point; the rim rests on zero.
+//! let n = r.shape.solution.normal(24, 24);
+//! assert!(n.z > 0.99);
+//! assert!(*r.depth.depth.get(24, 24) > 0.9 * r.depth.range);
+//! # Ok::<(), shadelab::Error>(())
+//! ```
+
+use crate::boundary::Boundary;
+use crate::error::{Error, Result};
+use crate::grid::{Image, Mask};
+use crate::integrate::{
+    gradients_from_fg, integrate_owned_gradients, rest_on_zero, FrankotChellappa, PoissonOptions,
+    DEFAULT_MIN_NZ,
+};
+use crate::light::Light;
+use crate::light_estimation::{estimate_light, LightEstimate};
+use crate::progress::Progress;
+use crate::reflectance::ReflectanceMap;
+use crate::solver::{Method, Solution, SolveOptions, Solver};
+use serde::Serialize;
+
+/// What a solve that does not meet its tolerance within its cap leads to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NonConvergence {
+    /// Keep the values and report it ([`Shape::converged`] is false): `shadelab solve`.
+    Report,
+    /// Solve again with Jacobi sweeps (the same fixed point, reached more slowly), at most
+    /// `max_sweeps`: the analyses, whose interpretations must all have settled to compare.
+    FallBackToJacobi {
+        /// The cap of the Jacobi solve.
+        max_sweeps: usize,
+    },
+}
+
+/// How the slopes of the recovered normals are integrated to depth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum DepthMethod {
+    /// Least squares on the domain alone (masked Poisson, conjugate gradients with a multigrid
+    /// preconditioner): silhouettes and the frame are free boundaries.
+    Poisson(#[serde(skip)] PoissonOptions),
+    /// Frankot–Chellappa over the whole frame (periodic): exact and fast when the slopes vanish
+    /// at the frame, as for a relief on a plane (the flat boundary).
+    FrankotChellappa,
+}
+
+/// Every policy of a reconstruction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReconstructOptions {
+    /// How the equations are iterated.
+    pub method: Method,
+    /// Weight λ of the brightness term (> 0).
+    pub lambda: f64,
+    /// Stop when the largest update of f or g falls below this (> 0).
+    pub tol: f64,
+    /// The cap of iterations (cycles for multigrid, sweeps otherwise); `None` is the method's
+    /// default, [`Method::default_max_iter`].
+    pub max_iter: Option<usize>,
+    /// What a solve that does not converge leads to.
+    pub non_convergence: NonConvergence,
+    /// How depth is integrated.
+    pub depth: DepthMethod,
+    /// The smallest n_z used when turning normals into slopes (caps the slope at the limb).
+    pub min_nz: f64,
+    /// Put the lowest point of the domain at depth 0 and everything outside it at 0 (`true`),
+    /// or keep the integrator's own offset (`false`: the analyses read only depth differences).
+    pub rest_on_zero: bool,
+}
+
+/// The cap of multigrid cycles an analysis spends on one solve before falling back to Jacobi:
+/// multigrid settles in a handful of cycles when it settles at all.
+pub const ANALYSIS_MULTIGRID_CYCLES: usize = 40;
+
+/// The cap of the analyses' Jacobi fallback.
+pub const ANALYSIS_JACOBI_SWEEPS: usize = 200_000;
+
+impl Default for ReconstructOptions {
+    /// `shadelab solve`'s policy: multigrid, λ = 1, tolerance 10⁻⁶, the method's default cap,
+    /// non-convergence reported, masked Poisson integration.
+    fn default() -> Self {
+        ReconstructOptions::from_solve(&SolveOptions::default(), NonConvergence::Report)
+    }
+}
+
+impl ReconstructOptions {
+    /// The analyses' policy: at most [`ANALYSIS_MULTIGRID_CYCLES`] multigrid cycles, then
+    /// Jacobi (at most [`ANALYSIS_JACOBI_SWEEPS`]) when multigrid has not settled.
+    pub fn for_analysis() -> Self {
+        ReconstructOptions {
+            max_iter: Some(ANALYSIS_MULTIGRID_CYCLES),
+            non_convergence: NonConvergence::FallBackToJacobi {
+                max_sweeps: ANALYSIS_JACOBI_SWEEPS,
+            },
+            rest_on_zero: false,
+            ..ReconstructOptions::default()
+        }
+    }
+
+    /// The policy with the solver settings of `solve` (its cap taken as given).
+    pub fn from_solve(solve: &SolveOptions, non_convergence: NonConvergence) -> Self {
+        ReconstructOptions {
+            method: solve.method,
+            lambda: solve.lambda,
+            tol: solve.tol,
+            max_iter: Some(solve.max_iter),
+            non_convergence,
+            depth: DepthMethod::Poisson(PoissonOptions::default()),
+            min_nz: DEFAULT_MIN_NZ,
+            rest_on_zero: true,
+        }
+    }
+
+    /// The cap of iterations in force: the given one or the method's default.
+    pub fn max_iter(&self) -> usize {
+        self.max_iter
+            .unwrap_or_else(|| self.method.default_max_iter())
+    }
+
+    /// The solver's settings.
+    pub fn solve_options(&self) -> SolveOptions {
+        SolveOptions {
+            lambda: self.lambda,
+            tol: self.tol,
+            max_iter: self.max_iter(),
+            method: self.method,
+        }
+    }
+
+    /// Checks every value, naming the bad one.
+    pub fn validate(&self) -> Result<()> {
+        self.solve_options().validate()?;
+        if let NonConvergence::FallBackToJacobi { max_sweeps: 0 } = self.non_convergence {
+            return Err(Error::invalid("the Jacobi fallback needs at least 1 sweep"));
+        }
+        if !(self.min_nz.is_finite() && self.min_nz > 0.0 && self.min_nz <= 1.0) {
+            return Err(Error::invalid(format!(
+                "min_nz = {} must be in (0, 1]",
+                self.min_nz
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The light and albedo a reconstruction assumes, and the estimate they came from if any.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Lighting {
+    /// The light.
+    pub light: Light,
+    /// The albedo.
+    pub albedo: f64,
+    /// The estimate, when the light was estimated from the image.
+    pub estimate: Option<LightEstimate>,
+}
+
+impl Lighting {
+    /// The light `given`, or (with `None`) the one estimated from `image` on `mask`; the albedo
+    /// `albedo`, or the estimate's when the light is estimated, or 1.
+    ///
+    /// Fails when the light is not strictly in front of the surface (z ≤ 0: a grazing or rear
+    /// light leaves the shading without an answer) or the albedo is not a positive number.
+    pub fn resolve(
+        given: Option<Light>,
+        albedo: Option<f64>,
+        image: &Image,
+        mask: &Mask,
+    ) -> Result<Lighting> {
+        if let Some(a) = albedo {
+            if !(a.is_finite() && a > 0.0) {
+                return Err(Error::invalid(format!(
+                    "albedo {a} must be a positive number"
+                )));
+            }
+        }
+        let estimate = match given {
+            Some(_) => None,
+            None => Some(estimate_light(image, mask)?),
+        };
+        let light = match (given, &estimate) {
+            (Some(l), _) => l,
+            (None, Some(e)) => e.light,
+            (None, None) => return Err(Error::invalid("no light given or estimated")),
+        };
+        check_light_in_front(&light)?;
+        let albedo = match (albedo, &estimate) {
+            (Some(a), _) => a,
+            (None, Some(e)) => e.albedo,
+            (None, None) => 1.0,
+        };
+        Ok(Lighting {
+            light,
+            albedo,
+            estimate,
+        })
+    }
+}
+
+/// Fails unless the light is strictly in front of the surface (z > 0).
+pub fn check_light_in_front(light: &Light) -> Result<()> {
+    let d = light.direction();
+    if d.z <= 0.0 {
+        return Err(Error::invalid(format!(
+            "the light ({:.4}, {:.4}, {:.4}) must have z > 0 (a grazing or rear light leaves \
+             the shading without an answer)",
+            d.x, d.y, d.z
+        )));
+    }
+    Ok(())
+}
+
+/// The solved shape: the solver's (f, g) with how it was reached.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape {
+    /// The solver's answer (f, g, energies, iterations, last update).
+    pub solution: Solution,
+    /// The method whose answer this is: the configured one, or Jacobi after a fallback.
+    pub method: Method,
+    /// Whether the configured method did not converge and Jacobi was run instead.
+    pub fell_back: bool,
+    /// The largest update after each iteration of the solve whose answer this is.
+    pub history: Vec<f64>,
+    /// The cap that solve ran under.
+    pub max_iter: usize,
+}
+
+impl Shape {
+    /// Whether the solve met its tolerance.
+    pub fn converged(&self) -> bool {
+        self.solution.converged
+    }
+}
+
+/// The integrated depth and how the integration went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Depth {
+    /// Depth toward the viewer in pixels: the lowest point of the domain at 0, 0 outside it.
+    pub depth: Image,
+    /// The depth range over the domain (with resting on zero: the highest point's height).
+    pub range: f64,
+    /// How it was integrated, with the iterative integrator's numbers.
+    pub report: IntegrationReport,
+}
+
+/// How an integration went.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct IntegrationReport {
+    /// Conjugate-gradient iterations (0 for Frankot–Chellappa).
+    pub iterations: usize,
+    /// The final relative residual (0 for Frankot–Chellappa).
+    pub relative_residual: f64,
+    /// Whether the iteration met its tolerance (always for Frankot–Chellappa).
+    pub converged: bool,
+}
+
+/// A whole reconstruction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reconstruction {
+    /// The solved (f, g).
+    pub shape: Shape,
+    /// The depth.
+    pub depth: Depth,
+}
+
+/// The reconstruction planner for one image size: the solver and the integrator, planned once
+/// and reused by every reconstruction.
+#[derive(Debug)]
+pub struct Reconstructor {
+    solver: Solver,
+    fourier: Option<FrankotChellappa>,
+    options: ReconstructOptions,
+}
+
+impl Reconstructor {
+    /// A planner for `width` × `height` images with `options` (checked).
+    pub fn new(width: usize, height: usize, options: ReconstructOptions) -> Result<Self> {
+        options.validate()?;
+        let fourier = match options.depth {
+            DepthMethod::FrankotChellappa => Some(FrankotChellappa::new(width, height)?),
+            DepthMethod::Poisson(_) => None,
+        };
+        Ok(Reconstructor {
+            solver: Solver::new(width, height)?,
+            fourier,
+            options,
+        })
+    }
+
+    /// The policy in force.
+    pub fn options(&self) -> &ReconstructOptions {
+        &self.options
+    }
+
+    /// Solves for (f, g), following the non-convergence policy; reports each iteration to
+    /// `progress` (a stage as long as the cap). A solve that blows up is an error.
+    pub fn solve(
+        &mut self,
+        image: &Image,
+        mask: &Mask,
+        boundary: &Boundary,
+        reflectance: &dyn ReflectanceMap,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        let options = self.options.solve_options();
+        let mut shape = self.solve_once(image, mask, boundary, reflectance, &options, progress)?;
+        if let NonConvergence::FallBackToJacobi { max_sweeps } = self.options.non_convergence {
+            if (shape.solution.diverged || !shape.solution.converged)
+                && options.method != Method::Jacobi
+            {
+                let jacobi = SolveOptions {
+                    method: Method::Jacobi,
+                    max_iter: max_sweeps,
+                    ..options
+                };
+                shape = self.solve_once(image, mask, boundary, reflectance, &jacobi, progress)?;
+                shape.fell_back = true;
+            }
+        }
+        if shape.solution.diverged {
+            return Err(Error::Compute(format!(
+                "the {} iteration diverged after {} {} (last update {:.3e}); use the jacobi \
+                 method or a smaller λ",
+                shape.method,
+                shape.solution.iterations,
+                shape.method.iteration_unit(),
+                shape.solution.last_update
+            )));
+        }
+        Ok(shape)
+    }
+
+    fn solve_once(
+        &mut self,
+        image: &Image,
+        mask: &Mask,
+        boundary: &Boundary,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        progress: &dyn Progress,
+    ) -> Result<Shape> {
+        progress.start(options.max_iter as u64, "solving");
+        let mut history = Vec::new();
+        let solution = self.solver.solve_with_progress(
+            image,
+            mask,
+            boundary,
+            reflectance,
+            options,
+            &mut |p| {
+                history.push(p.last_update);
+                progress.set_position(p.iteration as u64);
+                if p.iteration % 64 == 0 {
+                    progress.message(&format!("solving (last update {:.2e})", p.last_update));
+                }
+            },
+        )?;
+        progress.finish();
+        Ok(Shape {
+            solution,
+            method: options.method,
+            fell_back: false,
+            history,
+            max_iter: options.max_iter,
+        })
+    }
+
+    /// Integrates the slopes of `shape`'s normals on `mask` to depth resting on zero.
+    pub fn depth(&mut self, shape: &Shape, mask: &Mask) -> Result<Depth> {
+        let (f, g) = (shape.solution.f.clone(), shape.solution.g.clone());
+        self.depth_from_fg(f, g, mask)
+    }
+
+    /// [`Reconstructor::depth`] from (f, g) given by value: their buffers become the slopes,
+    /// so a large reconstruction holds no extra full-size images.
+    pub fn depth_from_fg(&mut self, f: Image, g: Image, mask: &Mask) -> Result<Depth> {
+        let (dz_dx, dz_dy) = gradients_from_fg(f, g, mask, self.options.min_nz)?;
+        let (mut depth, report) = match (&mut self.fourier, self.options.depth) {
+            (Some(fc), _) => (
+                fc.integrate(&dz_dx, &dz_dy)?,
+                IntegrationReport {
+                    iterations: 0,
+                    relative_residual: 0.0,
+                    converged: true,
+                },
+            ),
+            (None, DepthMethod::Poisson(options)) => {
+                let i = integrate_owned_gradients(dz_dx, dz_dy, mask, &options)?;
+                (
+                    i.depth,
+                    IntegrationReport {
+                        iterations: i.iterations,
+                        relative_residual: i.relative_residual,
+                        converged: i.converged,
+                    },
+                )
+            }
+            (None, DepthMethod::FrankotChellappa) => {
+                return Err(Error::Compute(
+                    "the Frankot–Chellappa integrator was not planned".into(),
+                ))
+            }
+        };
+        let range = if self.options.rest_on_zero {
+            rest_on_zero(&mut depth, mask)?
+        } else {
+            let (lo, hi) = depth
+                .data()
+                .iter()
+                .zip(mask.data())
+                .filter(|(_, &m)| m)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (&z, _)| {
+                    (lo.min(z), hi.max(z))
+                });
+            if hi >= lo {
+                hi - lo
+            } else {
+                0.0
+            }
+        };
+        Ok(Depth {
+            depth,
+            range,
+            report,
+        })
+    }
+
+    /// Solves and integrates: [`Reconstructor::solve`] then [`Reconstructor::depth`].
+    pub fn reconstruct(
+        &mut self,
+        image: &Image,
+        mask: &Mask,
+        boundary: &Boundary,
+        reflectance: &dyn ReflectanceMap,
+        progress: &dyn Progress,
+    ) -> Result<Reconstruction> {
+        let shape = self.solve(image, mask, boundary, reflectance, progress)?;
+        let depth = self.depth(&shape, mask)?;
+        Ok(Reconstruction { shape, depth })
+    }
+}
