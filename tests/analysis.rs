@@ -737,6 +737,48 @@ fn bump_config() -> shadelab::pipeline::perception::Config {
     config
 }
 
+/// Runs `analyze COMMAND` on the picture of [`bump_config`] with `extra` flags into `dir/cli`,
+/// and asserts that it writes the same files as the library wrote into `dir/lib`.
+fn command_writes_the_same(dir: &Path, command: &str, extra: &[&str]) {
+    let mut args = vec![
+        "analyze",
+        command,
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=1",
+        "--set",
+        "pattern=bumps",
+        "--size",
+        "48",
+        "--ppd",
+        "16",
+        "--out",
+        "cli",
+    ];
+    args.extend(extra);
+    let out = shadelab(dir, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (lib, cli) = (
+        crate::determinism::outputs(&dir.join("lib")),
+        crate::determinism::outputs(&dir.join("cli")),
+    );
+    assert_eq!(
+        lib.keys().collect::<Vec<_>>(),
+        cli.keys().collect::<Vec<_>>()
+    );
+    assert!(
+        lib == cli,
+        "the library and `analyze {command}` wrote different files"
+    );
+}
+
 #[test]
 fn the_prior_sweep_pipeline_writes_what_the_command_writes() {
     use shadelab::pipeline::prior_sweep;
@@ -754,47 +796,10 @@ fn the_prior_sweep_pipeline_writes_what_the_command_writes() {
     assert!(report.tokens[0].concave_tilts_deg.contains(&180.0));
     std::fs::create_dir_all(d.join("lib")).unwrap();
     report.write(&d.join("lib")).unwrap();
-    let out = shadelab(
+    command_writes_the_same(
         &d,
-        &[
-            "analyze",
-            "prior-sweep",
-            "--stimulus",
-            "bumps",
-            "--set",
-            "rows=1",
-            "--set",
-            "columns=1",
-            "--set",
-            "pattern=bumps",
-            "--size",
-            "48",
-            "--ppd",
-            "16",
-            "--tilts",
-            "0:360:90",
-            "--binding",
-            "0",
-            "--out",
-            "cli",
-        ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let (lib, cli) = (
-        crate::determinism::outputs(&d.join("lib")),
-        crate::determinism::outputs(&d.join("cli")),
-    );
-    assert_eq!(
-        lib.keys().collect::<Vec<_>>(),
-        cli.keys().collect::<Vec<_>>()
-    );
-    assert!(
-        lib == cli,
-        "the library and the command wrote different files"
+        "prior-sweep",
+        &["--tilts", "0:360:90", "--binding", "0"],
     );
 }
 
@@ -818,41 +823,17 @@ fn the_observer_pipeline_writes_what_the_command_writes() {
     );
     std::fs::create_dir_all(d.join("lib")).unwrap();
     report.write(&d.join("lib")).unwrap();
-    let out = shadelab(
+    command_writes_the_same(
         &d,
+        "observer",
         &[
-            "analyze",
-            "observer",
-            "--stimulus",
-            "bumps",
-            "--set",
-            "rows=1",
-            "--set",
-            "columns=1",
-            "--set",
-            "pattern=bumps",
-            "--size",
-            "48",
-            "--ppd",
-            "16",
             "--tilts",
             "0:360:45",
             "--rotations",
             "0,180",
             "--prior-kappa",
             "1,4",
-            "--out",
-            "cli",
         ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        crate::determinism::outputs(&d.join("lib")) == crate::determinism::outputs(&d.join("cli")),
-        "the library and the command wrote different files"
     );
 }
 

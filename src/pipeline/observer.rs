@@ -2,14 +2,15 @@
 //! upright picture, then each token's P(convex) against the picture's rotation, one curve per
 //! prior concentration κ.
 
-use super::perception::{self, field, interpretations_of, write_report, BadSetting, Header};
+use super::perception::{
+    self, field, interpretations_of, write_table_and_report, BadSetting, Header,
+};
 use crate::analysis::observer::{
     check_circle, curves_csv, p_convex_plot, Curve, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
     DEFAULT_PRIOR_TILT_DEG,
 };
-use crate::analysis::{observe, parse_angles, sweep, LightPrior, ObserverOptions, Sweep};
+use crate::analysis::{observe, parse_angles, LightPrior, ObserverOptions, Sweep};
 use crate::error::{Error, Result};
-use crate::io;
 use crate::progress::Progress;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -173,17 +174,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let started = Instant::now();
     config.check()?;
     let setup = config.picture.load()?;
-    let scene = setup.scene();
-    progress.start(config.tilts.len() as u64, "observer sweep");
-    let result = sweep(
-        &scene,
-        &config.tilts,
-        &setup.lighting,
-        &setup.options,
-        &|| progress.advance(1),
-    );
-    progress.finish();
-    let result = result?;
+    let result = setup.sweep(&config.tilts, progress, "observer sweep")?;
     let curves = config
         .observers()
         .into_iter()
@@ -226,13 +217,10 @@ impl Report {
     /// Writes `observer.csv`, `p_convex.png`, `p_convex.svg` and the report, [`REPORT_FILE`],
     /// into the folder `dir` (which must exist).
     pub fn write(&self, dir: &Path) -> Result<()> {
-        io::write_text(
-            &dir.join("observer.csv"),
-            &curves_csv(&self.sweep, &self.percepts),
-        )?;
         let plot = p_convex_plot(&self.sweep, &self.percepts)?;
         plot.write_png(&dir.join("p_convex.png"))?;
         plot.write_svg(&dir.join("p_convex.svg"))?;
-        write_report(dir, REPORT_FILE, self)
+        let csv = curves_csv(&self.sweep, &self.percepts);
+        write_table_and_report(dir, ("observer.csv", &csv), REPORT_FILE, self)
     }
 }

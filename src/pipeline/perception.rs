@@ -6,12 +6,13 @@
 use super::solve::{read_boundary, BoundarySource};
 use super::source::PictureSource;
 use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
+use crate::analysis::{sweep, Interpretation, Sweep};
 use crate::analysis::{Domain, Picture};
-use crate::analysis::{Interpretation, Sweep};
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
 use crate::io;
+use crate::progress::Progress;
 use crate::solver::SolveOptions;
 use serde::{Serialize, Serializer};
 use serde_json::Value;
@@ -345,6 +346,17 @@ impl Setup {
         }
     }
 
+    /// The sweep of the scene over `tilts`, one step of `progress` (a stage called `what`) per
+    /// tilt.
+    pub fn sweep(&self, tilts: &[f64], progress: &dyn Progress, what: &str) -> Result<Sweep> {
+        progress.start(tilts.len() as u64, what);
+        let result = sweep(&self.scene(), tilts, &self.lighting, &self.options, &|| {
+            progress.advance(1)
+        });
+        progress.finish();
+        result
+    }
+
     /// What every perception report begins with, for `command`.
     pub fn header(&self, command: &'static str) -> Header {
         Header {
@@ -387,9 +399,15 @@ pub(crate) fn interpretations_of<S: Serializer>(sweep: &Sweep, s: S) -> Result<S
     <[Interpretation]>::serialize(&sweep.interpretations, s)
 }
 
-/// Writes `report` as JSON to `dir/file`.
-pub(crate) fn write_report(dir: &Path, file: &str, report: &impl Serialize) -> Result<()> {
+/// Writes the table `csv` to `dir/csv_file` and `report` as JSON to `dir/report_file`.
+pub(crate) fn write_table_and_report(
+    dir: &Path,
+    (csv_file, csv): (&str, &str),
+    report_file: &str,
+    report: &impl Serialize,
+) -> Result<()> {
+    io::write_text(&dir.join(csv_file), csv)?;
     let value = serde_json::to_value(report)
         .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
-    io::write_json(&dir.join(file), &value)
+    io::write_json(&dir.join(report_file), &value)
 }

@@ -3,11 +3,12 @@
 //! where it flips, and optionally the binding analysis (one light for the scene against a light
 //! per token).
 
-use super::perception::{self, field, interpretations_of, write_report, BadSetting, Header};
+use super::perception::{
+    self, field, interpretations_of, write_table_and_report, BadSetting, Header,
+};
 use crate::analysis::binding::{binding, Binding, GlobalLight};
-use crate::analysis::{parse_angles, sweep, Interpreter, Sweep};
+use crate::analysis::{parse_angles, Interpreter, Sweep};
 use crate::error::{Error, Result};
-use crate::io;
 use crate::progress::Progress;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -148,16 +149,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let setup = config.picture.load()?;
     let scene = setup.scene();
     let fourier = Interpreter::new(&scene, &setup.options)?.uses_fourier();
-    progress.start(config.tilts.len() as u64, "prior sweep");
-    let result = sweep(
-        &scene,
-        &config.tilts,
-        &setup.lighting,
-        &setup.options,
-        &|| progress.advance(1),
-    );
-    progress.finish();
-    let result = result?;
+    let result = setup.sweep(&config.tilts, progress, "prior sweep")?;
     let bound = match config.binding {
         Some(g) => Some(binding(&scene, &setup.lighting, g, &setup.options)?),
         None => None,
@@ -203,10 +195,10 @@ impl Report {
     /// Writes `sweep.csv`, `sweep.png`, `sweep.svg` and the report, [`REPORT_FILE`], into the
     /// folder `dir` (which must exist).
     pub fn write(&self, dir: &Path) -> Result<()> {
-        io::write_text(&dir.join("sweep.csv"), &self.sweep.csv())?;
         let figure = self.sweep.figure();
         figure.write_png(&dir.join("sweep.png"))?;
         figure.write_svg(&dir.join("sweep.svg"))?;
-        write_report(dir, REPORT_FILE, self)
+        let csv = self.sweep.csv();
+        write_table_and_report(dir, ("sweep.csv", &csv), REPORT_FILE, self)
     }
 }
