@@ -9,6 +9,7 @@
 use crate::error::{Error, Result};
 use crate::grid::{Grid, RgbImage};
 use crate::io::{self, AtomicDir, BitDepth};
+use crate::pipeline::gallery::{GalleryEntry, GalleryReport};
 use crate::stimulus::{self, ExportOptions, Output, Pixels, Request, Spec};
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -180,16 +181,8 @@ struct Rendered {
     files: Vec<String>,
 }
 
-/// Builds the gallery of `presets` in `out`: per preset `NAME.png` (16-bit linear),
-/// `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then `gallery.png`
-/// (all thumbnails) and `index.html`. `progress` is called with each preset's name when it is
-/// done (from worker threads). Returns the folder.
-pub fn build(
-    presets: &[Preset],
-    out: &Path,
-    options: &Options,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<PathBuf> {
+/// Checks that there is at least one preset and that no two share a name (their files would).
+pub fn check_presets(presets: &[Preset]) -> Result<()> {
     if presets.is_empty() {
         return Err(Error::invalid("the gallery needs at least one preset"));
     }
@@ -202,6 +195,21 @@ pub fn build(
             )));
         }
     }
+    Ok(())
+}
+
+/// Builds the gallery of `presets` in `out`: per preset `NAME.png` (16-bit linear),
+/// `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then `gallery.png`
+/// (all thumbnails) and `index.html`. `progress` is called with each preset's name when it is
+/// done (from worker threads). Returns what was written (see also
+/// [`crate::pipeline::gallery`], the same as a pipeline).
+pub fn build(
+    presets: &[Preset],
+    out: &Path,
+    options: &Options,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<GalleryReport> {
+    check_presets(presets)?;
     let dir = AtomicDir::create(out, MARKER, options.force)?;
     let thumbs = dir.path().join("thumbs");
     std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
@@ -222,7 +230,21 @@ pub fn build(
     )?;
     let html = index_html(&rendered, &options.docs_base);
     io::write_text(&dir.path().join(MARKER), &html)?;
-    dir.commit()
+    let folder = dir.commit()?;
+    Ok(GalleryReport {
+        index: folder.join(MARKER),
+        folder,
+        presets: rendered
+            .into_iter()
+            .map(|r| GalleryEntry {
+                name: r.preset.name,
+                stimulus: r.preset.spec.stimulus,
+                geometry: r.request.geometry,
+                seed: r.request.seed,
+                files: r.files,
+            })
+            .collect(),
+    })
 }
 
 fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {

@@ -315,6 +315,13 @@ impl Reconstructor {
         &self.options
     }
 
+    /// Frees the solver's buffers (the multigrid hierarchy, the Jacobi vectors): a planner used
+    /// once need not hold them through the integration. The next solve plans them again.
+    pub fn release_solver(&mut self) -> Result<()> {
+        self.solver = Solver::new(self.solver.width(), self.solver.height())?;
+        Ok(())
+    }
+
     /// Solves for (f, g), following the non-convergence policy; reports each iteration to
     /// `progress` (a stage as long as the cap). A solve that blows up is an error.
     pub fn solve(

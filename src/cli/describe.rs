@@ -1,7 +1,7 @@
 //! `shadelab list` and `shadelab describe NAME`.
 
 use super::CliResult;
-use shadelab::stimulus;
+use shadelab::pipeline::render::{describe, list as all};
 
 /// Arguments of `describe`.
 #[derive(Debug, clap::Args)]
@@ -12,29 +12,27 @@ pub struct Args {
 
 /// Prints one line per stimulus: its name and what it shows.
 pub fn list() -> CliResult {
-    for s in stimulus::all() {
-        let info = s.info();
-        println!("{:<18} {}", info.name, info.summary);
+    for s in all() {
+        println!("{:<18} {}", s.name, s.summary);
     }
     Ok(())
 }
 
 /// Prints a stimulus's parameters with defaults and ranges.
 pub fn run(args: Args) -> CliResult {
-    let s = stimulus::find(&args.name)?;
-    let info = s.info();
-    println!("{} — {}", info.name, info.summary);
+    let d = describe(&args.name)?;
+    println!("{} — {}", d.name, d.summary);
     println!(
         "default size: {}x{} deg at {} ppd",
-        info.default_visual_size.0, info.default_visual_size.1, info.default_ppd
+        d.default_visual_size.0, d.default_visual_size.1, d.default_ppd
     );
     println!("parameters (--set key=value):");
-    for p in &info.params {
+    for p in &d.params {
         println!(
             "  {:<18} default {:<14} range {:<28} {}",
             p.name,
             p.default.to_string(),
-            p.range_text(),
+            p.range,
             p.doc
         );
     }

@@ -1,7 +1,9 @@
 //! `shadelab gallery --out DIR`: every preset rendered, with an index page.
 
-use super::{progress, CliResult, Global};
+use super::progress::Bar;
+use super::{CliResult, Global};
 use shadelab::gallery;
+use shadelab::pipeline::gallery::{run as build, GalleryConfig};
 use std::path::PathBuf;
 
 /// Arguments of `gallery`.
@@ -20,24 +22,22 @@ pub struct Args {
 
 /// Runs `gallery`.
 pub fn run(args: Args, global: &Global) -> CliResult {
-    let presets = match &args.presets {
-        Some(dir) => gallery::load_presets(dir)?,
-        None => gallery::builtin_presets()?,
+    let mut config = match &args.presets {
+        Some(dir) => GalleryConfig::from_folder(dir, &args.out)?,
+        None => GalleryConfig::builtin(&args.out)?,
     };
-    let bar = progress::bar(presets.len() as u64, "gallery", global.quiet);
-    let options = gallery::Options {
+    config.options = gallery::Options {
         force: global.force,
         max_pixels: global.max_pixels,
         docs_base: args.docs_base,
     };
-    let dir = gallery::build(&presets, &args.out, &options, &|_| bar.inc(1))?;
-    bar.finish_and_clear();
+    let report = build(&config, &Bar::new(global.quiet))?;
     if !global.quiet {
         eprintln!(
             "wrote {} ({} stimuli; open {})",
-            dir.display(),
-            presets.len(),
-            dir.join(gallery::MARKER).display()
+            report.folder.display(),
+            report.presets.len(),
+            report.index.display()
         );
     }
     Ok(())

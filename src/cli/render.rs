@@ -2,10 +2,12 @@
 
 use super::{CliError, CliResult, Global};
 use clap::builder::TypedValueParser;
-use serde_json::{Map, Value};
+use serde_json::Value;
 use shadelab::io::BitDepth;
-use shadelab::stimulus::{self, ExportOptions, Range, Spec};
-use shadelab::visual_size::{parse_pair, SizeRequest};
+use shadelab::pipeline::render::{self, RenderConfig};
+use shadelab::stimulus::{ExportOptions, Range, Spec};
+use shadelab::visual_size::parse_pair;
+use shadelab::{Error, NoProgress};
 use std::path::PathBuf;
 
 /// Arguments of `render`.
@@ -77,60 +79,54 @@ pub fn utf8_text() -> impl TypedValueParser<Value = String> {
 /// Runs `render`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let spec = args.spec.as_deref().map(Spec::load).transpose()?;
-    let name = match (&args.name, &spec) {
+    let mut config = match (&args.name, &spec) {
         (Some(n), Some(s)) if *n != s.stimulus => {
             return Err(CliError::usage(format!(
                 "the name '{n}' disagrees with the spec's stimulus '{}'",
                 s.stimulus
             )))
         }
-        (Some(n), _) => n.clone(),
-        (None, Some(s)) => s.stimulus.clone(),
+        (_, Some(s)) => RenderConfig::from_spec(s, &args.out),
+        (Some(n), None) => RenderConfig::new(n.as_str(), &args.out),
         (None, None) => {
             return Err(CliError::usage(
                 "name what to render (see `shadelab list`) or give --spec FILE.json",
             ))
         }
     };
-    let mut given: Map<String, Value> = spec.as_ref().map(|s| s.params.clone()).unwrap_or_default();
-    given.extend(shadelab::params::Params::parse_pairs(&args.set)?);
+    config
+        .params
+        .extend(shadelab::params::Params::parse_pairs(&args.set)?);
     if let Some(l) = &args.light {
-        given.insert("light".into(), Value::from(l.as_str()));
+        config
+            .params
+            .insert("light".into(), Value::from(l.as_str()));
     }
     if let Some(b) = &args.brdf {
-        given.insert("brdf".into(), Value::from(b.as_str()));
+        config.params.insert("brdf".into(), Value::from(b.as_str()));
     }
     if let Some(space) = &args.space {
-        let has_space = stimulus::find(&name)?
-            .info()
-            .params
-            .iter()
-            .any(|p| p.name == "space");
-        if !has_space {
-            return Err(CliError::usage(format!(
-                "--space applies to figures drawn in a space (reflectance-map); '{name}' has no space parameter"
-            )));
-        }
-        given.insert("space".into(), Value::from(space.as_str()));
+        config.set_space(space).map_err(|e| match e {
+            Error::Invalid(m) => CliError::usage(format!("--space: {m}")),
+            other => other.into(),
+        })?;
     }
-    let mut size = spec.as_ref().map(Spec::size).unwrap_or_default();
     if let Some(s) = &args.size {
-        size.shape = Some(parse_pair::<usize>(s, "--size")?);
+        config.size.shape = Some(parse_pair::<usize>(s, "--size")?);
     }
     if let (Some(w), Some(h)) = (args.width, args.height) {
-        size.shape = Some((w, h));
+        config.size.shape = Some((w, h));
     }
     if let Some(v) = &args.visual_size {
-        size.visual_size = Some(parse_pair::<f64>(v, "--visual-size")?);
+        config.size.visual_size = Some(parse_pair::<f64>(v, "--visual-size")?);
     }
     if args.ppd.is_some() {
-        size.ppd = args.ppd;
+        config.size.ppd = args.ppd;
     }
-    let seed = args
-        .seed
-        .or(spec.as_ref().and_then(|s| s.seed))
-        .unwrap_or(0);
-    let options = ExportOptions {
+    if let Some(seed) = args.seed {
+        config.seed = seed;
+    }
+    config.export = ExportOptions {
         bit_depth: if args.bit_depth == 8 {
             BitDepth::Eight
         } else {
@@ -145,21 +141,16 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         layers: args.layers,
         force: global.force,
     };
-    render_to(&name, &given, &size, seed, &args.out, &options, global)
+    config.max_pixels = global.max_pixels;
+    render_to(&config, global)
 }
 
-/// Renders `name` and writes it with its sidecar; prints the files written unless quiet.
-pub fn render_to(
-    name: &str,
-    given: &Map<String, Value>,
-    size: &SizeRequest,
-    seed: u64,
-    out: &std::path::Path,
-    options: &ExportOptions,
-    global: &Global,
-) -> CliResult {
-    let (request, output) = stimulus::generate(name, given, size, seed, global.max_pixels)?;
-    let files = stimulus::write_output(name, &request, &output, out, options)?;
+/// Renders what `config` says and writes it with its sidecar; prints the files written unless
+/// quiet.
+pub fn render_to(config: &RenderConfig, global: &Global) -> CliResult {
+    config.validate()?;
+    let report = render::run(config, &NoProgress)?;
+    let files = render::write(config, &report)?;
     if !global.quiet {
         for f in files {
             eprintln!("wrote {}", f.display());

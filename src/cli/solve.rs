@@ -75,21 +75,20 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     // Claim the output folder before the long part, so an unwritable one fails at once.
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
     let bar = Bar::new(global.quiet);
-    let run = solve::run(&config, &bar).map_err(|e| match e {
+    let report = solve::run_into(&config, folder.path(), &bar).map_err(|e| match e {
         shadelab::Error::Compute(why) if why.contains("diverged") => CliError::from(
             shadelab::Error::Compute(format!("{why} (--method jacobi, --lambda)")),
         ),
         other => CliError::from(other),
     })?;
-    run.write(folder.path())?;
     let target = folder.commit()?;
-    let solver = &run.report.solver;
+    let solver = &report.solver;
     let unit = solver.iteration_unit;
     if !solver.converged {
         eprintln!(
             "warning: the {} solve did not converge within --max-iter {} {unit}: the last update \
              {:.3e} is above --tol {:.3e}; raise --max-iter or --tol",
-            solver.method, run.shape.max_iter, solver.last_update, config.options.tol
+            solver.method, report.parameters.max_iter, solver.last_update, config.options.tol
         );
     }
     if !global.quiet {

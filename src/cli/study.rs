@@ -2,9 +2,11 @@
 //! in parallel on one machine or in shards on many (see docs/studies.md), merged into the
 //! files a single run writes.
 
-use super::{progress, CliError, CliResult, Global};
-use shadelab::analysis::study::{merge, Shard, Study, REPORT, RESULTS, SWEEP};
-use shadelab::io::{self, write_text, AtomicDir};
+use super::progress::Bar;
+use super::{CliError, CliResult, Global};
+use shadelab::analysis::study::{Shard, REPORT};
+use shadelab::io::AtomicDir;
+use shadelab::pipeline::study::{self as pipeline, StudyMergeConfig, StudyRunConfig};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -58,26 +60,22 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 fn run_study(args: RunArgs, global: &Global) -> CliResult {
     let started = Instant::now();
     let shard = match &args.shard {
-        Some(text) => Shard::parse(text)?,
+        // The library's message begins "shard 'I/N': …"; here it is the flag's.
+        Some(text) => Shard::parse(text).map_err(|e| CliError::usage(format!("--{e}")))?,
         None => Shard::WHOLE,
     };
-    let study = Study::load_with_max_pixels(&args.spec, global.max_pixels)?;
+    let config = StudyRunConfig::load(&args.spec, shard, global.max_pixels)?;
+    // Claimed before the work, so that a folder that may not be replaced fails at once.
     let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
-    let count = study.shard_points(shard).len();
-    let bar = progress::bar(count as u64, "study", global.quiet);
-    let output = study.run(shard, &|| bar.inc(1))?;
-    bar.finish_and_clear();
-    let dir = folder.path().to_path_buf();
-    write_text(&dir.join(RESULTS), &output.results)?;
-    write_text(&dir.join(SWEEP), &output.sweep)?;
-    let report = study.report(shard, &output, started.elapsed().as_secs_f64());
-    io::write_json(&dir.join(REPORT), &report)?;
+    let report = pipeline::run(&config, &Bar::new(global.quiet))?;
+    report.write_into(folder.path())?;
     let target = folder.commit()?;
     if !global.quiet {
         eprintln!(
-            "{}: {count} of {} grid points (shard {}/{}) in {:.2} s",
+            "{}: {} of {} grid points (shard {}/{}) in {:.2} s",
             target.display(),
-            study.points.len(),
+            report.points.len(),
+            report.point_count,
             shard.index,
             shard.count,
             started.elapsed().as_secs_f64()
@@ -87,31 +85,15 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
 }
 
 fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
-    // Replacing one of its own inputs would lose that shard if anything went wrong later.
-    let out = std::fs::canonicalize(&args.out).ok();
-    if let Some(dir) = args
-        .dirs
-        .iter()
-        .find(|d| out.is_some() && std::fs::canonicalize(d).ok() == out)
-    {
-        return Err(CliError::usage(format!(
-            "--out {} is one of the shard folders being merged ({}); choose another folder",
-            args.out.display(),
-            dir.display()
-        )));
-    }
-    let merged = merge(&args.dirs)?;
-    let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
-    let dir = folder.path().to_path_buf();
-    write_text(&dir.join(RESULTS), &merged.results)?;
-    write_text(&dir.join(SWEEP), &merged.sweep)?;
-    io::write_json(&dir.join(REPORT), &merged.report)?;
-    let target = folder.commit()?;
+    let config = StudyMergeConfig::new(args.dirs, &args.out)
+        .map_err(|e| CliError::usage(format!("--out {e}")))?;
+    let report = pipeline::merge(&config, &Bar::new(global.quiet))?;
+    let target = report.write(&args.out, global.force)?;
     if !global.quiet {
         eprintln!(
             "{}: merged {} shard folders",
             target.display(),
-            args.dirs.len()
+            config.dirs.len()
         );
     }
     Ok(())

@@ -3,11 +3,13 @@
 //! is ever left where the user asked for one.
 
 mod atomic;
+mod csv;
 mod npy;
 mod png;
 mod sidecar;
 
 pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, AtomicDir};
+pub use csv::csv_field;
 pub use npy::{
     read_array, read_array_from_bytes, read_image, read_image_from_bytes, read_normals, write_f32,
     write_image, write_normals, NpyArray,

@@ -9,6 +9,9 @@ pub mod observer;
 pub mod perception;
 pub mod prior_sweep;
 pub mod solve;
+pub mod gallery;
+pub mod render;
 pub mod source;
+pub mod study;
 
 pub use source::{Picture, PictureSource};

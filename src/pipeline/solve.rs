@@ -290,9 +290,20 @@ pub struct SolveRun {
     pub report: SolveReport,
 }
 
-/// Reads the inputs named by `config`, reconstructs, and reports.
-pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
-    let started = Instant::now();
+/// The solve done, before integration: what the report needs besides the depth.
+struct Solved {
+    shape: Shape,
+    mask: Mask,
+    planner: Reconstructor,
+    lighting: Lighting,
+    brdf: BrdfSpec,
+    image_info: Value,
+    boundary_kind: &'static str,
+    solve_seconds: f64,
+}
+
+/// Reads the inputs and solves; the image and boundary are dropped before returning.
+fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
     let (image, image_info) = read_image(&config.image, config.max_pixels)?;
     let (w, h) = (image.width(), image.height());
@@ -309,20 +320,88 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
     let reflectance = brdf.build(lighting.light)?;
-
     let mut planner = Reconstructor::new(w, h, config.options)?;
-    let solve_started = Instant::now();
+    let started = Instant::now();
     let shape = planner.solve(&image, &mask, &boundary, reflectance.as_ref(), progress)?;
-    let solve_seconds = solve_started.elapsed().as_secs_f64();
-    let boundary_kind = boundary.name();
-    drop((image, boundary, reflectance));
-    let integrate_started = Instant::now();
-    let depth = planner.depth(&shape, &mask)?;
-    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    // The solver's buffers live only for the solve: the integration and the outputs make their
+    // own, and memory peaks there.
+    planner.release_solver()?;
+    Ok(Solved {
+        shape,
+        mask,
+        planner,
+        lighting,
+        brdf,
+        image_info,
+        boundary_kind: boundary.name(),
+        solve_seconds: started.elapsed().as_secs_f64(),
+    })
+}
 
+/// Reads the inputs named by `config`, reconstructs, and reports, keeping everything in
+/// memory (see [`run_into`] for the folder written as it goes).
+pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
+    let started = Instant::now();
+    let mut solved = solve_stage(config, progress)?;
+    let integrate_started = Instant::now();
+    let depth = solved.planner.depth(&solved.shape, &solved.mask)?;
+    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    let report = report(
+        config,
+        &solved,
+        &solved.shape.solution,
+        &depth,
+        integrate_seconds,
+        started,
+    );
+    Ok(SolveRun {
+        shape: solved.shape,
+        mask: solved.mask,
+        depth,
+        report,
+    })
+}
+
+/// [`run`] writing the outputs into `dir` as they are made, each dropped once written: the
+/// normals before the integration, whose buffers take over (f, g) (the memory a large solve
+/// needs stays near what the solve itself holds; `docs/performance.md`).
+pub fn run_into(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
+    let started = Instant::now();
+    let mut solved = solve_stage(config, progress)?;
+    write_normals(dir, &solved.shape.solution)?;
+    write_convergence(dir, &solved.shape, config.options.tol)?;
+    let integrate_started = Instant::now();
+    // (f, g) move into the integration; the empty grids left behind are never read again.
+    let f = std::mem::replace(&mut solved.shape.solution.f, Grid::new(0, 0, 0.0));
+    let g = std::mem::replace(&mut solved.shape.solution.g, Grid::new(0, 0, 0.0));
+    let depth = solved.planner.depth_from_fg(f, g, &solved.mask)?;
+    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    write_depth(dir, &depth, &solved.mask)?;
+    let report = report(
+        config,
+        &solved,
+        &solved.shape.solution,
+        &depth,
+        integrate_seconds,
+        started,
+    );
+    write_report(dir, &report)?;
+    Ok(report)
+}
+
+/// The report of a solve.
+fn report(
+    config: &SolveConfig,
+    solved: &Solved,
+    s: &crate::solver::Solution,
+    depth: &Depth,
+    integrate_seconds: f64,
+    started: Instant,
+) -> SolveReport {
+    let (shape, lighting, brdf) = (&solved.shape, &solved.lighting, &solved.brdf);
+    let boundary_kind = solved.boundary_kind;
     let method = shape.method;
     let unit = method.iteration_unit();
-    let s = &shape.solution;
     // Not converging is not an error (the values may still be useful), but it is never silent.
     let warning = (!s.converged).then(|| {
         format!(
@@ -355,18 +434,18 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
             "convergence.csv as a plot (log10 of the update)".to_string(),
         );
     }
-    let report = SolveReport {
+    SolveReport {
         program: "shadelab",
         version: io::PROGRAM_VERSION,
         command: "solve",
         conventions: io::conventions_json(),
         input: SolveInput {
             image: config.image.display().to_string(),
-            image_info,
-            width: w,
-            height: h,
+            image_info: solved.image_info.clone(),
+            width: solved.mask.width(),
+            height: solved.mask.height(),
             mask: config.mask.as_ref().map(|p| p.display().to_string()),
-            mask_pixels: mask.count(),
+            mask_pixels: solved.mask.count(),
         },
         parameters: SolveParameters {
             light: or(
@@ -390,7 +469,7 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
             tilt_deg: lighting.light.tilt_deg(),
             slant_deg: lighting.light.slant_deg(),
             estimated: lighting.estimate.is_some(),
-            estimate: lighting.estimate,
+            estimate: lighting.estimate.clone(),
         },
         boundary: BoundaryReport {
             kind: boundary_kind,
@@ -406,7 +485,7 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
             unknowns: s.unknowns,
             smoothness_energy: s.smoothness_energy,
             brightness_energy: s.brightness_energy,
-            seconds: solve_seconds,
+            seconds: solved.solve_seconds,
         },
         integration: IntegrationSummary {
             method:
@@ -420,78 +499,86 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
         outputs,
         depth_range: [0.0, depth.range],
         seconds: started.elapsed().as_secs_f64(),
-    };
-    Ok(SolveRun {
-        shape,
-        mask,
-        depth,
-        report,
-    })
+    }
 }
 
 impl SolveRun {
     /// Writes every output into `dir` (an existing, empty folder: the caller makes it appear
     /// whole, e.g. with [`io::AtomicDir`]).
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let s = &self.shape.solution;
-        let (w, h) = (s.f.width(), s.f.height());
-        io::write_normals(&dir.join("normals.npy"), &s.normals())?;
-        let picture = Grid::from_fn(w, h, |c, r| {
-            let n = s.normal(c, r);
-            [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
-        });
-        io::write_rgb(&dir.join("normals.png"), &picture, BitDepth::Eight, None)?;
-        drop(picture);
-        self.write_convergence(dir)?;
-        let depth = &self.depth.depth;
-        io::write_image(&dir.join("depth.npy"), depth)?;
-        let highest = self.depth.range;
-        let picture = depth.map(|z| if highest > 0.0 { z / highest } else { 0.0 });
-        io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)?;
-        drop(picture);
-        let obj = dir.join("surface.obj");
-        io::write_atomic(&obj, |out| {
-            crate::integrate::write_mesh_obj(depth, &self.mask, out, &obj)
-        })?;
-        let report = serde_json::to_value(&self.report)
-            .map_err(|e| Error::Compute(format!("the report cannot be serialised: {e}")))?;
-        io::write_json(&dir.join(REPORT_FILE), &report)
+        write_normals(dir, &self.shape.solution)?;
+        write_convergence(dir, &self.shape, self.report.parameters.tol)?;
+        write_depth(dir, &self.depth, &self.mask)?;
+        write_report(dir, &self.report)
     }
+}
 
-    /// `convergence.csv` and, with plots, `convergence.png`: log10 of the largest update
-    /// against the sweep or cycle, with the tolerance as a reference line.
-    fn write_convergence(&self, dir: &Path) -> Result<()> {
-        let method = self.shape.method;
-        let unit = method.iteration_unit();
-        let history = &self.shape.history;
-        let mut csv = format!("{},largest_update\n", &unit[..unit.len() - 1]);
-        for (i, u) in history.iter().enumerate() {
-            csv.push_str(&format!("{},{u:e}\n", i + 1));
-        }
-        io::write_text(&dir.join("convergence.csv"), &csv)?;
-        #[cfg(feature = "plots")]
-        {
-            use crate::analysis::plot::{LinePlot, Series};
-            let mut plot = LinePlot::new(
-                &format!("{method} convergence"),
-                unit,
-                "log10 of the largest update of f or g",
-                (1.0, history.len().max(2) as f64),
-            );
-            plot.reference_y = Some(self.report.parameters.tol.log10());
-            plot.series.push(Series {
-                name: method.to_string(),
-                points: history
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, u)| **u > 0.0)
-                    .map(|(i, u)| ((i + 1) as f64, u.log10()))
-                    .collect(),
-            });
-            plot.write_png(&dir.join("convergence.png"))?;
-        }
-        Ok(())
+/// `normals.npy` and `normals.png`.
+fn write_normals(dir: &Path, s: &crate::solver::Solution) -> Result<()> {
+    let (w, h) = (s.f.width(), s.f.height());
+    io::write_normals(&dir.join("normals.npy"), &s.normals())?;
+    let picture = Grid::from_fn(w, h, |c, r| {
+        let n = s.normal(c, r);
+        [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
+    });
+    io::write_rgb(&dir.join("normals.png"), &picture, BitDepth::Eight, None)
+}
+
+/// `depth.npy`, `depth.png` (scaled by the range) and `surface.obj`.
+fn write_depth(dir: &Path, depth: &Depth, mask: &Mask) -> Result<()> {
+    let (z, highest) = (&depth.depth, depth.range);
+    io::write_image(&dir.join("depth.npy"), z)?;
+    let picture = z.map(|v| if highest > 0.0 { v / highest } else { 0.0 });
+    io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)?;
+    drop(picture);
+    let obj = dir.join("surface.obj");
+    io::write_atomic(&obj, |out| {
+        crate::integrate::write_mesh_obj(z, mask, out, &obj)
+    })
+}
+
+/// `report.json`.
+fn write_report(dir: &Path, report: &SolveReport) -> Result<()> {
+    let value = serde_json::to_value(report)
+        .map_err(|e| Error::Compute(format!("the report cannot be serialised: {e}")))?;
+    io::write_json(&dir.join(REPORT_FILE), &value)
+}
+
+/// `convergence.csv` and, with plots, `convergence.png`: log10 of the largest update against
+/// the sweep or cycle, with the tolerance as a reference line.
+fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
+    let method = shape.method;
+    let unit = method.iteration_unit();
+    let history = &shape.history;
+    let mut csv = format!("{},largest_update\n", &unit[..unit.len() - 1]);
+    for (i, u) in history.iter().enumerate() {
+        csv.push_str(&format!("{},{u:e}\n", i + 1));
     }
+    io::write_text(&dir.join("convergence.csv"), &csv)?;
+    #[cfg(feature = "plots")]
+    {
+        use crate::analysis::plot::{LinePlot, Series};
+        let mut plot = LinePlot::new(
+            &format!("{method} convergence"),
+            unit,
+            "log10 of the largest update of f or g",
+            (1.0, history.len().max(2) as f64),
+        );
+        plot.reference_y = Some(tol.log10());
+        plot.series.push(Series {
+            name: method.to_string(),
+            points: history
+                .iter()
+                .enumerate()
+                .filter(|(_, u)| **u > 0.0)
+                .map(|(i, u)| ((i + 1) as f64, u.log10()))
+                .collect(),
+        });
+        plot.write_png(&dir.join("convergence.png"))?;
+    }
+    #[cfg(not(feature = "plots"))]
+    let _ = tol;
+    Ok(())
 }
 
 /// Reads a PNG or `.npy` image, with what was read for the report.

@@ -45,13 +45,23 @@
 //!
 //! # The schedule
 //!
-//! From (0, 0) at the unknowns, as Jacobi starts: cycles of one Gauss–Seidel sweep, the residual
-//! (checked against `tol` on exactly the values that would be returned), the coarse correction
-//! and two more sweeps, until the residual is below `tol` or `max_iter` cycles are done. There is
-//! no full-multigrid start from a coarse solution: the equations have more than one fixed point
-//! (see below), and starting where Jacobi starts keeps the answer on Jacobi's. After a full
-//! red-black sweep every black cell sits exactly at its Jacobi target, so the residual is only
-//! evaluated on the red half.
+//! The start: problems with at least `NESTED_MIN_UNKNOWNS` unknowns start from a coarse
+//! solution (nested iteration, `Multigrid::start_from_coarse_solution`): the same problem on the
+//! half-size grid, solved the same way (so recursively from the coarsest grid up) to a loose
+//! tolerance, spread piecewise constant over the fine unknowns. Smaller problems start from
+//! (0, 0) at the unknowns, as Jacobi does. The start only moves the iteration closer; the
+//! equations and the convergence test are the fine problem's.
+//!
+//! Then cycles of one Gauss–Seidel sweep, the residual (checked against `tol` on exactly the
+//! values that would be returned), the coarse correction and two more sweeps, until the
+//! residual is below `tol` or `max_iter` cycles are done. The coarse correction is a W-cycle
+//! (`CycleSchedule::W_CYCLE`): every coarser level is visited twice per visit of the level
+//! above, each visit with the same pre- and post-sweeps. After a full red-black sweep every black
+//! cell sits exactly at its Jacobi target, so the residual is only evaluated on the red half.
+//!
+//! The equations have more than one fixed point (see below): a solve from the coarse start may
+//! settle on a neighbour of the one that Jacobi reaches from (0, 0); the differences are those
+//! measured below.
 //!
 //! # Which fixed point
 //!
@@ -92,13 +102,29 @@ type Pair = [f64; 2];
 /// A symmetric 2 × 2 matrix (a11, a12, a22).
 type Sym = [f64; 3];
 
-/// Gauss–Seidel sweeps (each a red and a black half-sweep) before the coarse correction.
-const PRE_SWEEPS: usize = 1;
-/// Gauss–Seidel sweeps after the coarse correction.
-const POST_SWEEPS: usize = 2;
-/// Visits to each coarser level per cycle (2: a W-cycle, which the oblique-light problems need to
-/// converge at a steady rate).
-const COARSE_VISITS: usize = 2;
+/// How each cycle visits the levels: sweeps before and after the coarse correction, and how
+/// many times the next coarser level is visited per visit of a level (1: a V-cycle, 2: a
+/// W-cycle).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct CycleSchedule {
+    /// Gauss–Seidel sweeps (each a red and a black half-sweep) before the coarse correction.
+    pre_sweeps: usize,
+    /// Gauss–Seidel sweeps after the coarse correction.
+    post_sweeps: usize,
+    /// Visits to the next coarser level per visit of a level.
+    coarse_visits: usize,
+}
+
+impl CycleSchedule {
+    /// The schedule the solver uses: one sweep before, two after, and a W-cycle (two coarse
+    /// visits), which the oblique-light problems need to converge at a steady rate.
+    const W_CYCLE: CycleSchedule = CycleSchedule {
+        pre_sweeps: 1,
+        post_sweeps: 2,
+        coarse_visits: 2,
+    };
+}
+
 /// Stop coarsening at a level with at most this many unknowns.
 const COARSEST_UNKNOWNS: usize = 64;
 /// Sweeps at most on the coarsest level per visit.
@@ -408,8 +434,8 @@ pub(crate) struct Multigrid {
     work: f64,
     /// The most levels to use (tests restrict it to check the pieces).
     max_levels: usize,
-    /// Sweeps before and after the coarse correction, and coarse visits per level (1: V-cycle).
-    schedule: (usize, usize, usize),
+    /// The cycle's sweeps and coarse visits (`CycleSchedule::W_CYCLE`).
+    schedule: CycleSchedule,
     /// Whether to start from the solution of the half-size problem (nested iteration) rather
     /// than from (0, 0).
     nested: bool,
@@ -432,7 +458,7 @@ impl Multigrid {
             used: 1,
             work: 0.0,
             max_levels: usize::MAX,
-            schedule: (PRE_SWEEPS, POST_SWEEPS, COARSE_VISITS),
+            schedule: CycleSchedule::W_CYCLE,
             nested: true,
         }
     }
@@ -532,7 +558,7 @@ impl Multigrid {
         let mut best = f64::INFINITY;
         let mut damping = 1.0;
         while !stats.converged {
-            for _ in 0..self.schedule.0 {
+            for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(0, &ctx);
             }
             let residual = self.restrict(0, &ctx);
@@ -565,7 +591,7 @@ impl Multigrid {
                 self.cycle(1, &ctx);
                 self.prolongate(0, damping);
             }
-            for _ in 0..self.schedule.1 {
+            for _ in 0..self.schedule.post_sweeps {
                 self.smooth(0, &ctx);
             }
         }
@@ -575,7 +601,7 @@ impl Multigrid {
     }
 
     /// Lays out every level for `bc`: flags and neighbour counts, the fixed values and a start
-    /// of (0, 0) at the unknowns of the finest level.
+    /// of (0, 0) at the unknowns of the finest level (which nested iteration may then replace).
     fn setup(&mut self, image: &Image, bc: &BoundaryConditions, ambient: f64) {
         let (w, h) = (self.width, self.height);
         let fine = &mut self.levels[0];
@@ -638,7 +664,8 @@ impl Multigrid {
         }
     }
 
-    /// One V-cycle for the correction on level `l` ≥ 1, from zero.
+    /// One cycle of `self.schedule` (a W-cycle: each coarser level visited twice) for the
+    /// correction on level `l` ≥ 1, from zero; the coarsest level is relaxed until it settles.
     fn cycle(&mut self, l: usize, ctx: &Context) {
         if l + 1 == self.used {
             let mut first = 0.0;
@@ -653,7 +680,7 @@ impl Multigrid {
             }
             return;
         }
-        for visit in 0..self.schedule.2 {
+        for visit in 0..self.schedule.coarse_visits {
             if visit > 0 {
                 // Later visits correct what the earlier ones left: start from zero again.
                 let next = &mut self.levels[l + 1];
@@ -661,13 +688,13 @@ impl Multigrid {
                     v.fill([0.0; 2]);
                 }
             }
-            for _ in 0..self.schedule.0 {
+            for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(l, ctx);
             }
             self.restrict(l, ctx);
             self.cycle(l + 1, ctx);
             self.prolongate(l, 1.0);
-            for _ in 0..self.schedule.1 {
+            for _ in 0..self.schedule.post_sweeps {
                 self.smooth(l, ctx);
             }
         }

@@ -44,6 +44,47 @@ impl Default for ExportOptions {
     }
 }
 
+impl ExportOptions {
+    /// Checks that these options can write `path`: a known format (by extension), a PsychoPy range
+    /// only for float formats, a gamma only for PNG. Returns the format (the lower-case extension).
+    ///
+    /// ```
+    /// use shadelab::stimulus::{ExportOptions, Range};
+    /// use std::path::Path;
+    /// let options = ExportOptions::default();
+    /// assert_eq!(options.check(Path::new("a.PNG")).unwrap(), "png");
+    /// assert!(options.check(Path::new("a.tiff")).is_err());
+    /// let psychopy = ExportOptions { range: Range::Psychopy, ..options };
+    /// assert!(psychopy.check(Path::new("a.png")).is_err());
+    /// assert!(psychopy.check(Path::new("a.npy")).is_ok());
+    /// ```
+    pub fn check(&self, path: &Path) -> Result<String> {
+        let ext = io::extension(path);
+        if !FORMATS.contains(&ext.as_str()) {
+            return Err(Error::invalid(format!(
+                "{}: unknown output format '.{ext}' (use one of: {})",
+                path.display(),
+                FORMATS
+                    .iter()
+                    .map(|f| format!(".{f}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        if self.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat") {
+            return Err(Error::invalid(format!(
+                "range psychopy applies to float formats (.npy, .mat), not .{ext}"
+            )));
+        }
+        if self.gamma.is_some() && ext != "png" {
+            return Err(Error::invalid(
+                "a display gamma applies to PNG output only (float formats stay linear)",
+            ));
+        }
+        Ok(ext)
+    }
+}
+
 /// The output formats, by extension.
 pub const FORMATS: &[&str] = &["png", "npy", "mat", "svg"];
 
@@ -61,23 +102,7 @@ pub fn write_output(
     path: &Path,
     options: &ExportOptions,
 ) -> Result<Vec<PathBuf>> {
-    let ext = io::extension(path);
-    if !FORMATS.contains(&ext.as_str()) {
-        return Err(Error::invalid(format!(
-            "{}: unknown output format '.{ext}' (use one of: {})",
-            path.display(),
-            FORMATS
-                .iter()
-                .map(|f| format!(".{f}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
-    if options.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat") {
-        return Err(Error::invalid(format!(
-            "--range psychopy applies to float formats (.npy, .mat), not .{ext}"
-        )));
-    }
+    let ext = options.check(path)?;
     if ext == "svg" && output.svg.is_none() {
         let why = match output.notes.get("svg_omitted").and_then(|v| v.as_str()) {
             Some(reason) => format!(" here ({reason})"),
@@ -86,11 +111,6 @@ pub fn write_output(
         return Err(Error::invalid(format!(
             "{name} has no vector form{why}; write it as .png, .npy or .mat (SVG is for circle arrays, strips, cut-outs and checkerboards)"
         )));
-    }
-    if options.gamma.is_some() && ext != "png" {
-        return Err(Error::invalid(
-            "--gamma applies to PNG output only (float formats stay linear)",
-        ));
     }
     let sidecar = io::sibling(path, "", "json");
     // Every file this call will write is checked before the first is written: the image and

@@ -1,0 +1,284 @@
+//! `render` as a pipeline: one stimulus or surface, from its name (or a spec) and plain
+//! parameter values, to a picture written with its sidecar (and mask and layers); and `list` and
+//! `describe`, what can be rendered and with which parameters.
+//!
+//! ```
+//! use shadelab::pipeline::render::{run, RenderConfig};
+//! use shadelab::NoProgress;
+//!
+//! let mut config = RenderConfig::new("sphere", "sphere.png");
+//! config.size.shape = Some((32, 24));
+//! config.validate().unwrap();
+//! let report = run(&config, &NoProgress).unwrap();
+//! assert_eq!((report.geometry.width, report.geometry.height), (32, 24));
+//! assert_eq!(report.output.pixels.size(), (32, 24));
+//! // Nothing is written until `write` is called.
+//! assert!(!std::path::Path::new("sphere.png").exists());
+//! ```
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::stimulus::{self, ExportOptions, Output, Request, Spec};
+use crate::visual_size::{Geometry, SizeRequest};
+use serde::Serialize;
+use serde_json::{Map, Value};
+use std::path::{Path, PathBuf};
+
+/// How to render: what, at which size and seed, and how to write it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderConfig {
+    /// The stimulus or surface (see [`list`]).
+    pub stimulus: String,
+    /// Parameter values, checked against the stimulus's declarations (see [`describe`]);
+    /// missing ones take their defaults.
+    pub params: Map<String, Value>,
+    /// Size in pixels and/or degrees; what is not given comes from the stimulus's defaults.
+    pub size: SizeRequest,
+    /// Seed for random layouts (recorded in the sidecar).
+    pub seed: u64,
+    /// The output file: `.png`, `.npy`, `.mat` or `.svg` (the sidecar goes beside it).
+    pub out: PathBuf,
+    /// Bit depth, gamma, value range, layers and whether to replace a foreign file.
+    pub export: ExportOptions,
+    /// The largest picture made, in pixels.
+    pub max_pixels: usize,
+}
+
+impl RenderConfig {
+    /// Renders `stimulus` with its defaults (size, parameters, seed 0) to `out`.
+    pub fn new(stimulus: impl Into<String>, out: impl Into<PathBuf>) -> RenderConfig {
+        RenderConfig {
+            stimulus: stimulus.into(),
+            params: Map::new(),
+            size: SizeRequest::default(),
+            seed: 0,
+            out: out.into(),
+            export: ExportOptions::default(),
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+        }
+    }
+
+    /// Renders what a stimulus spec file names (stimulus, parameters, size and seed) to `out`.
+    pub fn from_spec(spec: &Spec, out: impl Into<PathBuf>) -> RenderConfig {
+        RenderConfig {
+            params: spec.params.clone(),
+            size: spec.size(),
+            seed: spec.seed.unwrap_or(0),
+            ..RenderConfig::new(spec.stimulus.clone(), out)
+        }
+    }
+
+    /// Sets the space of a figure drawn in one (`pq` or `fg`, the reflectance map's), the same
+    /// as the parameter `space`; fails for a stimulus without that parameter.
+    pub fn set_space(&mut self, space: &str) -> Result<()> {
+        let has_space = stimulus::find(&self.stimulus)?
+            .info()
+            .params
+            .iter()
+            .any(|p| p.name == "space");
+        if !has_space {
+            return Err(Error::invalid(format!(
+                "'{}' has no space parameter (only figures drawn in a space have one, e.g. reflectance-map)",
+                self.stimulus
+            )));
+        }
+        self.params.insert("space".into(), Value::from(space));
+        Ok(())
+    }
+
+    /// Checks what needs no rendering: the stimulus exists and the output format suits the
+    /// export options. Parameters and size are checked when rendering resolves them.
+    pub fn validate(&self) -> Result<()> {
+        stimulus::find(&self.stimulus)?;
+        self.export.check(&self.out)?;
+        Ok(())
+    }
+}
+
+/// A rendered stimulus: what was resolved (for reports), and the picture itself.
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderReport {
+    /// The stimulus rendered.
+    pub stimulus: String,
+    /// Every parameter, defaults filled in.
+    pub parameters: Value,
+    /// The seed.
+    pub seed: u64,
+    /// Size in pixels and degrees.
+    pub geometry: Geometry,
+    /// Facts the stimulus recorded (e.g. the shared value of the checker squares).
+    pub notes: Map<String, Value>,
+    /// The resolved request.
+    #[serde(skip)]
+    pub request: Request,
+    /// The picture, targets and layers.
+    #[serde(skip)]
+    pub output: Output,
+}
+
+/// Renders the config's stimulus (nothing is written; see [`write()`]).
+pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderReport> {
+    progress.start(1, "render");
+    let rendered = stimulus::generate(
+        &config.stimulus,
+        &config.params,
+        &config.size,
+        config.seed,
+        config.max_pixels,
+    );
+    progress.finish();
+    let (request, output) = rendered?;
+    Ok(RenderReport {
+        stimulus: config.stimulus.clone(),
+        parameters: request.params.to_json(),
+        seed: request.seed,
+        geometry: request.geometry,
+        notes: output.notes.clone(),
+        request,
+        output,
+    })
+}
+
+/// Writes a render to `config.out` with its sidecar, mask and (if asked) layers, whole or not
+/// at all; returns every file written.
+pub fn write(config: &RenderConfig, report: &RenderReport) -> Result<Vec<PathBuf>> {
+    write_to(report, &config.out, &config.export)
+}
+
+/// Writes a render to `out` with `options` (see [`stimulus::write_output`]).
+pub fn write_to(
+    report: &RenderReport,
+    out: &Path,
+    options: &ExportOptions,
+) -> Result<Vec<PathBuf>> {
+    stimulus::write_output(
+        &report.stimulus,
+        &report.request,
+        &report.output,
+        out,
+        options,
+    )
+}
+
+/// One stimulus of [`list`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// Its name.
+    pub name: &'static str,
+    /// What it shows, in one line.
+    pub summary: &'static str,
+}
+
+/// Everything that can be rendered, in the library's order.
+///
+/// ```
+/// let all = shadelab::pipeline::render::list();
+/// assert!(all.iter().any(|s| s.name == "bumps"));
+/// ```
+pub fn list() -> Vec<Summary> {
+    stimulus::all()
+        .iter()
+        .map(|s| {
+            let info = s.info();
+            Summary {
+                name: info.name,
+                summary: info.summary,
+            }
+        })
+        .collect()
+}
+
+/// One parameter of a [`Description`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParamDescription {
+    /// The key (as in a spec's `params`).
+    pub name: &'static str,
+    /// Its default value.
+    pub default: Value,
+    /// The range or the choices, as text.
+    pub range: String,
+    /// What it is, with its unit.
+    pub doc: &'static str,
+}
+
+/// A stimulus's parameters with their defaults and ranges, and its default size.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Description {
+    /// Its name.
+    pub name: &'static str,
+    /// What it shows, in one line.
+    pub summary: &'static str,
+    /// Default (width, height) in degrees.
+    pub default_visual_size: (f64, f64),
+    /// Default pixels per degree.
+    pub default_ppd: f64,
+    /// Its parameters.
+    pub params: Vec<ParamDescription>,
+}
+
+/// Describes the stimulus `name` (an unknown name lists the valid ones).
+///
+/// ```
+/// let d = shadelab::pipeline::render::describe("bumps").unwrap();
+/// assert_eq!(d.name, "bumps");
+/// assert!(d.params.iter().any(|p| p.name == "rows"));
+/// assert!(shadelab::pipeline::render::describe("teapot").is_err());
+/// ```
+pub fn describe(name: &str) -> Result<Description> {
+    let info = stimulus::find(name)?.info();
+    Ok(Description {
+        name: info.name,
+        summary: info.summary,
+        default_visual_size: info.default_visual_size,
+        default_ppd: info.default_ppd,
+        params: info
+            .params
+            .iter()
+            .map(|p| ParamDescription {
+                name: p.name,
+                default: p.default.clone(),
+                range: p.range_text(),
+                doc: p.doc,
+            })
+            .collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    #[test]
+    fn configs_are_checked_and_specs_fill_them() {
+        assert!(RenderConfig::new("teapot", "a.png").validate().is_err());
+        assert!(RenderConfig::new("sphere", "a.tiff").validate().is_err());
+        let mut config = RenderConfig::new("sphere", "a.png");
+        let e = config.set_space("fg").unwrap_err().to_string();
+        assert!(e.contains("'sphere' has no space parameter"), "{e}");
+        assert!(!e.contains("--"), "{e}");
+        let mut figure = RenderConfig::new("reflectance-map", "a.png");
+        figure.set_space("fg").unwrap();
+        assert_eq!(figure.params["space"], "fg");
+        let spec: Spec =
+            serde_json::from_str(r#"{"stimulus": "sphere", "shape": [20, 10], "seed": 7}"#)
+                .unwrap();
+        config = RenderConfig::from_spec(&spec, "b.png");
+        assert_eq!((config.seed, config.size.shape), (7, Some((20, 10))));
+        let report = run(&config, &NoProgress).unwrap();
+        assert_eq!(report.output.pixels.size(), (20, 10));
+        let json = serde_json::to_value(&report).unwrap();
+        assert_eq!(json["stimulus"], "sphere");
+        assert_eq!(json["geometry"]["width"], 20);
+    }
+
+    #[test]
+    fn list_and_describe_agree_with_the_library() {
+        let all = list();
+        assert_eq!(all.len(), stimulus::names().len());
+        for s in &all {
+            let d = describe(s.name).unwrap();
+            assert_eq!((d.name, d.summary), (s.name, s.summary));
+        }
+    }
+}
