@@ -26,8 +26,8 @@
 
 use super::plot::{span, Legend, LinePlot, Marker, Series};
 use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
-use super::study::csv_field;
 use crate::error::{Error, Result};
+use crate::io::csv_field;
 use serde::Serialize;
 
 /// The default prior tilt: 26° to the left of vertical (Mamassian & Goutcher 2001).

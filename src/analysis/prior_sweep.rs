@@ -7,8 +7,8 @@
 
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
 use super::plot::{span, Figure, Legend, LinePlot, Marker, Series};
-use super::study::csv_field;
 use crate::error::{Error, Result};
+use crate::io::csv_field;
 use crate::solver::SolveOptions;
 use rayon::prelude::*;
 use serde::Serialize;

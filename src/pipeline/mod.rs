@@ -5,12 +5,12 @@
 //! writes what the report says.
 
 pub mod bench;
+pub mod gallery;
 pub mod observer;
 pub mod perception;
 pub mod prior_sweep;
-pub mod solve;
-pub mod gallery;
 pub mod render;
+pub mod solve;
 pub mod source;
 pub mod study;
 
