@@ -721,3 +721,161 @@ fn multigrid_settles_every_tilt_of_the_strips_without_the_jacobi_fallback() {
         );
     }
 }
+
+/// The pipelines' picture: one bump rendered 48 pixels square at 16 pixels per degree.
+fn bump_config() -> shadelab::pipeline::perception::Config {
+    let source = shadelab::pipeline::PictureSource {
+        stimulus: Some("bumps".into()),
+        params: shadelab::params::Params::parse_pairs(&["rows=1", "columns=1", "pattern=bumps"])
+            .unwrap(),
+        ppd: Some(16.0),
+        max_pixels: 1 << 24,
+        ..Default::default()
+    };
+    let mut config = shadelab::pipeline::perception::Config::new(source);
+    config.size = Some((48, 48));
+    config
+}
+
+/// Runs `analyze COMMAND` on the picture of [`bump_config`] with `extra` flags into `dir/cli`,
+/// and asserts that it writes the same files as the library wrote into `dir/lib`.
+fn command_writes_the_same(dir: &Path, command: &str, extra: &[&str]) {
+    let mut args = vec![
+        "analyze",
+        command,
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=1",
+        "--set",
+        "pattern=bumps",
+        "--size",
+        "48",
+        "--ppd",
+        "16",
+        "--out",
+        "cli",
+    ];
+    args.extend(extra);
+    let out = shadelab(dir, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (lib, cli) = (
+        crate::determinism::outputs(&dir.join("lib")),
+        crate::determinism::outputs(&dir.join("cli")),
+    );
+    assert_eq!(
+        lib.keys().collect::<Vec<_>>(),
+        cli.keys().collect::<Vec<_>>()
+    );
+    assert!(
+        lib == cli,
+        "the library and `analyze {command}` wrote different files"
+    );
+}
+
+#[test]
+fn the_prior_sweep_pipeline_writes_what_the_command_writes() {
+    use shadelab::pipeline::prior_sweep;
+    let d = scratch("pipeline-prior-sweep");
+    let config = prior_sweep::Config {
+        tilts: shadelab::analysis::parse_angles("0:360:90", "tilts").unwrap(),
+        binding: Some(GlobalLight::Given(0.0)),
+        ..prior_sweep::Config::new(bump_config()).unwrap()
+    };
+    let report = prior_sweep::run(&config, &shadelab::NoProgress).unwrap();
+    assert_eq!(report.tokens.len(), 1);
+    assert_eq!(report.tilts_deg, [0.0, 90.0, 180.0, 270.0]);
+    // Lit from above, the bump reads convex under the light from above, concave from below.
+    assert!(report.tokens[0].convex_tilts_deg.contains(&0.0));
+    assert!(report.tokens[0].concave_tilts_deg.contains(&180.0));
+    std::fs::create_dir_all(d.join("lib")).unwrap();
+    report.write(&d.join("lib")).unwrap();
+    command_writes_the_same(
+        &d,
+        "prior-sweep",
+        &["--tilts", "0:360:90", "--binding", "0"],
+    );
+}
+
+#[test]
+fn the_observer_pipeline_writes_what_the_command_writes() {
+    use shadelab::pipeline::observer;
+    let d = scratch("pipeline-observer");
+    let config = observer::Config {
+        tilts: shadelab::analysis::parse_angles("0:360:45", "tilts").unwrap(),
+        rotations: vec![0.0, 180.0],
+        kappas: vec![1.0, 4.0],
+        ..observer::Config::new(bump_config()).unwrap()
+    };
+    let report = observer::run(&config, &shadelab::NoProgress).unwrap();
+    assert_eq!(report.percepts.len(), 2);
+    let upright = report.percepts[1].percepts[0].p_convex[0];
+    let upside_down = report.percepts[1].percepts[1].p_convex[0];
+    assert!(
+        upright > 0.5 && upside_down < 0.5,
+        "{upright} {upside_down}"
+    );
+    std::fs::create_dir_all(d.join("lib")).unwrap();
+    report.write(&d.join("lib")).unwrap();
+    command_writes_the_same(
+        &d,
+        "observer",
+        &[
+            "--tilts",
+            "0:360:45",
+            "--rotations",
+            "0,180",
+            "--prior-kappa",
+            "1,4",
+        ],
+    );
+}
+
+#[test]
+fn pipeline_settings_are_checked_and_name_their_field() {
+    use shadelab::pipeline::{observer, perception, prior_sweep};
+    let bad = |c: &perception::Config| c.check().unwrap_err().field;
+    let mut c = bump_config();
+    c.slant_deg = 90.0;
+    assert_eq!(bad(&c), "slant_deg");
+    let mut c = bump_config();
+    c.albedo = Some(-1.0);
+    assert_eq!(bad(&c), "albedo");
+    let mut c = bump_config();
+    c.solver.max_iter = 0;
+    assert_eq!(bad(&c), "max_iter");
+    let mut c = bump_config();
+    c.size = Some((0, 4));
+    assert_eq!(bad(&c), "size");
+    // The error itself names the setting in words, never a flag.
+    let e = c.validate().unwrap_err().to_string();
+    assert!(e.contains("size") && !e.contains("--"), "{e}");
+    let o = observer::Config {
+        kappas: vec![-1.0],
+        ..observer::Config::new(bump_config()).unwrap()
+    };
+    assert_eq!(o.check().unwrap_err().field, "kappas");
+    let o = observer::Config {
+        tilts: vec![0.0, 90.0, 180.0],
+        ..observer::Config::new(bump_config()).unwrap()
+    };
+    assert_eq!(o.check().unwrap_err().field, "tilts");
+    let s = prior_sweep::Config {
+        tilts: vec![],
+        ..prior_sweep::Config::new(bump_config()).unwrap()
+    };
+    assert_eq!(s.check().unwrap_err().field, "tilts");
+    // Domains: a name or a PNG mask.
+    assert!("tokens".parse::<perception::DomainSpec>().is_ok());
+    let e = "x.npy"
+        .parse::<perception::DomainSpec>()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("x.npy") && !e.contains("--"), "{e}");
+}

@@ -719,11 +719,11 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         // analyze prior-sweep / observer: domain and boundary
         (
             "analyze prior-sweep in/ok.png --domain in/mask8.png --out o",
-            &["--domain in/mask8.png", "8x8"],
+            &["domain mask in/mask8.png", "8x8"],
         ),
         (
             "analyze prior-sweep in/ok.png --domain in/mask_empty.png --out o",
-            &["--domain in/mask_empty.png", "empty"],
+            &["domain mask in/mask_empty.png", "empty"],
         ),
         (
             "analyze prior-sweep in/ok.png --domain in/ok.npy --out o",

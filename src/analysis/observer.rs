@@ -24,8 +24,10 @@
 //! hypothesis t − θ of the sweep, and only the prior moves. This needs tilts that cover the
 //! circle in equal steps, so that the sum over t is a fair integral.
 
+use super::plot::{span, Legend, LinePlot, Marker, Series};
 use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
 use crate::error::{Error, Result};
+use crate::io::csv_field;
 use serde::Serialize;
 
 /// The default prior tilt: 26° to the left of vertical (Mamassian & Goutcher 2001).
@@ -130,15 +132,7 @@ pub fn posterior(sweep: &Sweep, options: &ObserverOptions, rotation_deg: f64) ->
             "rotation {rotation_deg} is not a finite number"
         )));
     }
-    let tilts = sweep.tilts();
-    if circle_step(&tilts).is_none() {
-        return Err(Error::invalid(format!(
-            "the observer needs assumed tilts that cover the circle in equal steps (e.g. 0:360:5); got {} tilts from {} to {}",
-            tilts.len(),
-            tilts.first().copied().unwrap_or(f64::NAN),
-            tilts.last().copied().unwrap_or(f64::NAN)
-        )));
-    }
+    check_circle(&sweep.tilts())?;
     let p = &options.prior;
     let e_min = sweep
         .interpretations
@@ -167,6 +161,143 @@ pub fn posterior(sweep: &Sweep, options: &ObserverOptions, rotation_deg: f64) ->
     let weights: Vec<f64> = log_weights.iter().map(|l| (l - top).exp()).collect();
     let total: f64 = weights.iter().sum();
     Ok(weights.iter().map(|w| w / total).collect())
+}
+
+/// Checks that `tilts` cover the circle in equal steps, as the observer needs.
+///
+/// ```
+/// use shadelab::analysis::observer::check_circle;
+/// assert!(check_circle(&[0.0, 90.0, 180.0, 270.0]).is_ok());
+/// assert!(check_circle(&[0.0, 90.0, 180.0]).is_err());
+/// ```
+pub fn check_circle(tilts: &[f64]) -> Result<()> {
+    if circle_step(tilts).is_none() {
+        return Err(Error::invalid(format!(
+            "the observer needs assumed tilts that cover the circle in equal steps (e.g. 0:360:5); got {} tilts from {} to {}",
+            tilts.len(),
+            tilts.first().copied().unwrap_or(f64::NAN),
+            tilts.last().copied().unwrap_or(f64::NAN)
+        )));
+    }
+    Ok(())
+}
+
+/// Parses concentrations κ of the tilt prior: one number ≥ 0 or a comma-separated list.
+///
+/// ```
+/// use shadelab::analysis::observer::parse_kappas;
+/// assert_eq!(parse_kappas("0, 2").unwrap(), [0.0, 2.0]);
+/// assert!(parse_kappas("-1").is_err());
+/// assert!(parse_kappas("nan").is_err());
+/// ```
+pub fn parse_kappas(text: &str) -> Result<Vec<f64>> {
+    let bad = || {
+        Error::invalid(format!(
+            "prior kappa '{text}' must be a number ≥ 0 or a comma-separated list of them"
+        ))
+    };
+    let kappas = text
+        .split(',')
+        .map(|k| k.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<Vec<_>>>()?;
+    if kappas.iter().any(|k| !(k.is_finite() && *k >= 0.0)) {
+        return Err(bad());
+    }
+    Ok(kappas)
+}
+
+/// The percepts under one set of observer options, over the rotations; serialised as the
+/// prior's κ and the percepts.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Curve {
+    /// The observer's options.
+    #[serde(rename = "prior_kappa", serialize_with = "kappa_of")]
+    pub options: ObserverOptions,
+    /// One percept per rotation.
+    pub percepts: Vec<Percept>,
+}
+
+fn kappa_of<S: serde::Serializer>(o: &ObserverOptions, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(o.prior.kappa)
+}
+
+/// One row per curve (prior κ), rotation and token: P(convex), the most probable light tilt
+/// and P(light from above).
+pub fn curves_csv(sweep: &Sweep, curves: &[Curve]) -> String {
+    let mut csv =
+        String::from("prior_kappa,rotation_deg,token,label,p_convex,map_tilt_deg,p_light_above\n");
+    for c in curves {
+        for p in &c.percepts {
+            for (k, v) in p.p_convex.iter().enumerate() {
+                let (label, name) = &sweep.tokens[k];
+                csv.push_str(&format!(
+                    "{},{},{},{label},{v},{},{}\n",
+                    c.options.prior.kappa,
+                    p.rotation_deg,
+                    csv_field(name),
+                    p.map_tilt_deg,
+                    p.p_light_above
+                ));
+            }
+        }
+    }
+    csv
+}
+
+/// P(convex) against rotation, one curve per token (and per κ when there are several), the
+/// prior's mean tilt marked. The curves share the prior's mean tilt and convexity bias (the
+/// first curve's are named in the title). Fails on no curves.
+pub fn p_convex_plot(sweep: &Sweep, curves: &[Curve]) -> Result<LinePlot> {
+    let first = curves
+        .first()
+        .ok_or_else(|| Error::invalid("no observer curves to plot"))?;
+    let rs: Vec<f64> = first.percepts.iter().map(|p| p.rotation_deg).collect();
+    let (lo, hi) = span(&rs);
+    let prior = first.options.prior;
+    let kappa_text = format!(
+        "κ = {}",
+        curves
+            .iter()
+            .map(|c| c.options.prior.kappa.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let mut plot = LinePlot::new(
+        &format!(
+            "P(convex) against rotation (prior tilt {}°, {kappa_text}, convexity bias {})",
+            prior.mean_tilt_deg, prior.convexity_bias
+        ),
+        "rotation of the picture (deg, counter-clockwise)",
+        "P(convex)",
+        (lo, hi),
+    );
+    plot.y_range = Some((-0.02, 1.02));
+    plot.reference_y = Some(0.5);
+    plot.legend = Legend::Middle;
+    let mean = prior.mean_tilt_deg;
+    if mean >= lo && mean <= hi {
+        plot.markers.push(Marker {
+            x: mean,
+            label: format!("prior {mean}°"),
+        });
+    }
+    for c in curves {
+        for (k, (_, name)) in sweep.tokens.iter().enumerate() {
+            plot.series.push(Series {
+                name: if curves.len() == 1 {
+                    name.clone()
+                } else {
+                    format!("{name}, κ = {}", c.options.prior.kappa)
+                },
+                points: c
+                    .percepts
+                    .iter()
+                    .map(|p| (p.rotation_deg, p.p_convex[k]))
+                    .collect(),
+            });
+        }
+    }
+    Ok(plot)
 }
 
 /// 1 for convex, 0 for concave, ½ for no verdict.

@@ -281,6 +281,24 @@ fn tick_format(range: f64) -> impl Fn(&f64) -> String {
     }
 }
 
+/// The range of `xs` for an axis: smallest to largest, or one unit either side of a single
+/// value (or of the first, when they are all equal).
+///
+/// ```
+/// use shadelab::analysis::plot::span;
+/// assert_eq!(span(&[30.0, 0.0, 90.0]), (0.0, 90.0));
+/// assert_eq!(span(&[5.0]), (4.0, 6.0));
+/// ```
+pub fn span(xs: &[f64]) -> (f64, f64) {
+    let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 1.0, lo + 1.0)
+    }
+}
+
 /// Several plots stacked top to bottom in one picture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Figure {

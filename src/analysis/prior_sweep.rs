@@ -6,7 +6,9 @@
 //! changes sign: the assumed tilts at which a bump becomes a dimple.
 
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
+use super::plot::{span, Figure, Legend, LinePlot, Marker, Series};
 use crate::error::{Error, Result};
+use crate::io::csv_field;
 use crate::solver::SolveOptions;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -51,6 +53,95 @@ impl Sweep {
     /// sweep covers the circle); angles are wrapped into [0, 360).
     pub fn flips(&self, k: usize) -> Vec<f64> {
         sign_changes(&self.tilts(), &self.convexities(k), self.covers_circle())
+    }
+
+    /// The tilts at which token `k`'s convexity passes `keep` (e.g. `|c| c > 0.0`: convex).
+    pub fn tilts_where(&self, k: usize, keep: impl Fn(f64) -> bool) -> Vec<f64> {
+        self.interpretations
+            .iter()
+            .filter(|i| keep(i.tokens[k].convexity))
+            .map(|i| i.tilt_deg)
+            .collect()
+    }
+
+    /// How many solves did not converge.
+    pub fn unconverged(&self) -> usize {
+        self.interpretations.iter().filter(|i| !i.converged).count()
+    }
+
+    /// The sweep as CSV: one row per assumed tilt and token, with its convexity, residual,
+    /// smoothness and surface residual over the token, and whether the solve converged.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from(
+            "tilt_deg,token,label,convexity,residual,smoothness,surface_residual,converged\n",
+        );
+        for i in &self.interpretations {
+            for (k, r) in i.tokens.iter().enumerate() {
+                let (label, name) = &self.tokens[k];
+                csv.push_str(&format!(
+                    "{},{},{label},{},{},{},{},{}\n",
+                    i.tilt_deg,
+                    csv_field(name),
+                    r.convexity,
+                    r.residual,
+                    r.smoothness,
+                    r.surface_residual,
+                    i.converged
+                ));
+            }
+        }
+        csv
+    }
+
+    /// Convexity (top; with one token, its flips marked) and surface residual (bottom) against
+    /// assumed tilt, one curve per token.
+    pub fn figure(&self) -> Figure {
+        let tilts = self.tilts();
+        let (lo, hi) = span(&tilts);
+        let x_label = "assumed light tilt (deg; 0 = above, 90 = left, 180 = below)";
+        let mut convexity = LinePlot::new(
+            "Convexity of each token under each assumed light",
+            x_label,
+            "convexity (> 0 convex)",
+            (lo, hi),
+        );
+        convexity.reference_y = Some(0.0);
+        convexity.legend = Legend::Middle;
+        let mut fit = LinePlot::new(
+            "How well the recovered surface reproduces the picture",
+            x_label,
+            "surface residual e_Z",
+            (lo, hi),
+        );
+        fit.legend = Legend::UpperMiddle;
+        for (k, (_, name)) in self.tokens.iter().enumerate() {
+            convexity.series.push(Series {
+                name: name.clone(),
+                points: tilts.iter().copied().zip(self.convexities(k)).collect(),
+            });
+            fit.series.push(Series {
+                name: name.clone(),
+                points: self
+                    .interpretations
+                    .iter()
+                    .map(|i| (i.tilt_deg, i.tokens[k].surface_residual))
+                    .collect(),
+            });
+        }
+        if self.tokens.len() == 1 {
+            for f in self.flips(0) {
+                if f >= lo && f <= hi {
+                    convexity.markers.push(Marker {
+                        x: f,
+                        label: format!("flip {f:.0}°"),
+                    });
+                }
+            }
+        }
+        Figure {
+            panels: vec![convexity, fit],
+            size: (900, 900),
+        }
     }
 }
 

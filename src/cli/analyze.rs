@@ -69,9 +69,6 @@ pub struct Source {
     pub mask: Option<PathBuf>,
 }
 
-/// A loaded picture (the library's [`shadelab::pipeline::Picture`]).
-pub type Input = shadelab::pipeline::Picture;
-
 impl Source {
     /// Checks the flags that need no file: --ppd and that exactly one source is given.
     pub fn check(&self) -> CliResult {
@@ -102,10 +99,5 @@ impl Source {
             mask: self.mask.clone(),
             max_pixels: global.max_pixels,
         })
-    }
-
-    /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
-    pub fn load(&self, colour: bool, global: &Global) -> Result<Input, CliError> {
-        Ok(self.to_library(global)?.load(colour)?)
     }
 }

@@ -6,6 +6,7 @@ mod analyze;
 mod bench;
 mod describe;
 mod eval;
+mod flags;
 mod gallery;
 mod progress;
 mod render;

@@ -172,7 +172,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         let mut best: Option<(Timing, Solution)> = None;
         for _ in 0..config.repeat {
             let run = time(&mut multigrid_planner)?;
-            if best.as_ref().is_none_or(|b| run.0.seconds < b.0.seconds) {
+            if best.as_ref().map_or(true, |b| run.0.seconds < b.0.seconds) {
                 best = Some(run);
             }
         }

@@ -469,7 +469,7 @@ fn report(
             tilt_deg: lighting.light.tilt_deg(),
             slant_deg: lighting.light.slant_deg(),
             estimated: lighting.estimate.is_some(),
-            estimate: lighting.estimate.clone(),
+            estimate: lighting.estimate,
         },
         boundary: BoundaryReport {
             kind: boundary_kind,
@@ -625,7 +625,12 @@ fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
 }
 
 /// Rim normals read from a `.npy` of the image's size.
-fn read_boundary(path: &Path, w: usize, h: usize, max_pixels: usize) -> Result<Boundary> {
+pub(crate) fn read_boundary(
+    path: &Path,
+    w: usize,
+    h: usize,
+    max_pixels: usize,
+) -> Result<Boundary> {
     let normals = io::read_normals(path, max_pixels)?;
     if (normals.width(), normals.height()) != (w, h) {
         return Err(Error::invalid(format!(

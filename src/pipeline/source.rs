@@ -69,8 +69,20 @@ impl PictureSource {
 
     /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
     pub fn load(&self, colour: bool) -> Result<Picture> {
+        Ok(self.load_shaped(colour, None)?.0)
+    }
+
+    /// Like [`load`](Self::load), but a stimulus is rendered `shape` = (width, height) pixels
+    /// when given, and its request (resolved parameters and geometry) comes back too (`None`
+    /// for an image file).
+    pub fn load_shaped(
+        &self,
+        colour: bool,
+        shape: Option<(usize, usize)>,
+    ) -> Result<(Picture, Option<stimulus::Request>)> {
         self.check()?;
         let max_pixels = self.max_pixels;
+        let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
             (Some(path), _) => {
                 let pixels = match io::extension(path).as_str() {
@@ -95,23 +107,26 @@ impl PictureSource {
             (None, Some(name)) => {
                 let size = SizeRequest {
                     ppd: self.ppd,
+                    shape,
                     ..Default::default()
                 };
                 let seed = self.seed.unwrap_or(0);
-                let (request, output) =
+                let (made, output) =
                     stimulus::generate(name, &self.params, &size, seed, max_pixels)?;
-                Picture {
+                let picture = Picture {
                     pixels: output.pixels,
-                    ppd: Some(request.geometry.ppd),
+                    ppd: Some(made.geometry.ppd),
                     labels: output.targets.map(|t| (t.labels, t.names)),
                     origin: json!({
                         "stimulus": name,
-                        "parameters": request.params.to_json(),
+                        "parameters": made.params.to_json(),
                         "seed": seed,
-                        "geometry": request.geometry,
+                        "geometry": made.geometry,
                         "notes": output.notes,
                     }),
-                }
+                };
+                request = Some(made);
+                picture
             }
             (None, None) => return Err(Error::invalid("give an image file or a stimulus name")),
         };
@@ -128,7 +143,7 @@ impl PictureSource {
             }
             picture.labels = Some((labels, Vec::new()));
         }
-        Ok(picture)
+        Ok((picture, request))
     }
 }
 

@@ -1,0 +1,136 @@
+//! Flag groups that several subcommands share, each one clap `Args` struct to flatten, and the
+//! translation of the library's complaints about a setting back into the flag that set it.
+//! Defaults are the library's: a flag left out leaves the library's value in place.
+
+use super::CliError;
+use shadelab::analysis::interpretation::MULTIGRID_CYCLES;
+use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
+use shadelab::pipeline::solve::BoundarySource;
+use shadelab::solver::{SolveOptions, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES};
+
+/// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
+/// the library's configuration of the command already holds).
+#[derive(Debug, Clone, clap::Args)]
+pub struct SolverFlags {
+    /// Weight λ of the brightness term (> 0).
+    #[arg(
+        long = "lambda",
+        value_name = "L",
+        default_value_t = SolveOptions::default().lambda,
+        allow_hyphen_values = true
+    )]
+    pub lambda: f64,
+    /// Stop when the largest change of f or g in a Jacobi sweep is below this (for multigrid:
+    /// the change the next Jacobi sweep would make).
+    #[arg(
+        long,
+        value_name = "T",
+        default_value_t = SolveOptions::default().tol,
+        allow_hyphen_values = true
+    )]
+    pub tol: f64,
+    /// Stop a solve after this many sweeps, or cycles for multigrid.
+    #[arg(long, value_name = "N", allow_hyphen_values = true, help = max_iter_help())]
+    pub max_iter: Option<usize>,
+}
+
+/// The `--max-iter` help, with the library's defaults.
+fn max_iter_help() -> String {
+    format!(
+        "Stop a solve after this many sweeps, or cycles for multigrid [default: {MULTIGRID_CYCLES} \
+         cycles in the analyses, which repeat a solve that has not converged with Jacobi sweeps; \
+         in solve, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} sweeps for \
+         jacobi and literal]"
+    )
+}
+
+impl SolverFlags {
+    /// Sets λ, the tolerance and (when given) the cap of `options`.
+    pub fn apply(&self, options: &mut SolveOptions) {
+        options.lambda = self.lambda;
+        options.tol = self.tol;
+        if let Some(n) = self.max_iter {
+            options.max_iter = n;
+        }
+    }
+}
+
+/// What the analyses assume about the picture besides the light's tilt.
+#[derive(Debug, Clone, clap::Args)]
+pub struct AnalysisFlags {
+    /// Where the engine solves: image (the whole picture, a relief on a plane), tokens (only
+    /// the target regions), or a PNG mask (nonzero = inside).
+    #[arg(long, value_name = "image|tokens|PNG", default_value_t = DomainSpec::default().to_string())]
+    pub domain: String,
+    /// Boundary condition at the domain's rim: flat (the default: these stimuli lie on a
+    /// plane), free, occluding, or an H×W×3 .npy of normals for the rim.
+    #[arg(
+        long,
+        value_name = "flat|free|occluding|FILE.npy",
+        default_value_t = DEFAULT_BOUNDARY.name().to_string()
+    )]
+    pub boundary: String,
+    /// Slant of every assumed light, degrees from the line of sight (0 ≤ S < 90).
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = shadelab::pipeline::perception::DEFAULT_SLANT_DEG,
+        allow_hyphen_values = true
+    )]
+    pub slant: f64,
+    /// Surface albedo (default: the stimulus's own, else the one that makes the background
+    /// a surface facing the viewer).
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub albedo: Option<f64>,
+    /// Ambient level, the brightness of shadowed surfaces (default: the stimulus's own, else 0).
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub ambient: Option<f64>,
+}
+
+impl AnalysisFlags {
+    /// The domain, parsed.
+    pub fn domain(&self) -> Result<DomainSpec, CliError> {
+        self.domain.parse().map_err(|e| usage("--domain", e))
+    }
+
+    /// The boundary, parsed.
+    pub fn boundary(&self) -> Result<BoundarySource, CliError> {
+        self.boundary.parse().map_err(|e| usage("--boundary", e))
+    }
+}
+
+/// Angles in degrees from `START:STOP:STEP` or a list, for `flag`.
+pub fn angles(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
+    Ok(shadelab::analysis::parse_angles(text, flag)?)
+}
+
+/// A usage error about `flag`.
+pub fn usage(flag: &str, e: shadelab::Error) -> CliError {
+    CliError::usage(format!("{flag}: {e}"))
+}
+
+/// The flag behind each configuration field the pipelines name.
+const FIELD_FLAGS: &[(&str, &str)] = &[
+    ("size", "--size"),
+    ("slant_deg", "--slant"),
+    ("albedo", "--albedo"),
+    ("ambient", "--ambient"),
+    ("lambda", "--lambda"),
+    ("tol", "--tol"),
+    ("max_iter", "--max-iter"),
+    ("tilts", "--tilts"),
+    ("binding", "--binding"),
+    ("rotations", "--rotations"),
+    ("prior_tilt_deg", "--prior-tilt"),
+    ("kappas", "--prior-kappa"),
+    ("convexity_bias", "--convexity-bias"),
+    ("noise", "--noise"),
+];
+
+/// A bad setting, named by its flag.
+pub fn setting(bad: BadSetting) -> CliError {
+    match FIELD_FLAGS.iter().find(|(field, _)| *field == bad.field) {
+        Some((_, flag)) => usage(flag, bad.error),
+        None => bad.error.into(),
+    }
+}

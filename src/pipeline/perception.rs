@@ -1,0 +1,413 @@
+//! What the perception pipelines ([`super::prior_sweep`], [`super::observer`]) share: the
+//! picture (an image or a rendered stimulus), where the engine solves, the boundary at the
+//! domain's rim ([`BoundarySource`], as `solve` takes it), the lighting to assume besides its tilt, and the solver settings, with their
+//! defaults; [`Config::load`] turns them into a [`Setup`] ready to interpret.
+
+use super::solve::{read_boundary, BoundarySource};
+use super::source::PictureSource;
+use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
+use crate::analysis::{sweep, Interpretation, Sweep};
+use crate::analysis::{Domain, Picture};
+use crate::boundary::Boundary;
+use crate::error::{Error, Result};
+use crate::grid::Mask;
+use crate::io;
+use crate::progress::Progress;
+use crate::solver::SolveOptions;
+use serde::{Serialize, Serializer};
+use serde_json::Value;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// The default slant of every assumed light, degrees from the line of sight.
+pub const DEFAULT_SLANT_DEG: f64 = 45.0;
+
+/// The default boundary: flat, since the analysed stimuli lie on a plane.
+pub const DEFAULT_BOUNDARY: Boundary = Boundary::Flat;
+
+/// A setting that failed its check: the name of its [`Config`] field and why. The command line
+/// turns the field into its flag; everyone else may take the [`Error`] (`?` converts it).
+#[derive(Debug)]
+pub struct BadSetting {
+    /// The field of the configuration, e.g. `"slant_deg"`.
+    pub field: &'static str,
+    /// What is wrong with it.
+    pub error: Error,
+}
+
+impl From<BadSetting> for Error {
+    fn from(bad: BadSetting) -> Error {
+        bad.error
+    }
+}
+
+/// Tags a check's failure with the field it checked.
+pub(crate) fn field(name: &'static str, result: Result<()>) -> Result<(), BadSetting> {
+    result.map_err(|error| BadSetting { field: name, error })
+}
+
+/// Where the engine solves: a named [`Domain`] or a mask file.
+///
+/// ```
+/// use shadelab::pipeline::perception::DomainSpec;
+/// let d: DomainSpec = "tokens".parse().unwrap();
+/// assert_eq!(d.to_string(), "tokens");
+/// assert!(matches!("mask.png".parse(), Ok(DomainSpec::Mask(_))));
+/// assert!("mask.npy".parse::<DomainSpec>().is_err());
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub enum DomainSpec {
+    /// The whole picture or only its tokens.
+    Named(Domain),
+    /// A PNG mask of the picture's size, nonzero = inside.
+    Mask(PathBuf),
+}
+
+impl Default for DomainSpec {
+    fn default() -> Self {
+        DomainSpec::Named(Domain::default())
+    }
+}
+
+impl FromStr for DomainSpec {
+    type Err = Error;
+    fn from_str(text: &str) -> Result<DomainSpec> {
+        if let Ok(d) = text.parse::<Domain>() {
+            return Ok(DomainSpec::Named(d));
+        }
+        let path = Path::new(text);
+        if io::extension(path) != "png" {
+            return Err(Error::invalid(format!(
+                "domain '{text}' is neither image, tokens nor a .png mask"
+            )));
+        }
+        Ok(DomainSpec::Mask(path.to_path_buf()))
+    }
+}
+
+impl fmt::Display for DomainSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DomainSpec::Named(d) => d.fmt(f),
+            DomainSpec::Mask(path) => path.display().fmt(f),
+        }
+    }
+}
+
+impl DomainSpec {
+    /// The domain's mask for `picture` (a mask file is read and checked against its size).
+    pub fn resolve(&self, picture: &Picture, max_pixels: usize) -> Result<Mask> {
+        match self {
+            DomainSpec::Named(d) => Ok(picture.domain(*d)),
+            DomainSpec::Mask(path) => {
+                let (w, h) = (picture.image.width(), picture.image.height());
+                let mask = io::read_mask(path, max_pixels)?;
+                if (mask.width(), mask.height()) != (w, h) {
+                    return Err(Error::invalid(format!(
+                        "domain mask {} is {}x{} but the image is {w}x{h}",
+                        path.display(),
+                        mask.width(),
+                        mask.height()
+                    )));
+                }
+                if mask.count() == 0 {
+                    return Err(Error::invalid(format!(
+                        "domain mask {} is empty: no pixel to solve",
+                        path.display()
+                    )));
+                }
+                Ok(mask)
+            }
+        }
+    }
+}
+
+/// The boundary as the user wrote it, for reports.
+fn boundary_text(boundary: &BoundarySource) -> String {
+    match boundary {
+        BoundarySource::Named(b) => b.name().to_string(),
+        BoundarySource::File(path) => path.display().to_string(),
+    }
+}
+
+/// The boundary for a `w`×`h` picture (a normals file is read and checked against it).
+fn resolve_boundary(
+    boundary: &BoundarySource,
+    w: usize,
+    h: usize,
+    max_pixels: usize,
+) -> Result<Boundary> {
+    match boundary {
+        BoundarySource::Named(b) => Ok(b.clone()),
+        BoundarySource::File(path) => read_boundary(path, w, h, max_pixels),
+    }
+}
+
+/// A picture and how to interpret it, as plain values.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// The picture.
+    pub source: PictureSource,
+    /// The rendered stimulus's size in pixels (width, height); only with a stimulus.
+    pub size: Option<(usize, usize)>,
+    /// Where the engine solves (default: the whole image).
+    pub domain: DomainSpec,
+    /// The boundary at the domain's rim (default: flat, a relief on a plane).
+    pub boundary: BoundarySource,
+    /// Slant of every assumed light, degrees from the line of sight (0 ≤ slant < 90).
+    pub slant_deg: f64,
+    /// Surface albedo; `None`: the stimulus's own, else the one that makes the background a
+    /// surface facing the viewer.
+    pub albedo: Option<f64>,
+    /// Ambient level; `None`: the stimulus's own, else 0.
+    pub ambient: Option<f64>,
+    /// The solver settings (default: [`analysis_solve_options`], at most
+    /// [`MULTIGRID_CYCLES`](crate::analysis::interpretation::MULTIGRID_CYCLES) multigrid cycles per solve, after which a solve that has not
+    /// converged is repeated with Jacobi sweeps).
+    pub solver: SolveOptions,
+}
+
+impl Config {
+    /// The defaults for `source`.
+    pub fn new(source: PictureSource) -> Config {
+        Config {
+            source,
+            size: None,
+            domain: DomainSpec::default(),
+            boundary: BoundarySource::Named(DEFAULT_BOUNDARY),
+            slant_deg: DEFAULT_SLANT_DEG,
+            albedo: None,
+            ambient: None,
+            solver: analysis_solve_options(),
+        }
+    }
+
+    /// Checks everything that needs no file, naming the first bad field.
+    pub fn check(&self) -> Result<(), BadSetting> {
+        field("source", self.source.check())?;
+        if let Some((w, h)) = self.size {
+            let ok = if self.source.stimulus.is_none() {
+                Err(Error::invalid("a size applies to a rendered stimulus only"))
+            } else if w == 0 || h == 0 {
+                Err(Error::invalid(format!(
+                    "size {w}x{h} must be at least 1 pixel each way"
+                )))
+            } else {
+                Ok(())
+            };
+            field("size", ok)?;
+        }
+        // The lighting's own checks, one value at a time with the others at valid values.
+        let lit = |slant_deg, albedo, ambient| {
+            Lighting {
+                slant_deg,
+                albedo,
+                ambient,
+            }
+            .validate()
+        };
+        field("slant_deg", lit(self.slant_deg, 1.0, 0.0))?;
+        if let Some(a) = self.albedo {
+            field("albedo", lit(0.0, a, 0.0))?;
+        }
+        if let Some(a) = self.ambient {
+            field("ambient", lit(0.0, 1.0, a))?;
+        }
+        // The solver's own checks, one value at a time with the others at valid values.
+        let fine = analysis_solve_options();
+        let solver = |o: SolveOptions| o.validate();
+        field(
+            "lambda",
+            solver(SolveOptions {
+                lambda: self.solver.lambda,
+                ..fine
+            }),
+        )?;
+        field(
+            "tol",
+            solver(SolveOptions {
+                tol: self.solver.tol,
+                ..fine
+            }),
+        )?;
+        field("max_iter", solver(self.solver))
+    }
+
+    /// Checks everything that needs no file.
+    pub fn validate(&self) -> Result<()> {
+        Ok(self.check()?)
+    }
+
+    /// Reads or renders the picture and resolves the domain, boundary, lighting and solver
+    /// options.
+    pub fn load(&self) -> Result<Setup> {
+        self.validate()?;
+        let options = self.solver;
+        let (loaded, request) = self.source.load_shaped(false, self.size)?;
+        let labels = loaded.labels.as_ref().map(|(l, n)| (l, n.as_slice()));
+        let mut picture =
+            Picture::from_image(loaded.luminance(), labels).map_err(|e| self.naming_mask(e))?;
+        if let Some(request) = &request {
+            picture.albedo = request.params.f64("albedo").ok();
+            picture.ambient = request.params.f64("ambient").ok();
+        }
+        let max_pixels = self.source.max_pixels;
+        let domain = self.domain.resolve(&picture, max_pixels)?;
+        let (w, h) = (picture.image.width(), picture.image.height());
+        let boundary = resolve_boundary(&self.boundary, w, h, max_pixels)?;
+        let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
+        picture.albedo = Some(lighting.albedo);
+        picture.ambient = Some(lighting.ambient);
+        let parameters = Parameters {
+            slant_deg: lighting.slant_deg,
+            albedo: lighting.albedo,
+            ambient: lighting.ambient,
+            boundary: boundary_text(&self.boundary),
+            domain: self.domain.to_string(),
+            lambda: options.lambda,
+            tol: options.tol,
+            max_iter: options.max_iter,
+            method: options.method.to_string(),
+        };
+        Ok(Setup {
+            picture,
+            domain,
+            boundary,
+            lighting,
+            options,
+            origin: loaded.origin,
+            parameters,
+        })
+    }
+
+    /// Names the mask file in a token error, which otherwise does not say where the labels
+    /// came from.
+    fn naming_mask(&self, e: Error) -> Error {
+        match (&self.source.mask, e) {
+            (Some(path), Error::Invalid(m)) => {
+                Error::invalid(format!("mask {}: {m}", path.display()))
+            }
+            (_, e) => e,
+        }
+    }
+}
+
+/// The settings an interpretation ran with, as reports record them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Parameters {
+    /// Slant of every assumed light, degrees.
+    pub slant_deg: f64,
+    /// The albedo used.
+    pub albedo: f64,
+    /// The ambient level used.
+    pub ambient: f64,
+    /// The boundary, as given.
+    pub boundary: String,
+    /// The domain, as given.
+    pub domain: String,
+    /// Weight λ of the brightness term.
+    pub lambda: f64,
+    /// The solver's tolerance.
+    pub tol: f64,
+    /// The most iterations per solve.
+    pub max_iter: usize,
+    /// The solver's method.
+    pub method: String,
+}
+
+/// A loaded picture ready to interpret.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The picture, its albedo and ambient set to the ones used.
+    pub picture: Picture,
+    /// Where the engine solves.
+    pub domain: Mask,
+    /// The boundary at the domain's rim.
+    pub boundary: Boundary,
+    /// What is assumed besides the light's tilt.
+    pub lighting: Lighting,
+    /// The solver options.
+    pub options: SolveOptions,
+    /// Where the picture came from, for reports.
+    pub origin: Value,
+    /// The settings, for reports.
+    pub parameters: Parameters,
+}
+
+impl Setup {
+    /// The scene to interpret.
+    pub fn scene(&self) -> Scene<'_> {
+        Scene {
+            image: &self.picture.image,
+            domain: &self.domain,
+            boundary: &self.boundary,
+            tokens: &self.picture.tokens,
+        }
+    }
+
+    /// The sweep of the scene over `tilts`, one step of `progress` (a stage called `what`) per
+    /// tilt.
+    pub fn sweep(&self, tilts: &[f64], progress: &dyn Progress, what: &str) -> Result<Sweep> {
+        progress.start(tilts.len() as u64, what);
+        let result = sweep(&self.scene(), tilts, &self.lighting, &self.options, &|| {
+            progress.advance(1)
+        });
+        progress.finish();
+        result
+    }
+
+    /// What every perception report begins with, for `command`.
+    pub fn header(&self, command: &'static str) -> Header {
+        Header {
+            program: "shadelab",
+            version: io::PROGRAM_VERSION,
+            command,
+            conventions: io::conventions_json(),
+            input: self.origin.clone(),
+            width: self.picture.image.width(),
+            height: self.picture.image.height(),
+            parameters: self.parameters.clone(),
+        }
+    }
+}
+
+/// What every perception report begins with: the program, the command, the conventions, the
+/// picture and the settings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Header {
+    /// "shadelab".
+    pub program: &'static str,
+    /// The program's version.
+    pub version: &'static str,
+    /// The command, e.g. "analyze prior-sweep".
+    pub command: &'static str,
+    /// The coordinate conventions.
+    pub conventions: Value,
+    /// Where the picture came from.
+    pub input: Value,
+    /// The picture's width, pixels.
+    pub width: usize,
+    /// The picture's height, pixels.
+    pub height: usize,
+    /// The settings used.
+    pub parameters: Parameters,
+}
+
+/// Serialises a sweep as its interpretations alone.
+pub(crate) fn interpretations_of<S: Serializer>(sweep: &Sweep, s: S) -> Result<S::Ok, S::Error> {
+    <[Interpretation]>::serialize(&sweep.interpretations, s)
+}
+
+/// Writes the table `csv` to `dir/csv_file` and `report` as JSON to `dir/report_file`.
+pub(crate) fn write_table_and_report(
+    dir: &Path,
+    (csv_file, csv): (&str, &str),
+    report_file: &str,
+    report: &impl Serialize,
+) -> Result<()> {
+    io::write_text(&dir.join(csv_file), csv)?;
+    let value = serde_json::to_value(report)
+        .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
+    io::write_json(&dir.join(report_file), &value)
+}
