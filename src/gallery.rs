@@ -9,9 +9,9 @@
 use crate::error::{Error, Result};
 use crate::grid::{Grid, RgbImage};
 use crate::io::{self, AtomicDir, BitDepth};
+use crate::parallel::prelude::*;
 use crate::pipeline::gallery::{GalleryEntry, GalleryReport};
 use crate::stimulus::{self, ExportOptions, Output, Pixels, Request, Spec};
-use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

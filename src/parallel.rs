@@ -14,3 +14,96 @@ pub fn threads() -> usize {
         1
     }
 }
+
+/// What parallel loops import: rayon's prelude with the `parallel` feature; without it,
+/// stand-ins that give slices the same `par_*` methods as plain sequential iterators.
+pub mod prelude {
+    #[cfg(feature = "parallel")]
+    pub use rayon::prelude::*;
+
+    #[cfg(not(feature = "parallel"))]
+    pub use super::sequential::{IteratorStandIns, SliceStandIns};
+}
+
+/// Combines the items of a (parallel) iterator with an associative `op` whose identity is
+/// `identity`: rayon's `reduce` with the `parallel` feature, a left fold without it. For ops
+/// like `max`, whose result does not depend on the grouping, both give the same bits.
+#[cfg(feature = "parallel")]
+pub fn reduce<I, T, F>(items: I, identity: T, op: F) -> T
+where
+    I: rayon::iter::ParallelIterator<Item = T>,
+    T: Send + Sync + Copy,
+    F: Fn(T, T) -> T + Sync + Send,
+{
+    items.reduce(|| identity, op)
+}
+
+/// Combines the items of an iterator with `op` from `identity` (the one-thread build).
+#[cfg(not(feature = "parallel"))]
+pub fn reduce<I, T, F>(items: I, identity: T, op: F) -> T
+where
+    I: Iterator<Item = T>,
+    F: Fn(T, T) -> T,
+{
+    items.fold(identity, op)
+}
+
+#[cfg(not(feature = "parallel"))]
+mod sequential {
+    /// `par_*` methods of slices as their sequential counterparts.
+    pub trait SliceStandIns<T> {
+        /// `iter()`.
+        fn par_iter(&self) -> std::slice::Iter<'_, T>;
+        /// `iter_mut()`.
+        fn par_iter_mut(&mut self) -> std::slice::IterMut<'_, T>;
+        /// `chunks(n)`.
+        fn par_chunks(&self, n: usize) -> std::slice::Chunks<'_, T>;
+        /// `chunks_mut(n)`.
+        fn par_chunks_mut(&mut self, n: usize) -> std::slice::ChunksMut<'_, T>;
+    }
+
+    impl<T> SliceStandIns<T> for [T] {
+        fn par_iter(&self) -> std::slice::Iter<'_, T> {
+            self.iter()
+        }
+        fn par_iter_mut(&mut self) -> std::slice::IterMut<'_, T> {
+            self.iter_mut()
+        }
+        fn par_chunks(&self, n: usize) -> std::slice::Chunks<'_, T> {
+            self.chunks(n)
+        }
+        fn par_chunks_mut(&mut self, n: usize) -> std::slice::ChunksMut<'_, T> {
+            self.chunks_mut(n)
+        }
+    }
+
+    /// rayon's splitting hints, which mean nothing on one thread.
+    pub trait IteratorStandIns: Iterator + Sized {
+        /// Returns the iterator as it is.
+        fn with_min_len(self, _len: usize) -> Self {
+            self
+        }
+
+        /// `map` with one state made by `init` for the whole (one-thread) loop.
+        fn map_init<S, R, I, F>(self, init: I, mut f: F) -> impl Iterator<Item = R>
+        where
+            I: Fn() -> S,
+            F: FnMut(&mut S, Self::Item) -> R,
+        {
+            let mut state = init();
+            self.map(move |item| f(&mut state, item))
+        }
+
+        /// `for_each` with one state made by `init` for the whole (one-thread) loop.
+        fn for_each_init<S, I, F>(self, init: I, mut f: F)
+        where
+            I: Fn() -> S,
+            F: FnMut(&mut S, Self::Item),
+        {
+            let mut state = init();
+            self.for_each(|item| f(&mut state, item))
+        }
+    }
+
+    impl<I: Iterator> IteratorStandIns for I {}
+}

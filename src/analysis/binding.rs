@@ -15,8 +15,8 @@ use super::interpretation::{Interpreter, Lighting, Scene};
 use crate::error::{Error, Result};
 use crate::grid::Mask;
 use crate::light_estimation::estimate_light;
+use crate::parallel::prelude::*;
 use crate::solver::SolveOptions;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// Where the global light comes from.

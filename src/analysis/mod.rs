@@ -32,7 +32,6 @@ pub mod interpretation;
 pub mod observer;
 pub mod outline;
 pub mod picture;
-#[cfg(feature = "plots")]
 pub mod plot;
 pub mod prior_sweep;
 pub mod rotation;

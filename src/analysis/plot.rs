@@ -4,22 +4,33 @@
 //! `assets/fonts/LICENSE-DejaVu.txt`) and compiled in, so plots look the same on every machine
 //! and need no system fonts. Both files are written atomically.
 
-use crate::error::{Error, Result};
+#[cfg(feature = "plots")]
+use crate::error::Error;
+use crate::error::Result;
+#[cfg(feature = "plots")]
 use crate::grid::Grid;
+#[cfg(feature = "plots")]
 use crate::io::{self, BitDepth};
+#[cfg(feature = "plots")]
 use plotters::prelude::*;
+#[cfg(feature = "plots")]
 use plotters::style::{register_font, FontStyle};
 use std::path::Path;
+#[cfg(feature = "plots")]
 use std::sync::Once;
 
+#[cfg(feature = "plots")]
 /// The font every plot uses.
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
+#[cfg(feature = "plots")]
 /// The family name the font is registered under.
 const FAMILY: &str = "sans-serif";
 
+#[cfg(feature = "plots")]
 static REGISTER: Once = Once::new();
 
+#[cfg(feature = "plots")]
 fn register() {
     REGISTER.call_once(|| {
         // A failure shows up as a drawing error naming the font, below.
@@ -27,6 +38,7 @@ fn register() {
     });
 }
 
+#[cfg(feature = "plots")]
 /// Colours that stay distinct for colour-blind readers (Okabe & Ito), cycled.
 const COLOURS: [RGBColor; 8] = [
     RGBColor(0, 114, 178),
@@ -39,6 +51,7 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(240, 228, 66),
 ];
 
+#[cfg(feature = "plots")]
 /// Legends with more series than this are left out (they would hide the plot).
 const MAX_LEGEND: usize = 10;
 
@@ -115,6 +128,7 @@ impl LinePlot {
         }
     }
 
+    #[cfg(feature = "plots")]
     fn y_range(&self) -> (f64, f64) {
         if let Some(r) = self.y_range {
             return r;
@@ -135,6 +149,7 @@ impl LinePlot {
         (lo - pad, hi + pad)
     }
 
+    #[cfg(feature = "plots")]
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
@@ -230,6 +245,7 @@ impl LinePlot {
         Ok(())
     }
 
+    #[cfg(feature = "plots")]
     /// The plot as an SVG document.
     pub fn svg(&self) -> Result<String> {
         let mut text = String::new();
@@ -240,6 +256,7 @@ impl LinePlot {
         Ok(text)
     }
 
+    #[cfg(feature = "plots")]
     /// The plot as 8-bit sRGB pixels, row-major, 3 bytes each.
     pub fn rgb(&self) -> Result<Vec<u8>> {
         let (w, h) = self.size;
@@ -251,17 +268,20 @@ impl LinePlot {
         Ok(buf)
     }
 
+    #[cfg(feature = "plots")]
     /// Writes the plot as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         write_rgb_png(path, &self.rgb()?, self.size)
     }
 
+    #[cfg(feature = "plots")]
     /// Writes the plot as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
         io::write_text(path, &self.svg()?)
     }
 }
 
+#[cfg(feature = "plots")]
 /// A tick label formatter with as many decimals as ticks about a tenth of `range` apart need,
 /// never printing "-0".
 fn tick_format(range: f64) -> impl Fn(&f64) -> String {
@@ -309,6 +329,7 @@ pub struct Figure {
 }
 
 impl Figure {
+    #[cfg(feature = "plots")]
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
@@ -320,6 +341,7 @@ impl Figure {
         Ok(())
     }
 
+    #[cfg(feature = "plots")]
     /// Writes the figure as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         let (w, h) = self.size;
@@ -331,6 +353,7 @@ impl Figure {
         write_rgb_png(path, &buf, self.size)
     }
 
+    #[cfg(feature = "plots")]
     /// Writes the figure as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
         let mut text = String::new();
@@ -342,6 +365,7 @@ impl Figure {
     }
 }
 
+#[cfg(feature = "plots")]
 /// Writes 8-bit sRGB bytes as a PNG, unchanged, atomically.
 fn write_rgb_png(path: &Path, buf: &[u8], (w, h): (u32, u32)) -> Result<()> {
     let image = Grid::from_vec(
@@ -358,6 +382,36 @@ fn write_rgb_png(path: &Path, buf: &[u8], (w, h): (u32, u32)) -> Result<()> {
             .collect(),
     )?;
     io::write_rgb(path, &image, BitDepth::Eight, None)
+}
+
+/// Without the `plots` feature figures are not drawn: their writers write nothing and succeed,
+/// so an embedding (Python, WebAssembly) gets every number and data file without a plotting
+/// library.
+#[cfg(not(feature = "plots"))]
+mod without_plots {
+    use super::{Figure, LinePlot, Path, Result};
+
+    impl LinePlot {
+        /// Writes nothing: this build has no plots.
+        pub fn write_png(&self, _path: &Path) -> Result<()> {
+            Ok(())
+        }
+        /// Writes nothing: this build has no plots.
+        pub fn write_svg(&self, _path: &Path) -> Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Figure {
+        /// Writes nothing: this build has no plots.
+        pub fn write_png(&self, _path: &Path) -> Result<()> {
+            Ok(())
+        }
+        /// Writes nothing: this build has no plots.
+        pub fn write_svg(&self, _path: &Path) -> Result<()> {
+            Ok(())
+        }
+    }
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@ use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, 
 use super::plot::{span, Figure, Legend, LinePlot, Marker, Series};
 use crate::error::{Error, Result};
 use crate::io::csv_field;
+use crate::parallel::prelude::*;
 use crate::solver::SolveOptions;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// Convexities of smaller magnitude than this count as zero (no verdict) when locating flips:

@@ -1,7 +1,7 @@
 //! Separable Gaussian blur with edge-replicating borders.
 
 use crate::grid::{Grid, Image};
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 /// `image` blurred by a Gaussian of σ `sigma_px` pixels (taps out to 4σ, normalised to unit
 /// sum), rows first, then columns; the image is extended by repeating its edge pixels. A σ

@@ -13,7 +13,7 @@
 //! work of a 2× padded convolution. Every transform of a row or column is independent, so the
 //! results do not depend on how rayon splits the work.
 
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};

@@ -27,7 +27,7 @@
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image};
 use crate::imageops::fft::{dft_1d, fast_len, shift_phase, RealFft2, C64};
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 use std::sync::Mutex;

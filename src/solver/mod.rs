@@ -32,8 +32,8 @@ use crate::boundary::{boundary_conditions, Boundary, BoundaryConditions, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::{normal_from_fg, Normal};
 use crate::grid::{Grid, Image, Mask};
+use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
-use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 
@@ -516,24 +516,27 @@ impl Solver {
             );
         }
         // max is exact and order-free, so the result does not depend on the thread count.
-        self.nodes
-            .par_chunks(CHUNK)
-            .zip(next_f.par_chunks_mut(CHUNK))
-            .zip(next_g.par_chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(chunk, ((nodes, nf), ng))| {
-                sweep_nodes(
-                    nodes,
-                    chunk * CHUNK,
-                    cur_f,
-                    cur_g,
-                    nf,
-                    ng,
-                    reflectance,
-                    literal,
-                )
-            })
-            .reduce(|| 0.0, f64::max)
+        crate::parallel::reduce(
+            self.nodes
+                .par_chunks(CHUNK)
+                .zip(next_f.par_chunks_mut(CHUNK))
+                .zip(next_g.par_chunks_mut(CHUNK))
+                .enumerate()
+                .map(|(chunk, ((nodes, nf), ng))| {
+                    sweep_nodes(
+                        nodes,
+                        chunk * CHUNK,
+                        cur_f,
+                        cur_g,
+                        nf,
+                        ng,
+                        reflectance,
+                        literal,
+                    )
+                }),
+            0.0,
+            f64::max,
+        )
     }
 
     /// The solution grids and energies from the current values.

@@ -83,8 +83,8 @@
 use super::{Progress, SolveOptions, DIVERGENCE_UPDATE};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::grid::{Grid, Image};
+use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
-use rayon::prelude::*;
 
 /// The number of domain neighbours k (0–4) of an unknown cell.
 const K_BITS: u8 = 0b111;
@@ -277,11 +277,14 @@ where
     F: Fn(usize, &mut [T]) -> f64 + Sync + Send,
 {
     if parallel {
-        out.par_chunks_mut(len)
-            .enumerate()
-            .with_min_len((TASK_CELLS / len).max(1))
-            .map(|(r, row)| f(r, row))
-            .reduce(|| 0.0, worst_of)
+        crate::parallel::reduce(
+            out.par_chunks_mut(len)
+                .enumerate()
+                .with_min_len((TASK_CELLS / len).max(1))
+                .map(|(r, row)| f(r, row)),
+            0.0,
+            worst_of,
+        )
     } else {
         out.chunks_mut(len)
             .enumerate()
@@ -818,14 +821,17 @@ impl Multigrid {
             worst
         };
         if parallel {
-            coarse
-                .rhs
-                .par_chunks_mut(cwp)
-                .zip(coarse.reaction.par_chunks_mut(cwp))
-                .enumerate()
-                .with_min_len((TASK_CELLS / (4 * cwp)).max(1))
-                .map(body)
-                .reduce(|| 0.0, worst_of)
+            crate::parallel::reduce(
+                coarse
+                    .rhs
+                    .par_chunks_mut(cwp)
+                    .zip(coarse.reaction.par_chunks_mut(cwp))
+                    .enumerate()
+                    .with_min_len((TASK_CELLS / (4 * cwp)).max(1))
+                    .map(body),
+                0.0,
+                worst_of,
+            )
         } else {
             coarse
                 .rhs

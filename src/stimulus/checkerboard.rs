@@ -11,8 +11,8 @@ use super::svg::{document, gray, num};
 use super::{Info, Output, Pixels, Request, Stimulus, Targets};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
+use crate::parallel::prelude::*;
 use crate::params::ParamSpec;
-use rayon::prelude::*;
 use serde_json::{json, Map};
 use svg::node::element::{Circle, Rectangle};
 

@@ -8,7 +8,7 @@ use crate::analysis::picture::Picture;
 use crate::analysis::prior_sweep::sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_field;
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 impl Study {
     /// The points shard `shard` runs.
