@@ -24,7 +24,7 @@ pub use export::{write_output, ExportOptions, Range};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
-use crate::params::{ParamSpec, Params};
+use crate::params::{ParamSet, ParamSpec, Params};
 use crate::visual_size::{Geometry, SizeRequest};
 use serde::Deserialize;
 use serde_json::{Map, Value};
@@ -146,6 +146,77 @@ pub trait Stimulus: Send + Sync {
     /// user gives no size in pixels.
     fn natural_shape(&self, _params: &Params) -> Result<Option<(usize, usize)>> {
         Ok(None)
+    }
+}
+
+/// A stimulus drawn by a typed function from its typed parameters `P`: the one place where
+/// the generic [`Params`] of a [`Request`] become a typed struct.
+pub(crate) struct Typed<P> {
+    name: &'static str,
+    summary: &'static str,
+    default_visual_size: (f64, f64),
+    default_ppd: f64,
+    render: fn(&P, &Geometry, u64) -> Result<Output>,
+    natural: fn(&P) -> Result<Option<(usize, usize)>>,
+}
+
+impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
+    /// A stimulus called `name` with its default size, drawn by `render(params, geometry, seed)`.
+    pub(crate) fn boxed(
+        name: &'static str,
+        summary: &'static str,
+        default_visual_size: (f64, f64),
+        default_ppd: f64,
+        render: fn(&P, &Geometry, u64) -> Result<Output>,
+    ) -> Box<dyn Stimulus> {
+        Box::new(Typed {
+            name,
+            summary,
+            default_visual_size,
+            default_ppd,
+            render,
+            natural: |_| Ok(None),
+        })
+    }
+
+    /// The same, with a size in pixels that the parameters give (a depth map's own size).
+    pub(crate) fn boxed_with_natural(
+        name: &'static str,
+        summary: &'static str,
+        default_visual_size: (f64, f64),
+        default_ppd: f64,
+        render: fn(&P, &Geometry, u64) -> Result<Output>,
+        natural: fn(&P) -> Result<Option<(usize, usize)>>,
+    ) -> Box<dyn Stimulus> {
+        Box::new(Typed {
+            name,
+            summary,
+            default_visual_size,
+            default_ppd,
+            render,
+            natural,
+        })
+    }
+}
+
+impl<P: ParamSet + Send + Sync> Stimulus for Typed<P> {
+    fn info(&self) -> Info {
+        Info {
+            name: self.name,
+            summary: self.summary,
+            params: P::specs(),
+            default_visual_size: self.default_visual_size,
+            default_ppd: self.default_ppd,
+        }
+    }
+
+    fn generate(&self, request: &Request) -> Result<Output> {
+        let params = P::from_params(&request.params)?;
+        (self.render)(&params, &request.geometry, request.seed)
+    }
+
+    fn natural_shape(&self, params: &Params) -> Result<Option<(usize, usize)>> {
+        (self.natural)(&P::from_params(params)?)
     }
 }
 
