@@ -178,7 +178,6 @@ pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::Params;
     use crate::visual_size::SizeRequest;
 
     #[test]

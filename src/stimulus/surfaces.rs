@@ -135,8 +135,8 @@ stimulus_params! {
 /// let Pixels::Gray(image) = out.pixels else { panic!() };
 /// // Lit head-on with albedo 1, the nearest point of the sphere has luminance 1
 /// // and the corner is background.
-/// assert!((image[(4, 4)] - 1.0).abs() < 1e-12);
-/// assert_eq!(image[(0, 0)], 0.0);
+/// assert!((*image.get(4, 4) - 1.0).abs() < 1e-12);
+/// assert_eq!(*image.get(0, 0), 0.0);
 /// ```
 pub fn sphere(p: &SphereParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
