@@ -755,3 +755,82 @@ mod tests {
         assert!(Params::parse_pairs(&["novalue"]).is_err());
     }
 }
+
+#[cfg(test)]
+mod typed_tests {
+    use super::*;
+
+    param_choice! {
+        /// A test choice.
+        pub enum Shape {
+            /// Round.
+            Round = "round",
+            /// Square.
+            Square = "square",
+        }
+    }
+
+    stimulus_params! {
+        /// A shared test set.
+        pub struct Inner {
+            /// a length (deg)
+            length: f64 = 1.0, range 0.0..=10.0;
+            /// the shape
+            shape: Shape = Shape::Round;
+        }
+    }
+
+    stimulus_params! {
+        /// A test set.
+        pub struct Outer {
+            /// how many
+            count: usize = 3, range 1..=9;
+            /// the inner set, longer by default
+            flatten inner: Inner { length: 2.5 };
+            /// where the light is
+            light: Light = "left";
+            /// on or off
+            on: bool = true;
+            /// a label
+            label: String = "x";
+        }
+    }
+
+    #[test]
+    fn declarations_come_in_field_order_with_overridden_defaults() {
+        let specs = Outer::specs();
+        let names: Vec<&str> = specs.iter().map(|s| s.name).collect();
+        assert_eq!(names, ["count", "length", "shape", "light", "on", "label"]);
+        assert_eq!(specs[0].kind, ParamKind::Integer { min: 1, max: 9 });
+        assert_eq!(specs[1].default, Value::from(2.5));
+        assert_eq!(specs[1].doc, "a length (deg)");
+        assert_eq!(specs[2].kind, ParamKind::Choice(&["round", "square"]));
+        assert_eq!(specs[3].default, Value::from("left"));
+        assert_eq!(Inner::default().length, 1.0);
+        let d = Outer::default();
+        assert_eq!((d.count, d.inner.length, d.inner.shape), (3, 2.5, Shape::Round));
+        assert!((d.light.tilt_deg() - 90.0).abs() < 1e-9);
+        assert_eq!((d.on, d.label.as_str()), (true, "x"));
+    }
+
+    #[test]
+    fn typed_values_convert_both_ways() {
+        let given = Params::parse_pairs(&["shape=square", "count=9", "light=0,1,1"]).unwrap();
+        let resolved = Params::resolve(&Outer::specs(), &given).unwrap();
+        let typed = Outer::try_from(&resolved).unwrap();
+        assert_eq!((typed.count, typed.inner.shape), (9, Shape::Square));
+        assert_eq!(typed.to_params().unwrap(), resolved);
+        assert_eq!("square".parse::<Shape>().unwrap().to_string(), "square");
+        assert!("oval".parse::<Shape>().unwrap_err().to_string().contains("round"));
+        let e = Outer::from_map(&Params::parse_pairs(&["count=10"]).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("count") && e.contains("1..9"), "{e}");
+        // A struct built in Rust is checked on the way back.
+        let bad = Outer {
+            count: 0,
+            ..Outer::default()
+        };
+        assert!(bad.validate().unwrap_err().to_string().contains("count"));
+    }
+}

@@ -53,7 +53,7 @@ param_choice! {
 
 stimulus_params! {
     /// The discs shared by [`bumps`] and [`sideways`].
-    pub struct DiscParams {
+    pub struct DiscArrayParams {
         /// disc profile: a rendered hemisphere or Gaussian, or a linear luminance gradient
         profile: DiscProfile = DiscProfile::Hemisphere;
         /// disc radius (deg)
@@ -98,7 +98,7 @@ stimulus_params! {
     /// ```
     pub struct BumpsParams {
         /// the discs
-        flatten discs: DiscParams {};
+        flatten discs: DiscArrayParams {};
         /// light direction (x,y,z | tilt=T,slant=S | name)
         light: Light = "above";
     }
@@ -118,7 +118,7 @@ stimulus_params! {
     /// Parameters of [`sideways`].
     pub struct SidewaysParams {
         /// the discs
-        flatten discs: DiscParams { rows: 2, pattern: DiscPattern::Rows };
+        flatten discs: DiscArrayParams { rows: 2, pattern: DiscPattern::Rows };
         /// where the light comes from
         side: LightSide = LightSide::Left;
         /// light slant from the line of sight (deg)
@@ -178,7 +178,7 @@ fn polarities(pattern: DiscPattern, rows: usize, cols: usize, seed: u64) -> Vec<
         .collect()
 }
 
-fn discs(name: &str, p: &DiscParams, g: &Geometry, seed: u64, light: Light) -> Result<Output> {
+fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light) -> Result<Output> {
     let frame = Frame::new(g);
     let radius = frame.px(p.radius);
     let spacing = frame.px(p.spacing);
