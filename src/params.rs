@@ -625,6 +625,7 @@ macro_rules! stimulus_params {
         }
 
         impl $crate::params::ParamSet for $name {
+            #[allow(clippy::vec_init_then_push)] // one push per declared field
             fn specs_with(
                 overrides: &[(&'static str, serde_json::Value)],
             ) -> Vec<$crate::params::ParamSpec> {
@@ -808,7 +809,10 @@ mod typed_tests {
         assert_eq!(specs[3].default, Value::from("left"));
         assert_eq!(Inner::default().length, 1.0);
         let d = Outer::default();
-        assert_eq!((d.count, d.inner.length, d.inner.shape), (3, 2.5, Shape::Round));
+        assert_eq!(
+            (d.count, d.inner.length, d.inner.shape),
+            (3, 2.5, Shape::Round)
+        );
         assert!((d.light.tilt_deg() - 90.0).abs() < 1e-9);
         assert_eq!((d.on, d.label.as_str()), (true, "x"));
     }
@@ -821,7 +825,11 @@ mod typed_tests {
         assert_eq!((typed.count, typed.inner.shape), (9, Shape::Square));
         assert_eq!(typed.to_params().unwrap(), resolved);
         assert_eq!("square".parse::<Shape>().unwrap().to_string(), "square");
-        assert!("oval".parse::<Shape>().unwrap_err().to_string().contains("round"));
+        assert!("oval"
+            .parse::<Shape>()
+            .unwrap_err()
+            .to_string()
+            .contains("round"));
         let e = Outer::from_map(&Params::parse_pairs(&["count=10"]).unwrap())
             .unwrap_err()
             .to_string();

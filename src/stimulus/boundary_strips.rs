@@ -104,8 +104,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     let height = frame.px(p.height);
     let amplitude = frame.px(p.amplitude);
     let gap = frame.px(p.gap);
-    let (contrast, mean, background) =
-        (p.contrast, p.mean, p.background);
+    let (contrast, mean, background) = (p.contrast, p.mean, p.background);
     if mean * (1.0 + contrast) > 1.0 {
         return Err(Error::invalid(format!(
             "boundary-strips: mean {mean} × (1 + contrast {contrast}) exceeds 1; lower one of them"
@@ -182,8 +181,8 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
                     .set("stop-color", gray(value)),
             );
         }
-        let mut doc = document(&frame, "boundary-strips", background)
-            .add(Definitions::new().add(gradient));
+        let mut doc =
+            document(&frame, "boundary-strips", background).add(Definitions::new().add(gradient));
         let samples = 64 * periods;
         for (i, kind) in kinds.iter().enumerate() {
             let curve = |k: usize, offset: f64| -> (f64, f64) {

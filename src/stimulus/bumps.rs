@@ -18,8 +18,8 @@ use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::light::Light;
 use crate::params::{param_choice, stimulus_params, ParamSet};
-use crate::visual_size::Geometry;
 use crate::random::SplitMix64;
+use crate::visual_size::Geometry;
 use nalgebra::Vector3;
 use serde_json::{json, Map};
 
@@ -190,8 +190,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
     if radius < 1.0 {
         return Err(Error::invalid(format!(
             "{name}: radius {}° is under one pixel at {} ppd",
-            p.radius,
-            frame.ppd
+            p.radius, frame.ppd
         )));
     }
     if (rows > 1 || cols > 1) && spacing < 2.0 * radius {
@@ -411,7 +410,11 @@ mod tests {
 
     #[test]
     fn the_panel_has_the_background_luminance_and_bumps_match_a_rendered_hemisphere() {
-        let r = request(stim("bumps").as_ref(), &["background=0.4", "pattern=bumps"], 16.0);
+        let r = request(
+            stim("bumps").as_ref(),
+            &["background=0.4", "pattern=bumps"],
+            16.0,
+        );
         let out = stim("bumps").generate(&r).unwrap();
         let Pixels::Gray(img) = &out.pixels else {
             panic!()
@@ -431,7 +434,11 @@ mod tests {
 
     #[test]
     fn sideways_rows_are_mirror_images() {
-        let r = request(stim("sideways").as_ref(), &["rows=2", "columns=1", "pattern=rows"], 16.0);
+        let r = request(
+            stim("sideways").as_ref(),
+            &["rows=2", "columns=1", "pattern=rows"],
+            16.0,
+        );
         let out = stim("sideways").generate(&r).unwrap();
         let Pixels::Gray(img) = &out.pixels else {
             panic!()
@@ -477,7 +484,11 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("enlarge"));
-        let r = request(stim("bumps").as_ref(), &["background=0.9", "light=tilt=0,slant=70"], 16.0);
+        let r = request(
+            stim("bumps").as_ref(),
+            &["background=0.9", "light=tilt=0,slant=70"],
+            16.0,
+        );
         assert!(stim("bumps")
             .generate(&r)
             .unwrap_err()

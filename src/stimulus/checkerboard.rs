@@ -65,8 +65,7 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     if check < 1.0 {
         return Err(Error::invalid(format!(
             "checkerboard: check {}° is under one pixel at {} ppd",
-            p.check,
-            frame.ppd
+            p.check, frame.ppd
         )));
     }
     let (first, second) = (p.intensity_first, p.intensity_second);

@@ -13,8 +13,8 @@ use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::params::{param_choice, stimulus_params, ParamSet};
-use crate::visual_size::Geometry;
 use crate::random::SplitMix64;
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use svg::node::element::path::Data;
 use svg::node::element::{Circle, Definitions, LinearGradient, Path, Stop};
@@ -125,17 +125,12 @@ impl Circles {
         if radius < 1.0 {
             return Err(Error::invalid(format!(
                 "{name}: radius {}° is under one pixel at {} ppd",
-                p.radius,
-                frame.ppd
+                p.radius, frame.ppd
             )));
         }
         let random_layout = p.layout == CircleLayout::Random;
         let (rows, cols) = (p.rows, p.columns);
-        let count = if random_layout {
-            p.count
-        } else {
-            rows * cols
-        };
+        let count = if random_layout { p.count } else { rows * cols };
         if count > 1 && spacing < 2.0 * radius {
             return Err(Error::invalid(format!(
                 "{name}: spacing {}° is less than the circle diameter {}°: circles would overlap",
@@ -200,7 +195,9 @@ impl Circles {
                                 dark
                             }
                         }
-                        CircleShading::Gradient => background * (1.0 + contrast * sign * t / radius),
+                        CircleShading::Gradient => {
+                            background * (1.0 + contrast * sign * t / radius)
+                        }
                     };
                     *image.get_mut(col, row) = v;
                     *labels.get_mut(col, row) = label;
@@ -376,7 +373,11 @@ mod tests {
     #[test]
     fn odd_one_out_flips_exactly_one_and_is_named() {
         let same = generate(CircleShading::Gradient, &["polarity=same"], 3);
-        let odd = generate(CircleShading::Gradient, &["polarity=same", "odd_one_out=true"], 3);
+        let odd = generate(
+            CircleShading::Gradient,
+            &["polarity=same", "odd_one_out=true"],
+            3,
+        );
         let label = odd.notes["odd_one_out_label"].as_u64().unwrap() as u16;
         let (Pixels::Gray(a), Pixels::Gray(b)) = (&same.pixels, &odd.pixels) else {
             panic!()

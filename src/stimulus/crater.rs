@@ -15,10 +15,10 @@ use crate::gradient_space::normal_from_pq;
 use crate::grid::Grid;
 use crate::light::Light;
 use crate::params::{param_choice, stimulus_params, ParamSet};
-use crate::visual_size::Geometry;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::surface::Surface;
+use crate::visual_size::Geometry;
 use nalgebra::Vector3;
 use serde_json::{json, Map};
 

@@ -121,8 +121,7 @@ pub fn hollow_mask(p: &HollowMaskParams, g: &Geometry) -> Result<Output> {
     if half < 4.0 {
         return Err(Error::invalid(format!(
             "hollow-mask: face_width {}° is under 8 pixels at {} ppd",
-            p.face_width,
-            frame.ppd
+            p.face_width, frame.ppd
         )));
     }
     let scale = half * p.relief;

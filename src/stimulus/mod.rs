@@ -46,8 +46,8 @@ pub use reflectance_map::{reflectance_map, OrientationSpace, ReflectanceMapParam
 pub use strips::{strips, StripOrientation, StripProfile, StripsParams};
 pub use surfaces::{
     bunny, ellipsoid, gaussian, heightfield, mesh, sphere, vase, BackdropParams, BunnyParams,
-    EllipsoidParams, GaussianParams, HeightfieldParams, LightingParams, MeshNormals,
-    MeshParams, SphereParams, VaseParams, ViewParams,
+    EllipsoidParams, GaussianParams, HeightfieldParams, LightingParams, MeshNormals, MeshParams,
+    SphereParams, VaseParams, ViewParams,
 };
 
 use crate::error::{Error, Result};
@@ -178,6 +178,9 @@ pub trait Stimulus: Send + Sync {
     }
 }
 
+/// The size in pixels that typed parameters give a stimulus, if any.
+type NaturalShape<P> = fn(&P) -> Result<Option<(usize, usize)>>;
+
 /// A stimulus drawn by a typed function from its typed parameters `P`: the one place where
 /// the generic [`Params`] of a [`Request`] become a typed struct.
 pub(crate) struct Typed<P> {
@@ -186,7 +189,7 @@ pub(crate) struct Typed<P> {
     default_visual_size: (f64, f64),
     default_ppd: f64,
     render: fn(&P, &Geometry, u64) -> Result<Output>,
-    natural: fn(&P) -> Result<Option<(usize, usize)>>,
+    natural: NaturalShape<P>,
 }
 
 impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
@@ -215,7 +218,7 @@ impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
         default_visual_size: (f64, f64),
         default_ppd: f64,
         render: fn(&P, &Geometry, u64) -> Result<Output>,
-        natural: fn(&P) -> Result<Option<(usize, usize)>>,
+        natural: NaturalShape<P>,
     ) -> Box<dyn Stimulus> {
         Box::new(Typed {
             name,
@@ -429,8 +432,9 @@ mod tests {
     fn by_name_and_typed_give_the_same_output_and_params() {
         let given = Params::parse_pairs(&["light=left", "profile=gaussian", "rows=2"]).unwrap();
         let size = SizeRequest {
-            shape: Some((160, 120)),
-            ..Default::default()
+            visual_size: Some((14.0, 10.0)),
+            ppd: Some(16.0),
+            shape: None,
         };
         let (request, by_name) = generate("bumps", &given, &size, 5, 1 << 20).unwrap();
         let typed = BumpsParams::from_map(&given).unwrap();
@@ -442,8 +446,10 @@ mod tests {
 
     #[test]
     fn typed_values_are_range_checked() {
-        let mut p = SphereParams::default();
-        p.radius = 7.0;
+        let p = SphereParams {
+            radius: 7.0,
+            ..Default::default()
+        };
         let g = Geometry {
             width: 8,
             height: 8,
@@ -451,8 +457,10 @@ mod tests {
         };
         let e = sphere(&p, &g).unwrap_err().to_string();
         assert!(e.contains("radius") && e.contains("0.01..5"), "{e}");
-        let mut p = CirclesParams::default();
-        p.rows = 0;
+        let p = CirclesParams {
+            rows: 0,
+            ..Default::default()
+        };
         assert!(p.validate().unwrap_err().to_string().contains("rows"));
     }
 

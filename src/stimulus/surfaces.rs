@@ -80,11 +80,7 @@ fn render_surface(
     backdrop: &BackdropParams,
 ) -> Result<Output> {
     let reflectance = lighting.reflectance()?;
-    let rendering = render(
-        &surface,
-        reflectance.as_ref(),
-        &backdrop.render_options(),
-    );
+    let rendering = render(&surface, reflectance.as_ref(), &backdrop.render_options());
     let labels = surface.mask.map(|&m| u16::from(m));
     Ok(Output {
         pixels: Pixels::Gray(rendering.image),
@@ -186,8 +182,7 @@ stimulus_params! {
 pub fn gaussian(p: &GaussianParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
     let side = shorter_side(g);
-    let surface =
-        surface::gaussian(g.width, g.height, p.height * side, p.sigma * side, 0.0, 0.0)?;
+    let surface = surface::gaussian(g.width, g.height, p.height * side, p.sigma * side, 0.0, 0.0)?;
     render_surface(surface, &p.lighting, &p.backdrop)
 }
 
