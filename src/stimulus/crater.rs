@@ -149,19 +149,7 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
     notes.insert("albedo".into(), json!(albedo));
     notes.insert("rim_radius_deg".into(), json!(rim / frame.ppd));
     let names = vec!["crater".to_string(), "mound".to_string()];
-    let mut out = Output {
-        pixels: Pixels::Gray(rendering.image),
-        targets: Some(Targets { labels, names }),
-        surface: Some(SurfaceLayers {
-            depth: surface.depth,
-            normals: surface.normals,
-            mask: surface.mask,
-            albedo: None,
-            shading: Some(rendering.shading),
-        }),
-        svg: None,
-        notes,
-    };
+    let mut out = Output::rendered(surface, rendering, Targets { labels, names }, notes);
     if p.rotation == CraterRotation::Turned {
         out = rotated(out);
         let seen = light.opposite_tilt();

@@ -11,7 +11,7 @@
 
 use super::frame::{smoothstep, Frame};
 use super::surfaces::{BackdropParams, LightingParams};
-use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::params::{param_choice, stimulus_params, ParamSet};
@@ -157,22 +157,11 @@ pub fn hollow_mask(p: &HollowMaskParams, g: &Geometry) -> Result<Output> {
             light.opposite_tilt()
         )),
     );
-    Ok(Output {
-        pixels: Pixels::Gray(rendering.image),
-        targets: Some(Targets {
-            labels: surface.mask.map(|&m| u16::from(m)),
-            names: vec!["face".into()],
-        }),
-        surface: Some(SurfaceLayers {
-            depth: surface.depth,
-            normals: surface.normals,
-            mask: surface.mask,
-            albedo: None,
-            shading: Some(rendering.shading),
-        }),
-        svg: None,
-        notes,
-    })
+    let targets = Targets {
+        labels: surface.mask.map(|&m| u16::from(m)),
+        names: vec!["face".into()],
+    };
+    Ok(Output::rendered(surface, rendering, targets, notes))
 }
 
 /// The hollow-mask stimulus.

@@ -151,6 +151,29 @@ pub struct Output {
 }
 
 impl Output {
+    /// A rendered surface: its image, the surface's layers with the shading before shadows,
+    /// and `targets` and `notes`.
+    pub(crate) fn rendered(
+        surface: crate::surface::Surface,
+        rendering: crate::render::Rendering,
+        targets: Targets,
+        notes: Map<String, Value>,
+    ) -> Self {
+        Output {
+            pixels: Pixels::Gray(rendering.image),
+            targets: Some(targets),
+            surface: Some(SurfaceLayers {
+                depth: surface.depth,
+                normals: surface.normals,
+                mask: surface.mask,
+                albedo: None,
+                shading: Some(rendering.shading),
+            }),
+            svg: None,
+            notes,
+        }
+    }
+
     /// A gray output with no targets, layers or notes.
     pub fn gray(image: Image) -> Self {
         Output {
@@ -201,14 +224,14 @@ impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
         default_ppd: f64,
         render: fn(&P, &Geometry, u64) -> Result<Output>,
     ) -> Box<dyn Stimulus> {
-        Box::new(Typed {
+        Self::boxed_with_natural(
             name,
             summary,
             default_visual_size,
             default_ppd,
             render,
-            natural: |_| Ok(None),
-        })
+            |_| Ok(None),
+        )
     }
 
     /// The same, with a size in pixels that the parameters give (a depth map's own size).

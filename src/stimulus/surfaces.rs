@@ -4,7 +4,7 @@
 //! Their lengths are fractions of the frame's shorter side, because benchmark objects are
 //! framed, not placed in degrees; the frame itself still has a size in degrees.
 
-use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::light::Light;
 use crate::params::{param_choice, stimulus_params, ParamSet};
@@ -81,23 +81,16 @@ fn render_surface(
 ) -> Result<Output> {
     let reflectance = lighting.reflectance()?;
     let rendering = render(&surface, reflectance.as_ref(), &backdrop.render_options());
-    let labels = surface.mask.map(|&m| u16::from(m));
-    Ok(Output {
-        pixels: Pixels::Gray(rendering.image),
-        targets: Some(Targets {
-            labels,
-            names: vec!["object".into()],
-        }),
-        surface: Some(SurfaceLayers {
-            depth: surface.depth,
-            normals: surface.normals,
-            mask: surface.mask,
-            albedo: None,
-            shading: Some(rendering.shading),
-        }),
-        svg: None,
-        notes: Default::default(),
-    })
+    let targets = Targets {
+        labels: surface.mask.map(|&m| u16::from(m)),
+        names: vec!["object".into()],
+    };
+    Ok(Output::rendered(
+        surface,
+        rendering,
+        targets,
+        Default::default(),
+    ))
 }
 
 /// The frame's shorter side in pixels: the unit of the benchmark surfaces' lengths.
