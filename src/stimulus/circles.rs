@@ -9,7 +9,7 @@
 
 use super::frame::{grid_centres, random_centres, Frame};
 use super::svg::{document, gray, num};
-use super::{Output, Pixels, Stimulus, Targets, Typed};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::params::{param_choice, stimulus_params, ParamSet};
@@ -223,13 +223,7 @@ impl Circles {
                 })
                 .collect::<Vec<_>>()),
         );
-        Ok(Output {
-            pixels: Pixels::Gray(image),
-            targets: Some(Targets { labels, names }),
-            surface: None,
-            svg: Some(svg),
-            notes,
-        })
+        Ok(Output::drawn(image, Targets { labels, names }, svg, notes))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -331,6 +325,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 mod tests {
     use super::*;
     use crate::params::Params;
+    use crate::stimulus::Pixels;
 
     fn generate(shading: CircleShading, pairs: &[&str], seed: u64) -> Output {
         let given = Params::parse_pairs(pairs).unwrap();

@@ -174,6 +174,22 @@ impl Output {
         }
     }
 
+    /// A gray picture drawn as vector graphics, with its targets and notes.
+    pub(crate) fn drawn(
+        image: Image,
+        targets: Targets,
+        svg: String,
+        notes: Map<String, Value>,
+    ) -> Self {
+        Output {
+            pixels: Pixels::Gray(image),
+            targets: Some(targets),
+            surface: None,
+            svg: Some(svg),
+            notes,
+        }
+    }
+
     /// A gray output with no targets, layers or notes.
     pub fn gray(image: Image) -> Self {
         Output {
@@ -216,7 +232,26 @@ pub(crate) struct Typed<P> {
 }
 
 impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
-    /// A stimulus called `name` with its default size, drawn by `render(params, geometry, seed)`.
+    /// A stimulus called `name` with its default size, drawn by `render(params, geometry, seed)`
+    /// (set `natural` for one whose parameters give its size in pixels).
+    pub(crate) fn new(
+        name: &'static str,
+        summary: &'static str,
+        default_visual_size: (f64, f64),
+        default_ppd: f64,
+        render: fn(&P, &Geometry, u64) -> Result<Output>,
+    ) -> Self {
+        Typed {
+            name,
+            summary,
+            default_visual_size,
+            default_ppd,
+            render,
+            natural: |_| Ok(None),
+        }
+    }
+
+    /// [`Typed::new`], boxed.
     pub(crate) fn boxed(
         name: &'static str,
         summary: &'static str,
@@ -224,33 +259,13 @@ impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
         default_ppd: f64,
         render: fn(&P, &Geometry, u64) -> Result<Output>,
     ) -> Box<dyn Stimulus> {
-        Self::boxed_with_natural(
+        Box::new(Self::new(
             name,
             summary,
             default_visual_size,
             default_ppd,
             render,
-            |_| Ok(None),
-        )
-    }
-
-    /// The same, with a size in pixels that the parameters give (a depth map's own size).
-    pub(crate) fn boxed_with_natural(
-        name: &'static str,
-        summary: &'static str,
-        default_visual_size: (f64, f64),
-        default_ppd: f64,
-        render: fn(&P, &Geometry, u64) -> Result<Output>,
-        natural: NaturalShape<P>,
-    ) -> Box<dyn Stimulus> {
-        Box::new(Typed {
-            name,
-            summary,
-            default_visual_size,
-            default_ppd,
-            render,
-            natural,
-        })
+        ))
     }
 }
 

@@ -10,7 +10,7 @@
 
 use super::frame::Frame;
 use super::svg::{document, gray, num};
-use super::{Output, Pixels, Stimulus, Targets, Typed};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::params::{param_choice, stimulus_params, ParamSet};
@@ -196,13 +196,7 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
         "strip_px".into(),
         json!({"width": width, "gap": gap, "length": length}),
     );
-    Ok(Output {
-        pixels: Pixels::Gray(image),
-        targets: Some(Targets { labels, names }),
-        surface: None,
-        svg: Some(svg),
-        notes,
-    })
+    Ok(Output::drawn(image, Targets { labels, names }, svg, notes))
 }
 
 /// The strips stimulus.
@@ -220,6 +214,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 mod tests {
     use super::*;
     use crate::params::Params;
+    use crate::stimulus::Pixels;
 
     fn generate(pairs: &[&str]) -> Result<Output> {
         let given = Params::parse_pairs(pairs).unwrap();

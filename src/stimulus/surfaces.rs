@@ -363,14 +363,16 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
             PPD,
             |p, g, _| vase(p, g),
         ),
-        Typed::boxed_with_natural(
-            "heightfield",
-            "a depth map from a .npy file (pixel units; its size sets the frame)",
-            SIZE,
-            PPD,
-            |p, g, _| heightfield(p, g),
-            depth_map_shape,
-        ),
+        Box::new(Typed {
+            natural: depth_map_shape,
+            ..Typed::new(
+                "heightfield",
+                "a depth map from a .npy file (pixel units; its size sets the frame)",
+                SIZE,
+                PPD,
+                |p, g, _| heightfield(p, g),
+            )
+        }),
         Typed::boxed(
             "bunny",
             "the Stanford Bunny (built in, 1,889 vertices), rasterised under any view",
