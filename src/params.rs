@@ -237,7 +237,8 @@ impl Params {
         Ok(map)
     }
 
-    fn get(&self, name: &str) -> Result<&Value> {
+    /// The checked value of parameter `name`.
+    pub fn get(&self, name: &str) -> Result<&Value> {
         self.values
             .get(name)
             .ok_or_else(|| Error::Compute(format!("internal: parameter '{name}' is not declared")))
@@ -293,6 +294,423 @@ impl Params {
     }
 }
 
+/// A Rust type that one parameter can have: how it is declared ([`ParamKind`]), read back from
+/// a checked JSON value, and written to one.
+///
+/// Implemented for `f64`, `usize`, `bool`, `String`, [`Light`] and the choice enums
+/// declared with `param_choice!`.
+pub trait ParamType: Sized {
+    /// The kind of the parameter, with its range where the type has one.
+    fn kind(range: Option<std::ops::RangeInclusive<Self>>) -> ParamKind;
+    /// The value from its checked (or default) JSON form; `None` when it has another type.
+    fn from_value(value: &Value) -> Option<Self>;
+    /// The value as JSON (checked again by [`Params::resolve`] when converted back).
+    fn to_value(&self) -> Value;
+    /// A stand-in used only if a declared default cannot be read (never, for a declaration that
+    /// passes the tests).
+    fn fallback() -> Self;
+}
+
+impl ParamType for f64 {
+    fn kind(range: Option<std::ops::RangeInclusive<Self>>) -> ParamKind {
+        let (min, max) = range.map_or((f64::MIN, f64::MAX), |r| (*r.start(), *r.end()));
+        ParamKind::Number { min, max }
+    }
+    fn from_value(value: &Value) -> Option<Self> {
+        value.as_f64()
+    }
+    fn to_value(&self) -> Value {
+        Value::from(*self)
+    }
+    fn fallback() -> Self {
+        0.0
+    }
+}
+
+macro_rules! integer_param_type {
+    ($($t:ty),*) => {$(
+        impl ParamType for $t {
+            fn kind(range: Option<std::ops::RangeInclusive<Self>>) -> ParamKind {
+                let (min, max) = range.map_or((0, i64::MAX), |r| {
+                    (
+                        i64::try_from(*r.start()).unwrap_or(i64::MAX),
+                        i64::try_from(*r.end()).unwrap_or(i64::MAX),
+                    )
+                });
+                ParamKind::Integer { min, max }
+            }
+            fn from_value(value: &Value) -> Option<Self> {
+                value.as_u64().and_then(|v| <$t>::try_from(v).ok())
+            }
+            fn to_value(&self) -> Value {
+                Value::from(*self)
+            }
+            fn fallback() -> Self {
+                0
+            }
+        }
+    )*};
+}
+integer_param_type!(usize);
+
+impl ParamType for bool {
+    fn kind(_: Option<std::ops::RangeInclusive<Self>>) -> ParamKind {
+        ParamKind::Bool
+    }
+    fn from_value(value: &Value) -> Option<Self> {
+        value.as_bool()
+    }
+    fn to_value(&self) -> Value {
+        Value::from(*self)
+    }
+    fn fallback() -> Self {
+        false
+    }
+}
+
+impl ParamType for String {
+    fn kind(_: Option<std::ops::RangeInclusive<Self>>) -> ParamKind {
+        ParamKind::Text
+    }
+    fn from_value(value: &Value) -> Option<Self> {
+        value.as_str().map(str::to_string)
+    }
+    fn to_value(&self) -> Value {
+        Value::from(self.as_str())
+    }
+    fn fallback() -> Self {
+        String::new()
+    }
+}
+
+impl ParamType for Light {
+    fn kind(_: Option<std::ops::RangeInclusive<Self>>) -> ParamKind {
+        ParamKind::Light
+    }
+    fn from_value(value: &Value) -> Option<Self> {
+        value.as_str().and_then(|t| t.parse().ok())
+    }
+    fn to_value(&self) -> Value {
+        Value::from(self.to_string())
+    }
+    fn fallback() -> Self {
+        Light::FRONT
+    }
+}
+
+/// A typed set of parameters: a struct declared with `stimulus_params!`, convertible from and
+/// to the generic, name-based [`Params`].
+pub trait ParamSet: Sized + Default {
+    /// The declarations, in order, with the defaults replaced by `overrides` (name, value)
+    /// where one names the parameter (the first match wins).
+    fn specs_with(overrides: &[(&'static str, Value)]) -> Vec<ParamSpec>;
+
+    /// The default value with the defaults replaced by `overrides`.
+    fn default_with(overrides: &[(&'static str, Value)]) -> Self;
+
+    /// Reads every parameter from resolved `params`.
+    fn from_params(params: &Params) -> Result<Self>;
+
+    /// Writes every parameter, unchecked, into `values`.
+    fn write_values(&self, values: &mut Map<String, Value>);
+
+    /// The declarations, in order, with their defaults (what `describe` shows).
+    fn specs() -> Vec<ParamSpec> {
+        Self::specs_with(&[])
+    }
+
+    /// Checks `given` (key → value, as from `key=value` pairs or a spec) and reads it; missing
+    /// keys take their defaults.
+    fn from_map(given: &Map<String, Value>) -> Result<Self> {
+        Self::from_params(&Params::resolve(&Self::specs(), given)?)
+    }
+
+    /// The generic form, every value range-checked: what a sidecar records.
+    fn to_params(&self) -> Result<Params> {
+        let mut values = Map::new();
+        self.write_values(&mut values);
+        Params::resolve(&Self::specs(), &values)
+    }
+
+    /// Checks every value against its declared range or choices.
+    fn validate(&self) -> Result<()> {
+        self.to_params().map(drop)
+    }
+}
+
+/// The value `overrides` gives `name`, else `default`.
+#[doc(hidden)]
+pub fn override_or(overrides: &[(&'static str, Value)], name: &str, default: Value) -> Value {
+    overrides
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(default, |(_, v)| v.clone())
+}
+
+/// `outer` followed by `local`: the overrides a nested set sees.
+#[doc(hidden)]
+pub fn chain_overrides(
+    outer: &[(&'static str, Value)],
+    local: Vec<(&'static str, Value)>,
+) -> Vec<(&'static str, Value)> {
+    outer.iter().cloned().chain(local).collect()
+}
+
+/// Reads parameter `name` of type `T` from resolved `params`.
+#[doc(hidden)]
+pub fn read_param<T: ParamType>(params: &Params, name: &str) -> Result<T> {
+    T::from_value(params.get(name)?).ok_or_else(|| {
+        Error::Compute(format!(
+            "internal: parameter '{name}' does not have its declared type"
+        ))
+    })
+}
+
+/// The typed default of a parameter from its JSON default.
+#[doc(hidden)]
+pub fn default_param<T: ParamType>(value: &Value) -> T {
+    T::from_value(value).unwrap_or_else(T::fallback)
+}
+
+/// Declares an enum of words for a choice parameter, with `NAMES` (in declaration order, as
+/// `describe` lists them), `FromStr`, `Display`, serde as the word, and [`ParamType`].
+macro_rules! param_choice {
+    (
+        $(#[$meta:meta])*
+        pub enum $name:ident {
+            $( $(#[doc = $doc:literal])* $variant:ident = $word:literal, )+
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum $name {
+            $( $(#[doc = $doc])* $variant, )+
+        }
+
+        impl $name {
+            /// The words, in declaration order.
+            pub const NAMES: &'static [&'static str] = &[$($word),+];
+
+            /// The word for this choice.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $( $name::$variant => $word, )+
+                }
+            }
+        }
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl std::str::FromStr for $name {
+            type Err = $crate::error::Error;
+            fn from_str(text: &str) -> $crate::error::Result<Self> {
+                match text {
+                    $( $word => Ok($name::$variant), )+
+                    other => Err($crate::error::Error::unknown(
+                        stringify!($name),
+                        other,
+                        Self::NAMES,
+                    )),
+                }
+            }
+        }
+
+        impl From<$name> for serde_json::Value {
+            fn from(v: $name) -> Self {
+                serde_json::Value::from(v.name())
+            }
+        }
+
+        impl serde::Serialize for $name {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+                s.serialize_str(self.name())
+            }
+        }
+
+        impl<'de> serde::Deserialize<'de> for $name {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+                let text = <String as serde::Deserialize>::deserialize(d)?;
+                text.parse().map_err(serde::de::Error::custom)
+            }
+        }
+
+        impl $crate::params::ParamType for $name {
+            fn kind(_: Option<std::ops::RangeInclusive<Self>>) -> $crate::params::ParamKind {
+                $crate::params::ParamKind::Choice(Self::NAMES)
+            }
+            fn from_value(value: &serde_json::Value) -> Option<Self> {
+                value.as_str().and_then(|t| t.parse().ok())
+            }
+            fn to_value(&self) -> serde_json::Value {
+                serde_json::Value::from(self.name())
+            }
+            fn fallback() -> Self {
+                [$($name::$variant),+][0]
+            }
+        }
+    };
+}
+pub(crate) use param_choice;
+
+/// Declares a typed parameter set: the struct, its `Default`, its [`ParamSet`] impl (the
+/// [`ParamSpec`]s in field order, reading from and writing to [`Params`]) and
+/// `TryFrom<&Params>`, all from one declaration per parameter:
+///
+/// ```text
+/// stimulus_params! {
+///     /// Discs on a panel.
+///     pub struct DiscParams {
+///         /// disc radius (deg)
+///         radius: f64 = 1.0, range 0.01..=90.0;
+///         /// light direction
+///         light: Light = "above";
+///         /// the shading parameters, with other defaults (flattened: their keys are ours)
+///         flatten shading: ShadingParams { light: "above-left" };
+///     }
+/// }
+/// ```
+///
+/// The parameter's key is the field's name and its one-line doc the field's doc comment.
+macro_rules! stimulus_params {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident { $($body:tt)* }
+    ) => {
+        $crate::params::stimulus_params!(@munch [$(#[$meta])*] $name [] $($body)*);
+    };
+    // A flattened set, with its defaults overridden.
+    (@munch $meta:tt $name:ident [$($done:tt)*]
+        $(#[doc = $doc:literal])*
+        flatten $f:ident : $ty:ty { $($o:ident : $ov:expr),* $(,)? };
+        $($rest:tt)*
+    ) => {
+        $crate::params::stimulus_params!(@munch $meta $name
+            [$($done)* (flat [$($doc)*] $f $ty [$($o : $ov),*] ())] $($rest)*);
+    };
+    // A parameter with a range.
+    (@munch $meta:tt $name:ident [$($done:tt)*]
+        $(#[doc = $doc:literal])*
+        $f:ident : $ty:ty = $default:expr, range $range:expr;
+        $($rest:tt)*
+    ) => {
+        $crate::params::stimulus_params!(@munch $meta $name
+            [$($done)* (plain [$($doc)*] $f $ty [$default] (Some($range)))] $($rest)*);
+    };
+    // A parameter without one.
+    (@munch $meta:tt $name:ident [$($done:tt)*]
+        $(#[doc = $doc:literal])*
+        $f:ident : $ty:ty = $default:expr;
+        $($rest:tt)*
+    ) => {
+        $crate::params::stimulus_params!(@munch $meta $name
+            [$($done)* (plain [$($doc)*] $f $ty [$default] (None))] $($rest)*);
+    };
+    (@munch [$($meta:tt)*] $name:ident
+        [$(($kind:ident [$($doc:literal)*] $f:ident $ty:ty [$($default:tt)*] ($($range:tt)*)))*]
+    ) => {
+        $($meta)*
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct $name {
+            $( $(#[doc = $doc])* pub $f: $ty, )*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                <Self as $crate::params::ParamSet>::default_with(&[])
+            }
+        }
+
+        impl $crate::params::ParamSet for $name {
+            #[allow(clippy::vec_init_then_push)] // one push per declared field
+            fn specs_with(
+                overrides: &[(&'static str, serde_json::Value)],
+            ) -> Vec<$crate::params::ParamSpec> {
+                let mut specs = Vec::new();
+                $( $crate::params::stimulus_params!(@spec $kind specs overrides $f $ty
+                    [concat!($($doc),*)] [$($default)*] ($($range)*)); )*
+                specs
+            }
+
+            fn default_with(overrides: &[(&'static str, serde_json::Value)]) -> Self {
+                $name {
+                    $( $f: $crate::params::stimulus_params!(@default $kind overrides $f $ty
+                        [$($default)*]), )*
+                }
+            }
+
+            fn from_params(params: &$crate::params::Params) -> $crate::error::Result<Self> {
+                Ok($name {
+                    $( $f: $crate::params::stimulus_params!(@read $kind params $f $ty), )*
+                })
+            }
+
+            fn write_values(&self, values: &mut serde_json::Map<String, serde_json::Value>) {
+                $( $crate::params::stimulus_params!(@write $kind self values $f $ty); )*
+            }
+        }
+
+        impl TryFrom<&$crate::params::Params> for $name {
+            type Error = $crate::error::Error;
+            fn try_from(params: &$crate::params::Params) -> $crate::error::Result<Self> {
+                <Self as $crate::params::ParamSet>::from_params(params)
+            }
+        }
+    };
+    (@spec plain $specs:ident $ov:ident $f:ident $ty:ty [$doc:expr] [$default:expr] ($range:expr)) => {
+        $specs.push($crate::params::ParamSpec {
+            name: stringify!($f),
+            kind: <$ty as $crate::params::ParamType>::kind($range),
+            default: $crate::params::override_or(
+                $ov,
+                stringify!($f),
+                serde_json::Value::from($default),
+            ),
+            doc: $doc.trim(),
+        });
+    };
+    (@spec flat $specs:ident $ov:ident $f:ident $ty:ty [$doc:expr] [$($o:ident : $v:expr),*] ()) => {
+        $specs.extend(<$ty as $crate::params::ParamSet>::specs_with(
+            &$crate::params::chain_overrides(
+                $ov,
+                vec![$((stringify!($o), serde_json::Value::from($v))),*],
+            ),
+        ));
+    };
+    (@default plain $ov:ident $f:ident $ty:ty [$default:expr]) => {
+        $crate::params::default_param::<$ty>(&$crate::params::override_or(
+            $ov,
+            stringify!($f),
+            serde_json::Value::from($default),
+        ))
+    };
+    (@default flat $ov:ident $f:ident $ty:ty [$($o:ident : $v:expr),*]) => {
+        <$ty as $crate::params::ParamSet>::default_with(&$crate::params::chain_overrides(
+            $ov,
+            vec![$((stringify!($o), serde_json::Value::from($v))),*],
+        ))
+    };
+    (@read plain $params:ident $f:ident $ty:ty) => {
+        $crate::params::read_param::<$ty>($params, stringify!($f))?
+    };
+    (@read flat $params:ident $f:ident $ty:ty) => {
+        <$ty as $crate::params::ParamSet>::from_params($params)?
+    };
+    (@write plain $self:ident $values:ident $f:ident $ty:ty) => {
+        $values.insert(
+            stringify!($f).to_string(),
+            $crate::params::ParamType::to_value(&$self.$f),
+        );
+    };
+    (@write flat $self:ident $values:ident $f:ident $ty:ty) => {
+        $crate::params::ParamSet::write_values(&$self.$f, $values);
+    };
+}
+pub(crate) use stimulus_params;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -336,5 +754,91 @@ mod tests {
             assert!(e.contains(needle), "{pair}: {e}");
         }
         assert!(Params::parse_pairs(&["novalue"]).is_err());
+    }
+}
+
+#[cfg(test)]
+mod typed_tests {
+    use super::*;
+
+    param_choice! {
+        /// A test choice.
+        pub enum Shape {
+            /// Round.
+            Round = "round",
+            /// Square.
+            Square = "square",
+        }
+    }
+
+    stimulus_params! {
+        /// A shared test set.
+        pub struct Inner {
+            /// a length (deg)
+            length: f64 = 1.0, range 0.0..=10.0;
+            /// the shape
+            shape: Shape = Shape::Round;
+        }
+    }
+
+    stimulus_params! {
+        /// A test set.
+        pub struct Outer {
+            /// how many
+            count: usize = 3, range 1..=9;
+            /// the inner set, longer by default
+            flatten inner: Inner { length: 2.5 };
+            /// where the light is
+            light: Light = "left";
+            /// on or off
+            on: bool = true;
+            /// a label
+            label: String = "x";
+        }
+    }
+
+    #[test]
+    fn declarations_come_in_field_order_with_overridden_defaults() {
+        let specs = Outer::specs();
+        let names: Vec<&str> = specs.iter().map(|s| s.name).collect();
+        assert_eq!(names, ["count", "length", "shape", "light", "on", "label"]);
+        assert_eq!(specs[0].kind, ParamKind::Integer { min: 1, max: 9 });
+        assert_eq!(specs[1].default, Value::from(2.5));
+        assert_eq!(specs[1].doc, "a length (deg)");
+        assert_eq!(specs[2].kind, ParamKind::Choice(&["round", "square"]));
+        assert_eq!(specs[3].default, Value::from("left"));
+        assert_eq!(Inner::default().length, 1.0);
+        let d = Outer::default();
+        assert_eq!(
+            (d.count, d.inner.length, d.inner.shape),
+            (3, 2.5, Shape::Round)
+        );
+        assert!((d.light.tilt_deg() - 90.0).abs() < 1e-9);
+        assert_eq!((d.on, d.label.as_str()), (true, "x"));
+    }
+
+    #[test]
+    fn typed_values_convert_both_ways() {
+        let given = Params::parse_pairs(&["shape=square", "count=9", "light=0,1,1"]).unwrap();
+        let resolved = Params::resolve(&Outer::specs(), &given).unwrap();
+        let typed = Outer::try_from(&resolved).unwrap();
+        assert_eq!((typed.count, typed.inner.shape), (9, Shape::Square));
+        assert_eq!(typed.to_params().unwrap(), resolved);
+        assert_eq!("square".parse::<Shape>().unwrap().to_string(), "square");
+        assert!("oval"
+            .parse::<Shape>()
+            .unwrap_err()
+            .to_string()
+            .contains("round"));
+        let e = Outer::from_map(&Params::parse_pairs(&["count=10"]).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("count") && e.contains("1..9"), "{e}");
+        // A struct built in Rust is checked on the way back.
+        let bad = Outer {
+            count: 0,
+            ..Outer::default()
+        };
+        assert!(bad.validate().unwrap_err().to_string().contains("count"));
     }
 }

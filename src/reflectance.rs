@@ -182,13 +182,34 @@ impl ReflectanceMap for OrenNayar {
     }
 }
 
+crate::params::param_choice! {
+    /// A reflectance model, by the name `--brdf NAME` and the `brdf` key of a spec use.
+    pub enum BrdfModel {
+        /// [`Lambertian`]: matte.
+        Lambertian = "lambertian",
+        /// [`BlinnPhong`]: matte plus a specular lobe.
+        BlinnPhong = "blinn-phong",
+        /// [`OrenNayar`]: rough diffuse.
+        OrenNayar = "oren-nayar",
+    }
+}
+
 /// The reflectance models shadelab knows, by name, with their parameters: what `--brdf NAME`
-/// and the `brdf` key of a spec select.
+/// and the `brdf` key of a spec select. Serialised as `{"model": "lambertian", "albedo": …}`
+/// with every parameter, used by the model or not.
+///
+/// ```
+/// use shadelab::reflectance::{BrdfModel, BrdfSpec};
+/// let spec = BrdfSpec::named("phong").unwrap();
+/// assert_eq!(spec.model, BrdfModel::BlinnPhong);
+/// let json = serde_json::to_value(&spec).unwrap();
+/// assert_eq!(json["model"], "blinn-phong");
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BrdfSpec {
-    /// `lambertian`, `blinn-phong` or `oren-nayar`.
-    pub model: String,
+    /// Which model.
+    pub model: BrdfModel,
     /// Albedo ρ (0..1 for physical surfaces).
     pub albedo: f64,
     /// Ambient level (Lambertian and Blinn–Phong).
@@ -201,13 +222,13 @@ pub struct BrdfSpec {
     pub roughness_deg: f64,
 }
 
-/// The names accepted by [`BrdfSpec::model`].
-pub const BRDF_NAMES: &[&str] = &["lambertian", "blinn-phong", "oren-nayar"];
+/// The names accepted by [`BrdfSpec::named`] (besides the aliases `phong` and `lambert`).
+pub const BRDF_NAMES: &[&str] = BrdfModel::NAMES;
 
 impl Default for BrdfSpec {
     fn default() -> Self {
         BrdfSpec {
-            model: "lambertian".into(),
+            model: BrdfModel::Lambertian,
             albedo: 1.0,
             ambient: 0.0,
             specular: 0.4,
@@ -225,11 +246,11 @@ impl BrdfSpec {
             "lambert" => "lambertian",
             m => m,
         };
-        if !BRDF_NAMES.contains(&model) {
-            return Err(Error::unknown("reflectance model", model, BRDF_NAMES));
-        }
+        let model = model
+            .parse::<BrdfModel>()
+            .map_err(|_| Error::unknown("reflectance model", model, BRDF_NAMES))?;
         Ok(BrdfSpec {
-            model: model.to_string(),
+            model,
             ..BrdfSpec::default()
         })
     }
@@ -252,19 +273,18 @@ impl BrdfSpec {
             albedo,
             ambient,
         };
-        Ok(match self.model.as_str() {
-            "lambertian" => Box::new(diffuse),
-            "blinn-phong" => Box::new(BlinnPhong {
+        Ok(match self.model {
+            BrdfModel::Lambertian => Box::new(diffuse),
+            BrdfModel::BlinnPhong => Box::new(BlinnPhong {
                 diffuse,
                 specular: check("specular", self.specular, 0.0, 100.0)?,
                 shininess: check("shininess", self.shininess, 1.0, 10_000.0)?,
             }),
-            "oren-nayar" => Box::new(OrenNayar {
+            BrdfModel::OrenNayar => Box::new(OrenNayar {
                 light,
                 albedo,
                 roughness: check("roughness_deg", self.roughness_deg, 0.0, 90.0)?.to_radians(),
             }),
-            other => return Err(Error::unknown("reflectance model", other, BRDF_NAMES)),
         })
     }
 }

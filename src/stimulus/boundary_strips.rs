@@ -13,10 +13,11 @@
 
 use super::frame::Frame;
 use super::svg::{document, gray, num};
-use super::{Info, Output, Pixels, Request, Stimulus, Targets};
+use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::params::{param_choice, stimulus_params, ParamSet};
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use std::f64::consts::TAU;
 use svg::node::element::path::Data;
@@ -36,10 +37,10 @@ fn boundary(kind: &str, u: f64) -> f64 {
 }
 
 /// The shading at phase `u` in 0..1, from −1 to 1.
-fn shade(kind: &str, u: f64) -> f64 {
+fn shade(kind: StripShading, u: f64) -> f64 {
     match kind {
-        "ramp" => 1.0 - 2.0 * u,
-        _ => (TAU * u).sin(),
+        StripShading::Ramp => 1.0 - 2.0 * u,
+        StripShading::Sinusoidal => (TAU * u).sin(),
     }
 }
 
@@ -56,206 +57,197 @@ fn parse_boundaries(text: &str) -> Result<Vec<&str>> {
     Ok(kinds)
 }
 
-struct BoundaryStrips;
+param_choice! {
+    /// The internal pattern of [`boundary_strips`].
+    pub enum StripShading {
+        /// A sinusoid per period.
+        Sinusoidal = "sinusoidal",
+        /// A sawtooth ramp per period.
+        Ramp = "ramp",
+    }
+}
 
-impl Stimulus for BoundaryStrips {
-    fn info(&self) -> Info {
-        Info {
-            name: "boundary-strips",
-            summary: "one shading pattern inside sinusoidal, sawtooth, arched or straight outlines: the outline decides the shape",
-            params: vec![
-                ParamSpec::text(
-                    "boundary",
-                    "sinusoidal,sawtooth,arched,straight",
-                    "outline kind, or a comma-separated list stacked top to bottom (sinusoidal, sawtooth, arched, straight)",
-                ),
-                ParamSpec::choice(
-                    "shading",
-                    "sinusoidal",
-                    &["sinusoidal", "ramp"],
-                    "the internal pattern: a sinusoid or a sawtooth ramp per period",
-                ),
-                ParamSpec::number("period", 1.5, 0.01, 90.0, "period of pattern and outline (deg)"),
-                ParamSpec::integer("periods", 6, 1, 200, "periods per strip"),
-                ParamSpec::number(
-                    "height",
-                    1.6,
-                    0.01,
-                    90.0,
-                    "vertical distance between the strip's two outlines (deg)",
-                ),
-                ParamSpec::number(
-                    "amplitude",
-                    0.3,
-                    0.0,
-                    45.0,
-                    "how far the outline swings up and down (deg)",
-                ),
-                ParamSpec::number("gap", 0.8, 0.0, 90.0, "space between stacked strips (deg)"),
-                ParamSpec::number("contrast", 0.7, 0.0, 1.0, "shading amplitude relative to the mean"),
-                ParamSpec::number("mean", 0.5, 0.0, 1.0, "mean luminance of the shading"),
-                ParamSpec::number("background", 0.2, 0.0, 1.0, "luminance around the strips"),
-            ],
-            default_visual_size: (11.0, 12.0),
-            default_ppd: 32.0,
+stimulus_params! {
+    /// Parameters of [`boundary_strips`].
+    pub struct BoundaryStripsParams {
+        /// outline kind, or a comma-separated list stacked top to bottom (sinusoidal, sawtooth, arched, straight)
+        boundary: String = "sinusoidal,sawtooth,arched,straight";
+        /// the internal pattern: a sinusoid or a sawtooth ramp per period
+        shading: StripShading = StripShading::Sinusoidal;
+        /// period of pattern and outline (deg)
+        period: f64 = 1.5, range 0.01..=90.0;
+        /// periods per strip
+        periods: usize = 6, range 1..=200;
+        /// vertical distance between the strip's two outlines (deg)
+        height: f64 = 1.6, range 0.01..=90.0;
+        /// how far the outline swings up and down (deg)
+        amplitude: f64 = 0.3, range 0.0..=45.0;
+        /// space between stacked strips (deg)
+        gap: f64 = 0.8, range 0.0..=90.0;
+        /// shading amplitude relative to the mean
+        contrast: f64 = 0.7, range 0.0..=1.0;
+        /// mean luminance of the shading
+        mean: f64 = 0.5, range 0.0..=1.0;
+        /// luminance around the strips
+        background: f64 = 0.2, range 0.0..=1.0;
+    }
+}
+
+/// One shading pattern inside sinusoidal, sawtooth, arched or straight outlines.
+pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let kinds = parse_boundaries(&p.boundary)?;
+    let shading = p.shading;
+    let period = frame.px(p.period);
+    let periods = p.periods;
+    let height = frame.px(p.height);
+    let amplitude = frame.px(p.amplitude);
+    let gap = frame.px(p.gap);
+    let (contrast, mean, background) = (p.contrast, p.mean, p.background);
+    if mean * (1.0 + contrast) > 1.0 {
+        return Err(Error::invalid(format!(
+            "boundary-strips: mean {mean} × (1 + contrast {contrast}) exceeds 1; lower one of them"
+        )));
+    }
+    if period < 2.0 || height < 1.0 {
+        return Err(Error::invalid(format!(
+            "boundary-strips: period and height must span at least 2 and 1 pixels at {} ppd",
+            frame.ppd
+        )));
+    }
+    let width = period * periods as f64;
+    // Each strip's band, including the outline's swing, stacked and centred.
+    let band = height + 2.0 * amplitude;
+    let n = kinds.len();
+    let stack = n as f64 * band + (n as f64 - 1.0) * gap;
+    let (fw, fh) = (frame.w as f64, frame.h as f64);
+    if width > fw || stack > fh {
+        let (dw, dh) = frame.degrees();
+        return Err(Error::invalid(format!(
+            "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge --visual-size or shorten them",
+            width / frame.ppd,
+            stack / frame.ppd
+        )));
+    }
+    let x0 = frame.snap(-width / 2.0, 0.0).0;
+    let centre_y = |i: usize| stack / 2.0 - band / 2.0 - i as f64 * (band + gap);
+    let phase = |x: f64| ((x - x0) / period).rem_euclid(1.0);
+    let level = |u: f64| mean * (1.0 + contrast * shade(shading, u));
+    let mut image = Grid::new(frame.w, frame.h, background);
+    let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    for col in frame.cols(x0, x0 + width) {
+        let x = frame.x(col);
+        if x < x0 || x >= x0 + width {
+            continue;
+        }
+        let u = phase(x);
+        let v = level(u);
+        for (i, kind) in kinds.iter().enumerate() {
+            let yc = centre_y(i) + amplitude * boundary(kind, u);
+            let (lo, hi) = (yc - height / 2.0, yc + height / 2.0);
+            for row in frame.rows(lo, hi) {
+                let y = frame.y(row);
+                if y > lo && y <= hi {
+                    *image.get_mut(col, row) = v;
+                    *labels.get_mut(col, row) = i as u16 + 1;
+                }
+            }
         }
     }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let kinds = parse_boundaries(p.str("boundary")?)?;
-        let shading = p.str("shading")?;
-        let period = frame.px(p.f64("period")?);
-        let periods = p.usize("periods")?;
-        let height = frame.px(p.f64("height")?);
-        let amplitude = frame.px(p.f64("amplitude")?);
-        let gap = frame.px(p.f64("gap")?);
-        let (contrast, mean, background) =
-            (p.f64("contrast")?, p.f64("mean")?, p.f64("background")?);
-        if mean * (1.0 + contrast) > 1.0 {
-            return Err(Error::invalid(format!(
-                "boundary-strips: mean {mean} × (1 + contrast {contrast}) exceeds 1; lower one of them"
-            )));
+    let svg = {
+        let (gx0, _) = frame.svg_xy(x0, 0.0);
+        let mut gradient = LinearGradient::new()
+            .set("id", "shading")
+            .set("gradientUnits", "userSpaceOnUse")
+            .set("spreadMethod", "repeat")
+            .set("x1", num(gx0))
+            .set("y1", 0)
+            .set("x2", num(gx0 + period))
+            .set("y2", 0);
+        // A ramp is exact with two stops (jumping at the period's end); a sinusoid is
+        // sampled with 32 stops per period.
+        let n_stops = if shading == StripShading::Ramp { 1 } else { 32 };
+        for k in 0..=n_stops {
+            let u = k as f64 / n_stops as f64;
+            let value = if shading == StripShading::Ramp && k == n_stops {
+                level(1.0)
+            } else {
+                level(u)
+            };
+            gradient = gradient.add(
+                Stop::new()
+                    .set("offset", num(u))
+                    .set("stop-color", gray(value)),
+            );
         }
-        if period < 2.0 || height < 1.0 {
-            return Err(Error::invalid(format!(
-                "boundary-strips: period and height must span at least 2 and 1 pixels at {} ppd",
-                frame.ppd
-            )));
+        let mut doc =
+            document(&frame, "boundary-strips", background).add(Definitions::new().add(gradient));
+        let samples = 64 * periods;
+        for (i, kind) in kinds.iter().enumerate() {
+            let curve = |k: usize, offset: f64| -> (f64, f64) {
+                let x = x0 + width * k as f64 / samples as f64;
+                let u = if k == samples { 1.0 } else { phase(x) };
+                frame.svg_xy(x, centre_y(i) + amplitude * boundary(kind, u) + offset)
+            };
+            let start = curve(0, height / 2.0);
+            let mut data = Data::new().move_to((num(start.0), num(start.1)));
+            for k in 1..=samples {
+                let (x, y) = curve(k, height / 2.0);
+                data = data.line_to((num(x), num(y)));
+            }
+            for k in (0..=samples).rev() {
+                let (x, y) = curve(k, -height / 2.0);
+                data = data.line_to((num(x), num(y)));
+            }
+            doc = doc.add(
+                Path::new()
+                    .set("d", data.close())
+                    .set("fill", "url(#shading)")
+                    .set("data-boundary", *kind),
+            );
         }
-        let width = period * periods as f64;
-        // Each strip's band, including the outline's swing, stacked and centred.
-        let band = height + 2.0 * amplitude;
-        let n = kinds.len();
-        let stack = n as f64 * band + (n as f64 - 1.0) * gap;
-        let (fw, fh) = (frame.w as f64, frame.h as f64);
-        if width > fw || stack > fh {
-            let (dw, dh) = frame.degrees();
-            return Err(Error::invalid(format!(
-                "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge --visual-size or shorten them",
-                width / frame.ppd,
-                stack / frame.ppd
-            )));
-        }
-        let x0 = frame.snap(-width / 2.0, 0.0).0;
-        let centre_y = |i: usize| stack / 2.0 - band / 2.0 - i as f64 * (band + gap);
-        let phase = |x: f64| ((x - x0) / period).rem_euclid(1.0);
-        let level = |u: f64| mean * (1.0 + contrast * shade(shading, u));
-        let mut image = Grid::new(frame.w, frame.h, background);
-        let mut labels = Grid::new(frame.w, frame.h, 0u16);
-        for col in frame.cols(x0, x0 + width) {
-            let x = frame.x(col);
-            if x < x0 || x >= x0 + width {
-                continue;
-            }
-            let u = phase(x);
-            let v = level(u);
-            for (i, kind) in kinds.iter().enumerate() {
-                let yc = centre_y(i) + amplitude * boundary(kind, u);
-                let (lo, hi) = (yc - height / 2.0, yc + height / 2.0);
-                for row in frame.rows(lo, hi) {
-                    let y = frame.y(row);
-                    if y > lo && y <= hi {
-                        *image.get_mut(col, row) = v;
-                        *labels.get_mut(col, row) = i as u16 + 1;
-                    }
-                }
-            }
-        }
-        let svg = {
-            let (gx0, _) = frame.svg_xy(x0, 0.0);
-            let mut gradient = LinearGradient::new()
-                .set("id", "shading")
-                .set("gradientUnits", "userSpaceOnUse")
-                .set("spreadMethod", "repeat")
-                .set("x1", num(gx0))
-                .set("y1", 0)
-                .set("x2", num(gx0 + period))
-                .set("y2", 0);
-            // A ramp is exact with two stops (jumping at the period's end); a sinusoid is
-            // sampled with 32 stops per period.
-            let n_stops = if shading == "ramp" { 1 } else { 32 };
-            for k in 0..=n_stops {
-                let u = k as f64 / n_stops as f64;
-                let value = if shading == "ramp" && k == n_stops {
-                    level(1.0)
-                } else {
-                    level(u)
-                };
-                gradient = gradient.add(
-                    Stop::new()
-                        .set("offset", num(u))
-                        .set("stop-color", gray(value)),
-                );
-            }
-            let mut doc = document(&frame, "boundary-strips", background)
-                .add(Definitions::new().add(gradient));
-            let samples = 64 * periods;
-            for (i, kind) in kinds.iter().enumerate() {
-                let curve = |k: usize, offset: f64| -> (f64, f64) {
-                    let x = x0 + width * k as f64 / samples as f64;
-                    let u = if k == samples { 1.0 } else { phase(x) };
-                    frame.svg_xy(x, centre_y(i) + amplitude * boundary(kind, u) + offset)
-                };
-                let start = curve(0, height / 2.0);
-                let mut data = Data::new().move_to((num(start.0), num(start.1)));
-                for k in 1..=samples {
-                    let (x, y) = curve(k, height / 2.0);
-                    data = data.line_to((num(x), num(y)));
-                }
-                for k in (0..=samples).rev() {
-                    let (x, y) = curve(k, -height / 2.0);
-                    data = data.line_to((num(x), num(y)));
-                }
-                doc = doc.add(
-                    Path::new()
-                        .set("d", data.close())
-                        .set("fill", "url(#shading)")
-                        .set("data-boundary", *kind),
-                );
-            }
-            doc.to_string()
-        };
-        let mut notes = Map::new();
-        notes.insert("boundaries".into(), json!(kinds));
-        notes.insert("strip_left_px".into(), json!(frame.svg_xy(x0, 0.0).0));
-        Ok(Output {
-            pixels: Pixels::Gray(image),
-            targets: Some(Targets {
-                labels,
-                names: kinds.iter().map(|k| format!("{k} strip")).collect(),
-            }),
-            surface: None,
-            svg: Some(svg),
-            notes,
-        })
-    }
+        doc.to_string()
+    };
+    let mut notes = Map::new();
+    notes.insert("boundaries".into(), json!(kinds));
+    notes.insert("strip_left_px".into(), json!(frame.svg_xy(x0, 0.0).0));
+    Ok(Output {
+        pixels: Pixels::Gray(image),
+        targets: Some(Targets {
+            labels,
+            names: kinds.iter().map(|k| format!("{k} strip")).collect(),
+        }),
+        surface: None,
+        svg: Some(svg),
+        notes,
+    })
 }
 
 /// The boundary-strips stimulus.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(BoundaryStrips)]
+    vec![Typed::boxed(
+        "boundary-strips",
+        "one shading pattern inside sinusoidal, sawtooth, arched or straight outlines: the outline decides the shape",
+        (11.0, 12.0),
+        32.0,
+        |p, g, _| boundary_strips(p, g),
+    )]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::Params;
-    use crate::visual_size::Geometry;
 
     fn generate(pairs: &[&str]) -> Result<Output> {
-        let info = BoundaryStrips.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        BoundaryStrips.generate(&Request {
-            params: Params::resolve(&info.params, &given)?,
-            geometry: Geometry {
-                width: 220,
-                height: 120,
-                ppd: 20.0,
-            },
-            seed: 0,
-        })
+        let g = Geometry {
+            width: 220,
+            height: 120,
+            ppd: 20.0,
+        };
+        boundary_strips(&BoundaryStripsParams::from_map(&given)?, &g)
     }
 
     #[test]

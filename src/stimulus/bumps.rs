@@ -13,142 +13,161 @@
 //! is mirror-symmetric on the pixel lattice.
 
 use super::frame::{grid_centres, Frame};
-use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::light::Light;
-use crate::params::ParamSpec;
+use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::random::SplitMix64;
+use crate::visual_size::Geometry;
 use nalgebra::Vector3;
 use serde_json::{json, Map};
 
-const PROFILES: &[&str] = &["hemisphere", "gaussian", "linear"];
-const PATTERNS: &[&str] = &["random", "alternate", "rows", "bumps", "dimples"];
-
-fn disc_params(rows: i64, columns: i64, pattern: &'static str) -> Vec<ParamSpec> {
-    vec![
-        ParamSpec::choice(
-            "profile",
-            "hemisphere",
-            PROFILES,
-            "disc profile: a rendered hemisphere or Gaussian, or a linear luminance gradient",
-        ),
-        ParamSpec::number("radius", 1.0, 0.01, 90.0, "disc radius (deg)"),
-        ParamSpec::number(
-            "spacing",
-            3.0,
-            0.01,
-            180.0,
-            "centre-to-centre distance (deg)",
-        ),
-        ParamSpec::integer("rows", rows, 1, 50, "rows of discs"),
-        ParamSpec::integer("columns", columns, 1, 50, "columns of discs"),
-        ParamSpec::choice(
-            "pattern",
-            pattern,
-            PATTERNS,
-            "which discs are bumps and which dimples (random uses the seed)",
-        ),
-        ParamSpec::number(
-            "height",
-            1.0,
-            0.01,
-            10.0,
-            "peak height as a fraction of the radius (hemisphere) or of sigma (gaussian)",
-        ),
-        ParamSpec::number(
-            "sigma",
-            0.35,
-            0.05,
-            5.0,
-            "Gaussian standard deviation as a fraction of the radius",
-        ),
-        ParamSpec::number(
-            "contrast",
-            0.5,
-            0.0,
-            1.0,
-            "gradient amplitude relative to the background (linear profile)",
-        ),
-        ParamSpec::number("background", 0.5, 0.0, 1.0, "luminance of the panel"),
-    ]
-}
-
-struct Bumps;
-struct Sideways;
-
-impl Stimulus for Bumps {
-    fn info(&self) -> Info {
-        let mut params = disc_params(3, 4, "random");
-        params.push(ParamSpec::light(
-            "light",
-            "above",
-            "light direction (x,y,z | tilt=T,slant=S | name)",
-        ));
-        Info {
-            name: "bumps",
-            summary: "discs shaded as bumps and dimples under one light (light-from-above prior)",
-            params,
-            default_visual_size: (14.0, 10.0),
-            default_ppd: 32.0,
-        }
-    }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let light = request.params.light("light")?;
-        discs("bumps", request, light)
+param_choice! {
+    /// The profile of a disc of [`bumps`] and [`sideways`].
+    pub enum DiscProfile {
+        /// A rendered hemisphere.
+        Hemisphere = "hemisphere",
+        /// A rendered Gaussian.
+        Gaussian = "gaussian",
+        /// Ramachandran's linear luminance gradient.
+        Linear = "linear",
     }
 }
 
-impl Stimulus for Sideways {
-    fn info(&self) -> Info {
-        let mut params = disc_params(2, 4, "rows");
-        params.push(ParamSpec::choice(
-            "side",
-            "left",
-            &["left", "right"],
-            "where the light comes from",
-        ));
-        params.push(ParamSpec::number(
-            "slant",
-            45.0,
-            0.0,
-            89.0,
-            "light slant from the line of sight (deg)",
-        ));
-        Info {
-            name: "sideways",
-            summary: "discs lit from the left or right: bump or dimple is ambiguous (bistable)",
-            params,
-            default_visual_size: (14.0, 7.0),
-            default_ppd: 32.0,
-        }
+param_choice! {
+    /// Which discs of [`bumps`] and [`sideways`] are bumps and which dimples.
+    pub enum DiscPattern {
+        /// At random (seeded).
+        Random = "random",
+        /// A checkerboard of bumps and dimples.
+        Alternate = "alternate",
+        /// Rows of bumps and rows of dimples.
+        Rows = "rows",
+        /// All bumps.
+        Bumps = "bumps",
+        /// All dimples.
+        Dimples = "dimples",
     }
+}
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let tilt = if p.str("side")? == "left" {
-            90.0
-        } else {
-            -90.0
-        };
-        let light = Light::from_tilt_slant(tilt, p.f64("slant")?)?;
-        discs("sideways", request, light)
+stimulus_params! {
+    /// The discs shared by [`bumps`] and [`sideways`].
+    pub struct DiscArrayParams {
+        /// disc profile: a rendered hemisphere or Gaussian, or a linear luminance gradient
+        profile: DiscProfile = DiscProfile::Hemisphere;
+        /// disc radius (deg)
+        radius: f64 = 1.0, range 0.01..=90.0;
+        /// centre-to-centre distance (deg)
+        spacing: f64 = 3.0, range 0.01..=180.0;
+        /// rows of discs
+        rows: usize = 3, range 1..=50;
+        /// columns of discs
+        columns: usize = 4, range 1..=50;
+        /// which discs are bumps and which dimples (random uses the seed)
+        pattern: DiscPattern = DiscPattern::Random;
+        /// peak height as a fraction of the radius (hemisphere) or of sigma (gaussian)
+        height: f64 = 1.0, range 0.01..=10.0;
+        /// Gaussian standard deviation as a fraction of the radius
+        sigma: f64 = 0.35, range 0.05..=5.0;
+        /// gradient amplitude relative to the background (linear profile)
+        contrast: f64 = 0.5, range 0.0..=1.0;
+        /// luminance of the panel
+        background: f64 = 0.5, range 0.0..=1.0;
     }
+}
+
+stimulus_params! {
+    /// Parameters of [`bumps`].
+    ///
+    /// ```
+    /// use shadelab::params::{ParamSet, Params};
+    /// use shadelab::stimulus::BumpsParams;
+    ///
+    /// let p = BumpsParams::default();
+    /// assert_eq!(p.discs.radius, 1.0);
+    /// assert_eq!((p.discs.rows, p.discs.columns), (3, 4));
+    /// // Built from key=value pairs: a value out of range names the key and the range.
+    /// let given = Params::parse_pairs(&["radius=100"]).unwrap();
+    /// let e = BumpsParams::from_map(&given).unwrap_err().to_string();
+    /// assert!(e.contains("radius") && e.contains("0.01..90"), "{e}");
+    /// // The declarations are what `describe bumps` lists, in order.
+    /// let names: Vec<_> = BumpsParams::specs().iter().map(|s| s.name).collect();
+    /// assert_eq!(names[..2], ["profile", "radius"]);
+    /// assert_eq!(names.last(), Some(&"light"));
+    /// ```
+    pub struct BumpsParams {
+        /// the discs
+        flatten discs: DiscArrayParams {};
+        /// light direction (x,y,z | tilt=T,slant=S | name)
+        light: Light = "above";
+    }
+}
+
+param_choice! {
+    /// The side a light comes from.
+    pub enum LightSide {
+        /// From the left (tilt 90°).
+        Left = "left",
+        /// From the right (tilt −90°).
+        Right = "right",
+    }
+}
+
+stimulus_params! {
+    /// Parameters of [`sideways`].
+    pub struct SidewaysParams {
+        /// the discs
+        flatten discs: DiscArrayParams { rows: 2, pattern: DiscPattern::Rows };
+        /// where the light comes from
+        side: LightSide = LightSide::Left;
+        /// light slant from the line of sight (deg)
+        slant: f64 = 45.0, range 0.0..=89.0;
+    }
+}
+
+/// Discs shaded as bumps and dimples under one light (the light-from-above prior).
+///
+/// ```
+/// use shadelab::stimulus::{bumps, BumpsParams, Pixels};
+/// use shadelab::visual_size::Geometry;
+///
+/// let mut p = BumpsParams::default();
+/// (p.discs.rows, p.discs.columns) = (1, 1);
+/// let g = Geometry { width: 40, height: 40, ppd: 10.0 };
+/// let out = bumps(&p, &g, 0).unwrap();
+/// let Pixels::Gray(image) = out.pixels else { panic!() };
+/// // Outside the disc the panel has exactly the background luminance.
+/// assert_eq!(*image.get(0, 0), p.discs.background);
+/// ```
+pub fn bumps(p: &BumpsParams, g: &Geometry, seed: u64) -> Result<Output> {
+    p.validate()?;
+    discs("bumps", &p.discs, g, seed, p.light)
+}
+
+/// Discs lit from the left or right: bump or dimple is ambiguous (bistable).
+pub fn sideways(p: &SidewaysParams, g: &Geometry, seed: u64) -> Result<Output> {
+    p.validate()?;
+    let tilt = match p.side {
+        LightSide::Left => 90.0,
+        LightSide::Right => -90.0,
+    };
+    let light = Light::from_tilt_slant(tilt, p.slant)?;
+    discs("sideways", &p.discs, g, seed, light)
 }
 
 /// Bump (+1) or dimple (−1) for each disc, in reading order.
-fn polarities(pattern: &str, rows: usize, cols: usize, seed: u64) -> Vec<f64> {
+fn polarities(pattern: DiscPattern, rows: usize, cols: usize, seed: u64) -> Vec<f64> {
     let mut rng = SplitMix64::new(seed);
     (0..rows * cols)
         .map(|i| {
             let (r, c) = (i / cols, i % cols);
             let bump = match pattern {
-                "random" => rng.next_u64() >> 63 == 0,
-                "alternate" => (r + c) % 2 == 0,
-                "rows" => r % 2 == 0,
-                "dimples" => false,
-                _ => true,
+                DiscPattern::Random => rng.next_u64() >> 63 == 0,
+                DiscPattern::Alternate => (r + c) % 2 == 0,
+                DiscPattern::Rows => r % 2 == 0,
+                DiscPattern::Dimples => false,
+                DiscPattern::Bumps => true,
             };
             if bump {
                 1.0
@@ -159,45 +178,44 @@ fn polarities(pattern: &str, rows: usize, cols: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
-    let p = &request.params;
-    let frame = Frame::new(&request.geometry);
-    let radius = frame.px(p.f64("radius")?);
-    let spacing = frame.px(p.f64("spacing")?);
-    let (rows, cols) = (p.usize("rows")?, p.usize("columns")?);
-    let profile = p.str("profile")?;
-    let (height, sigma) = (p.f64("height")?, p.f64("sigma")? * radius);
-    let (contrast, background) = (p.f64("contrast")?, p.f64("background")?);
+fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light) -> Result<Output> {
+    let frame = Frame::new(g);
+    let radius = frame.px(p.radius);
+    let spacing = frame.px(p.spacing);
+    let (rows, cols) = (p.rows, p.columns);
+    let profile = p.profile;
+    let linear = profile == DiscProfile::Linear;
+    let (height, sigma) = (p.height, p.sigma * radius);
+    let (contrast, background) = (p.contrast, p.background);
     if radius < 1.0 {
         return Err(Error::invalid(format!(
             "{name}: radius {}° is under one pixel at {} ppd",
-            p.f64("radius")?,
-            frame.ppd
+            p.radius, frame.ppd
         )));
     }
     if (rows > 1 || cols > 1) && spacing < 2.0 * radius {
         return Err(Error::invalid(format!(
             "{name}: spacing {}° is less than the disc diameter {}°: discs would overlap",
-            p.f64("spacing")?,
-            2.0 * p.f64("radius")?
+            p.spacing,
+            2.0 * p.radius
         )));
     }
     let centres = grid_centres(&frame, rows, cols, spacing);
     frame.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
-    let sign = polarities(p.str("pattern")?, rows, cols, request.seed);
+    let sign = polarities(p.pattern, rows, cols, seed);
     let s = light.direction();
     let tilt_len = s.x.hypot(s.y);
-    if profile == "linear" && tilt_len < 1e-9 {
+    if linear && tilt_len < 1e-9 {
         return Err(Error::invalid(format!(
             "{name}: the linear profile needs a light with a direction in the image (slant > 0)"
         )));
     }
-    if profile != "linear" && s.z < 1e-6 {
+    if !linear && s.z < 1e-6 {
         return Err(Error::invalid(format!(
             "{name}: a grazing light (slant 90°) leaves the panel dark; use a slant below 90°"
         )));
     }
-    if profile == "linear" && background * (1.0 + contrast) > 1.0 {
+    if linear && background * (1.0 + contrast) > 1.0 {
         return Err(Error::invalid(format!(
             "{name}: background {background} × (1 + contrast {contrast}) exceeds 1; lower one of them"
         )));
@@ -222,16 +240,16 @@ fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
                     continue;
                 }
                 let (z, n) = match profile {
-                    "gaussian" => {
+                    DiscProfile::Gaussian => {
                         let z = height * sigma * (-rho2 / (2.0 * sigma * sigma)).exp();
                         let k = z / (sigma * sigma);
                         (z, Vector3::new(sg * k * x, sg * k * y, 1.0).normalize())
                     }
-                    "linear" => {
+                    DiscProfile::Linear => {
                         let root = (radius * radius - rho2).sqrt();
                         (root, Vector3::new(sg * x, sg * y, root).normalize())
                     }
-                    _ => {
+                    DiscProfile::Hemisphere => {
                         let root = (radius * radius - rho2).sqrt();
                         (
                             height * root,
@@ -242,7 +260,7 @@ fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
                 *depth.get_mut(col, row) = sg * z;
                 *normals.get_mut(col, row) = n;
                 *labels.get_mut(col, row) = label;
-                *image.get_mut(col, row) = if profile == "linear" {
+                *image.get_mut(col, row) = if linear {
                     background * (1.0 + contrast * sg * (x * dx + y * dy) / radius)
                 } else {
                     albedo * n.dot(&s).max(0.0)
@@ -250,7 +268,7 @@ fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
             }
         }
     }
-    if profile != "linear" {
+    if !linear {
         let peak = image.data().iter().fold(0.0f64, |a, &b| a.max(b));
         if peak > 1.0 {
             return Err(Error::invalid(format!(
@@ -259,14 +277,14 @@ fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
             )));
         }
     }
-    let shading = if profile == "linear" {
+    let shading = if linear {
         image.clone()
     } else {
         normals.map(|n| n.dot(&s).max(0.0))
     };
     let mut notes = Map::new();
     notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
-    if profile != "linear" {
+    if !linear {
         notes.insert("albedo".into(), json!(albedo));
     }
     notes.insert(
@@ -302,14 +320,34 @@ fn discs(name: &str, request: &Request, light: Light) -> Result<Output> {
 
 /// The disc stimuli.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(Bumps), Box::new(Sideways)]
+    vec![
+        Typed::boxed(
+            "bumps",
+            "discs shaded as bumps and dimples under one light (light-from-above prior)",
+            (14.0, 10.0),
+            32.0,
+            bumps,
+        ),
+        Typed::boxed(
+            "sideways",
+            "discs lit from the left or right: bump or dimple is ambiguous (bistable)",
+            (14.0, 7.0),
+            32.0,
+            sideways,
+        ),
+    ]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::Params;
+    use crate::stimulus::Request;
     use crate::visual_size::Geometry;
+
+    fn stim(name: &str) -> Box<dyn Stimulus> {
+        crate::stimulus::find(name).unwrap()
+    }
 
     fn request(s: &dyn Stimulus, pairs: &[&str], ppd: f64) -> Request {
         let info = s.info();
@@ -351,13 +389,13 @@ mod tests {
 
     #[test]
     fn bumps_lit_from_above_are_bright_on_top_and_dimples_below() {
-        for profile in PROFILES {
+        for profile in DiscProfile::NAMES {
             let r = request(
-                &Bumps,
+                stim("bumps").as_ref(),
                 &[&format!("profile={profile}"), "pattern=alternate"],
                 16.0,
             );
-            let out = Bumps.generate(&r).unwrap();
+            let out = stim("bumps").generate(&r).unwrap();
             let names = &out.targets.as_ref().unwrap().names;
             for (i, name) in names.iter().enumerate() {
                 let (top, bottom) = halves(&out, i as u16 + 1);
@@ -372,8 +410,12 @@ mod tests {
 
     #[test]
     fn the_panel_has_the_background_luminance_and_bumps_match_a_rendered_hemisphere() {
-        let r = request(&Bumps, &["background=0.4", "pattern=bumps"], 16.0);
-        let out = Bumps.generate(&r).unwrap();
+        let r = request(
+            stim("bumps").as_ref(),
+            &["background=0.4", "pattern=bumps"],
+            16.0,
+        );
+        let out = stim("bumps").generate(&r).unwrap();
         let Pixels::Gray(img) = &out.pixels else {
             panic!()
         };
@@ -392,8 +434,12 @@ mod tests {
 
     #[test]
     fn sideways_rows_are_mirror_images() {
-        let r = request(&Sideways, &["rows=2", "columns=1", "pattern=rows"], 16.0);
-        let out = Sideways.generate(&r).unwrap();
+        let r = request(
+            stim("sideways").as_ref(),
+            &["rows=2", "columns=1", "pattern=rows"],
+            16.0,
+        );
+        let out = stim("sideways").generate(&r).unwrap();
         let Pixels::Gray(img) = &out.pixels else {
             panic!()
         };
@@ -426,20 +472,24 @@ mod tests {
 
     #[test]
     fn bad_layouts_are_one_line_errors() {
-        let r = request(&Bumps, &["spacing=1"], 16.0);
-        assert!(Bumps
+        let r = request(stim("bumps").as_ref(), &["spacing=1"], 16.0);
+        assert!(stim("bumps")
             .generate(&r)
             .unwrap_err()
             .to_string()
             .contains("overlap"));
-        let r = request(&Bumps, &["rows=20"], 16.0);
-        assert!(Bumps
+        let r = request(stim("bumps").as_ref(), &["rows=20"], 16.0);
+        assert!(stim("bumps")
             .generate(&r)
             .unwrap_err()
             .to_string()
             .contains("enlarge"));
-        let r = request(&Bumps, &["background=0.9", "light=tilt=0,slant=70"], 16.0);
-        assert!(Bumps
+        let r = request(
+            stim("bumps").as_ref(),
+            &["background=0.9", "light=tilt=0,slant=70"],
+            16.0,
+        );
+        assert!(stim("bumps")
             .generate(&r)
             .unwrap_err()
             .to_string()

@@ -15,14 +15,13 @@
 //! Lengths are in degrees measured on the board (before foreshortening).
 
 use super::frame::{smoothstep, Frame};
-use super::{Info, Output, Pixels, Request, Stimulus, Targets};
+use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::params::{stimulus_params, ParamSet};
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use std::f64::consts::SQRT_2;
-
-struct CheckerShadow;
 
 /// Distance from (x, y) to the segment from (ax, ay) to (bx, ay) (a horizontal segment).
 fn segment_distance(x: f64, y: f64, ax: f64, bx: f64, ay: f64) -> f64 {
@@ -37,247 +36,212 @@ fn segment_distance(x: f64, y: f64, ax: f64, bx: f64, ay: f64) -> f64 {
     dx.hypot(y - ay)
 }
 
-impl Stimulus for CheckerShadow {
-    fn info(&self) -> Info {
-        Info {
-            name: "checker-shadow",
-            summary: "Adelson's checker-shadow: squares A and B have the same value, B looks much lighter",
-            params: vec![
-                ParamSpec::integer("squares", 7, 5, 16, "squares per side of the board"),
-                ParamSpec::number("square", 0.8, 0.01, 30.0, "side of one square on the board (deg)"),
-                ParamSpec::number(
-                    "view_elevation",
-                    40.0,
-                    10.0,
-                    90.0,
-                    "angle of the line of sight above the board (deg)",
-                ),
-                ParamSpec::number(
-                    "light_elevation",
-                    45.0,
-                    10.0,
-                    89.0,
-                    "angle of the light above the board (deg)",
-                ),
-                ParamSpec::number("light_square", 0.8, 0.0, 1.0, "luminance of a light square in light"),
-                ParamSpec::number(
-                    "dark_square",
-                    0.4,
-                    0.0,
-                    1.0,
-                    "luminance of a dark square in light (= a light square in full shadow)",
-                ),
-                ParamSpec::number(
-                    "cylinder_radius",
-                    0.6,
-                    0.01,
-                    30.0,
-                    "radius of the cylinder (deg)",
-                ),
-                ParamSpec::number(
-                    "cylinder_height",
-                    1.8,
-                    0.01,
-                    60.0,
-                    "height of the cylinder (deg)",
-                ),
-                ParamSpec::number(
-                    "cylinder_offset",
-                    1.4,
-                    0.0,
-                    60.0,
-                    "distance from square B's centre to the cylinder's axis, toward the light (deg)",
-                ),
-                ParamSpec::number(
-                    "penumbra",
-                    0.12,
-                    0.0,
-                    10.0,
-                    "half-width of the shadow's soft edge (deg)",
-                ),
-                ParamSpec::number("cylinder_albedo", 0.5, 0.0, 1.0, "luminance of the cylinder's top"),
-                ParamSpec::number("background", 0.9, 0.0, 1.0, "luminance around the board"),
-            ],
-            default_visual_size: (9.0, 7.0),
-            default_ppd: 40.0,
-        }
+stimulus_params! {
+    /// Parameters of [`checker_shadow`].
+    pub struct CheckerShadowParams {
+        /// squares per side of the board
+        squares: usize = 7, range 5..=16;
+        /// side of one square on the board (deg)
+        square: f64 = 0.8, range 0.01..=30.0;
+        /// angle of the line of sight above the board (deg)
+        view_elevation: f64 = 40.0, range 10.0..=90.0;
+        /// angle of the light above the board (deg)
+        light_elevation: f64 = 45.0, range 10.0..=89.0;
+        /// luminance of a light square in light
+        light_square: f64 = 0.8, range 0.0..=1.0;
+        /// luminance of a dark square in light (= a light square in full shadow)
+        dark_square: f64 = 0.4, range 0.0..=1.0;
+        /// radius of the cylinder (deg)
+        cylinder_radius: f64 = 0.6, range 0.01..=30.0;
+        /// height of the cylinder (deg)
+        cylinder_height: f64 = 1.8, range 0.01..=60.0;
+        /// distance from square B's centre to the cylinder's axis, toward the light (deg)
+        cylinder_offset: f64 = 1.4, range 0.0..=60.0;
+        /// half-width of the shadow's soft edge (deg)
+        penumbra: f64 = 0.12, range 0.0..=10.0;
+        /// luminance of the cylinder's top
+        cylinder_albedo: f64 = 0.5, range 0.0..=1.0;
+        /// luminance around the board
+        background: f64 = 0.9, range 0.0..=1.0;
     }
+}
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let n = p.usize("squares")?;
-        let sq_deg = p.f64("square")?;
-        let side = frame.px(sq_deg);
-        if side < 4.0 {
-            return Err(Error::invalid(format!(
-                "checker-shadow: square {sq_deg}° is under 4 pixels at {} ppd",
-                frame.ppd
-            )));
-        }
-        let (light, dark) = (p.f64("light_square")?, p.f64("dark_square")?);
-        if dark > light || light == 0.0 {
-            return Err(Error::invalid(format!(
-                "checker-shadow: dark_square {dark} must not exceed light_square {light} (and light_square must be above 0)"
-            )));
-        }
-        let k = dark / light;
-        // Everything below is in squares, in the board's frame, origin at its centre.
-        let in_squares = |key: &str| -> Result<f64> { Ok(p.f64(key)? / sq_deg) };
-        let (rc, hc, offset, pen) = (
-            in_squares("cylinder_radius")?,
-            in_squares("cylinder_height")?,
-            in_squares("cylinder_offset")?,
-            in_squares("penumbra")?,
-        );
-        let (se, ce) = p.f64("view_elevation")?.to_radians().sin_cos();
-        let (sl, cl) = p.f64("light_elevation")?.to_radians().sin_cos();
-        let half = n as f64 / 2.0;
-        let (ib, jb) = (n / 2, n / 2);
-        let (ia, ja) = (ib - 1, jb + 2);
-        let centre = |i: usize| i as f64 + 0.5 - half;
-        let (bx, by) = (centre(ib), centre(jb));
-        let (cx, cy) = (bx + offset, by);
-        let shadow_end = cx - hc * cl / sl;
-        // Board (X, Y) → (u, w): turned by 45°; w runs away from the viewer.
-        let (uc, wc) = ((cx - cy) / SQRT_2, (cx + cy) / SQRT_2);
-        let top = (half * SQRT_2 * se).max((wc + rc) * se + hc * ce);
-        let bottom = -half * SQRT_2 * se;
-        let y_off = -(top + bottom) / 2.0;
-        let content_w = 2.0 * half * SQRT_2 * side;
-        let content_h = (top - bottom) * side;
-        if content_w > frame.w as f64 + 0.5 || content_h > frame.h as f64 + 0.5 {
-            let (fw, fh) = frame.degrees();
-            return Err(Error::invalid(format!(
-                "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge --visual-size or shrink `square`",
-                content_w / frame.ppd,
-                content_h / frame.ppd
-            )));
-        }
-        let (lu, lw, lz) = (cl / SQRT_2, cl / SQRT_2, sl);
-        let cyl_albedo = p.f64("cylinder_albedo")?;
-        let cylinder_value = |nu: f64, nw: f64, nz: f64| -> f64 {
-            let cos_i = (nu * lu + nw * lw + nz * lz).max(0.0);
-            cyl_albedo * (k + (1.0 - k) * cos_i / sl)
-        };
-        let mut image = Grid::new(frame.w, frame.h, p.f64("background")?);
-        let mut labels = Grid::new(frame.w, frame.h, 0u16);
-        let mut problems = Vec::new();
-        for row in 0..frame.h {
-            for col in 0..frame.w {
-                // Pixel → (u, y') in squares.
-                let u = frame.x(col) / side;
-                let yv = frame.y(row) / side - y_off;
-                let du = u - uc;
-                let cyl = if du.abs() < rc {
-                    let root = (rc * rc - du * du).sqrt();
-                    let w_top = (yv - hc * ce) / se;
-                    let w_front = wc - root;
-                    if du * du + (w_top - wc).powi(2) <= rc * rc {
-                        Some(cylinder_value(0.0, 0.0, 1.0))
-                    } else if yv >= w_front * se && yv <= w_front * se + hc * ce {
-                        Some(cylinder_value(du / rc, (w_front - wc) / rc, 0.0))
-                    } else {
-                        None
-                    }
+/// Adelson's checker-shadow: squares A and B have the same value, B looks much lighter.
+pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let n = p.squares;
+    let sq_deg = p.square;
+    let side = frame.px(sq_deg);
+    if side < 4.0 {
+        return Err(Error::invalid(format!(
+            "checker-shadow: square {sq_deg}° is under 4 pixels at {} ppd",
+            frame.ppd
+        )));
+    }
+    let (light, dark) = (p.light_square, p.dark_square);
+    if dark > light || light == 0.0 {
+        return Err(Error::invalid(format!(
+            "checker-shadow: dark_square {dark} must not exceed light_square {light} (and light_square must be above 0)"
+        )));
+    }
+    let k = dark / light;
+    // Everything below is in squares, in the board's frame, origin at its centre.
+    let in_squares = |degrees: f64| degrees / sq_deg;
+    let (rc, hc, offset, pen) = (
+        in_squares(p.cylinder_radius),
+        in_squares(p.cylinder_height),
+        in_squares(p.cylinder_offset),
+        in_squares(p.penumbra),
+    );
+    let (se, ce) = p.view_elevation.to_radians().sin_cos();
+    let (sl, cl) = p.light_elevation.to_radians().sin_cos();
+    let half = n as f64 / 2.0;
+    let (ib, jb) = (n / 2, n / 2);
+    let (ia, ja) = (ib - 1, jb + 2);
+    let centre = |i: usize| i as f64 + 0.5 - half;
+    let (bx, by) = (centre(ib), centre(jb));
+    let (cx, cy) = (bx + offset, by);
+    let shadow_end = cx - hc * cl / sl;
+    // Board (X, Y) → (u, w): turned by 45°; w runs away from the viewer.
+    let (uc, wc) = ((cx - cy) / SQRT_2, (cx + cy) / SQRT_2);
+    let top = (half * SQRT_2 * se).max((wc + rc) * se + hc * ce);
+    let bottom = -half * SQRT_2 * se;
+    let y_off = -(top + bottom) / 2.0;
+    let content_w = 2.0 * half * SQRT_2 * side;
+    let content_h = (top - bottom) * side;
+    if content_w > frame.w as f64 + 0.5 || content_h > frame.h as f64 + 0.5 {
+        let (fw, fh) = frame.degrees();
+        return Err(Error::invalid(format!(
+            "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge --visual-size or shrink `square`",
+            content_w / frame.ppd,
+            content_h / frame.ppd
+        )));
+    }
+    let (lu, lw, lz) = (cl / SQRT_2, cl / SQRT_2, sl);
+    let cyl_albedo = p.cylinder_albedo;
+    let cylinder_value = |nu: f64, nw: f64, nz: f64| -> f64 {
+        let cos_i = (nu * lu + nw * lw + nz * lz).max(0.0);
+        cyl_albedo * (k + (1.0 - k) * cos_i / sl)
+    };
+    let mut image = Grid::new(frame.w, frame.h, p.background);
+    let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    let mut problems = Vec::new();
+    for row in 0..frame.h {
+        for col in 0..frame.w {
+            // Pixel → (u, y') in squares.
+            let u = frame.x(col) / side;
+            let yv = frame.y(row) / side - y_off;
+            let du = u - uc;
+            let cyl = if du.abs() < rc {
+                let root = (rc * rc - du * du).sqrt();
+                let w_top = (yv - hc * ce) / se;
+                let w_front = wc - root;
+                if du * du + (w_top - wc).powi(2) <= rc * rc {
+                    Some(cylinder_value(0.0, 0.0, 1.0))
+                } else if yv >= w_front * se && yv <= w_front * se + hc * ce {
+                    Some(cylinder_value(du / rc, (w_front - wc) / rc, 0.0))
                 } else {
                     None
-                };
-                let w = yv / se;
-                let (x, y) = ((u + w) / SQRT_2, (w - u) / SQRT_2);
-                let on_board = x >= -half && x < half && y >= -half && y < half;
-                let square = on_board.then(|| {
-                    (
-                        ((x + half).floor() as usize).min(n - 1),
-                        ((y + half).floor() as usize).min(n - 1),
-                    )
-                });
-                let label = match square {
-                    Some(s) if s == (ia, ja) => 1,
-                    Some(s) if s == (ib, jb) => 2,
-                    _ => 0,
-                };
-                let v = if let Some(v) = cyl {
-                    if label > 0 {
-                        problems.push("hidden by the cylinder");
-                    }
-                    v
-                } else if let Some((i, j)) = square {
-                    let dist = segment_distance(x, y, cx, shadow_end, cy);
-                    let shadow = 1.0 - smoothstep(rc - pen, rc + pen, dist);
-                    let light_square = (i + j) % 2 == 0;
-                    let (lit, shadowed) = if light_square {
-                        (light, dark)
-                    } else {
-                        (dark, dark * k)
-                    };
-                    if (label == 1 && shadow != 0.0) || (label == 2 && shadow != 1.0) {
-                        problems.push("not wholly in light (A) or in the shadow's core (B)");
-                    }
-                    (1.0 - shadow) * lit + shadow * shadowed
-                } else {
-                    continue;
-                };
-                *image.get_mut(col, row) = v;
-                if cyl.is_none() {
-                    *labels.get_mut(col, row) = label;
                 }
+            } else {
+                None
+            };
+            let w = yv / se;
+            let (x, y) = ((u + w) / SQRT_2, (w - u) / SQRT_2);
+            let on_board = x >= -half && x < half && y >= -half && y < half;
+            let square = on_board.then(|| {
+                (
+                    ((x + half).floor() as usize).min(n - 1),
+                    ((y + half).floor() as usize).min(n - 1),
+                )
+            });
+            let label = match square {
+                Some(s) if s == (ia, ja) => 1,
+                Some(s) if s == (ib, jb) => 2,
+                _ => 0,
+            };
+            let v = if let Some(v) = cyl {
+                if label > 0 {
+                    problems.push("hidden by the cylinder");
+                }
+                v
+            } else if let Some((i, j)) = square {
+                let dist = segment_distance(x, y, cx, shadow_end, cy);
+                let shadow = 1.0 - smoothstep(rc - pen, rc + pen, dist);
+                let light_square = (i + j) % 2 == 0;
+                let (lit, shadowed) = if light_square {
+                    (light, dark)
+                } else {
+                    (dark, dark * k)
+                };
+                if (label == 1 && shadow != 0.0) || (label == 2 && shadow != 1.0) {
+                    problems.push("not wholly in light (A) or in the shadow's core (B)");
+                }
+                (1.0 - shadow) * lit + shadow * shadowed
+            } else {
+                continue;
+            };
+            *image.get_mut(col, row) = v;
+            if cyl.is_none() {
+                *labels.get_mut(col, row) = label;
             }
         }
-        if let Some(why) = problems.first() {
-            return Err(Error::invalid(format!(
-                "checker-shadow: with these parameters square A or B is {why}; change cylinder_offset, cylinder_radius, penumbra or the elevations"
-            )));
-        }
-        let peak = image.min_max().map_or(0.0, |m| m.1);
-        if peak > 1.0 {
-            return Err(Error::invalid(format!(
-                "checker-shadow: the cylinder's lit side reaches {peak:.3} > 1; lower cylinder_albedo or raise light_elevation"
-            )));
-        }
-        let mut notes = Map::new();
-        notes.insert("a_and_b_value".into(), json!(dark));
-        notes.insert("shadow_illumination".into(), json!(k));
-        notes.insert(
-            "squares_ij".into(),
-            json!({"A": [ia, ja], "B": [ib, jb], "note": "i along the board's X (toward the light), j along Y; (0,0) is the left corner"}),
-        );
-        Ok(Output {
-            pixels: Pixels::Gray(image),
-            targets: Some(Targets {
-                labels,
-                names: vec!["A".into(), "B".into()],
-            }),
-            surface: None,
-            svg: None,
-            notes,
-        })
     }
+    if let Some(why) = problems.first() {
+        return Err(Error::invalid(format!(
+            "checker-shadow: with these parameters square A or B is {why}; change cylinder_offset, cylinder_radius, penumbra or the elevations"
+        )));
+    }
+    let peak = image.min_max().map_or(0.0, |m| m.1);
+    if peak > 1.0 {
+        return Err(Error::invalid(format!(
+            "checker-shadow: the cylinder's lit side reaches {peak:.3} > 1; lower cylinder_albedo or raise light_elevation"
+        )));
+    }
+    let mut notes = Map::new();
+    notes.insert("a_and_b_value".into(), json!(dark));
+    notes.insert("shadow_illumination".into(), json!(k));
+    notes.insert(
+        "squares_ij".into(),
+        json!({"A": [ia, ja], "B": [ib, jb], "note": "i along the board's X (toward the light), j along Y; (0,0) is the left corner"}),
+    );
+    Ok(Output {
+        pixels: Pixels::Gray(image),
+        targets: Some(Targets {
+            labels,
+            names: vec!["A".into(), "B".into()],
+        }),
+        surface: None,
+        svg: None,
+        notes,
+    })
 }
 
 /// The checker-shadow stimulus.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(CheckerShadow)]
+    vec![Typed::boxed(
+        "checker-shadow",
+        "Adelson's checker-shadow: squares A and B have the same value, B looks much lighter",
+        (9.0, 7.0),
+        40.0,
+        |p, g, _| checker_shadow(p, g),
+    )]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::Params;
-    use crate::visual_size::Geometry;
 
     fn generate(pairs: &[&str], ppd: f64) -> Result<Output> {
-        let info = CheckerShadow.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        CheckerShadow.generate(&Request {
-            params: Params::resolve(&info.params, &given)?,
-            geometry: Geometry {
-                width: (9.0 * ppd) as usize,
-                height: (7.0 * ppd) as usize,
-                ppd,
-            },
-            seed: 0,
-        })
+        let g = Geometry {
+            width: (9.0 * ppd) as usize,
+            height: (7.0 * ppd) as usize,
+            ppd,
+        };
+        checker_shadow(&CheckerShadowParams::from_map(&given)?, &g)
     }
 
     #[test]

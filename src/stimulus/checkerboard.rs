@@ -8,87 +8,106 @@
 
 use super::frame::Frame;
 use super::svg::{document, gray, num};
-use super::{Info, Output, Pixels, Request, Stimulus, Targets};
+use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::parallel::prelude::*;
-use crate::params::ParamSpec;
+use crate::params::{stimulus_params, ParamSet};
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use svg::node::element::{Circle, Rectangle};
 
 /// Rows per parallel work item: large enough that scheduling costs nothing.
 const ROWS_PER_TASK: usize = 64;
 
-struct Checkerboard;
-struct Disc;
-
-impl Stimulus for Checkerboard {
-    fn info(&self) -> Info {
-        Info {
-            name: "checkerboard",
-            summary: "a plain checkerboard (as stimupy's), starting with the first intensity at the top left",
-            params: vec![
-                ParamSpec::number("check", 1.0, 0.001, 180.0, "side of one check (deg)"),
-                ParamSpec::number("intensity_first", 0.0, 0.0, 1.0, "luminance of the top-left check"),
-                ParamSpec::number("intensity_second", 1.0, 0.0, 1.0, "luminance of its neighbours"),
-            ],
-            default_visual_size: (8.0, 8.0),
-            default_ppd: 32.0,
-        }
+stimulus_params! {
+    /// Parameters of [`checkerboard`].
+    pub struct CheckerboardParams {
+        /// side of one check (deg)
+        check: f64 = 1.0, range 0.001..=180.0;
+        /// luminance of the top-left check
+        intensity_first: f64 = 0.0, range 0.0..=1.0;
+        /// luminance of its neighbours
+        intensity_second: f64 = 1.0, range 0.0..=1.0;
     }
+}
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let check = frame.px(p.f64("check")?);
-        if check < 1.0 {
-            return Err(Error::invalid(format!(
-                "checkerboard: check {}° is under one pixel at {} ppd",
-                p.f64("check")?,
-                frame.ppd
-            )));
-        }
-        let (first, second) = (p.f64("intensity_first")?, p.f64("intensity_second")?);
-        let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
-        let col_parity: Vec<usize> = (0..frame.w).map(|c| index(c) % 2).collect();
-        let mut data = vec![0.0; frame.w * frame.h];
-        data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-            .enumerate()
-            .for_each(|(task, chunk)| {
-                for (k, row) in chunk.chunks_mut(frame.w).enumerate() {
-                    let r = index(task * ROWS_PER_TASK + k) % 2;
-                    for (v, &c) in row.iter_mut().zip(&col_parity) {
-                        *v = if (r + c) % 2 == 0 { first } else { second };
-                    }
+stimulus_params! {
+    /// Parameters of [`disc`].
+    pub struct DiscParams {
+        /// radius (deg)
+        radius: f64 = 2.0, range 0.001..=180.0;
+        /// luminance of the disc
+        intensity_disc: f64 = 1.0, range 0.0..=1.0;
+        /// luminance around it
+        intensity_background: f64 = 0.0, range 0.0..=1.0;
+    }
+}
+
+/// A plain checkerboard (as stimupy's), starting with the first intensity at the top left.
+///
+/// ```
+/// use shadelab::stimulus::{checkerboard, CheckerboardParams, Pixels};
+/// use shadelab::visual_size::Geometry;
+///
+/// // 0.5° checks at 4 ppd are 2 pixels wide: columns 0-1 dark, 2-3 light.
+/// let p = CheckerboardParams { check: 0.5, ..Default::default() };
+/// let g = Geometry { width: 6, height: 4, ppd: 4.0 };
+/// let Pixels::Gray(image) = checkerboard(&p, &g).unwrap().pixels else { panic!() };
+/// let top: Vec<f64> = (0..6).map(|c| *image.get(c, 0)).collect();
+/// assert_eq!(top, [0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
+/// assert_eq!(*image.get(0, 2), 1.0);
+/// ```
+pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let check = frame.px(p.check);
+    if check < 1.0 {
+        return Err(Error::invalid(format!(
+            "checkerboard: check {}° is under one pixel at {} ppd",
+            p.check, frame.ppd
+        )));
+    }
+    let (first, second) = (p.intensity_first, p.intensity_second);
+    let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
+    let col_parity: Vec<usize> = (0..frame.w).map(|c| index(c) % 2).collect();
+    let mut data = vec![0.0; frame.w * frame.h];
+    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
+        .enumerate()
+        .for_each(|(task, chunk)| {
+            for (k, row) in chunk.chunks_mut(frame.w).enumerate() {
+                let r = index(task * ROWS_PER_TASK + k) % 2;
+                for (v, &c) in row.iter_mut().zip(&col_parity) {
+                    *v = if (r + c) % 2 == 0 { first } else { second };
                 }
-            });
-        let image = Grid::from_vec(frame.w, frame.h, data)?;
-        let (nx, ny) = (
-            (frame.w as f64 / check).ceil() as usize,
-            (frame.h as f64 / check).ceil() as usize,
+            }
+        });
+    let image = Grid::from_vec(frame.w, frame.h, data)?;
+    let (nx, ny) = (
+        (frame.w as f64 / check).ceil() as usize,
+        (frame.h as f64 / check).ceil() as usize,
+    );
+    let mut notes = Map::new();
+    notes.insert("checks".into(), json!([nx, ny]));
+    let svg = if nx * ny > MAX_SVG_CHECKS {
+        notes.insert(
+            "svg_omitted".into(),
+            json!(format!(
+                "{} checks are too many for an SVG document (limit {MAX_SVG_CHECKS})",
+                nx * ny
+            )),
         );
-        let mut notes = Map::new();
-        notes.insert("checks".into(), json!([nx, ny]));
-        let svg = if nx * ny > MAX_SVG_CHECKS {
-            notes.insert(
-                "svg_omitted".into(),
-                json!(format!(
-                    "{} checks are too many for an SVG document (limit {MAX_SVG_CHECKS})",
-                    nx * ny
-                )),
-            );
-            None
-        } else {
-            Some(checks_svg(&frame, check, nx, ny, first, second))
-        };
-        Ok(Output {
-            pixels: Pixels::Gray(image),
-            targets: None,
-            surface: None,
-            svg,
-            notes,
-        })
-    }
+        None
+    } else {
+        Some(checks_svg(&frame, check, nx, ny, first, second))
+    };
+    Ok(Output {
+        pixels: Pixels::Gray(image),
+        targets: None,
+        surface: None,
+        svg,
+        notes,
+    })
 }
 
 /// The most checks an SVG document is made for (half of them become rectangles).
@@ -118,78 +137,78 @@ fn checks_svg(frame: &Frame, check: f64, nx: usize, ny: usize, first: f64, secon
     doc.to_string()
 }
 
-impl Stimulus for Disc {
-    fn info(&self) -> Info {
-        Info {
-            name: "disc",
-            summary: "a plain disc centred in the frame (as stimupy's)",
-            params: vec![
-                ParamSpec::number("radius", 2.0, 0.001, 180.0, "radius (deg)"),
-                ParamSpec::number("intensity_disc", 1.0, 0.0, 1.0, "luminance of the disc"),
-                ParamSpec::number("intensity_background", 0.0, 0.0, 1.0, "luminance around it"),
-            ],
-            default_visual_size: (8.0, 8.0),
-            default_ppd: 32.0,
-        }
-    }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let radius = frame.px(p.f64("radius")?);
-        let (inside, outside) = (p.f64("intensity_disc")?, p.f64("intensity_background")?);
-        let r2 = radius * radius;
-        let mut data = vec![outside; frame.w * frame.h];
-        let mut labels = vec![0u16; frame.w * frame.h];
-        data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-            .zip(labels.par_chunks_mut(frame.w * ROWS_PER_TASK))
-            .enumerate()
-            .for_each(|(task, (chunk, lab))| {
-                for (k, (row, lrow)) in chunk
-                    .chunks_mut(frame.w)
-                    .zip(lab.chunks_mut(frame.w))
-                    .enumerate()
-                {
-                    let y = frame.y(task * ROWS_PER_TASK + k);
-                    let y2 = y * y;
-                    if y2 >= r2 {
-                        continue;
-                    }
-                    // The disc's chord on this row, found once; the loop only fills it.
-                    let half = (r2 - y2).sqrt();
-                    for col in frame.cols(-half, half) {
-                        let x = frame.x(col);
-                        if x * x + y2 < r2 {
-                            row[col] = inside;
-                            lrow[col] = 1;
-                        }
+/// A plain disc centred in the frame (as stimupy's).
+pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let radius = frame.px(p.radius);
+    let (inside, outside) = (p.intensity_disc, p.intensity_background);
+    let r2 = radius * radius;
+    let mut data = vec![outside; frame.w * frame.h];
+    let mut labels = vec![0u16; frame.w * frame.h];
+    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
+        .zip(labels.par_chunks_mut(frame.w * ROWS_PER_TASK))
+        .enumerate()
+        .for_each(|(task, (chunk, lab))| {
+            for (k, (row, lrow)) in chunk
+                .chunks_mut(frame.w)
+                .zip(lab.chunks_mut(frame.w))
+                .enumerate()
+            {
+                let y = frame.y(task * ROWS_PER_TASK + k);
+                let y2 = y * y;
+                if y2 >= r2 {
+                    continue;
+                }
+                // The disc's chord on this row, found once; the loop only fills it.
+                let half = (r2 - y2).sqrt();
+                for col in frame.cols(-half, half) {
+                    let x = frame.x(col);
+                    if x * x + y2 < r2 {
+                        row[col] = inside;
+                        lrow[col] = 1;
                     }
                 }
-            });
-        let (cx, cy) = frame.svg_xy(0.0, 0.0);
-        let doc = document(&frame, "disc", outside).add(
-            Circle::new()
-                .set("cx", num(cx))
-                .set("cy", num(cy))
-                .set("r", num(radius))
-                .set("fill", gray(inside)),
-        );
-        Ok(Output {
-            pixels: Pixels::Gray(Grid::from_vec(frame.w, frame.h, data)?),
-            targets: Some(Targets {
-                labels: Grid::from_vec(frame.w, frame.h, labels)?,
-                names: vec!["disc".into()],
-            }),
-            surface: None,
-            svg: Some(doc.to_string()),
-            notes: Map::new(),
-        })
-    }
+            }
+        });
+    let (cx, cy) = frame.svg_xy(0.0, 0.0);
+    let doc = document(&frame, "disc", outside).add(
+        Circle::new()
+            .set("cx", num(cx))
+            .set("cy", num(cy))
+            .set("r", num(radius))
+            .set("fill", gray(inside)),
+    );
+    Ok(Output {
+        pixels: Pixels::Gray(Grid::from_vec(frame.w, frame.h, data)?),
+        targets: Some(Targets {
+            labels: Grid::from_vec(frame.w, frame.h, labels)?,
+            names: vec!["disc".into()],
+        }),
+        surface: None,
+        svg: Some(doc.to_string()),
+        notes: Map::new(),
+    })
 }
 
 /// The plain checkerboard and disc.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(Checkerboard), Box::new(Disc)]
+    vec![
+        Typed::boxed(
+            "checkerboard",
+            "a plain checkerboard (as stimupy's), starting with the first intensity at the top left",
+            (8.0, 8.0),
+            32.0,
+            |p, g, _| checkerboard(p, g),
+        ),
+        Typed::boxed(
+            "disc",
+            "a plain disc centred in the frame (as stimupy's)",
+            (8.0, 8.0),
+            32.0,
+            |p, g, _| disc(p, g),
+        ),
+    ]
 }
 
 #[cfg(test)]
@@ -198,10 +217,11 @@ mod tests {
     use crate::params::Params;
     use crate::visual_size::Geometry;
 
-    fn generate(s: &dyn Stimulus, pairs: &[&str], w: usize, h: usize, ppd: f64) -> Output {
+    fn generate(name: &str, pairs: &[&str], w: usize, h: usize, ppd: f64) -> Output {
+        let s = crate::stimulus::find(name).unwrap();
         let info = s.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        s.generate(&Request {
+        s.generate(&crate::stimulus::Request {
             params: Params::resolve(&info.params, &given).unwrap(),
             geometry: Geometry {
                 width: w,
@@ -215,7 +235,7 @@ mod tests {
 
     #[test]
     fn checks_are_check_times_ppd_pixels_wide() {
-        let out = generate(&Checkerboard, &["check=0.5"], 300, 200, 20.0);
+        let out = generate("checkerboard", &["check=0.5"], 300, 200, 20.0);
         let Pixels::Gray(img) = out.pixels else {
             panic!()
         };
@@ -230,7 +250,7 @@ mod tests {
 
     #[test]
     fn disc_area_is_pi_r_squared_in_pixels() {
-        let out = generate(&Disc, &["radius=2"], 200, 160, 20.0);
+        let out = generate("disc", &["radius=2"], 200, 160, 20.0);
         let Pixels::Gray(img) = out.pixels else {
             panic!()
         };

@@ -9,96 +9,114 @@
 
 use super::frame::{grid_centres, random_centres, Frame};
 use super::svg::{document, gray, num};
-use super::{Info, Output, Pixels, Request, Stimulus, Targets};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::random::SplitMix64;
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use svg::node::element::path::Data;
 use svg::node::element::{Circle, Definitions, LinearGradient, Path, Stop};
 
-#[derive(Clone, Copy, PartialEq)]
-enum Shading {
+/// How each circle of [`circles`] is shaded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CircleShading {
+    /// Half light, half dark (`circles-binary`).
     Binary,
+    /// A smooth gradient (`circles-gradient`).
     Gradient,
 }
 
-struct Circles {
-    shading: Shading,
+param_choice! {
+    /// How the circles of [`circles`] are placed.
+    pub enum CircleLayout {
+        /// Rows and columns.
+        Grid = "grid",
+        /// A seeded random placement.
+        Random = "random",
+    }
 }
 
-impl Stimulus for Circles {
-    fn info(&self) -> Info {
-        let (name, summary) = match self.shading {
-            Shading::Binary => (
-                "circles-binary",
-                "circles half light, half dark: rows of opposite polarity read as bumps and dimples",
-            ),
-            Shading::Gradient => (
-                "circles-gradient",
-                "smoothly graded circles in rows or scattered; an odd one out pops out",
-            ),
-        };
-        Info {
-            name,
-            summary,
-            params: vec![
-                ParamSpec::number("radius", 0.8, 0.01, 90.0, "circle radius (deg)"),
-                ParamSpec::number(
-                    "spacing",
-                    2.4,
-                    0.01,
-                    180.0,
-                    "centre-to-centre distance (deg; the least distance in a random layout)",
-                ),
-                ParamSpec::choice(
-                    "layout",
-                    "grid",
-                    &["grid", "random"],
-                    "rows and columns, or a seeded random placement",
-                ),
-                ParamSpec::integer("rows", 4, 1, 50, "rows (grid layout)"),
-                ParamSpec::integer("columns", 6, 1, 50, "columns (grid layout)"),
-                ParamSpec::integer("count", 12, 1, 1000, "number of circles (random layout)"),
-                ParamSpec::choice(
-                    "polarity",
-                    "rows",
-                    &["rows", "same", "random"],
-                    "which circles are light on top: alternate rows, all, or at random (seeded)",
-                ),
-                ParamSpec::boolean(
-                    "odd_one_out",
-                    false,
-                    "flip the polarity of one circle (chosen by the seed)",
-                ),
-                ParamSpec::choice(
-                    "axis",
-                    "vertical",
-                    &["vertical", "horizontal"],
-                    "direction of the shading: top–bottom or left–right",
-                ),
-                ParamSpec::number(
-                    "contrast",
-                    0.6,
-                    0.0,
-                    1.0,
-                    "light and dark levels are background · (1 ± contrast)",
-                ),
-                ParamSpec::number("background", 0.5, 0.0, 1.0, "luminance around the circles"),
-            ],
-            default_visual_size: (15.0, 10.0),
-            default_ppd: 32.0,
+param_choice! {
+    /// Which circles of [`circles`] are light on top.
+    pub enum CirclePolarity {
+        /// Alternate rows.
+        Rows = "rows",
+        /// All of them.
+        Same = "same",
+        /// At random (seeded).
+        Random = "random",
+    }
+}
+
+param_choice! {
+    /// The direction of the shading of a circle.
+    pub enum ShadingAxis {
+        /// Top–bottom.
+        Vertical = "vertical",
+        /// Left–right.
+        Horizontal = "horizontal",
+    }
+}
+
+stimulus_params! {
+    /// Parameters of [`circles`].
+    pub struct CirclesParams {
+        /// circle radius (deg)
+        radius: f64 = 0.8, range 0.01..=90.0;
+        /// centre-to-centre distance (deg; the least distance in a random layout)
+        spacing: f64 = 2.4, range 0.01..=180.0;
+        /// rows and columns, or a seeded random placement
+        layout: CircleLayout = CircleLayout::Grid;
+        /// rows (grid layout)
+        rows: usize = 4, range 1..=50;
+        /// columns (grid layout)
+        columns: usize = 6, range 1..=50;
+        /// number of circles (random layout)
+        count: usize = 12, range 1..=1000;
+        /// which circles are light on top: alternate rows, all, or at random (seeded)
+        polarity: CirclePolarity = CirclePolarity::Rows;
+        /// flip the polarity of one circle (chosen by the seed)
+        odd_one_out: bool = false;
+        /// direction of the shading: top–bottom or left–right
+        axis: ShadingAxis = ShadingAxis::Vertical;
+        /// light and dark levels are background · (1 ± contrast)
+        contrast: f64 = 0.6, range 0.0..=1.0;
+        /// luminance around the circles
+        background: f64 = 0.5, range 0.0..=1.0;
+    }
+}
+
+/// Arrays of shaded circles, half light and half dark or graded (Ramachandran 1988).
+pub fn circles(
+    p: &CirclesParams,
+    shading: CircleShading,
+    g: &Geometry,
+    seed: u64,
+) -> Result<Output> {
+    p.validate()?;
+    Circles { shading }.generate(p, g, seed)
+}
+
+struct Circles {
+    shading: CircleShading,
+}
+
+impl Circles {
+    fn name(&self) -> &'static str {
+        match self.shading {
+            CircleShading::Binary => "circles-binary",
+            CircleShading::Gradient => "circles-gradient",
         }
     }
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let name = self.info().name;
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let radius = frame.px(p.f64("radius")?);
-        let spacing = frame.px(p.f64("spacing")?);
-        let (contrast, background) = (p.f64("contrast")?, p.f64("background")?);
+    fn generate(&self, p: &CirclesParams, g: &Geometry, seed: u64) -> Result<Output> {
+        let name = self.name();
+        let frame = Frame::new(g);
+        let radius = frame.px(p.radius);
+        let spacing = frame.px(p.spacing);
+        let (contrast, background) = (p.contrast, p.background);
         if background * (1.0 + contrast) > 1.0 {
             return Err(Error::invalid(format!(
                 "{name}: background {background} × (1 + contrast {contrast}) exceeds 1; lower one of them"
@@ -107,50 +125,45 @@ impl Stimulus for Circles {
         if radius < 1.0 {
             return Err(Error::invalid(format!(
                 "{name}: radius {}° is under one pixel at {} ppd",
-                p.f64("radius")?,
-                frame.ppd
+                p.radius, frame.ppd
             )));
         }
-        let random_layout = p.str("layout")? == "random";
-        let (rows, cols) = (p.usize("rows")?, p.usize("columns")?);
-        let count = if random_layout {
-            p.usize("count")?
-        } else {
-            rows * cols
-        };
+        let random_layout = p.layout == CircleLayout::Random;
+        let (rows, cols) = (p.rows, p.columns);
+        let count = if random_layout { p.count } else { rows * cols };
         if count > 1 && spacing < 2.0 * radius {
             return Err(Error::invalid(format!(
                 "{name}: spacing {}° is less than the circle diameter {}°: circles would overlap",
-                p.f64("spacing")?,
-                2.0 * p.f64("radius")?
+                p.spacing,
+                2.0 * p.radius
             )));
         }
         // Layout and polarity draw from separate streams so that changing one keeps the other.
         let centres = if random_layout {
-            random_centres(name, &frame, count, radius, spacing, request.seed)?
+            random_centres(name, &frame, count, radius, spacing, seed)?
         } else {
             let c = grid_centres(&frame, rows, cols, spacing);
             frame.check_inside(&format!("{name}: {rows}x{cols} circles"), &c, radius)?;
             c
         };
-        let mut rng = SplitMix64::new(request.seed ^ 0x0005_EED0_FC1B_C1E5);
-        let mut light_top: Vec<bool> = match p.str("polarity")? {
-            "same" => vec![true; count],
-            "random" => (0..count).map(|_| rng.next_u64() >> 63 == 0).collect(),
+        let mut rng = SplitMix64::new(seed ^ 0x0005_EED0_FC1B_C1E5);
+        let mut light_top: Vec<bool> = match p.polarity {
+            CirclePolarity::Same => vec![true; count],
+            CirclePolarity::Random => (0..count).map(|_| rng.next_u64() >> 63 == 0).collect(),
             _ if random_layout => {
                 // Rows of a scattered array: above or below the middle of the frame.
                 centres.iter().map(|&(_, y)| y >= 0.0).collect()
             }
             _ => (0..count).map(|i| (i / cols) % 2 == 0).collect(),
         };
-        let odd = if p.bool("odd_one_out")? {
+        let odd = if p.odd_one_out {
             let i = rng.below(count);
             light_top[i] = !light_top[i];
             Some(i)
         } else {
             None
         };
-        let vertical = p.str("axis")? == "vertical";
+        let vertical = p.axis == ShadingAxis::Vertical;
         let (light, dark) = (background * (1.0 + contrast), background * (1.0 - contrast));
         let mut image = Grid::new(frame.w, frame.h, background);
         let mut labels = Grid::new(frame.w, frame.h, 0u16);
@@ -175,14 +188,16 @@ impl Stimulus for Circles {
                     // Toward the light side: +y (top) or −x (left).
                     let t = if vertical { y } else { -x };
                     let v = match self.shading {
-                        Shading::Binary => {
+                        CircleShading::Binary => {
                             if (t > 0.0) == up {
                                 light
                             } else {
                                 dark
                             }
                         }
-                        Shading::Gradient => background * (1.0 + contrast * sign * t / radius),
+                        CircleShading::Gradient => {
+                            background * (1.0 + contrast * sign * t / radius)
+                        }
                     };
                     *image.get_mut(col, row) = v;
                     *labels.get_mut(col, row) = label;
@@ -208,17 +223,9 @@ impl Stimulus for Circles {
                 })
                 .collect::<Vec<_>>()),
         );
-        Ok(Output {
-            pixels: Pixels::Gray(image),
-            targets: Some(Targets { labels, names }),
-            surface: None,
-            svg: Some(svg),
-            notes,
-        })
+        Ok(Output::drawn(image, Targets { labels, names }, svg, notes))
     }
-}
 
-impl Circles {
     #[allow(clippy::too_many_arguments)]
     fn svg(
         &self,
@@ -231,8 +238,8 @@ impl Circles {
         light: f64,
         dark: f64,
     ) -> String {
-        let mut doc = document(frame, self.info().name, background);
-        if self.shading == Shading::Gradient {
+        let mut doc = document(frame, self.name(), background);
+        if self.shading == CircleShading::Gradient {
             // Gradient "up" runs from the light side (offset 0) to the dark side.
             let (x2, y2) = if vertical { (0, 1) } else { (1, 0) };
             let mut defs = Definitions::new();
@@ -253,7 +260,7 @@ impl Circles {
         for (&(cx, cy), &up) in centres.iter().zip(light_top) {
             let (x, y) = frame.svg_xy(cx, cy);
             match self.shading {
-                Shading::Gradient => {
+                CircleShading::Gradient => {
                     doc = doc.add(
                         Circle::new()
                             .set("cx", num(x))
@@ -262,7 +269,7 @@ impl Circles {
                             .set("fill", if up { "url(#up)" } else { "url(#down)" }),
                     );
                 }
-                Shading::Binary => {
+                CircleShading::Binary => {
                     // Two half discs; the first is the top (or left) half.
                     let (ax, ay, bx, by) = if vertical {
                         (x - radius, y, x + radius, y)
@@ -294,13 +301,23 @@ impl Circles {
 
 /// The circle arrays.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
+    const SIZE: (f64, f64) = (15.0, 10.0);
+    const PPD: f64 = 32.0;
     vec![
-        Box::new(Circles {
-            shading: Shading::Binary,
-        }),
-        Box::new(Circles {
-            shading: Shading::Gradient,
-        }),
+        Typed::boxed(
+            "circles-binary",
+            "circles half light, half dark: rows of opposite polarity read as bumps and dimples",
+            SIZE,
+            PPD,
+            |p, g, seed| circles(p, CircleShading::Binary, g, seed),
+        ),
+        Typed::boxed(
+            "circles-gradient",
+            "smoothly graded circles in rows or scattered; an odd one out pops out",
+            SIZE,
+            PPD,
+            |p, g, seed| circles(p, CircleShading::Gradient, g, seed),
+        ),
     ]
 }
 
@@ -308,22 +325,16 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 mod tests {
     use super::*;
     use crate::params::Params;
-    use crate::visual_size::Geometry;
+    use crate::stimulus::Pixels;
 
-    fn generate(shading: Shading, pairs: &[&str], seed: u64) -> Output {
-        let s = Circles { shading };
-        let info = s.info();
+    fn generate(shading: CircleShading, pairs: &[&str], seed: u64) -> Output {
         let given = Params::parse_pairs(pairs).unwrap();
-        s.generate(&Request {
-            params: Params::resolve(&info.params, &given).unwrap(),
-            geometry: Geometry {
-                width: 240,
-                height: 160,
-                ppd: 16.0,
-            },
-            seed,
-        })
-        .unwrap()
+        let g = Geometry {
+            width: 240,
+            height: 160,
+            ppd: 16.0,
+        };
+        circles(&CirclesParams::from_map(&given).unwrap(), shading, &g, seed).unwrap()
     }
 
     #[test]
@@ -332,7 +343,7 @@ mod tests {
             &["axis=vertical"][..],
             &["axis=horizontal", "layout=random"],
         ] {
-            let out = generate(Shading::Binary, pairs, 7);
+            let out = generate(CircleShading::Binary, pairs, 7);
             let Pixels::Gray(img) = &out.pixels else {
                 panic!()
             };
@@ -356,8 +367,12 @@ mod tests {
 
     #[test]
     fn odd_one_out_flips_exactly_one_and_is_named() {
-        let same = generate(Shading::Gradient, &["polarity=same"], 3);
-        let odd = generate(Shading::Gradient, &["polarity=same", "odd_one_out=true"], 3);
+        let same = generate(CircleShading::Gradient, &["polarity=same"], 3);
+        let odd = generate(
+            CircleShading::Gradient,
+            &["polarity=same", "odd_one_out=true"],
+            3,
+        );
         let label = odd.notes["odd_one_out_label"].as_u64().unwrap() as u16;
         let (Pixels::Gray(a), Pixels::Gray(b)) = (&same.pixels, &odd.pixels) else {
             panic!()
@@ -375,11 +390,11 @@ mod tests {
 
     #[test]
     fn random_layout_depends_on_the_seed_only() {
-        let a = generate(Shading::Binary, &["layout=random"], 1);
-        assert_eq!(a, generate(Shading::Binary, &["layout=random"], 1));
+        let a = generate(CircleShading::Binary, &["layout=random"], 1);
+        assert_eq!(a, generate(CircleShading::Binary, &["layout=random"], 1));
         assert_ne!(
             a.pixels,
-            generate(Shading::Binary, &["layout=random"], 2).pixels
+            generate(CircleShading::Binary, &["layout=random"], 2).pixels
         );
     }
 }

@@ -9,200 +9,158 @@
 //! with cast shadows by default.
 
 use super::frame::Frame;
-use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_pq;
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::light::Light;
+use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::surface::Surface;
+use crate::visual_size::Geometry;
 use nalgebra::Vector3;
 use serde_json::{json, Map};
 
-struct Crater;
+param_choice! {
+    /// How the finished picture of [`crater`] is turned.
+    pub enum CraterRotation {
+        /// Upright: a mound with a crater.
+        Upright = "0",
+        /// Turned by 180° (exact pixel rotation): seen as a crater with a mound.
+        Turned = "180",
+    }
+}
 
-impl Stimulus for Crater {
-    fn info(&self) -> Info {
-        Info {
-            name: "crater",
-            summary: "a mound with a crater lit from above; rotation=180 turns it into a crater with a mound",
-            params: vec![
-                ParamSpec::number(
-                    "mound_radius",
-                    1.0,
-                    0.01,
-                    90.0,
-                    "spread σ of the Gaussian mound (deg)",
-                ),
-                ParamSpec::number(
-                    "crater_radius",
-                    0.7,
-                    0.01,
-                    90.0,
-                    "radius of the bowl-shaped pit in its top (deg)",
-                ),
-                ParamSpec::number(
-                    "height",
-                    1.2,
-                    0.0,
-                    10.0,
-                    "mound height as a multiple of mound_radius",
-                ),
-                ParamSpec::number(
-                    "depth",
-                    1.0,
-                    0.0,
-                    10.0,
-                    "pit depth as a multiple of mound_radius",
-                ),
-                ParamSpec::choice(
-                    "rotation",
-                    "0",
-                    &["0", "180"],
-                    "turn the finished picture by 180° (exact pixel rotation)",
-                ),
-                ParamSpec::light(
-                    "light",
-                    "above",
-                    "light direction (x,y,z | tilt=T,slant=S | name)",
-                ),
-                ParamSpec::number("background", 0.5, 0.0, 1.0, "luminance of the flat ground"),
-                ParamSpec::number(
-                    "ambient",
-                    0.1,
-                    0.0,
-                    1.0,
-                    "luminance of surfaces the light does not reach (attached and cast shadows)",
-                ),
-                ParamSpec::boolean(
-                    "cast_shadows",
-                    true,
-                    "ray-march cast shadows over the heightfield",
-                ),
-            ],
-            default_visual_size: (6.0, 6.0),
-            default_ppd: 40.0,
+stimulus_params! {
+    /// Parameters of [`crater`].
+    pub struct CraterParams {
+        /// spread σ of the Gaussian mound (deg)
+        mound_radius: f64 = 1.0, range 0.01..=90.0;
+        /// radius of the bowl-shaped pit in its top (deg)
+        crater_radius: f64 = 0.7, range 0.01..=90.0;
+        /// mound height as a multiple of mound_radius
+        height: f64 = 1.2, range 0.0..=10.0;
+        /// pit depth as a multiple of mound_radius
+        depth: f64 = 1.0, range 0.0..=10.0;
+        /// turn the finished picture by 180° (exact pixel rotation)
+        rotation: CraterRotation = CraterRotation::Upright;
+        /// light direction (x,y,z | tilt=T,slant=S | name)
+        light: Light = "above";
+        /// luminance of the flat ground
+        background: f64 = 0.5, range 0.0..=1.0;
+        /// luminance of surfaces the light does not reach (attached and cast shadows)
+        ambient: f64 = 0.1, range 0.0..=1.0;
+        /// ray-march cast shadows over the heightfield
+        cast_shadows: bool = true;
+    }
+}
+
+/// A mound with a crater on top, lit from above (or turned by 180°).
+pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let sm = frame.px(p.mound_radius);
+    let sc = frame.px(p.crater_radius);
+    let (hh, dd) = (p.height * sm, p.depth * sm);
+    if sm < 1.0 || sc < 0.5 {
+        return Err(Error::invalid(format!(
+            "crater: mound_radius and crater_radius must span at least a pixel at {} ppd",
+            frame.ppd
+        )));
+    }
+    let light = p.light;
+    let s = light.direction();
+    if s.z < 1e-6 {
+        return Err(Error::invalid(
+            "crater: a grazing light (slant 90°) leaves the ground dark; use a slant below 90°",
+        ));
+    }
+    let profile = |rho2: f64| -> (f64, f64) {
+        let em = (-rho2 / (2.0 * sm * sm)).exp();
+        let bowl = (1.0 - rho2 / (sc * sc)).max(0.0);
+        // z and k with p = k·x, q = k·y (p = −∂z/∂x for a radial profile).
+        (
+            hh * em - dd * bowl * bowl,
+            hh * em / (sm * sm) - 4.0 * dd * bowl / (sc * sc),
+        )
+    };
+    // The rim is where the profile peaks; the mound ends where it has fallen to 2% of H.
+    let (mut rim, mut best, mut edge) = (0.0, f64::NEG_INFINITY, 0.0);
+    let steps = 4000;
+    for i in 0..=steps {
+        let rho = 4.0 * sm.max(sc) * i as f64 / steps as f64;
+        let z = profile(rho * rho).0;
+        if z > best {
+            (best, rim) = (z, rho);
+        }
+        if z.abs() > 0.02 * hh.max(dd) {
+            edge = rho;
         }
     }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let sm = frame.px(p.f64("mound_radius")?);
-        let sc = frame.px(p.f64("crater_radius")?);
-        let (hh, dd) = (p.f64("height")? * sm, p.f64("depth")? * sm);
-        if sm < 1.0 || sc < 0.5 {
-            return Err(Error::invalid(format!(
-                "crater: mound_radius and crater_radius must span at least a pixel at {} ppd",
-                frame.ppd
-            )));
-        }
-        let light = p.light("light")?;
-        let s = light.direction();
-        if s.z < 1e-6 {
-            return Err(Error::invalid(
-                "crater: a grazing light (slant 90°) leaves the ground dark; use a slant below 90°",
-            ));
-        }
-        let profile = |rho2: f64| -> (f64, f64) {
-            let em = (-rho2 / (2.0 * sm * sm)).exp();
-            let bowl = (1.0 - rho2 / (sc * sc)).max(0.0);
-            // z and k with p = k·x, q = k·y (p = −∂z/∂x for a radial profile).
-            (
-                hh * em - dd * bowl * bowl,
-                hh * em / (sm * sm) - 4.0 * dd * bowl / (sc * sc),
-            )
-        };
-        // The rim is where the profile peaks; the mound ends where it has fallen to 2% of H.
-        let (mut rim, mut best, mut edge) = (0.0, f64::NEG_INFINITY, 0.0);
-        let steps = 4000;
-        for i in 0..=steps {
-            let rho = 4.0 * sm.max(sc) * i as f64 / steps as f64;
-            let z = profile(rho * rho).0;
-            if z > best {
-                (best, rim) = (z, rho);
-            }
-            if z.abs() > 0.02 * hh.max(dd) {
-                edge = rho;
+    let (w, h) = (frame.w, frame.h);
+    let mut depth = Grid::new(w, h, 0.0);
+    let mut normals = Grid::new(w, h, Vector3::z());
+    let mut labels = Grid::new(w, h, 0u16);
+    for row in 0..h {
+        for col in 0..w {
+            let (x, y) = (frame.x(col), frame.y(row));
+            let rho2 = x * x + y * y;
+            let (z, k) = profile(rho2);
+            *depth.get_mut(col, row) = z;
+            *normals.get_mut(col, row) = normal_from_pq(k * x, k * y);
+            if rho2 < rim * rim {
+                *labels.get_mut(col, row) = 1;
+            } else if rho2 < edge * edge {
+                *labels.get_mut(col, row) = 2;
             }
         }
-        let (w, h) = (frame.w, frame.h);
-        let mut depth = Grid::new(w, h, 0.0);
-        let mut normals = Grid::new(w, h, Vector3::z());
-        let mut labels = Grid::new(w, h, 0u16);
-        for row in 0..h {
-            for col in 0..w {
-                let (x, y) = (frame.x(col), frame.y(row));
-                let rho2 = x * x + y * y;
-                let (z, k) = profile(rho2);
-                *depth.get_mut(col, row) = z;
-                *normals.get_mut(col, row) = normal_from_pq(k * x, k * y);
-                if rho2 < rim * rim {
-                    *labels.get_mut(col, row) = 1;
-                } else if rho2 < edge * edge {
-                    *labels.get_mut(col, row) = 2;
-                }
-            }
-        }
-        let surface = Surface {
-            depth,
-            normals,
-            mask: Grid::new(w, h, true),
-        };
-        let (background, ambient) = (p.f64("background")?, p.f64("ambient")?);
-        if ambient > background {
-            return Err(Error::invalid(format!(
-                "crater: ambient {ambient} exceeds the background {background} (the lit ground cannot be darker than shadow)"
-            )));
-        }
-        let albedo = (background - ambient) / s.z;
-        let reflectance = Lambertian {
-            light,
-            albedo,
-            ambient,
-        };
-        let options = RenderOptions {
-            background: 0.0,
-            cast_shadows: p.bool("cast_shadows")?,
-        };
-        let rendering = render(&surface, &reflectance, &options);
-        let peak = rendering.image.min_max().map_or(0.0, |m| m.1);
-        if peak > 1.0 {
-            return Err(Error::invalid(format!(
-                "crater: the brightest slope reaches {peak:.3} > 1; lower the background or the light's slant"
-            )));
-        }
-        let mut notes = Map::new();
-        notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
-        notes.insert("albedo".into(), json!(albedo));
-        notes.insert("rim_radius_deg".into(), json!(rim / frame.ppd));
-        let names = vec!["crater".to_string(), "mound".to_string()];
-        let mut out = Output {
-            pixels: Pixels::Gray(rendering.image),
-            targets: Some(Targets { labels, names }),
-            surface: Some(SurfaceLayers {
-                depth: surface.depth,
-                normals: surface.normals,
-                mask: surface.mask,
-                albedo: None,
-                shading: Some(rendering.shading),
-            }),
-            svg: None,
-            notes,
-        };
-        if p.str("rotation")? == "180" {
-            out = rotated(out);
-            let seen = light.opposite_tilt();
-            out.notes.insert(
-                "rotation".into(),
-                json!(format!(
-                    "the picture is turned by 180°: physically the same mound lit from {seen} (the layers describe it); seen as a crater lit from {light}"
-                )),
-            );
-        }
-        Ok(out)
     }
+    let surface = Surface {
+        depth,
+        normals,
+        mask: Grid::new(w, h, true),
+    };
+    let (background, ambient) = (p.background, p.ambient);
+    if ambient > background {
+        return Err(Error::invalid(format!(
+            "crater: ambient {ambient} exceeds the background {background} (the lit ground cannot be darker than shadow)"
+        )));
+    }
+    let albedo = (background - ambient) / s.z;
+    let reflectance = Lambertian {
+        light,
+        albedo,
+        ambient,
+    };
+    let options = RenderOptions {
+        background: 0.0,
+        cast_shadows: p.cast_shadows,
+    };
+    let rendering = render(&surface, &reflectance, &options);
+    let peak = rendering.image.min_max().map_or(0.0, |m| m.1);
+    if peak > 1.0 {
+        return Err(Error::invalid(format!(
+            "crater: the brightest slope reaches {peak:.3} > 1; lower the background or the light's slant"
+        )));
+    }
+    let mut notes = Map::new();
+    notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
+    notes.insert("albedo".into(), json!(albedo));
+    notes.insert("rim_radius_deg".into(), json!(rim / frame.ppd));
+    let names = vec!["crater".to_string(), "mound".to_string()];
+    let mut out = Output::rendered(surface, rendering, Targets { labels, names }, notes);
+    if p.rotation == CraterRotation::Turned {
+        out = rotated(out);
+        let seen = light.opposite_tilt();
+        out.notes.insert(
+            "rotation".into(),
+            json!(format!(
+                "the picture is turned by 180°: physically the same mound lit from {seen} (the layers describe it); seen as a crater lit from {light}"
+            )),
+        );
+    }
+    Ok(out)
 }
 
 /// The output turned by 180° in the image plane: pixels, labels and layers move with the
@@ -234,29 +192,28 @@ fn rotated(out: Output) -> Output {
 
 /// The crater stimulus.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(Crater)]
+    vec![Typed::boxed(
+        "crater",
+        "a mound with a crater lit from above; rotation=180 turns it into a crater with a mound",
+        (6.0, 6.0),
+        40.0,
+        |p, g, _| crater(p, g),
+    )]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::Params;
-    use crate::visual_size::Geometry;
 
     fn generate(pairs: &[&str]) -> Output {
-        let info = Crater.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        Crater
-            .generate(&Request {
-                params: Params::resolve(&info.params, &given).unwrap(),
-                geometry: Geometry {
-                    width: 96,
-                    height: 80,
-                    ppd: 12.0,
-                },
-                seed: 0,
-            })
-            .unwrap()
+        let g = Geometry {
+            width: 96,
+            height: 80,
+            ppd: 12.0,
+        };
+        crater(&CraterParams::from_map(&given).unwrap(), &g).unwrap()
     }
 
     #[test]

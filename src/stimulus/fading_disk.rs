@@ -8,16 +8,15 @@
 //! field + weight · (disk − field). Colours are linear RGB 0..1.
 
 use super::frame::Frame;
-use super::{Info, Output, Pixels, Request, Stimulus, Targets};
+use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::{ParamSpec, Params};
+use crate::params::{param_choice, stimulus_params, ParamSet};
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 
-struct FadingDisk;
-
-fn colour(p: &Params, key: &str) -> Result<[f64; 3]> {
-    let text = p.str(key)?;
+/// The colour `text` (r,g,b in 0..1) of the parameter `key`.
+fn colour(key: &str, text: &str) -> Result<[f64; 3]> {
     let bad = || {
         Error::invalid(format!(
             "fading-disk: parameter {key}: '{text}' is not three numbers r,g,b in 0..1"
@@ -49,151 +48,135 @@ fn edge(rho: f64, radius: f64, blur: f64) -> f64 {
     }
 }
 
-impl Stimulus for FadingDisk {
-    fn info(&self) -> Info {
-        Info {
-            name: "fading-disk",
-            summary: "a blurred blue disk in a green field fades under steady fixation (Troxler)",
-            params: vec![
-                ParamSpec::number(
-                    "radius",
-                    2.5,
-                    0.01,
-                    90.0,
-                    "disk radius, at the middle of the edge (deg)",
-                ),
-                ParamSpec::number("blur", 2.0, 0.0, 90.0, "width of the blurred edge (deg)"),
-                ParamSpec::choice(
-                    "variant",
-                    "colour",
-                    &["colour", "achromatic"],
-                    "blue on green (RGB output) or grey on grey (one channel)",
-                ),
-                ParamSpec::text(
-                    "disk_colour",
-                    "0.35,0.5,0.95",
-                    "disk colour, linear r,g,b in 0..1",
-                ),
-                ParamSpec::text(
-                    "field_colour",
-                    "0.3,0.75,0.3",
-                    "field colour, linear r,g,b in 0..1",
-                ),
-                ParamSpec::number("disk_gray", 0.35, 0.0, 1.0, "disk luminance (achromatic)"),
-                ParamSpec::number("field_gray", 0.5, 0.0, 1.0, "field luminance (achromatic)"),
-                ParamSpec::number(
-                    "fixation_radius",
-                    0.1,
-                    0.0,
-                    10.0,
-                    "radius of the fixation dot (deg; 0 for none)",
-                ),
-                ParamSpec::number(
-                    "fixation_offset",
-                    0.0,
-                    -90.0,
-                    90.0,
-                    "horizontal offset of the fixation dot from the disk's centre (deg)",
-                ),
-                ParamSpec::text(
-                    "fixation_colour",
-                    "0,0,0",
-                    "fixation dot colour, linear r,g,b",
-                ),
-            ],
-            default_visual_size: (10.0, 8.0),
-            default_ppd: 32.0,
-        }
+param_choice! {
+    /// The colours of [`fading_disk`].
+    pub enum FadingVariant {
+        /// Blue on green (RGB output).
+        Colour = "colour",
+        /// Grey on grey (one channel).
+        Achromatic = "achromatic",
     }
+}
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let radius = frame.px(p.f64("radius")?);
-        let blur = frame.px(p.f64("blur")?);
-        if blur > 2.0 * radius {
-            return Err(Error::invalid(format!(
-                "fading-disk: blur {}° exceeds the disk's diameter {}°",
-                p.f64("blur")?,
-                2.0 * p.f64("radius")?
-            )));
-        }
-        let achromatic = p.str("variant")? == "achromatic";
-        let (disk, field) = if achromatic {
-            let (d, f) = (p.f64("disk_gray")?, p.f64("field_gray")?);
-            ([d; 3], [f; 3])
-        } else {
-            (colour(p, "disk_colour")?, colour(p, "field_colour")?)
-        };
-        let fix_colour = colour(p, "fixation_colour")?;
-        let fix_r = frame.px(p.f64("fixation_radius")?);
-        let fix_x = frame.px(p.f64("fixation_offset")?);
-        let mut rgb = Grid::new(frame.w, frame.h, field);
-        let mut labels = Grid::new(frame.w, frame.h, 0u16);
-        for row in 0..frame.h {
-            for col in 0..frame.w {
-                let (x, y) = (frame.x(col), frame.y(row));
-                let rho = x.hypot(y);
-                let px = rgb.get_mut(col, row);
-                if (x - fix_x).hypot(y) < fix_r {
-                    *px = fix_colour;
-                    *labels.get_mut(col, row) = 2;
-                    continue;
-                }
-                let wgt = edge(rho, radius, blur);
-                if wgt > 0.0 {
-                    for k in 0..3 {
-                        px[k] = field[k] + wgt * (disk[k] - field[k]);
-                    }
-                }
-                if rho < radius {
-                    *labels.get_mut(col, row) = 1;
+stimulus_params! {
+    /// Parameters of [`fading_disk`].
+    pub struct FadingDiskParams {
+        /// disk radius, at the middle of the edge (deg)
+        radius: f64 = 2.5, range 0.01..=90.0;
+        /// width of the blurred edge (deg)
+        blur: f64 = 2.0, range 0.0..=90.0;
+        /// blue on green (RGB output) or grey on grey (one channel)
+        variant: FadingVariant = FadingVariant::Colour;
+        /// disk colour, linear r,g,b in 0..1
+        disk_colour: String = "0.35,0.5,0.95";
+        /// field colour, linear r,g,b in 0..1
+        field_colour: String = "0.3,0.75,0.3";
+        /// disk luminance (achromatic)
+        disk_gray: f64 = 0.35, range 0.0..=1.0;
+        /// field luminance (achromatic)
+        field_gray: f64 = 0.5, range 0.0..=1.0;
+        /// radius of the fixation dot (deg; 0 for none)
+        fixation_radius: f64 = 0.1, range 0.0..=10.0;
+        /// horizontal offset of the fixation dot from the disk's centre (deg)
+        fixation_offset: f64 = 0.0, range -90.0..=90.0;
+        /// fixation dot colour, linear r,g,b
+        fixation_colour: String = "0,0,0";
+    }
+}
+
+/// A blurred disk in a field that fades under steady fixation (Troxler).
+pub fn fading_disk(p: &FadingDiskParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let radius = frame.px(p.radius);
+    let blur = frame.px(p.blur);
+    if blur > 2.0 * radius {
+        return Err(Error::invalid(format!(
+            "fading-disk: blur {}° exceeds the disk's diameter {}°",
+            p.blur,
+            2.0 * p.radius
+        )));
+    }
+    let achromatic = p.variant == FadingVariant::Achromatic;
+    let (disk, field) = if achromatic {
+        let (d, f) = (p.disk_gray, p.field_gray);
+        ([d; 3], [f; 3])
+    } else {
+        (
+            colour("disk_colour", &p.disk_colour)?,
+            colour("field_colour", &p.field_colour)?,
+        )
+    };
+    let fix_colour = colour("fixation_colour", &p.fixation_colour)?;
+    let fix_r = frame.px(p.fixation_radius);
+    let fix_x = frame.px(p.fixation_offset);
+    let mut rgb = Grid::new(frame.w, frame.h, field);
+    let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    for row in 0..frame.h {
+        for col in 0..frame.w {
+            let (x, y) = (frame.x(col), frame.y(row));
+            let rho = x.hypot(y);
+            let px = rgb.get_mut(col, row);
+            if (x - fix_x).hypot(y) < fix_r {
+                *px = fix_colour;
+                *labels.get_mut(col, row) = 2;
+                continue;
+            }
+            let wgt = edge(rho, radius, blur);
+            if wgt > 0.0 {
+                for k in 0..3 {
+                    px[k] = field[k] + wgt * (disk[k] - field[k]);
                 }
             }
+            if rho < radius {
+                *labels.get_mut(col, row) = 1;
+            }
         }
-        let mut notes = Map::new();
-        notes.insert("disk_rgb".into(), json!(disk));
-        notes.insert("field_rgb".into(), json!(field));
-        let pixels = if achromatic {
-            Pixels::Gray(rgb.map(|c| c[0]))
-        } else {
-            Pixels::Rgb(rgb)
-        };
-        Ok(Output {
-            pixels,
-            targets: Some(Targets {
-                labels,
-                names: vec!["disk".into(), "fixation".into()],
-            }),
-            surface: None,
-            svg: None,
-            notes,
-        })
     }
+    let mut notes = Map::new();
+    notes.insert("disk_rgb".into(), json!(disk));
+    notes.insert("field_rgb".into(), json!(field));
+    let pixels = if achromatic {
+        Pixels::Gray(rgb.map(|c| c[0]))
+    } else {
+        Pixels::Rgb(rgb)
+    };
+    Ok(Output {
+        pixels,
+        targets: Some(Targets {
+            labels,
+            names: vec!["disk".into(), "fixation".into()],
+        }),
+        surface: None,
+        svg: None,
+        notes,
+    })
 }
 
 /// The fading-disk stimulus.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(FadingDisk)]
+    vec![Typed::boxed(
+        "fading-disk",
+        "a blurred blue disk in a green field fades under steady fixation (Troxler)",
+        (10.0, 8.0),
+        32.0,
+        |p, g, _| fading_disk(p, g),
+    )]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::visual_size::Geometry;
+    use crate::params::Params;
 
     fn generate(pairs: &[&str]) -> Result<Output> {
-        let info = FadingDisk.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        FadingDisk.generate(&Request {
-            params: Params::resolve(&info.params, &given)?,
-            geometry: Geometry {
-                width: 100,
-                height: 80,
-                ppd: 10.0,
-            },
-            seed: 0,
-        })
+        let g = Geometry {
+            width: 100,
+            height: 80,
+            ppd: 10.0,
+        };
+        fading_disk(&FadingDiskParams::from_map(&given)?, &g)
     }
 
     #[test]

@@ -10,13 +10,14 @@
 //! face under (−s_x, −s_y, s_z) (tilt + 180°).
 
 use super::frame::{smoothstep, Frame};
-use super::surfaces::{lighting_params, reflectance_from_params, render_options_from_params};
-use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use super::surfaces::{BackdropParams, LightingParams};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::render::render;
 use crate::surface::Surface;
+use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 
 /// Face outline: u² + (v/OVAL)² < 1 in units of the half-width.
@@ -85,134 +86,108 @@ fn relief(u: f64, v: f64) -> Option<f64> {
     Some(z)
 }
 
-struct HollowMask;
+param_choice! {
+    /// How the face of [`hollow_mask`] is seen.
+    pub enum FaceMode {
+        /// From behind: depth negated.
+        Hollow = "hollow",
+        /// From the front.
+        Convex = "convex",
+    }
+}
 
-impl Stimulus for HollowMask {
-    fn info(&self) -> Info {
-        let mut params = vec![
-            ParamSpec::choice(
-                "mode",
-                "hollow",
-                &["hollow", "convex"],
-                "the face as seen from the front (convex) or from behind, hollow (depth negated)",
-            ),
-            ParamSpec::number("face_width", 5.0, 0.05, 180.0, "width of the face (deg)"),
-            ParamSpec::number(
-                "relief",
-                1.0,
-                0.01,
-                10.0,
-                "depth scale (1 = a natural face)",
-            ),
-        ];
-        params.extend(lighting_params("above", 0.1));
-        for spec in &mut params {
-            // A face fully lit at the default slant would reach 1 with albedo 1.
-            if spec.name == "albedo" {
-                spec.default = serde_json::Value::from(0.7);
+stimulus_params! {
+    /// Parameters of [`hollow_mask`].
+    pub struct HollowMaskParams {
+        /// the face as seen from the front (convex) or from behind, hollow (depth negated)
+        mode: FaceMode = FaceMode::Hollow;
+        /// width of the face (deg)
+        face_width: f64 = 5.0, range 0.05..=180.0;
+        /// depth scale (1 = a natural face)
+        relief: f64 = 1.0, range 0.01..=10.0;
+        /// light and reflectance: a face fully lit at the default slant would reach 1 with
+        /// albedo 1, and some light in the shadows keeps the eye sockets from going black
+        flatten lighting: LightingParams { albedo: 0.7, ambient: 0.06 };
+        /// background and cast shadows
+        flatten backdrop: BackdropParams { background: 0.1 };
+    }
+}
+
+/// A face relief, convex or hollow, rendered under one light.
+pub fn hollow_mask(p: &HollowMaskParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let frame = Frame::new(g);
+    let half = frame.px(p.face_width) / 2.0;
+    if half < 4.0 {
+        return Err(Error::invalid(format!(
+            "hollow-mask: face_width {}° is under 8 pixels at {} ppd",
+            p.face_width, frame.ppd
+        )));
+    }
+    let scale = half * p.relief;
+    let (w, h) = (frame.w, frame.h);
+    let mut depth = Grid::new(w, h, 0.0);
+    let mut mask = Grid::new(w, h, false);
+    for row in frame.rows(-half * OVAL, half * OVAL) {
+        for col in frame.cols(-half, half) {
+            if let Some(z) = relief(frame.x(col) / half, frame.y(row) / half) {
+                *depth.get_mut(col, row) = scale * z;
+                *mask.get_mut(col, row) = true;
             }
-            // Some light in the shadows keeps the eye sockets from going black.
-            if spec.name == "ambient" {
-                spec.default = serde_json::Value::from(0.06);
-            }
-        }
-        Info {
-            name: "hollow-mask",
-            summary: "a face relief, convex or hollow: a hollow face lit from above looks convex, lit from below",
-            params,
-            default_visual_size: (7.0, 9.0),
-            default_ppd: 40.0,
         }
     }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let frame = Frame::new(&request.geometry);
-        let half = frame.px(p.f64("face_width")?) / 2.0;
-        if half < 4.0 {
-            return Err(Error::invalid(format!(
-                "hollow-mask: face_width {}° is under 8 pixels at {} ppd",
-                p.f64("face_width")?,
-                frame.ppd
-            )));
-        }
-        let scale = half * p.f64("relief")?;
-        let (w, h) = (frame.w, frame.h);
-        let mut depth = Grid::new(w, h, 0.0);
-        let mut mask = Grid::new(w, h, false);
-        for row in frame.rows(-half * OVAL, half * OVAL) {
-            for col in frame.cols(-half, half) {
-                if let Some(z) = relief(frame.x(col) / half, frame.y(row) / half) {
-                    *depth.get_mut(col, row) = scale * z;
-                    *mask.get_mut(col, row) = true;
-                }
-            }
-        }
-        if mask.count() == 0 {
-            return Err(Error::invalid("hollow-mask: the face covers no pixel"));
-        }
-        let convex = Surface::from_depth(depth, mask)?;
-        let hollow = p.str("mode")? == "hollow";
-        let surface = if hollow { convex.negated() } else { convex };
-        let light = p.light("light")?;
-        let reflectance = reflectance_from_params(p)?;
-        let options = render_options_from_params(p)?;
-        let rendering = render(&surface, reflectance.as_ref(), &options);
-        let s = light.direction();
-        let mut notes = Map::new();
-        notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
-        notes.insert(
-            "equivalent".into(),
-            json!(format!(
-                "without cast shadows this image equals the {} face lit from {}",
-                if hollow { "convex" } else { "hollow" },
-                light.opposite_tilt()
-            )),
-        );
-        Ok(Output {
-            pixels: Pixels::Gray(rendering.image),
-            targets: Some(Targets {
-                labels: surface.mask.map(|&m| u16::from(m)),
-                names: vec!["face".into()],
-            }),
-            surface: Some(SurfaceLayers {
-                depth: surface.depth,
-                normals: surface.normals,
-                mask: surface.mask,
-                albedo: None,
-                shading: Some(rendering.shading),
-            }),
-            svg: None,
-            notes,
-        })
+    if mask.count() == 0 {
+        return Err(Error::invalid("hollow-mask: the face covers no pixel"));
     }
+    let convex = Surface::from_depth(depth, mask)?;
+    let hollow = p.mode == FaceMode::Hollow;
+    let surface = if hollow { convex.negated() } else { convex };
+    let light = p.lighting.light;
+    let reflectance = p.lighting.reflectance()?;
+    let options = p.backdrop.render_options();
+    let rendering = render(&surface, reflectance.as_ref(), &options);
+    let s = light.direction();
+    let mut notes = Map::new();
+    notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
+    notes.insert(
+        "equivalent".into(),
+        json!(format!(
+            "without cast shadows this image equals the {} face lit from {}",
+            if hollow { "convex" } else { "hollow" },
+            light.opposite_tilt()
+        )),
+    );
+    let targets = Targets {
+        labels: surface.mask.map(|&m| u16::from(m)),
+        names: vec!["face".into()],
+    };
+    Ok(Output::rendered(surface, rendering, targets, notes))
 }
 
 /// The hollow-mask stimulus.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(HollowMask)]
+    vec![Typed::boxed(
+        "hollow-mask",
+        "a face relief, convex or hollow: a hollow face lit from above looks convex, lit from below",
+        (7.0, 9.0),
+        40.0,
+        |p, g, _| hollow_mask(p, g),
+    )]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::Params;
-    use crate::visual_size::Geometry;
 
     fn generate(pairs: &[&str]) -> Output {
-        let info = HollowMask.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        HollowMask
-            .generate(&Request {
-                params: Params::resolve(&info.params, &given).unwrap(),
-                geometry: Geometry {
-                    width: 70,
-                    height: 90,
-                    ppd: 10.0,
-                },
-                seed: 0,
-            })
-            .unwrap()
+        let g = Geometry {
+            width: 70,
+            height: 90,
+            ppd: 10.0,
+        };
+        hollow_mask(&HollowMaskParams::from_map(&given).unwrap(), &g).unwrap()
     }
 
     #[test]

@@ -2,6 +2,13 @@
 //! behind one interface. A stimulus declares its parameters and default size; given resolved
 //! parameters, a geometry (size in degrees and pixels) and a seed, it returns linear luminance
 //! with its target mask and, where a surface exists, the ground-truth layers.
+//!
+//! Two ways in: by name ([`find`], [`generate`], [`Spec`]), with the parameters as key=value
+//! pairs or JSON checked against the stimulus's declarations; or typed, with one parameter
+//! struct and one function per stimulus ([`bumps`] with [`BumpsParams`], [`sphere`] with
+//! [`SphereParams`] ...). Each struct is declared once (`stimulus_params!` in
+//! [`crate::params`]), which gives its defaults, ranges, docs and the conversion to and from
+//! the generic [`Params`] that sidecars record.
 
 mod boundary_strips;
 mod bumps;
@@ -21,10 +28,32 @@ mod svg;
 
 pub use export::{write_output, ExportOptions, Range};
 
+// The typed interface: one parameter struct and one function per stimulus.
+pub use boundary_strips::{boundary_strips, BoundaryStripsParams, StripShading};
+pub use bumps::{
+    bumps, sideways, BumpsParams, DiscArrayParams, DiscPattern, DiscProfile, LightSide,
+    SidewaysParams,
+};
+pub use checker_shadow::{checker_shadow, CheckerShadowParams};
+pub use checkerboard::{checkerboard, disc, CheckerboardParams, DiscParams};
+pub use circles::{
+    circles, CircleLayout, CirclePolarity, CircleShading, CirclesParams, ShadingAxis,
+};
+pub use crater::{crater, CraterParams, CraterRotation};
+pub use fading_disk::{fading_disk, FadingDiskParams, FadingVariant};
+pub use hollow_mask::{hollow_mask, FaceMode, HollowMaskParams};
+pub use reflectance_map::{reflectance_map, OrientationSpace, ReflectanceMapParams};
+pub use strips::{strips, StripOrientation, StripProfile, StripsParams};
+pub use surfaces::{
+    bunny, ellipsoid, gaussian, heightfield, mesh, sphere, vase, BackdropParams, BunnyParams,
+    EllipsoidParams, GaussianParams, HeightfieldParams, LightingParams, MeshNormals, MeshParams,
+    SphereParams, VaseParams, ViewParams,
+};
+
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
-use crate::params::{ParamSpec, Params};
+use crate::params::{ParamSet, ParamSpec, Params};
 use crate::visual_size::{Geometry, SizeRequest};
 use serde::Deserialize;
 use serde_json::{Map, Value};
@@ -122,6 +151,45 @@ pub struct Output {
 }
 
 impl Output {
+    /// A rendered surface: its image, the surface's layers with the shading before shadows,
+    /// and `targets` and `notes`.
+    pub(crate) fn rendered(
+        surface: crate::surface::Surface,
+        rendering: crate::render::Rendering,
+        targets: Targets,
+        notes: Map<String, Value>,
+    ) -> Self {
+        Output {
+            pixels: Pixels::Gray(rendering.image),
+            targets: Some(targets),
+            surface: Some(SurfaceLayers {
+                depth: surface.depth,
+                normals: surface.normals,
+                mask: surface.mask,
+                albedo: None,
+                shading: Some(rendering.shading),
+            }),
+            svg: None,
+            notes,
+        }
+    }
+
+    /// A gray picture drawn as vector graphics, with its targets and notes.
+    pub(crate) fn drawn(
+        image: Image,
+        targets: Targets,
+        svg: String,
+        notes: Map<String, Value>,
+    ) -> Self {
+        Output {
+            pixels: Pixels::Gray(image),
+            targets: Some(targets),
+            surface: None,
+            svg: Some(svg),
+            notes,
+        }
+    }
+
     /// A gray output with no targets, layers or notes.
     pub fn gray(image: Image) -> Self {
         Output {
@@ -146,6 +214,79 @@ pub trait Stimulus: Send + Sync {
     /// user gives no size in pixels.
     fn natural_shape(&self, _params: &Params) -> Result<Option<(usize, usize)>> {
         Ok(None)
+    }
+}
+
+/// The size in pixels that typed parameters give a stimulus, if any.
+type NaturalShape<P> = fn(&P) -> Result<Option<(usize, usize)>>;
+
+/// A stimulus drawn by a typed function from its typed parameters `P`: the one place where
+/// the generic [`Params`] of a [`Request`] become a typed struct.
+pub(crate) struct Typed<P> {
+    name: &'static str,
+    summary: &'static str,
+    default_visual_size: (f64, f64),
+    default_ppd: f64,
+    render: fn(&P, &Geometry, u64) -> Result<Output>,
+    natural: NaturalShape<P>,
+}
+
+impl<P: ParamSet + Send + Sync + 'static> Typed<P> {
+    /// A stimulus called `name` with its default size, drawn by `render(params, geometry, seed)`
+    /// (set `natural` for one whose parameters give its size in pixels).
+    pub(crate) fn new(
+        name: &'static str,
+        summary: &'static str,
+        default_visual_size: (f64, f64),
+        default_ppd: f64,
+        render: fn(&P, &Geometry, u64) -> Result<Output>,
+    ) -> Self {
+        Typed {
+            name,
+            summary,
+            default_visual_size,
+            default_ppd,
+            render,
+            natural: |_| Ok(None),
+        }
+    }
+
+    /// [`Typed::new`], boxed.
+    pub(crate) fn boxed(
+        name: &'static str,
+        summary: &'static str,
+        default_visual_size: (f64, f64),
+        default_ppd: f64,
+        render: fn(&P, &Geometry, u64) -> Result<Output>,
+    ) -> Box<dyn Stimulus> {
+        Box::new(Self::new(
+            name,
+            summary,
+            default_visual_size,
+            default_ppd,
+            render,
+        ))
+    }
+}
+
+impl<P: ParamSet + Send + Sync> Stimulus for Typed<P> {
+    fn info(&self) -> Info {
+        Info {
+            name: self.name,
+            summary: self.summary,
+            params: P::specs(),
+            default_visual_size: self.default_visual_size,
+            default_ppd: self.default_ppd,
+        }
+    }
+
+    fn generate(&self, request: &Request) -> Result<Output> {
+        let params = P::from_params(&request.params)?;
+        (self.render)(&params, &request.geometry, request.seed)
+    }
+
+    fn natural_shape(&self, params: &Params) -> Result<Option<(usize, usize)>> {
+        (self.natural)(&P::from_params(params)?)
     }
 }
 
@@ -289,6 +430,76 @@ mod tests {
             // Every default must pass its own check.
             Params::resolve(&info.params, &Map::new()).unwrap();
         }
+    }
+
+    fn defaults_round_trip<P: ParamSet + PartialEq + std::fmt::Debug>() {
+        let resolved = Params::resolve(&P::specs(), &Map::new()).unwrap();
+        assert_eq!(P::default(), P::from_params(&resolved).unwrap());
+        assert_eq!(P::default().to_params().unwrap(), resolved);
+    }
+
+    #[test]
+    fn typed_defaults_are_the_declared_defaults() {
+        defaults_round_trip::<BoundaryStripsParams>();
+        defaults_round_trip::<BumpsParams>();
+        defaults_round_trip::<SidewaysParams>();
+        defaults_round_trip::<CheckerShadowParams>();
+        defaults_round_trip::<CheckerboardParams>();
+        defaults_round_trip::<DiscParams>();
+        defaults_round_trip::<CirclesParams>();
+        defaults_round_trip::<CraterParams>();
+        defaults_round_trip::<FadingDiskParams>();
+        defaults_round_trip::<HollowMaskParams>();
+        defaults_round_trip::<ReflectanceMapParams>();
+        defaults_round_trip::<StripsParams>();
+        defaults_round_trip::<SphereParams>();
+        defaults_round_trip::<EllipsoidParams>();
+        defaults_round_trip::<GaussianParams>();
+        defaults_round_trip::<VaseParams>();
+        defaults_round_trip::<HeightfieldParams>();
+        defaults_round_trip::<BunnyParams>();
+        defaults_round_trip::<MeshParams>();
+        // Overridden defaults of a shared set reach the typed default.
+        let mask = HollowMaskParams::default();
+        assert_eq!((mask.lighting.albedo, mask.backdrop.background), (0.7, 0.1));
+        assert_eq!(SidewaysParams::default().discs.pattern, DiscPattern::Rows);
+        assert_eq!(BumpsParams::default().discs.pattern, DiscPattern::Random);
+    }
+
+    #[test]
+    fn by_name_and_typed_give_the_same_output_and_params() {
+        let given = Params::parse_pairs(&["light=left", "profile=gaussian", "rows=2"]).unwrap();
+        let size = SizeRequest {
+            visual_size: Some((14.0, 10.0)),
+            ppd: Some(16.0),
+            shape: None,
+        };
+        let (request, by_name) = generate("bumps", &given, &size, 5, 1 << 20).unwrap();
+        let typed = BumpsParams::from_map(&given).unwrap();
+        assert_eq!(typed.discs.profile, DiscProfile::Gaussian);
+        assert_eq!(typed.light, "left".parse().unwrap());
+        assert_eq!(typed.to_params().unwrap(), request.params);
+        assert_eq!(bumps(&typed, &request.geometry, 5).unwrap(), by_name);
+    }
+
+    #[test]
+    fn typed_values_are_range_checked() {
+        let p = SphereParams {
+            radius: 7.0,
+            ..Default::default()
+        };
+        let g = Geometry {
+            width: 8,
+            height: 8,
+            ppd: 1.0,
+        };
+        let e = sphere(&p, &g).unwrap_err().to_string();
+        assert!(e.contains("radius") && e.contains("0.01..5"), "{e}");
+        let p = CirclesParams {
+            rows: 0,
+            ..Default::default()
+        };
+        assert!(p.validate().unwrap_err().to_string().contains("rows"));
     }
 
     #[test]

@@ -3,195 +3,181 @@
 //! highlighted: every orientation on it explains that pixel equally well, which is why one
 //! image alone does not fix the shape.
 
-use super::surfaces::{lighting_params, reflectance_from_params};
-use super::{Info, Output, Pixels, Request, Stimulus};
+use super::surfaces::LightingParams;
+use super::{Output, Pixels, Stimulus, Typed};
 use crate::colormap::viridis;
 use crate::error::Result;
 use crate::gradient_space::{normal_from_fg, normal_from_pq};
 use crate::grid::Grid;
-use crate::params::ParamSpec;
+use crate::params::{param_choice, stimulus_params, ParamSet};
+use crate::visual_size::Geometry;
 use serde_json::Value;
 
-struct ReflectanceMapFigure;
+param_choice! {
+    /// The orientation space a reflectance map is drawn over.
+    pub enum OrientationSpace {
+        /// Gradient space (p, q).
+        Pq = "pq",
+        /// Stereographic space (f, g).
+        Fg = "fg",
+    }
+}
+
+stimulus_params! {
+    /// Parameters of [`reflectance_map`].
+    pub struct ReflectanceMapParams {
+        /// gradient space (p, q) or stereographic space (f, g)
+        space: OrientationSpace = OrientationSpace::Pq;
+        /// half-width of the p–q window (f–g always shows its radius-2 disc and a margin)
+        extent: f64 = 3.0, range 0.1..=100.0;
+        /// iso-brightness contours at R = k/(N+1)
+        contours: usize = 10, range 0..=100;
+        /// the measured intensity whose contour is highlighted (0: none)
+        intensity: f64 = 0.6, range 0.0..=1.0;
+        /// light and reflectance
+        flatten lighting: LightingParams { light: "above-left" };
+    }
+}
 
 /// The reflectance-map figure.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    vec![Box::new(ReflectanceMapFigure)]
+    vec![Typed::boxed(
+        "reflectance-map",
+        "R(p,q) or R(f,g) as a heat map with iso-brightness contours (the under-constrained problem)",
+        (8.0, 8.0),
+        64.0,
+        |p, g, _| reflectance_map(p, g),
+    )]
 }
 
-impl Stimulus for ReflectanceMapFigure {
-    fn info(&self) -> Info {
-        let mut params = vec![
-            ParamSpec::choice(
-                "space",
-                "pq",
-                &["pq", "fg"],
-                "gradient space (p, q) or stereographic space (f, g)",
-            ),
-            ParamSpec::number(
-                "extent",
-                3.0,
-                0.1,
-                100.0,
-                "half-width of the p–q window (f–g always shows its radius-2 disc and a margin)",
-            ),
-            ParamSpec::integer(
-                "contours",
-                10,
-                0,
-                100,
-                "iso-brightness contours at R = k/(N+1)",
-            ),
-            ParamSpec::number(
-                "intensity",
-                0.6,
-                0.0,
-                1.0,
-                "the measured intensity whose contour is highlighted (0: none)",
-            ),
-        ];
-        params.extend(
-            lighting_params("above-left", 0.0)
-                .into_iter()
-                .filter(|p| !matches!(p.name, "background" | "cast_shadows")),
-        );
-        Info {
-            name: "reflectance-map",
-            summary: "R(p,q) or R(f,g) as a heat map with iso-brightness contours (the under-constrained problem)",
-            params,
-            default_visual_size: (8.0, 8.0),
-            default_ppd: 64.0,
-        }
-    }
-
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let p = &request.params;
-        let light = p.light("light")?;
-        let reflectance = reflectance_from_params(p)?;
-        let fg = p.str("space")? == "fg";
-        let extent = if fg { 2.2 } else { p.f64("extent")? };
-        let contours = p.usize("contours")?;
-        let measured = p.f64("intensity")?;
-        let (w, h) = (request.geometry.width, request.geometry.height);
-        let scale = extent / (w.min(h) as f64 / 2.0);
-        // Coordinates of pixel centres: first axis right, second axis up.
-        let coord = |c: usize, r: usize| {
-            (
-                (c as f64 - (w as f64 - 1.0) / 2.0) * scale,
-                ((h as f64 - 1.0) / 2.0 - r as f64) * scale,
-            )
-        };
-        let values = Grid::from_fn(w, h, |c, r| {
-            let (a, b) = coord(c, r);
-            if fg {
-                (a * a + b * b <= 4.0).then(|| reflectance.radiance(&normal_from_fg(a, b)))
-            } else {
-                Some(reflectance.radiance(&normal_from_pq(a, b)))
-            }
-        });
-        let top = values
-            .data()
-            .iter()
-            .flatten()
-            .fold(0.0f64, |m, &v| m.max(v))
-            .max(1e-12);
-        // A contour passes between two pixels whose values lie on either side of its level.
-        let crosses = |c: usize, r: usize, level: f64| -> bool {
-            let Some(v) = *values.get(c, r) else {
-                return false;
-            };
-            [(1isize, 0isize), (0, 1)].iter().any(|&(dc, dr)| {
-                matches!(values.checked(c as isize + dc, r as isize + dr), Some(Some(u)) if (v - level) * (u - level) < 0.0)
-            })
-        };
-        let near = |c: usize, r: usize, radius: isize, level: f64| -> bool {
-            (-radius..=radius).any(|dr| {
-                (-radius..=radius).any(|dc| {
-                    let (cc, rr) = (c as isize + dc, r as isize + dr);
-                    cc >= 0
-                        && rr >= 0
-                        && (cc as usize) < w
-                        && (rr as usize) < h
-                        && crosses(cc as usize, rr as usize, level)
-                })
-            })
-        };
-        let thick = ((w.min(h) as f64) / 300.0).round().max(1.0) as isize;
-        let s = light.direction();
-        let light_point = if fg {
-            Some((2.0 * s.x / (1.0 + s.z), 2.0 * s.y / (1.0 + s.z)))
-        } else if s.z > 1e-9 {
-            Some((s.x / s.z, s.y / s.z))
+/// R(p, q) or R(f, g) as a heat map with iso-brightness contours and the contour of one
+/// measured intensity highlighted.
+pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let light = p.lighting.light;
+    let reflectance = p.lighting.reflectance()?;
+    let fg = p.space == OrientationSpace::Fg;
+    let extent = if fg { 2.2 } else { p.extent };
+    let contours = p.contours;
+    let measured = p.intensity;
+    let (w, h) = (g.width, g.height);
+    let scale = extent / (w.min(h) as f64 / 2.0);
+    // Coordinates of pixel centres: first axis right, second axis up.
+    let coord = |c: usize, r: usize| {
+        (
+            (c as f64 - (w as f64 - 1.0) / 2.0) * scale,
+            ((h as f64 - 1.0) / 2.0 - r as f64) * scale,
+        )
+    };
+    let values = Grid::from_fn(w, h, |c, r| {
+        let (a, b) = coord(c, r);
+        if fg {
+            (a * a + b * b <= 4.0).then(|| reflectance.radiance(&normal_from_fg(a, b)))
         } else {
-            None
+            Some(reflectance.radiance(&normal_from_pq(a, b)))
+        }
+    });
+    let top = values
+        .data()
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, &v| m.max(v))
+        .max(1e-12);
+    // A contour passes between two pixels whose values lie on either side of its level.
+    let crosses = |c: usize, r: usize, level: f64| -> bool {
+        let Some(v) = *values.get(c, r) else {
+            return false;
         };
-        let dot = 4.0 * scale * thick as f64;
-        let line = scale * thick as f64 / 2.0;
-        // Ticks at every unit of the axes, so the figure can be read without a plot frame.
-        let tick = 3.0 * dot;
-        let on_tick = |x: f64| (x - x.round()).abs() <= line && x.round() != 0.0;
-        let axis_grey = [0.35, 0.35, 0.35];
-        let image = Grid::from_fn(w, h, |c, r| {
-            let (a, b) = coord(c, r);
-            if fg {
-                // The limb normals (1,0,0) and (0,1,0) as rings that reach past the disc's rim,
-                // where they lie, so they are visible on white as well as on the map.
-                let ring = |x: f64, y: f64| ((a - x).hypot(b - y) - 2.0 * dot).abs() <= line * 1.5;
-                if ring(2.0, 0.0) || ring(0.0, 2.0) {
-                    return [1.0, 0.45, 0.0];
-                }
-                // The rim f² + g² = 4: the occluding boundary.
-                if (a.hypot(b) - 2.0).abs() <= line {
-                    return [0.0, 0.0, 0.0];
-                }
-            }
-            let Some(v) = *values.get(c, r) else {
-                return [1.0, 1.0, 1.0];
-            };
-            if measured > 0.0 && near(c, r, thick, measured) {
-                return [1.0, 0.1, 0.05];
-            }
-            if let Some((lx, ly)) = light_point {
-                if (a - lx).hypot(b - ly) < dot {
-                    return [1.0, 1.0, 1.0];
-                }
-            }
-            if fg && ((a - 2.0).hypot(b) < dot || a.hypot(b - 2.0) < dot) {
+        [(1isize, 0isize), (0, 1)].iter().any(|&(dc, dr)| {
+            matches!(values.checked(c as isize + dc, r as isize + dr), Some(Some(u)) if (v - level) * (u - level) < 0.0)
+        })
+    };
+    let near = |c: usize, r: usize, radius: isize, level: f64| -> bool {
+        (-radius..=radius).any(|dr| {
+            (-radius..=radius).any(|dc| {
+                let (cc, rr) = (c as isize + dc, r as isize + dr);
+                cc >= 0
+                    && rr >= 0
+                    && (cc as usize) < w
+                    && (rr as usize) < h
+                    && crosses(cc as usize, rr as usize, level)
+            })
+        })
+    };
+    let thick = ((w.min(h) as f64) / 300.0).round().max(1.0) as isize;
+    let s = light.direction();
+    let light_point = if fg {
+        Some((2.0 * s.x / (1.0 + s.z), 2.0 * s.y / (1.0 + s.z)))
+    } else if s.z > 1e-9 {
+        Some((s.x / s.z, s.y / s.z))
+    } else {
+        None
+    };
+    let dot = 4.0 * scale * thick as f64;
+    let line = scale * thick as f64 / 2.0;
+    // Ticks at every unit of the axes, so the figure can be read without a plot frame.
+    let tick = 3.0 * dot;
+    let on_tick = |x: f64| (x - x.round()).abs() <= line && x.round() != 0.0;
+    let axis_grey = [0.35, 0.35, 0.35];
+    let image = Grid::from_fn(w, h, |c, r| {
+        let (a, b) = coord(c, r);
+        if fg {
+            // The limb normals (1,0,0) and (0,1,0) as rings that reach past the disc's rim,
+            // where they lie, so they are visible on white as well as on the map.
+            let ring = |x: f64, y: f64| ((a - x).hypot(b - y) - 2.0 * dot).abs() <= line * 1.5;
+            if ring(2.0, 0.0) || ring(0.0, 2.0) {
                 return [1.0, 0.45, 0.0];
             }
-            if (1..=contours).any(|k| crosses(c, r, top * k as f64 / (contours + 1) as f64)) {
+            // The rim f² + g² = 4: the occluding boundary.
+            if (a.hypot(b) - 2.0).abs() <= line {
                 return [0.0, 0.0, 0.0];
             }
-            if a.abs() <= scale / 2.0 || b.abs() <= scale / 2.0 {
-                return axis_grey;
+        }
+        let Some(v) = *values.get(c, r) else {
+            return [1.0, 1.0, 1.0];
+        };
+        if measured > 0.0 && near(c, r, thick, measured) {
+            return [1.0, 0.1, 0.05];
+        }
+        if let Some((lx, ly)) = light_point {
+            if (a - lx).hypot(b - ly) < dot {
+                return [1.0, 1.0, 1.0];
             }
-            if (b.abs() <= tick && on_tick(a)) || (a.abs() <= tick && on_tick(b)) {
-                return axis_grey;
-            }
-            viridis(v / top)
-        });
-        let mut out = Output::gray(values.map(|v| v.unwrap_or(0.0)));
-        out.pixels = Pixels::Rgb(image);
-        out.notes
-            .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
-        out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));
-        out.notes
-            .insert("window_half_width".into(), Value::from(extent));
-        out.notes.insert("max_R".into(), Value::from(top));
-        out.notes
-            .insert("highlighted_intensity".into(), Value::from(measured));
-        out.notes.insert(
-            "white_dot".into(),
-            Value::from("the orientation facing the light (brightest)"),
-        );
-        Ok(out)
-    }
+        }
+        if fg && ((a - 2.0).hypot(b) < dot || a.hypot(b - 2.0) < dot) {
+            return [1.0, 0.45, 0.0];
+        }
+        if (1..=contours).any(|k| crosses(c, r, top * k as f64 / (contours + 1) as f64)) {
+            return [0.0, 0.0, 0.0];
+        }
+        if a.abs() <= scale / 2.0 || b.abs() <= scale / 2.0 {
+            return axis_grey;
+        }
+        if (b.abs() <= tick && on_tick(a)) || (a.abs() <= tick && on_tick(b)) {
+            return axis_grey;
+        }
+        viridis(v / top)
+    });
+    let mut out = Output::gray(values.map(|v| v.unwrap_or(0.0)));
+    out.pixels = Pixels::Rgb(image);
+    out.notes
+        .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
+    out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));
+    out.notes
+        .insert("window_half_width".into(), Value::from(extent));
+    out.notes.insert("max_R".into(), Value::from(top));
+    out.notes
+        .insert("highlighted_intensity".into(), Value::from(measured));
+    out.notes.insert(
+        "white_dot".into(),
+        Value::from("the orientation facing the light (brightest)"),
+    );
+    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::Params;
     use crate::visual_size::SizeRequest;
 
     #[test]
@@ -214,9 +200,8 @@ mod tests {
             "corner is outside f²+g² ≤ 4"
         );
         // The light is to the left: left of centre is brighter than right of centre on the f axis.
-        let info = ReflectanceMapFigure.info();
-        let params = Params::resolve(&info.params, &given).unwrap();
-        assert_eq!(params.str("space").unwrap(), "fg");
+        let params = ReflectanceMapParams::from_map(&given).unwrap();
+        assert_eq!(params.space, OrientationSpace::Fg);
         let lum = crate::grid::luminance;
         assert!(lum(*img.get(30, 50)) > lum(*img.get(70, 50)));
         // The rings marking (2,0) and (0,2) reach past the rim, where the map is white: one

@@ -4,353 +4,389 @@
 //! Their lengths are fractions of the frame's shorter side, because benchmark objects are
 //! framed, not placed in degrees; the frame itself still has a size in degrees.
 
-use super::{Info, Output, Pixels, Request, Stimulus, SurfaceLayers, Targets};
+use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
-use crate::params::{ParamSpec, Params};
-use crate::reflectance::{BrdfSpec, ReflectanceMap, BRDF_NAMES};
+use crate::light::Light;
+use crate::params::{param_choice, stimulus_params, ParamSet};
+use crate::reflectance::{BrdfModel, BrdfSpec, ReflectanceMap};
 use crate::render::{render, RenderOptions};
 use crate::surface::{self, Mesh, MeshShading, Surface};
+use crate::visual_size::Geometry;
 
-/// Parameters shared by every rendered surface: light, reflectance and background.
-pub fn lighting_params(default_light: &'static str, default_background: f64) -> Vec<ParamSpec> {
-    let d = BrdfSpec::default();
-    vec![
-        ParamSpec::light(
-            "light",
-            default_light,
-            "light direction (x,y,z | tilt=T,slant=S | name)",
-        ),
-        ParamSpec::choice("brdf", "lambertian", BRDF_NAMES, "reflectance model"),
-        ParamSpec::number("albedo", d.albedo, 0.0, 1.0, "surface albedo"),
-        ParamSpec::number(
-            "ambient",
-            d.ambient,
-            0.0,
-            1.0,
-            "ambient level added everywhere (also the level in shadow)",
-        ),
-        ParamSpec::number(
-            "specular",
-            d.specular,
-            0.0,
-            10.0,
-            "specular strength (blinn-phong)",
-        ),
-        ParamSpec::number(
-            "shininess",
-            d.shininess,
-            1.0,
-            10000.0,
-            "specular exponent (blinn-phong)",
-        ),
-        ParamSpec::number(
-            "roughness",
-            d.roughness_deg,
-            0.0,
-            90.0,
-            "facet slope spread in degrees (oren-nayar)",
-        ),
-        ParamSpec::number(
-            "background",
-            default_background,
-            0.0,
-            1.0,
-            "luminance outside the object",
-        ),
-        ParamSpec::boolean(
-            "cast_shadows",
-            false,
-            "ray-march cast shadows over the heightfield",
-        ),
-    ]
-}
-
-/// The reflectance map that the lighting parameters of [`lighting_params`] describe.
-pub fn reflectance_from_params(params: &Params) -> Result<Box<dyn ReflectanceMap>> {
-    BrdfSpec {
-        model: params.str("brdf")?.to_string(),
-        albedo: params.f64("albedo")?,
-        ambient: params.f64("ambient")?,
-        specular: params.f64("specular")?,
-        shininess: params.f64("shininess")?,
-        roughness_deg: params.f64("roughness")?,
+stimulus_params! {
+    /// The light and reflectance of a rendered surface (shared by every surface stimulus, the
+    /// hollow mask and the reflectance map).
+    pub struct LightingParams {
+        /// light direction (x,y,z | tilt=T,slant=S | name)
+        light: Light = "above";
+        /// reflectance model
+        brdf: BrdfModel = BrdfModel::Lambertian;
+        /// surface albedo
+        albedo: f64 = BrdfSpec::default().albedo, range 0.0..=1.0;
+        /// ambient level added everywhere (also the level in shadow)
+        ambient: f64 = BrdfSpec::default().ambient, range 0.0..=1.0;
+        /// specular strength (blinn-phong)
+        specular: f64 = BrdfSpec::default().specular, range 0.0..=10.0;
+        /// specular exponent (blinn-phong)
+        shininess: f64 = BrdfSpec::default().shininess, range 1.0..=10000.0;
+        /// facet slope spread in degrees (oren-nayar)
+        roughness: f64 = BrdfSpec::default().roughness_deg, range 0.0..=90.0;
     }
-    .build(params.light("light")?)
 }
 
-/// The background and cast-shadow options of [`lighting_params`].
-pub fn render_options_from_params(params: &Params) -> Result<RenderOptions> {
-    Ok(RenderOptions {
-        background: params.f64("background")?,
-        cast_shadows: params.bool("cast_shadows")?,
-    })
-}
-
-/// Renders `surface` with the lighting parameters of [`lighting_params`].
-pub fn render_surface(surface: Surface, params: &Params) -> Result<Output> {
-    let reflectance = reflectance_from_params(params)?;
-    let rendering = render(
-        &surface,
-        reflectance.as_ref(),
-        &render_options_from_params(params)?,
-    );
-    let labels = surface.mask.map(|&m| u16::from(m));
-    Ok(Output {
-        pixels: Pixels::Gray(rendering.image),
-        targets: Some(Targets {
-            labels,
-            names: vec!["object".into()],
-        }),
-        surface: Some(SurfaceLayers {
-            depth: surface.depth,
-            normals: surface.normals,
-            mask: surface.mask,
-            albedo: None,
-            shading: Some(rendering.shading),
-        }),
-        svg: None,
-        notes: Default::default(),
-    })
-}
-
-type Build = fn(&Request, f64) -> Result<Surface>;
-type NaturalShape = fn(&Params) -> Result<Option<(usize, usize)>>;
-
-struct SurfaceStimulus {
-    name: &'static str,
-    summary: &'static str,
-    params: fn() -> Vec<ParamSpec>,
-    build: Build,
-    natural: Option<NaturalShape>,
-}
-
-impl Stimulus for SurfaceStimulus {
-    fn info(&self) -> Info {
-        let mut params = (self.params)();
-        params.extend(lighting_params("above", 0.0));
-        Info {
-            name: self.name,
-            summary: self.summary,
-            params,
-            default_visual_size: (8.0, 8.0),
-            default_ppd: 32.0,
+impl LightingParams {
+    /// The reflectance model these parameters name.
+    pub fn brdf_spec(&self) -> BrdfSpec {
+        BrdfSpec {
+            model: self.brdf,
+            albedo: self.albedo,
+            ambient: self.ambient,
+            specular: self.specular,
+            shininess: self.shininess,
+            roughness_deg: self.roughness,
         }
     }
 
-    fn generate(&self, request: &Request) -> Result<Output> {
-        let g = &request.geometry;
-        let side = g.width.min(g.height) as f64;
-        let surface = (self.build)(request, side)?;
-        render_surface(surface, &request.params)
+    /// The reflectance map under the light.
+    pub fn reflectance(&self) -> Result<Box<dyn ReflectanceMap>> {
+        self.brdf_spec().build(self.light)
     }
+}
 
-    fn natural_shape(&self, params: &Params) -> Result<Option<(usize, usize)>> {
-        match self.natural {
-            Some(f) => f(params),
-            None => Ok(None),
+stimulus_params! {
+    /// What surrounds a rendered surface and whether it shadows itself.
+    pub struct BackdropParams {
+        /// luminance outside the object
+        background: f64 = 0.0, range 0.0..=1.0;
+        /// ray-march cast shadows over the heightfield
+        cast_shadows: bool = false;
+    }
+}
+
+impl BackdropParams {
+    /// The render options these parameters give.
+    pub fn render_options(&self) -> RenderOptions {
+        RenderOptions {
+            background: self.background,
+            cast_shadows: self.cast_shadows,
         }
     }
 }
 
-fn depth_map_shape(params: &Params) -> Result<Option<(usize, usize)>> {
-    let path = params.str("path")?;
-    if path.is_empty() {
+/// Renders `surface` under `lighting` on `backdrop`.
+fn render_surface(
+    surface: Surface,
+    lighting: &LightingParams,
+    backdrop: &BackdropParams,
+) -> Result<Output> {
+    let reflectance = lighting.reflectance()?;
+    let rendering = render(&surface, reflectance.as_ref(), &backdrop.render_options());
+    let targets = Targets {
+        labels: surface.mask.map(|&m| u16::from(m)),
+        names: vec!["object".into()],
+    };
+    Ok(Output::rendered(
+        surface,
+        rendering,
+        targets,
+        Default::default(),
+    ))
+}
+
+/// The frame's shorter side in pixels: the unit of the benchmark surfaces' lengths.
+fn shorter_side(g: &Geometry) -> f64 {
+    g.width.min(g.height) as f64
+}
+
+stimulus_params! {
+    /// Parameters of [`sphere`].
+    pub struct SphereParams {
+        /// radius as a fraction of the frame's shorter side
+        radius: f64 = 0.45, range 0.01..=5.0;
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// A hemisphere under one light, the classic shape-from-shading benchmark.
+///
+/// ```
+/// use shadelab::params::ParamSet;
+/// use shadelab::stimulus::{sphere, Pixels, SphereParams};
+/// use shadelab::visual_size::Geometry;
+///
+/// let g = Geometry { width: 9, height: 9, ppd: 1.0 };
+/// let mut p = SphereParams::default();
+/// p.lighting.light = "front".parse().unwrap();
+/// let out = sphere(&p, &g).unwrap();
+/// let Pixels::Gray(image) = out.pixels else { panic!() };
+/// // Lit head-on with albedo 1, the nearest point of the sphere has luminance 1
+/// // and the corner is background.
+/// assert!((*image.get(4, 4) - 1.0).abs() < 1e-12);
+/// assert_eq!(*image.get(0, 0), 0.0);
+/// ```
+pub fn sphere(p: &SphereParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let surface = surface::sphere(g.width, g.height, p.radius * shorter_side(g))?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+stimulus_params! {
+    /// Parameters of [`ellipsoid`].
+    pub struct EllipsoidParams {
+        /// x semi-axis, fraction of the shorter side
+        a: f64 = 0.45, range 0.01..=5.0;
+        /// y semi-axis, fraction of the shorter side
+        b: f64 = 0.3, range 0.01..=5.0;
+        /// z semi-axis (depth), fraction of the shorter side
+        c: f64 = 0.3, range 0.01..=5.0;
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// The front half of an ellipsoid.
+pub fn ellipsoid(p: &EllipsoidParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let side = shorter_side(g);
+    let surface = surface::ellipsoid(g.width, g.height, p.a * side, p.b * side, p.c * side)?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+stimulus_params! {
+    /// Parameters of [`gaussian`].
+    pub struct GaussianParams {
+        /// peak height (negative: a dimple), fraction of the shorter side
+        height: f64 = 0.12, range -5.0..=5.0;
+        /// standard deviation, fraction of the shorter side
+        sigma: f64 = 0.12, range 0.001..=5.0;
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// A Gaussian bump or dimple on a plane.
+pub fn gaussian(p: &GaussianParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let side = shorter_side(g);
+    let surface = surface::gaussian(g.width, g.height, p.height * side, p.sigma * side, 0.0, 0.0)?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+stimulus_params! {
+    /// Parameters of [`vase`].
+    pub struct VaseParams {
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// The vase of Zhang, Tsai, Cryer & Shah (1999), scaled to the frame.
+pub fn vase(p: &VaseParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let surface = surface::vase(g.width, g.height)?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+stimulus_params! {
+    /// Parameters of [`heightfield`].
+    pub struct HeightfieldParams {
+        /// the .npy depth map (H×W, pixel units)
+        path: String = "";
+        /// multiplies the depth (negative turns it hollow)
+        scale: f64 = 1.0, range -1e6..=1e6;
+        /// treat exact zeros as background
+        zero_is_background: bool = true;
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// A depth map from a `.npy` file, rendered; `g` must have the map's size.
+pub fn heightfield(p: &HeightfieldParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    if p.path.is_empty() {
+        return Err(Error::invalid(
+            "heightfield: give the depth map with --set path=FILE.npy",
+        ));
+    }
+    let path = std::path::Path::new(&p.path);
+    let depth = crate::io::read_image(path, crate::grid::DEFAULT_MAX_PIXELS)?;
+    if depth.width() != g.width || depth.height() != g.height {
+        return Err(Error::format(
+            path,
+            format!(
+                "depth map is {}x{} but the requested size is {}x{} (omit the size to use the map's own)",
+                depth.width(),
+                depth.height(),
+                g.width,
+                g.height
+            ),
+        ));
+    }
+    let domain = if p.zero_is_background {
+        surface::DepthDomain::NonZero
+    } else {
+        surface::DepthDomain::All
+    };
+    let scale = p.scale;
+    let surface = surface::depth_surface(depth.map(|z| z * scale), domain)
+        .map_err(|e| Error::format(path, e.to_string()))?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+/// The size of the depth map that `p` names, if it names one.
+fn depth_map_shape(p: &HeightfieldParams) -> Result<Option<(usize, usize)>> {
+    if p.path.is_empty() {
         return Ok(None);
     }
-    let depth = crate::io::read_image(std::path::Path::new(path), crate::grid::DEFAULT_MAX_PIXELS)?;
+    let depth = crate::io::read_image(
+        std::path::Path::new(&p.path),
+        crate::grid::DEFAULT_MAX_PIXELS,
+    )?;
     Ok(Some((depth.width(), depth.height())))
+}
+
+param_choice! {
+    /// How a rasterised mesh is shaded.
+    pub enum MeshNormals {
+        /// Interpolated vertex normals.
+        Smooth = "smooth",
+        /// One normal per face.
+        Flat = "flat",
+    }
+}
+
+stimulus_params! {
+    /// How a mesh is turned and framed.
+    pub struct ViewParams {
+        /// turn about the vertical axis in degrees (front toward +x)
+        yaw: f64 = 0.0, range -360.0..=360.0;
+        /// tip about the horizontal axis in degrees (top toward the viewer)
+        pitch: f64 = 0.0, range -360.0..=360.0;
+        /// turn in the image plane in degrees (counter-clockwise)
+        roll: f64 = 0.0, range -360.0..=360.0;
+        /// fraction of the frame the object's bounding box fills
+        fill: f64 = 0.85, range 0.01..=surface::MAX_FILL;
+        /// interpolated vertex normals or one normal per face
+        shading: MeshNormals = MeshNormals::Smooth;
+    }
+}
+
+stimulus_params! {
+    /// Parameters of [`bunny`].
+    pub struct BunnyParams {
+        /// view
+        flatten view: ViewParams {};
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// The Stanford Bunny (built in), rasterised under any view.
+pub fn bunny(p: &BunnyParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    let mesh = Mesh::from_ply(BUNNY_PLY, std::path::Path::new("bun_zipper_res3.ply"))?;
+    let surface = rasterize_mesh(&mesh, &p.view, g)?;
+    render_surface(surface, &p.lighting, &p.backdrop)
+}
+
+stimulus_params! {
+    /// Parameters of [`mesh`].
+    pub struct MeshParams {
+        /// the mesh file (.ply ASCII or binary, or .obj)
+        path: String = "";
+        /// view
+        flatten view: ViewParams {};
+        /// light and reflectance
+        flatten lighting: LightingParams {};
+        /// background and cast shadows
+        flatten backdrop: BackdropParams {};
+    }
+}
+
+/// A triangle mesh (`.ply` or `.obj`) rasterised orthographically under any view.
+pub fn mesh(p: &MeshParams, g: &Geometry) -> Result<Output> {
+    p.validate()?;
+    if p.path.is_empty() {
+        return Err(Error::invalid(
+            "mesh: give the mesh file with --set path=FILE.ply (or .obj)",
+        ));
+    }
+    let surface = rasterize_mesh(&Mesh::load(&p.path)?, &p.view, g)
+        .map_err(|e| Error::format(&p.path, e.to_string()))?;
+    render_surface(surface, &p.lighting, &p.backdrop)
 }
 
 /// The surfaces of the core as stimuli.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
+    const SIZE: (f64, f64) = (8.0, 8.0);
+    const PPD: f64 = 32.0;
     vec![
-        Box::new(SurfaceStimulus {
-            name: "sphere",
-            summary: "a hemisphere under one light: the classic shape-from-shading benchmark",
-            params: || {
-                vec![ParamSpec::number(
-                    "radius",
-                    0.45,
-                    0.01,
-                    5.0,
-                    "radius as a fraction of the frame's shorter side",
-                )]
-            },
-            build: |r, side| {
-                let g = &r.geometry;
-                surface::sphere(g.width, g.height, r.params.f64("radius")? * side)
-            },
-            natural: None,
+        Typed::boxed(
+            "sphere",
+            "a hemisphere under one light: the classic shape-from-shading benchmark",
+            SIZE,
+            PPD,
+            |p, g, _| sphere(p, g),
+        ),
+        Typed::boxed(
+            "ellipsoid",
+            "the front half of an ellipsoid (semi-axes a, b, c)",
+            SIZE,
+            PPD,
+            |p, g, _| ellipsoid(p, g),
+        ),
+        Typed::boxed(
+            "gaussian",
+            "a Gaussian bump (height > 0) or dimple (height < 0) on a plane",
+            SIZE,
+            PPD,
+            |p, g, _| gaussian(p, g),
+        ),
+        Typed::boxed(
+            "vase",
+            "the vase of Zhang, Tsai, Cryer & Shah (1999), scaled to the frame",
+            SIZE,
+            PPD,
+            |p, g, _| vase(p, g),
+        ),
+        Box::new(Typed {
+            natural: depth_map_shape,
+            ..Typed::new(
+                "heightfield",
+                "a depth map from a .npy file (pixel units; its size sets the frame)",
+                SIZE,
+                PPD,
+                |p, g, _| heightfield(p, g),
+            )
         }),
-        Box::new(SurfaceStimulus {
-            name: "ellipsoid",
-            summary: "the front half of an ellipsoid (semi-axes a, b, c)",
-            params: || {
-                vec![
-                    ParamSpec::number(
-                        "a",
-                        0.45,
-                        0.01,
-                        5.0,
-                        "x semi-axis, fraction of the shorter side",
-                    ),
-                    ParamSpec::number(
-                        "b",
-                        0.3,
-                        0.01,
-                        5.0,
-                        "y semi-axis, fraction of the shorter side",
-                    ),
-                    ParamSpec::number(
-                        "c",
-                        0.3,
-                        0.01,
-                        5.0,
-                        "z semi-axis (depth), fraction of the shorter side",
-                    ),
-                ]
-            },
-            build: |r, side| {
-                let (g, p) = (&r.geometry, &r.params);
-                surface::ellipsoid(
-                    g.width,
-                    g.height,
-                    p.f64("a")? * side,
-                    p.f64("b")? * side,
-                    p.f64("c")? * side,
-                )
-            },
-            natural: None,
-        }),
-        Box::new(SurfaceStimulus {
-            name: "gaussian",
-            summary: "a Gaussian bump (height > 0) or dimple (height < 0) on a plane",
-            params: || {
-                vec![
-                    ParamSpec::number(
-                        "height",
-                        0.12,
-                        -5.0,
-                        5.0,
-                        "peak height (negative: a dimple), fraction of the shorter side",
-                    ),
-                    ParamSpec::number(
-                        "sigma",
-                        0.12,
-                        0.001,
-                        5.0,
-                        "standard deviation, fraction of the shorter side",
-                    ),
-                ]
-            },
-            build: |r, side| {
-                let (g, p) = (&r.geometry, &r.params);
-                surface::gaussian(
-                    g.width,
-                    g.height,
-                    p.f64("height")? * side,
-                    p.f64("sigma")? * side,
-                    0.0,
-                    0.0,
-                )
-            },
-            natural: None,
-        }),
-        Box::new(SurfaceStimulus {
-            name: "vase",
-            summary: "the vase of Zhang, Tsai, Cryer & Shah (1999), scaled to the frame",
-            params: Vec::new,
-            build: |r, _| surface::vase(r.geometry.width, r.geometry.height),
-            natural: None,
-        }),
-        Box::new(SurfaceStimulus {
-            name: "heightfield",
-            summary: "a depth map from a .npy file (pixel units; its size sets the frame)",
-            params: || {
-                vec![
-                    ParamSpec::text("path", "", "the .npy depth map (H×W, pixel units)"),
-                    ParamSpec::number(
-                        "scale",
-                        1.0,
-                        -1e6,
-                        1e6,
-                        "multiplies the depth (negative turns it hollow)",
-                    ),
-                    ParamSpec::boolean(
-                        "zero_is_background",
-                        true,
-                        "treat exact zeros as background",
-                    ),
-                ]
-            },
-            build: |r, _| {
-                let p = &r.params;
-                let path = p.str("path")?;
-                if path.is_empty() {
-                    return Err(Error::invalid(
-                        "heightfield: give the depth map with --set path=FILE.npy",
-                    ));
-                }
-                let path = std::path::Path::new(path);
-                let depth = crate::io::read_image(path, crate::grid::DEFAULT_MAX_PIXELS)?;
-                let g = &r.geometry;
-                if depth.width() != g.width || depth.height() != g.height {
-                    return Err(Error::format(
-                        path,
-                        format!(
-                            "depth map is {}x{} but the requested size is {}x{} (omit the size to use the map's own)",
-                            depth.width(),
-                            depth.height(),
-                            g.width,
-                            g.height
-                        ),
-                    ));
-                }
-                let domain = if p.bool("zero_is_background")? {
-                    surface::DepthDomain::NonZero
-                } else {
-                    surface::DepthDomain::All
-                };
-                let scale = p.f64("scale")?;
-                surface::depth_surface(depth.map(|z| z * scale), domain)
-                    .map_err(|e| Error::format(path, e.to_string()))
-            },
-            natural: Some(depth_map_shape),
-        }),
-        Box::new(SurfaceStimulus {
-            name: "bunny",
-            summary: "the Stanford Bunny (built in, 1,889 vertices), rasterised under any view",
-            params: view_params,
-            build: |r, _| {
-                let mesh = Mesh::from_ply(BUNNY_PLY, std::path::Path::new("bun_zipper_res3.ply"))?;
-                rasterize_mesh(&mesh, r)
-            },
-            natural: None,
-        }),
-        Box::new(SurfaceStimulus {
-            name: "mesh",
-            summary: "a triangle mesh (.ply or .obj) rasterised orthographically under any view",
-            params: || {
-                let mut v = vec![ParamSpec::text(
-                    "path",
-                    "",
-                    "the mesh file (.ply ASCII or binary, or .obj)",
-                )];
-                v.extend(view_params());
-                v
-            },
-            build: |r, _| {
-                let path = r.params.str("path")?;
-                if path.is_empty() {
-                    return Err(Error::invalid(
-                        "mesh: give the mesh file with --set path=FILE.ply (or .obj)",
-                    ));
-                }
-                rasterize_mesh(&Mesh::load(path)?, r)
-                    .map_err(|e| Error::format(path, e.to_string()))
-            },
-            natural: None,
-        }),
+        Typed::boxed(
+            "bunny",
+            "the Stanford Bunny (built in, 1,889 vertices), rasterised under any view",
+            SIZE,
+            PPD,
+            |p, g, _| bunny(p, g),
+        ),
+        Typed::boxed(
+            "mesh",
+            "a triangle mesh (.ply or .obj) rasterised orthographically under any view",
+            SIZE,
+            PPD,
+            |p, g, _| mesh(p, g),
+        ),
     ]
 }
 
@@ -358,58 +394,11 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 /// Computer Graphics Laboratory; Turk & Levoy 1994; credited in tests/data/README.md).
 const BUNNY_PLY: &[u8] = include_bytes!("../../tests/data/bun_zipper_res3.ply");
 
-fn view_params() -> Vec<ParamSpec> {
-    vec![
-        ParamSpec::number(
-            "yaw",
-            0.0,
-            -360.0,
-            360.0,
-            "turn about the vertical axis in degrees (front toward +x)",
-        ),
-        ParamSpec::number(
-            "pitch",
-            0.0,
-            -360.0,
-            360.0,
-            "tip about the horizontal axis in degrees (top toward the viewer)",
-        ),
-        ParamSpec::number(
-            "roll",
-            0.0,
-            -360.0,
-            360.0,
-            "turn in the image plane in degrees (counter-clockwise)",
-        ),
-        ParamSpec::number(
-            "fill",
-            0.85,
-            0.01,
-            surface::MAX_FILL,
-            "fraction of the frame the object's bounding box fills",
-        ),
-        ParamSpec::choice(
-            "shading",
-            "smooth",
-            &["smooth", "flat"],
-            "interpolated vertex normals or one normal per face",
-        ),
-    ]
-}
-
-fn rasterize_mesh(mesh: &Mesh, r: &Request) -> Result<Surface> {
-    let p = &r.params;
-    let view = surface::view_rotation(p.f64("yaw")?, p.f64("pitch")?, p.f64("roll")?)?;
-    let shading = if p.str("shading")? == "flat" {
-        MeshShading::Flat
-    } else {
-        MeshShading::Smooth
+fn rasterize_mesh(mesh: &Mesh, view: &ViewParams, g: &Geometry) -> Result<Surface> {
+    let rotation = surface::view_rotation(view.yaw, view.pitch, view.roll)?;
+    let shading = match view.shading {
+        MeshNormals::Flat => MeshShading::Flat,
+        MeshNormals::Smooth => MeshShading::Smooth,
     };
-    mesh.rasterize_with(
-        r.geometry.width,
-        r.geometry.height,
-        &view,
-        p.f64("fill")?,
-        shading,
-    )
+    mesh.rasterize_with(g.width, g.height, &rotation, view.fill, shading)
 }
