@@ -47,7 +47,8 @@ pub use grid::{Grid, Image, Labels, Mask, RgbImage};
 pub use light::Light;
 pub use progress::{NoProgress, Progress};
 pub use reconstruct::{
-    DepthMethod, Lighting, NonConvergence, ReconstructOptions, Reconstruction, Reconstructor,
+    DepthMethod, Lighting, NonConvergence, Problem, ReconstructOptions, Reconstruction,
+    Reconstructor,
 };
 pub use reflectance::{Lambertian, ReflectanceMap};
 pub use solver::{Method, SolveOptions};

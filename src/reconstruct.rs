@@ -11,7 +11,7 @@
 //! The light and albedo may be given or estimated from the image ([`Lighting::resolve`]).
 //!
 //! ```
-//! use shadelab::{Boundary, Grid, Lambertian, Light, ReconstructOptions, Reconstructor};
+//! use shadelab::{Boundary, Lambertian, Light, Problem, ReconstructOptions, Reconstructor};
 //! use shadelab::render::{render, RenderOptions};
 //! use shadelab::surface::sphere;
 //!
@@ -20,8 +20,13 @@
 //! let map = Lambertian { light: Light::FRONT, albedo: 1.0, ambient: 0.0 };
 //! let image = render(&surface, &map, &RenderOptions::default()).image;
 //! let mut planner = Reconstructor::new(48, 48, ReconstructOptions::default())?;
-//! let r = planner.reconstruct(&image, &surface.mask, &Boundary::Occluding, &map,
-//!                             &shadelab::NoProgress)?;
+//! let problem = Problem {
+//!     image: &image,
+//!     mask: &surface.mask,
+//!     boundary: &Boundary::Occluding,
+//!     reflectance: &map,
+//! };
+//! let r = planner.reconstruct(&problem, &shadelab::NoProgress)?;
 //! assert!(r.shape.converged());
 //! // The centre faces the viewer and is the highest point; the rim rests on zero.
 //! let n = r.shape.solution.normal(24, 24);
@@ -233,6 +238,30 @@ pub fn check_light_in_front(light: &Light) -> Result<()> {
     Ok(())
 }
 
+/// What a reconstruction is asked: the picture, where to solve, the condition at the domain's
+/// rim and the reflectance map (light and albedo included).
+#[derive(Clone, Copy)]
+pub struct Problem<'a> {
+    /// The brightness (linear, in the reflectance map's units).
+    pub image: &'a Image,
+    /// Where the surface is solved for.
+    pub mask: &'a Mask,
+    /// The boundary condition at the mask's rim.
+    pub boundary: &'a Boundary,
+    /// The reflectance map R(f, g) assumed.
+    pub reflectance: &'a dyn ReflectanceMap,
+}
+
+impl std::fmt::Debug for Problem<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Problem")
+            .field("size", &(self.image.width(), self.image.height()))
+            .field("mask_pixels", &self.mask.count())
+            .field("boundary", &self.boundary.name())
+            .finish_non_exhaustive()
+    }
+}
+
 /// The solved shape: the solver's (f, g) with how it was reached.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Shape {
@@ -324,16 +353,9 @@ impl Reconstructor {
 
     /// Solves for (f, g), following the non-convergence policy; reports each iteration to
     /// `progress` (a stage as long as the cap). A solve that blows up is an error.
-    pub fn solve(
-        &mut self,
-        image: &Image,
-        mask: &Mask,
-        boundary: &Boundary,
-        reflectance: &dyn ReflectanceMap,
-        progress: &dyn Progress,
-    ) -> Result<Shape> {
+    pub fn solve(&mut self, problem: &Problem, progress: &dyn Progress) -> Result<Shape> {
         let options = self.options.solve_options();
-        let mut shape = self.solve_once(image, mask, boundary, reflectance, &options, progress)?;
+        let mut shape = self.solve_once(problem, &options, progress)?;
         if let NonConvergence::FallBackToJacobi { max_sweeps } = self.options.non_convergence {
             if (shape.solution.diverged || !shape.solution.converged)
                 && options.method != Method::Jacobi
@@ -343,7 +365,7 @@ impl Reconstructor {
                     max_iter: max_sweeps,
                     ..options
                 };
-                shape = self.solve_once(image, mask, boundary, reflectance, &jacobi, progress)?;
+                shape = self.solve_once(problem, &jacobi, progress)?;
                 shape.fell_back = true;
             }
         }
@@ -362,20 +384,17 @@ impl Reconstructor {
 
     fn solve_once(
         &mut self,
-        image: &Image,
-        mask: &Mask,
-        boundary: &Boundary,
-        reflectance: &dyn ReflectanceMap,
+        problem: &Problem,
         options: &SolveOptions,
         progress: &dyn Progress,
     ) -> Result<Shape> {
         progress.start(options.max_iter as u64, "solving");
         let mut history = Vec::new();
         let solution = self.solver.solve_with_progress(
-            image,
-            mask,
-            boundary,
-            reflectance,
+            problem.image,
+            problem.mask,
+            problem.boundary,
+            problem.reflectance,
             options,
             &mut |p| {
                 history.push(p.last_update);
@@ -434,19 +453,7 @@ impl Reconstructor {
         let range = if self.options.rest_on_zero {
             rest_on_zero(&mut depth, mask)?
         } else {
-            let (lo, hi) = depth
-                .data()
-                .iter()
-                .zip(mask.data())
-                .filter(|(_, &m)| m)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (&z, _)| {
-                    (lo.min(z), hi.max(z))
-                });
-            if hi >= lo {
-                hi - lo
-            } else {
-                0.0
-            }
+            crate::integrate::masked_range(&depth, mask).map_or(0.0, |(lo, hi)| hi - lo)
         };
         Ok(Depth {
             depth,
@@ -458,14 +465,11 @@ impl Reconstructor {
     /// Solves and integrates: [`Reconstructor::solve`] then [`Reconstructor::depth`].
     pub fn reconstruct(
         &mut self,
-        image: &Image,
-        mask: &Mask,
-        boundary: &Boundary,
-        reflectance: &dyn ReflectanceMap,
+        problem: &Problem,
         progress: &dyn Progress,
     ) -> Result<Reconstruction> {
-        let shape = self.solve(image, mask, boundary, reflectance, progress)?;
-        let depth = self.depth(&shape, mask)?;
+        let shape = self.solve(problem, progress)?;
+        let depth = self.depth(&shape, problem.mask)?;
         Ok(Reconstruction { shape, depth })
     }
 }

@@ -27,7 +27,7 @@ use crate::grid::{Grid, Image, Mask};
 use crate::integrate::PoissonOptions;
 use crate::light::Light;
 use crate::progress::NoProgress;
-use crate::reconstruct::{DepthMethod, ReconstructOptions, Reconstructor};
+use crate::reconstruct::{DepthMethod, Problem, ReconstructOptions, Reconstructor};
 use crate::reflectance::{Lambertian, ReflectanceMap};
 use crate::solver::{Method, SolveOptions};
 use serde::Serialize;
@@ -218,7 +218,15 @@ impl Interpreter {
         };
         let shape = self
             .planner
-            .solve(scene.image, scene.domain, scene.boundary, &map, &NoProgress)
+            .solve(
+                &Problem {
+                    image: scene.image,
+                    mask: scene.domain,
+                    boundary: scene.boundary,
+                    reflectance: &map,
+                },
+                &NoProgress,
+            )
             .map_err(|e| match e {
                 Error::Compute(why) => {
                     Error::Compute(format!("under the light of tilt {tilt_deg}°: {why}"))

@@ -1,6 +1,6 @@
 //! `shadelab eval`: the engine on the evaluation data, as a table (and a folder of results).
 
-use super::{progress::Bar, CliResult, Global};
+use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
 use shadelab::boundary::Boundary;
 use shadelab::evaluation::{self, report, Config, Set};
 use shadelab::io::{self, AtomicDir, BitDepth};
@@ -46,29 +46,12 @@ pub struct Args {
     /// Side of the square frame the bunny is rasterised into, in pixels.
     #[arg(long, value_name = "N", default_value_t = 256)]
     pub bunny_size: usize,
-    /// Weight λ of the brightness term (> 0).
-    #[arg(
-        long = "lambda",
-        value_name = "L",
-        default_value_t = 1.0,
-        allow_hyphen_values = true
-    )]
-    pub lambda: f64,
-    /// Solver tolerance (the largest change a Jacobi sweep would still make).
-    #[arg(
-        long,
-        value_name = "T",
-        default_value_t = 1e-6,
-        allow_hyphen_values = true
-    )]
-    pub tol: f64,
+    #[command(flatten)]
+    pub solver: SolverFlags,
     /// Iteration: multigrid (the default) or jacobi (the same fixed point, slowly; for
     /// comparison).
     #[arg(long, value_name = "multigrid|jacobi", default_value = "multigrid")]
     pub method: String,
-    /// Most multigrid cycles (Jacobi sweeps) per case.
-    #[arg(long, value_name = "N", default_value_t = evaluation::MAX_CYCLES)]
-    pub max_iter: usize,
     /// The commit to record in the report; default: `git rev-parse --short HEAD` in the
     /// current folder (with `-dirty` when tracked files are modified), or "unknown".
     #[arg(long, value_name = "ID")]
@@ -101,10 +84,10 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.bunny_size = args.bunny_size;
     config.albedo_quantile = args.albedo_quantile;
     config.ball_albedo_from_truth = args.ball_albedo_from_truth;
-    config.options.lambda = args.lambda;
-    config.options.tol = args.tol;
-    config.options.max_iter = args.max_iter;
-    config.options.method = args.method.parse::<Method>()?;
+    let method = args.method.parse::<Method>()?;
+    config.options.method = method;
+    config.options.max_iter = method.default_max_iter();
+    args.solver.apply(&mut config.options);
     config.validate()?;
     let commit = match &args.commit {
         Some(c) => c.clone(),

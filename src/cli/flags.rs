@@ -39,8 +39,8 @@ fn max_iter_help() -> String {
     format!(
         "Stop a solve after this many sweeps, or cycles for multigrid [default: {MULTIGRID_CYCLES} \
          cycles in the analyses, which repeat a solve that has not converged with Jacobi sweeps; \
-         in solve, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} sweeps for \
-         jacobi and literal]"
+         in solve and eval, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} \
+         sweeps for jacobi and literal]"
     )
 }
 

@@ -1,11 +1,11 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
-use super::{progress::Bar, CliError, CliResult, Global};
+use super::{flags::SolverFlags, progress::Bar, CliError, CliResult, Global};
 use shadelab::io::AtomicDir;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord, REPORT_FILE};
 use shadelab::reconstruct::{check_light_in_front, NonConvergence, ReconstructOptions};
 use shadelab::reflectance::BrdfSpec;
-use shadelab::solver::Method;
+use shadelab::solver::{Method, SolveOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -34,14 +34,6 @@ pub struct Args {
     /// Surface albedo (default 1, or the estimate with --light estimate).
     #[arg(long, value_name = "A", allow_hyphen_values = true)]
     pub albedo: Option<f64>,
-    /// Weight λ of the brightness term (> 0).
-    #[arg(
-        long = "lambda",
-        value_name = "L",
-        default_value_t = 1.0,
-        allow_hyphen_values = true
-    )]
-    pub lambda: f64,
     /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow) or literal
     /// (R at the current value; unstable, for study).
     #[arg(
@@ -50,19 +42,8 @@ pub struct Args {
         default_value = "multigrid"
     )]
     pub method: String,
-    /// Stop when the largest change of f or g in a Jacobi sweep is below this (for multigrid:
-    /// the change the next Jacobi sweep would make).
-    #[arg(
-        long,
-        value_name = "T",
-        default_value_t = 1e-6,
-        allow_hyphen_values = true
-    )]
-    pub tol: f64,
-    /// Stop after this many sweeps, or cycles for multigrid [default: 1000 cycles for
-    /// multigrid, 100000 sweeps for jacobi and literal].
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub max_iter: Option<usize>,
+    #[command(flatten)]
+    pub solver: SolverFlags,
     /// Output folder (written whole or not at all).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -111,14 +92,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 /// The library configuration from the flags; every flag is checked before any file is read.
 fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
     let method: Method = args.method.parse()?;
-    let options = ReconstructOptions {
-        method,
-        lambda: args.lambda,
-        tol: args.tol,
-        max_iter: args.max_iter,
-        non_convergence: NonConvergence::Report,
-        ..ReconstructOptions::default()
-    };
+    let mut solve = SolveOptions::for_method(method);
+    args.solver.apply(&mut solve);
+    let options = ReconstructOptions::from_solve(&solve, NonConvergence::Report);
     options
         .validate()
         .map_err(|e| CliError::usage(e.to_string()))?;

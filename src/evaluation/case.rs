@@ -10,7 +10,7 @@ use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
 use crate::light::Light;
 use crate::progress::NoProgress;
-use crate::reconstruct::{NonConvergence, ReconstructOptions, Reconstructor};
+use crate::reconstruct::{NonConvergence, Problem, ReconstructOptions, Reconstructor};
 use crate::reflectance::Lambertian;
 use crate::solver::SolveOptions;
 use serde::Serialize;
@@ -131,10 +131,12 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
     let mut planner = Reconstructor::new(w, h, policy)?;
     let reconstruction = planner
         .reconstruct(
-            &case.image,
-            &case.domain,
-            &case.boundary,
-            &reflectance,
+            &Problem {
+                image: &case.image,
+                mask: &case.domain,
+                boundary: &case.boundary,
+                reflectance: &reflectance,
+            },
             &NoProgress,
         )
         .map_err(|e| match e {

@@ -98,14 +98,8 @@ pub struct DepthError {
 /// ([`crate::integrate::fit_scale_offset`]) and reports what is left.
 pub fn depth_error(estimate: &Image, truth: &Image, mask: &Mask) -> Result<DepthError> {
     let fit = fit_scale_offset(estimate, truth, mask)?;
-    let (lo, hi) = truth
-        .data()
-        .iter()
-        .zip(mask.data())
-        .filter(|(_, &m)| m)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (&z, _)| {
-            (lo.min(z), hi.max(z))
-        });
+    let (lo, hi) =
+        crate::integrate::masked_range(truth, mask).unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
     let range = hi - lo;
     Ok(DepthError {
         rms_px: fit.rmse,

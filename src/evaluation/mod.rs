@@ -84,13 +84,10 @@ pub struct Config {
     pub options: SolveOptions,
 }
 
-/// The solver parameters of the evaluation: the defaults of `shadelab solve`, at most
-/// [`MAX_CYCLES`] multigrid cycles as there.
+/// The solver parameters of the evaluation: the defaults of `shadelab solve` (multigrid, at
+/// most [`MAX_CYCLES`] cycles).
 pub fn default_options() -> SolveOptions {
-    SolveOptions {
-        max_iter: MAX_CYCLES,
-        ..SolveOptions::default()
-    }
+    SolveOptions::default()
 }
 
 /// The most multigrid cycles a case may take: `shadelab solve`'s default.

@@ -91,6 +91,22 @@ pub fn rest_on_zero(depth: &mut Image, mask: &Mask) -> Result<f64> {
     Ok(masked_fold(depth, mask, 0.0, f64::max))
 }
 
+/// The smallest and largest of `values` inside `mask`, or `None` for an empty mask.
+///
+/// ```
+/// use shadelab::{integrate::masked_range, Grid};
+/// let z = Grid::from_vec(3, 1, vec![5.0, -1.0, 9.0])?;
+/// let m = Grid::from_vec(3, 1, vec![true, true, false])?;
+/// assert_eq!(masked_range(&z, &m), Some((-1.0, 5.0)));
+/// assert_eq!(masked_range(&z, &Grid::new(3, 1, false)), None);
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+pub fn masked_range(values: &Image, mask: &Mask) -> Option<(f64, f64)> {
+    let lo = masked_fold(values, mask, f64::INFINITY, f64::min);
+    let hi = masked_fold(values, mask, f64::NEG_INFINITY, f64::max);
+    (lo <= hi).then_some((lo, hi))
+}
+
 /// `values` inside `mask` folded from `start` with `op`.
 fn masked_fold(values: &Image, mask: &Mask, start: f64, op: fn(f64, f64) -> f64) -> f64 {
     values

@@ -7,7 +7,9 @@ use crate::error::{Error, Result};
 use crate::gradient_space::angle_deg;
 use crate::light::Light;
 use crate::progress::Progress;
-use crate::reconstruct::{check_light_in_front, NonConvergence, ReconstructOptions, Reconstructor};
+use crate::reconstruct::{
+    check_light_in_front, NonConvergence, Problem, ReconstructOptions, Reconstructor,
+};
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::solver::{Method, Solution};
@@ -141,6 +143,12 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
             _ => vase(size, size)?,
         };
         let image = render(&surface, &map, &RenderOptions::default()).image;
+        let problem = Problem {
+            image: &image,
+            mask: &surface.mask,
+            boundary: &Boundary::Occluding,
+            reflectance: &map,
+        };
         // One planner per method and size, as a user would keep one: the repeats reuse it.
         let planner = |method: Method| {
             let options = ReconstructOptions {
@@ -154,13 +162,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
             (planner(Method::Multigrid)?, planner(Method::Jacobi)?);
         let time = |planner: &mut Reconstructor| -> Result<(Timing, Solution)> {
             let started = Instant::now();
-            let shape = planner.solve(
-                &image,
-                &surface.mask,
-                &Boundary::Occluding,
-                &map,
-                &crate::progress::NoProgress,
-            )?;
+            let shape = planner.solve(&problem, &crate::progress::NoProgress)?;
             let s = shape.solution;
             let timing = Timing {
                 seconds: started.elapsed().as_secs_f64(),

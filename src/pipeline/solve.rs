@@ -13,7 +13,7 @@ use crate::io::{self, BitDepth};
 use crate::light::Light;
 use crate::light_estimation::LightEstimate;
 use crate::progress::Progress;
-use crate::reconstruct::{Depth, Lighting, ReconstructOptions, Reconstructor, Shape};
+use crate::reconstruct::{Depth, Lighting, Problem, ReconstructOptions, Reconstructor, Shape};
 use crate::reflectance::BrdfSpec;
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -322,7 +322,13 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
     let reflectance = brdf.build(lighting.light)?;
     let mut planner = Reconstructor::new(w, h, config.options)?;
     let started = Instant::now();
-    let shape = planner.solve(&image, &mask, &boundary, reflectance.as_ref(), progress)?;
+    let problem = Problem {
+        image: &image,
+        mask: &mask,
+        boundary: &boundary,
+        reflectance: reflectance.as_ref(),
+    };
+    let shape = planner.solve(&problem, progress)?;
     // The solver's buffers live only for the solve: the integration and the outputs make their
     // own, and memory peaks there.
     planner.release_solver()?;
@@ -343,17 +349,11 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
 pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
     let started = Instant::now();
     let mut solved = solve_stage(config, progress)?;
-    let integrate_started = Instant::now();
-    let depth = solved.planner.depth(&solved.shape, &solved.mask)?;
-    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
-    let report = report(
-        config,
-        &solved,
-        &solved.shape.solution,
-        &depth,
-        integrate_seconds,
-        started,
+    let (f, g) = (
+        solved.shape.solution.f.clone(),
+        solved.shape.solution.g.clone(),
     );
+    let (depth, report) = integrate(config, &mut solved, f, g, started)?;
     Ok(SolveRun {
         shape: solved.shape,
         mask: solved.mask,
@@ -370,35 +370,40 @@ pub fn run_into(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Re
     let mut solved = solve_stage(config, progress)?;
     write_normals(dir, &solved.shape.solution)?;
     write_convergence(dir, &solved.shape, config.options.tol)?;
-    let integrate_started = Instant::now();
     // (f, g) move into the integration; the empty grids left behind are never read again.
     let f = std::mem::replace(&mut solved.shape.solution.f, Grid::new(0, 0, 0.0));
     let g = std::mem::replace(&mut solved.shape.solution.g, Grid::new(0, 0, 0.0));
-    let depth = solved.planner.depth_from_fg(f, g, &solved.mask)?;
-    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    let (depth, report) = integrate(config, &mut solved, f, g, started)?;
     write_depth(dir, &depth, &solved.mask)?;
-    let report = report(
-        config,
-        &solved,
-        &solved.shape.solution,
-        &depth,
-        integrate_seconds,
-        started,
-    );
     write_report(dir, &report)?;
     Ok(report)
+}
+
+/// Integrates (f, g) to depth and makes the report.
+fn integrate(
+    config: &SolveConfig,
+    solved: &mut Solved,
+    f: Image,
+    g: Image,
+    started: Instant,
+) -> Result<(Depth, SolveReport)> {
+    let integrate_started = Instant::now();
+    let depth = solved.planner.depth_from_fg(f, g, &solved.mask)?;
+    let integrate_seconds = integrate_started.elapsed().as_secs_f64();
+    let report = report(config, solved, &depth, integrate_seconds, started);
+    Ok((depth, report))
 }
 
 /// The report of a solve.
 fn report(
     config: &SolveConfig,
     solved: &Solved,
-    s: &crate::solver::Solution,
     depth: &Depth,
     integrate_seconds: f64,
     started: Instant,
 ) -> SolveReport {
     let (shape, lighting, brdf) = (&solved.shape, &solved.lighting, &solved.brdf);
+    let s = &shape.solution;
     let boundary_kind = solved.boundary_kind;
     let method = shape.method;
     let unit = method.iteration_unit();
