@@ -1,23 +1,53 @@
 //! shadelab: shape-from-shading stimuli and analyses for vision science.
 //!
+//! Render a sphere under a light, recover its shape from the picture alone, and measure how far
+//! the recovered normals are from the render's own:
+//!
+//! ```
+//! use shadelab::stimulus::{sphere, Pixels, SphereParams};
+//! use shadelab::{Boundary, Geometry, Lambertian, NoProgress, Problem, ReconstructOptions, Reconstructor};
+//!
+//! let mut params = SphereParams::default();
+//! params.lighting.light = "tilt=30,slant=40".parse()?;           // from above-left
+//! let out = sphere(&params, &Geometry { width: 64, height: 64, ppd: 16.0 })?;
+//! let (Pixels::Gray(image), Some(truth)) = (&out.pixels, &out.surface) else { unreachable!() };
+//! let map = Lambertian { light: params.lighting.light, albedo: 1.0, ambient: 0.0 };
+//! let problem = Problem { image, mask: &truth.mask, boundary: &Boundary::Occluding, reflectance: &map };
+//! let shape = Reconstructor::new(64, 64, ReconstructOptions::default())?.reconstruct(&problem, &NoProgress)?;
+//! let error = shadelab::evaluation::metrics::angular_error(&shape.shape.solution.normals(), &truth.normals, &truth.mask)?;
+//! assert!(error.mean_deg < 10.0, "{error:?}");
+//! # Ok::<(), shadelab::Error>(())
+//! ```
+//!
 //! The crate has two halves that share one core:
-//! - a **stimulus generator** that renders the shading illusions of the literature as exact,
-//!   reproducible psychophysics stimuli (linear luminance, sizes in degrees of visual angle,
-//!   target masks, every parameter recorded), and
+//! - a **stimulus generator** ([`stimulus`]) that renders the shading illusions of the literature
+//!   as exact, reproducible psychophysics stimuli (linear luminance, sizes in degrees of visual
+//!   angle, target masks, every parameter recorded), each with a typed parameter struct
+//!   ([`stimulus::BumpsParams`], …) and a typed function, and the generic name-based interface
+//!   the command line, specs and sidecars use ([`stimulus::generate`]);
 //! - an **analyzer**: a shape-from-shading engine (reflectance maps in p–q and f–g space,
-//!   occluding-boundary conditions, the Ikeuchi–Horn iteration, integration to depth) and the
-//!   analyses built on it.
+//!   occluding-boundary conditions, the Ikeuchi–Horn iteration, integration to depth), one
+//!   reconstruction pipeline over it ([`Reconstructor`]), and the analyses built on it
+//!   (perception under assumed lights and priors, lightness models).
+//!
+//! Every command of the `shadelab` program is a library pipeline in [`pipeline`]: a `Config` of
+//! plain values → `run(&config, &dyn Progress)` → a typed, serialisable report, and a writer for
+//! its output folder. `docs/architecture.md` draws the modules and the one-way data flow
+//! stimulus → image → reconstruction → analysis → report.
 //!
 //! Conventions (see `docs/conventions.md`): x = image right, y = image up, z = toward the
 //! viewer; pixel row 0 is the top row. p = −∂z/∂x, q = −∂z/∂y. Lights are unit vectors toward
 //! the light, or tilt/slant in degrees with tilt 0 = from above and +90 = from the left.
+//!
+//! Features: `cli` (the command line), `plots` (figures), `parallel` (worker threads), all on by
+//! default; `--no-default-features` builds the core alone, with the same bytes on one thread.
 #![deny(missing_docs)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod analysis;
 pub mod boundary;
-pub mod colormap;
-pub mod error;
+mod colormap;
+mod error;
 pub mod evaluation;
 pub mod gallery;
 pub mod gradient_space;
@@ -32,7 +62,7 @@ pub mod parallel;
 pub mod params;
 pub mod pipeline;
 pub mod progress;
-pub mod random;
+mod random;
 pub mod reconstruct;
 pub mod reflectance;
 pub mod render;
@@ -41,14 +71,35 @@ pub mod stimulus;
 pub mod surface;
 pub mod visual_size;
 
-pub use boundary::Boundary;
 pub use error::{Error, Result};
 pub use grid::{Grid, Image, Labels, Mask, RgbImage};
 pub use light::Light;
 pub use progress::{NoProgress, Progress};
+
+// The engine.
+pub use boundary::Boundary;
 pub use reconstruct::{
     DepthMethod, Lighting, NonConvergence, Problem, ReconstructOptions, Reconstruction,
-    Reconstructor,
+    Reconstructor, Shape,
 };
-pub use reflectance::{Lambertian, ReflectanceMap};
-pub use solver::{Method, SolveOptions};
+pub use reflectance::{BrdfModel, BrdfSpec, Lambertian, ReflectanceMap};
+pub use solver::{Method, Solution, SolveOptions};
+
+// Stimuli.
+pub use params::{ParamSet, Params};
+pub use stimulus::{Pixels, SurfaceLayers, Targets};
+pub use visual_size::{Geometry, SizeRequest};
+
+// The commands as library pipelines.
+pub use lightness::Model as LightnessModel;
+pub use pipeline::bench::{BenchConfig, BenchReport};
+pub use pipeline::fading::{FadingConfig, FadingReport};
+pub use pipeline::gallery::{GalleryConfig, GalleryReport};
+pub use pipeline::lightness::{LightnessConfig, LightnessReport};
+pub use pipeline::observer::{Config as ObserverConfig, Report as ObserverReport};
+pub use pipeline::perception::Config as PerceptionConfig;
+pub use pipeline::prior_sweep::{Config as PriorSweepConfig, Report as PriorSweepReport};
+pub use pipeline::render::{RenderConfig, RenderReport};
+pub use pipeline::solve::{SolveConfig, SolveReport, SolveRun};
+pub use pipeline::study::{StudyMergeConfig, StudyMergeReport, StudyRunConfig, StudyRunReport};
+pub use pipeline::{Picture, PictureSource};
