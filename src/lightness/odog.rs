@@ -898,6 +898,7 @@ mod tests {
         assert!(a.data().iter().any(|v| v.abs() > 0.1));
     }
 
+    #[cfg(feature = "parallel")]
     #[test]
     fn outputs_do_not_depend_on_the_thread_count() {
         let image = test_image(36, 30);

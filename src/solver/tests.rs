@@ -244,6 +244,7 @@ fn progress_is_reported_every_sweep() {
     assert_eq!(seen.last().map(|p| p.last_update), Some(sol.last_update));
 }
 
+#[cfg(feature = "parallel")]
 #[test]
 fn reused_buffers_carry_nothing_over_and_results_do_not_depend_on_threads() {
     // Big enough for the parallel sweep; a few sweeps suffice to compare bits.
