@@ -39,6 +39,18 @@ pub enum Error {
     /// A computation could not be carried out on valid input (e.g. an empty domain).
     #[error("{0}")]
     Compute(String),
+    /// An output would replace a file or folder that shadelab did not write (a front end may
+    /// say how to allow it).
+    #[error("{}: {message}", path.display())]
+    NotOurs {
+        /// The file or folder.
+        path: PathBuf,
+        /// Why it is taken for someone else's.
+        message: String,
+    },
+    /// An image larger than the pixel limit in force (a front end may say how to raise it).
+    #[error("{0}")]
+    TooLarge(String),
 }
 
 impl Error {
@@ -79,7 +91,10 @@ impl Error {
     /// Whether the error is a usage error (a bad argument rather than a failure while working):
     /// the command line exits with 2 for these and 1 for the rest.
     pub fn is_usage(&self) -> bool {
-        matches!(self, Error::Invalid(_) | Error::Unknown { .. })
+        matches!(
+            self,
+            Error::Invalid(_) | Error::Unknown { .. } | Error::TooLarge(_)
+        )
     }
 }
 

@@ -249,7 +249,10 @@ pub fn build(
 
 fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {
     let spec = &preset.spec;
-    let context = |e: Error| Error::format(&preset.source, e.to_string());
+    let context = |e: Error| match e {
+        Error::TooLarge(m) => Error::TooLarge(format!("{}: {m}", preset.source.display())),
+        other => Error::format(&preset.source, other.to_string()),
+    };
     let (request, output) = stimulus::generate(
         &spec.stimulus,
         &spec.params,

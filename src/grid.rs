@@ -44,8 +44,8 @@ pub fn check_size(width: usize, height: usize, max_pixels: usize) -> Result<()> 
     }
     match width.checked_mul(height) {
         Some(n) if n <= max_pixels => Ok(()),
-        _ => Err(Error::invalid(format!(
-            "image size {width}x{height} exceeds the limit of {max_pixels} pixels (--max-pixels)"
+        _ => Err(Error::TooLarge(format!(
+            "image size {width}x{height} exceeds the limit of {max_pixels} pixels"
         ))),
     }
 }

@@ -230,7 +230,7 @@ impl Params {
         for pair in pairs {
             let pair = pair.as_ref();
             let (k, v) = pair.split_once('=').ok_or_else(|| {
-                Error::invalid(format!("--set '{pair}' is not of the form key=value"))
+                Error::invalid(format!("parameter '{pair}' is not of the form key=value"))
             })?;
             map.insert(k.trim().to_string(), Value::from(v.trim()));
         }

@@ -165,9 +165,21 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", one_line(&e.error));
+            eprintln!("error: {}{}", one_line(&e.error), hint(&e.error));
             ExitCode::from(if e.usage { 2 } else { 1 })
         }
+    }
+}
+
+/// What the command line adds to a library error that a flag can remedy.
+fn hint(error: &anyhow::Error) -> &'static str {
+    match error
+        .chain()
+        .find_map(|c| c.downcast_ref::<shadelab::Error>())
+    {
+        Some(shadelab::Error::NotOurs { .. }) => "; use --force to replace it",
+        Some(shadelab::Error::TooLarge(_)) => " (--max-pixels)",
+        _ => "",
     }
 }
 

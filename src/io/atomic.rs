@@ -167,10 +167,10 @@ pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> 
     } else {
         format!("no {} beside it", file_name_of(marker))
     };
-    Err(Error::format(
-        target,
-        format!("exists and was not written by shadelab ({why}); use --force to replace it"),
-    ))
+    Err(Error::NotOurs {
+        path: target.to_path_buf(),
+        message: format!("exists and was not written by shadelab ({why})"),
+    })
 }
 
 /// An output folder filled under a temporary name and renamed into place by
@@ -202,10 +202,10 @@ impl AtomicDir {
                 } else {
                     format!("no {marker} in it")
                 };
-                return Err(Error::format(
-                    target,
-                    format!("folder exists and was not written by shadelab ({why}); use --force or another folder"),
-                ));
+                return Err(Error::NotOurs {
+                    path: target.to_path_buf(),
+                    message: format!("folder exists and was not written by shadelab ({why})"),
+                });
             }
         }
         check_parent(target)?;

@@ -125,7 +125,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     if width > fw || stack > fh {
         let (dw, dh) = frame.degrees();
         return Err(Error::invalid(format!(
-            "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge --visual-size or shorten them",
+            "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge the visual size or shorten them",
             width / frame.ppd,
             stack / frame.ppd
         )));

@@ -113,7 +113,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     if content_w > frame.w as f64 + 0.5 || content_h > frame.h as f64 + 0.5 {
         let (fw, fh) = frame.degrees();
         return Err(Error::invalid(format!(
-            "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge --visual-size or shrink `square`",
+            "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or shrink `square`",
             content_w / frame.ppd,
             content_h / frame.ppd
         )));

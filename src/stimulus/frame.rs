@@ -96,7 +96,7 @@ impl Frame {
         let need_h = (max_y - min_y + 2.0 * radius) / self.ppd;
         let (fw, fh) = self.degrees();
         Err(Error::invalid(format!(
-            "{what} need {need_w:.2}x{need_h:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge --visual-size or make them smaller or fewer"
+            "{what} need {need_w:.2}x{need_h:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer"
         )))
     }
 }

@@ -113,7 +113,7 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     if total > across_px || length > along_px {
         let (fw, fh) = frame.degrees();
         return Err(Error::invalid(format!(
-            "strips: {n} strips need {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge --visual-size or make them smaller or fewer",
+            "strips: {n} strips need {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer",
             if horizontal { length } else { total } as f64 / frame.ppd,
             if horizontal { total } else { length } as f64 / frame.ppd,
         )));

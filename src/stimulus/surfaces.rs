@@ -217,7 +217,7 @@ pub fn heightfield(p: &HeightfieldParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
     if p.path.is_empty() {
         return Err(Error::invalid(
-            "heightfield: give the depth map with --set path=FILE.npy",
+            "heightfield: give the depth map as its parameter path=FILE.npy",
         ));
     }
     let path = std::path::Path::new(&p.path);
@@ -322,7 +322,7 @@ pub fn mesh(p: &MeshParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
     if p.path.is_empty() {
         return Err(Error::invalid(
-            "mesh: give the mesh file with --set path=FILE.ply (or .obj)",
+            "mesh: give the mesh file as its parameter path=FILE.ply (or .obj)",
         ));
     }
     let surface = rasterize_mesh(&Mesh::load(&p.path)?, &p.view, g)

@@ -165,6 +165,7 @@ impl Study {
             .map_err(|e| Error::format(path, format!("bad study spec: {e}")))?;
         Study::new_with_max_pixels(spec, max_pixels).map_err(|e| match e {
             Error::Invalid(m) => Error::format(path, m),
+            Error::TooLarge(m) => Error::TooLarge(format!("{}: {m}", path.display())),
             Error::Unknown { kind, name, valid } => {
                 Error::format(path, format!("unknown {kind} '{name}' (valid: {valid})"))
             }
@@ -236,6 +237,7 @@ impl Study {
                 crate::stimulus::prepare(&entry.stimulus, &combo, &size, entry.seed, max_pixels)
                     .map_err(|e| match e {
                         Error::Invalid(m) => Error::invalid(format!("{}: {m}", entry.stimulus)),
+                        Error::TooLarge(m) => Error::TooLarge(format!("{}: {m}", entry.stimulus)),
                         other => other,
                     })?;
                 for &slant in &spec.slants {
