@@ -80,6 +80,26 @@ pub struct Lambertian {
     pub ambient: f64,
 }
 
+impl Lambertian {
+    /// Albedo 1 and no ambient light: R = max(0, n·s), the reflectance that shape from
+    /// shading assumes for an image divided by its albedo.
+    ///
+    /// ```
+    /// use shadelab::light::Light;
+    /// use shadelab::reflectance::Lambertian;
+    ///
+    /// let map = Lambertian::unit(Light::from_vector(0.0, 0.0, 1.0).unwrap());
+    /// assert_eq!((map.albedo, map.ambient), (1.0, 0.0));
+    /// ```
+    pub fn unit(light: Light) -> Lambertian {
+        Lambertian {
+            light,
+            albedo: 1.0,
+            ambient: 0.0,
+        }
+    }
+}
+
 impl ReflectanceMap for Lambertian {
     fn light(&self) -> Light {
         self.light

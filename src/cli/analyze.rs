@@ -12,15 +12,9 @@ use super::{CliError, CliResult, Global};
 use shadelab::pipeline::PictureSource;
 use std::path::PathBuf;
 
-/// Arguments of `analyze`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    #[command(subcommand)]
-    command: Command,
-}
-
+/// The subcommands of `analyze`.
 #[derive(Debug, clap::Subcommand)]
-enum Command {
+pub enum Command {
     /// Lightness models (ODOG, LODOG, FLODOG, Retinex) on an image or stimulus, with the mean
     /// output per target.
     Lightness(lightness::Args),
@@ -36,8 +30,8 @@ enum Command {
 }
 
 /// Runs `analyze`.
-pub fn run(args: Args, global: &Global) -> CliResult {
-    match args.command {
+pub fn run(command: Command, global: &Global) -> CliResult {
+    match command {
         Command::Lightness(a) => lightness::run(a, global),
         Command::Fading(a) => fading::run(a, global),
         Command::PriorSweep(a) => prior_sweep::run(a, global),

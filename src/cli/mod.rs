@@ -59,11 +59,13 @@ enum Command {
     /// Recover surface normals and depth from one shaded image (shape from shading).
     Solve(solve::Args),
     /// Analyses of an image or stimulus (lightness models, the fading disk).
-    Analyze(analyze::Args),
+    #[command(subcommand)]
+    Analyze(analyze::Command),
     /// Time the shape-from-shading solvers (multigrid, Jacobi, the NumPy reference) as a table.
     Bench(bench::Args),
     /// Run a grid of stimuli × parameters × priors (whole or one shard), or merge shards.
-    Study(study::Args),
+    #[command(subcommand)]
+    Study(study::Command),
     /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
     Eval(eval::Args),
 }

@@ -10,15 +10,9 @@ use shadelab::pipeline::study::{self as pipeline, StudyMergeConfig, StudyRunConf
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Arguments of `study`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    #[command(subcommand)]
-    command: Command,
-}
-
+/// The subcommands of `study`.
 #[derive(Debug, clap::Subcommand)]
-enum Command {
+pub enum Command {
     /// Run a study spec (or one shard of it) into an output folder.
     Run(RunArgs),
     /// Join the output folders of every shard into one, identical to an unsharded run.
@@ -50,8 +44,8 @@ pub struct MergeArgs {
 }
 
 /// Runs `study`.
-pub fn run(args: Args, global: &Global) -> CliResult {
-    match args.command {
+pub fn run(command: Command, global: &Global) -> CliResult {
+    match command {
         Command::Run(a) => run_study(a, global),
         Command::Merge(a) => merge_shards(a, global),
     }

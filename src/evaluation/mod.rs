@@ -456,11 +456,7 @@ fn rendered_case(
     boundary: Boundary,
     depth_known: bool,
 ) -> Result<Case> {
-    let map = Lambertian {
-        light,
-        albedo: 1.0,
-        ambient: 0.0,
-    };
+    let map = Lambertian::unit(light);
     let image = render(surface, &map, &RenderOptions::default()).image;
     let crop = Crop::around(&surface.mask, CROP_MARGIN)?;
     Ok(Case {

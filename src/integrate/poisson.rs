@@ -67,8 +67,7 @@ pub fn integrate_differences(
     options: &PoissonOptions,
 ) -> Result<Integration> {
     check_inputs(right, down, mask, options)?;
-    let b = build_rhs(mask, |c, r| *right.get(c, r), |c, r| *down.get(c, r));
-    solve(mask, b, options)
+    solve(mask, differences_rhs(right, down, mask), options)
 }
 
 /// The depth on `mask` whose slopes best match (`dz_dx`, `dz_dy`) in least squares (world axes:
@@ -130,6 +129,11 @@ fn gradient_rhs(dz_dx: &Image, dz_dy: &Image, mask: &Mask) -> Vec<f64> {
         // One row down is one pixel toward −y.
         |c, r| -0.5 * (dz_dy.get(c, r) + dz_dy.get(c, r + 1)),
     )
+}
+
+/// The right-hand side for difference fields, read as they are.
+fn differences_rhs(right: &Image, down: &Image, mask: &Mask) -> Vec<f64> {
+    build_rhs(mask, |c, r| *right.get(c, r), |c, r| *down.get(c, r))
 }
 
 /// Checks sizes, finiteness, options and a non-empty mask, in the order the original

@@ -254,54 +254,63 @@ fn check_gamma(gamma: Option<f64>) -> Result<()> {
 /// Writes a grayscale PNG of linear values 0..1 (clamped), optionally display-encoded with
 /// v^(1/gamma).
 pub fn write_gray(path: &Path, image: &Image, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    check_gamma(gamma)?;
-    let (w, h) = (image.width(), image.height());
-    match depth {
-        BitDepth::Eight => {
-            let bytes: Vec<u8> = image
-                .data()
-                .iter()
-                .map(|&v| encode(v, gamma, 255.0) as u8)
-                .collect();
-            write_png(path, w, h, &bytes, ExtendedColorType::L8)
-        }
-        BitDepth::Sixteen => {
-            let bytes: Vec<u8> = image
-                .data()
-                .iter()
-                .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
-                .collect();
-            write_png(path, w, h, &bytes, ExtendedColorType::L16)
-        }
-    }
+    write_encoded(
+        path,
+        image,
+        depth,
+        gamma,
+        (ExtendedColorType::L8, ExtendedColorType::L16),
+    )
 }
 
 /// Writes an RGB PNG of linear values 0..1 (clamped), optionally display-encoded.
 pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    check_gamma(gamma)?;
-    let (w, h) = (image.width(), image.height());
-    match depth {
-        BitDepth::Eight => {
-            let bytes: Vec<u8> = image
-                .data()
-                .iter()
-                .flat_map(|p| p.map(|v| encode(v, gamma, 255.0) as u8))
-                .collect();
-            write_png(path, w, h, &bytes, ExtendedColorType::Rgb8)
-        }
-        BitDepth::Sixteen => {
-            let bytes: Vec<u8> = image
-                .data()
-                .iter()
-                .flat_map(|p| {
-                    p.iter()
-                        .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            write_png(path, w, h, &bytes, ExtendedColorType::Rgb16)
-        }
+    let colors = (ExtendedColorType::Rgb8, ExtendedColorType::Rgb16);
+    write_encoded(path, image, depth, gamma, colors)
+}
+
+/// A pixel of linear values: one channel (gray) or three (RGB).
+trait Channels {
+    /// The pixel's channels, in PNG order.
+    fn channels(&self) -> &[f64];
+}
+
+impl Channels for f64 {
+    fn channels(&self) -> &[f64] {
+        std::slice::from_ref(self)
     }
+}
+
+impl Channels for [f64; 3] {
+    fn channels(&self) -> &[f64] {
+        self
+    }
+}
+
+/// Encodes `image` (channels interleaved, row-major) at `depth`, optionally display-encoded
+/// with v^(1/gamma), and writes it as a PNG of `colors.0` (8-bit) or `colors.1` (16-bit).
+fn write_encoded<P: Channels>(
+    path: &Path,
+    image: &Grid<P>,
+    depth: BitDepth,
+    gamma: Option<f64>,
+    (eight, sixteen): (ExtendedColorType, ExtendedColorType),
+) -> Result<()> {
+    check_gamma(gamma)?;
+    let values = image.data().iter().flat_map(Channels::channels);
+    let (bytes, color): (Vec<u8>, _) = match depth {
+        BitDepth::Eight => (
+            values.map(|&v| encode(v, gamma, 255.0) as u8).collect(),
+            eight,
+        ),
+        BitDepth::Sixteen => (
+            values
+                .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                .collect(),
+            sixteen,
+        ),
+    };
+    write_png(path, image.width(), image.height(), &bytes, color)
 }
 
 /// Writes a label map: 8-bit when every label fits, else 16-bit; the codes are the labels.

@@ -381,12 +381,7 @@ impl Odog {
         let mut r = vec![0.0; n];
         let mut out = vec![0.0; n];
         for o in 0..ORIENTATIONS_DEG.len() {
-            self.response_real(
-                &work.x,
-                &self.orientation_spectra[o],
-                &mut work.spec,
-                &mut r,
-            );
+            self.orientation_response(o, work, &mut r);
             let rms = (ordered_sum_sq(&r, self.width) / n as f64).sqrt();
             if rms > floor && rms > 0.0 {
                 out.par_iter_mut()
@@ -402,12 +397,7 @@ impl Odog {
         let (mut r, mut energy) = (vec![0.0; n], vec![0.0; n]);
         let mut out = vec![0.0; n];
         for o in 0..ORIENTATIONS_DEG.len() {
-            self.response_real(
-                &work.x,
-                &self.orientation_spectra[o],
-                &mut work.spec,
-                &mut r,
-            );
+            self.orientation_response(o, work, &mut r);
             self.local_rms(
                 &r,
                 &self.windows[0],
@@ -492,6 +482,11 @@ impl Odog {
 
     /// Convolution of the padded image with a filter given by its real spectrum (phase
     /// removed), aligned as multyscale aligns its filter bank, into `out`.
+    /// The summed response of orientation `o` (all scales, weighted) to the image in `work`.
+    fn orientation_response(&self, o: usize, work: &mut Work, out: &mut [f64]) {
+        self.response_real(&work.x, &self.orientation_spectra[o], &mut work.spec, out);
+    }
+
     fn response_real(&self, x: &[C64], real_spectrum: &[f64], spec: &mut [C64], out: &mut [f64]) {
         let my = self.fft.my();
         spec.par_chunks_mut(my)
@@ -829,12 +824,7 @@ mod tests {
         let mut work = model.work(&image);
         for o in 0..6 {
             let mut fast = vec![0.0; w * h];
-            model.response_real(
-                &work.x,
-                &model.orientation_spectra[o],
-                &mut work.spec,
-                &mut fast,
-            );
+            model.orientation_response(o, &mut work, &mut fast);
             let mut slow = vec![0.0; w * h];
             for s in 0..SCALES {
                 let r = model.filter_response(&image, o, s).unwrap();

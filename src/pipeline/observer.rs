@@ -2,13 +2,12 @@
 //! upright picture, then each token's P(convex) against the picture's rotation, one curve per
 //! prior concentration κ.
 
-use super::perception::{
-    self, field, interpretations_of, write_table_and_report, BadSetting, Header,
-};
+use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
 use crate::analysis::observer::{
     check_circle, curves_csv, p_convex_plot, Curve, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
     DEFAULT_PRIOR_TILT_DEG,
 };
+use crate::analysis::plot::Figure;
 use crate::analysis::{observe, parse_angles, LightPrior, ObserverOptions, Sweep};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -218,9 +217,17 @@ impl Report {
     /// into the folder `dir` (which must exist).
     pub fn write(&self, dir: &Path) -> Result<()> {
         let plot = p_convex_plot(&self.sweep, &self.percepts)?;
-        plot.write_png(&dir.join("p_convex.png"))?;
-        plot.write_svg(&dir.join("p_convex.svg"))?;
+        let figure = Figure {
+            size: plot.size,
+            panels: vec![plot],
+        };
         let csv = curves_csv(&self.sweep, &self.percepts);
-        write_table_and_report(dir, ("observer.csv", &csv), REPORT_FILE, self)
+        write_outputs(
+            dir,
+            ("p_convex", &figure),
+            ("observer.csv", &csv),
+            REPORT_FILE,
+            self,
+        )
     }
 }

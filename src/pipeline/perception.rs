@@ -6,6 +6,7 @@
 use super::solve::{read_boundary, BoundarySource};
 use super::source::PictureSource;
 use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
+use crate::analysis::plot::Figure;
 use crate::analysis::{sweep, Interpretation, Sweep};
 use crate::analysis::{Domain, Picture};
 use crate::boundary::Boundary;
@@ -399,13 +400,17 @@ pub(crate) fn interpretations_of<S: Serializer>(sweep: &Sweep, s: S) -> Result<S
     <[Interpretation]>::serialize(&sweep.interpretations, s)
 }
 
-/// Writes the table `csv` to `dir/csv_file` and `report` as JSON to `dir/report_file`.
-pub(crate) fn write_table_and_report(
+/// Writes a perception report's files into `dir`: `figure` as `<stem>.png` and `<stem>.svg`,
+/// the table `csv` as `csv_file` and `report` as JSON to `report_file`.
+pub(crate) fn write_outputs(
     dir: &Path,
+    (stem, figure): (&str, &Figure),
     (csv_file, csv): (&str, &str),
     report_file: &str,
     report: &impl Serialize,
 ) -> Result<()> {
+    figure.write_png(&dir.join(format!("{stem}.png")))?;
+    figure.write_svg(&dir.join(format!("{stem}.svg")))?;
     io::write_text(&dir.join(csv_file), csv)?;
     let value = serde_json::to_value(report)
         .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;

@@ -3,9 +3,7 @@
 //! where it flips, and optionally the binding analysis (one light for the scene against a light
 //! per token).
 
-use super::perception::{
-    self, field, interpretations_of, write_table_and_report, BadSetting, Header,
-};
+use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
 use crate::analysis::binding::{binding, Binding, GlobalLight};
 use crate::analysis::{parse_angles, Interpreter, Sweep};
 use crate::error::{Error, Result};
@@ -195,10 +193,13 @@ impl Report {
     /// Writes `sweep.csv`, `sweep.png`, `sweep.svg` and the report, [`REPORT_FILE`], into the
     /// folder `dir` (which must exist).
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let figure = self.sweep.figure();
-        figure.write_png(&dir.join("sweep.png"))?;
-        figure.write_svg(&dir.join("sweep.svg"))?;
         let csv = self.sweep.csv();
-        write_table_and_report(dir, ("sweep.csv", &csv), REPORT_FILE, self)
+        write_outputs(
+            dir,
+            ("sweep", &self.sweep.figure()),
+            ("sweep.csv", &csv),
+            REPORT_FILE,
+            self,
+        )
     }
 }

@@ -1026,20 +1026,9 @@ mod tests {
     use crate::boundary::{boundary_conditions, Boundary};
     use crate::gradient_space::{angle_deg, normal_from_fg};
     use crate::light::Light;
-    use crate::reflectance::Lambertian;
-    use crate::render::{render, RenderOptions};
+    use crate::solver::tests::picture;
     use crate::solver::{Method, Solver};
-    use crate::surface::{sphere, Surface};
-
-    fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
-        let map = Lambertian {
-            light,
-            albedo: 1.0,
-            ambient: 0.0,
-        };
-        let image = render(surface, &map, &RenderOptions::default()).image;
-        (image, map)
-    }
+    use crate::surface::sphere;
 
     /// Multigrid with two, three or all levels reaches one fixed point; one level (plain
     /// Gauss–Seidel) follows Jacobi's path to Jacobi's own. The two fixed points differ only

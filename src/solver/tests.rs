@@ -7,12 +7,8 @@ use crate::render::{render, RenderOptions};
 use crate::surface::{gaussian, sphere, vase, Surface};
 
 /// The image of `surface` under a Lambertian surface of albedo 1 lit from `light`.
-fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
-    let map = Lambertian {
-        light,
-        albedo: 1.0,
-        ambient: 0.0,
-    };
+pub(super) fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
+    let map = Lambertian::unit(light);
     let image = render(surface, &map, &RenderOptions::default()).image;
     (image, map)
 }
@@ -197,11 +193,7 @@ fn shadowed_pixels_carry_smoothness_only() {
 #[test]
 fn a_plane_facing_the_viewer_is_a_fixed_point_with_zero_energy() {
     let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
-    let map = Lambertian {
-        light,
-        albedo: 1.0,
-        ambient: 0.0,
-    };
+    let map = Lambertian::unit(light);
     let image = Grid::new(20, 16, light.direction().z);
     let mut solver = Solver::new(20, 16).unwrap();
     let sol = solver
@@ -313,11 +305,7 @@ fn bad_input_is_an_error_not_a_panic() {
     ] {
         assert!(solver.solve(&image, &s.mask, &occ, &map, &bad).is_err());
     }
-    let grazing = Lambertian {
-        light: Light::from_vector(1.0, 0.0, 0.0).unwrap(),
-        albedo: 1.0,
-        ambient: 0.0,
-    };
+    let grazing = Lambertian::unit(Light::from_vector(1.0, 0.0, 0.0).unwrap());
     let e = solver
         .solve(&image, &s.mask, &occ, &grazing, &ok)
         .unwrap_err();

@@ -320,25 +320,60 @@ pub fn find(name: &str) -> Result<Box<dyn Stimulus>> {
         .ok_or_else(|| Error::unknown("stimulus", name, &names()))
 }
 
+/// Declares a struct that asks for a stimulus by name, with the fields that a stimulus spec
+/// file and an entry of a study spec share (`stimulus`, `params`, `visual_size`, `ppd`,
+/// `shape`, in that order), then its own fields, and a `size` method that gathers the size
+/// triple. The doc comment before `params;` documents the parameters.
+macro_rules! stimulus_request {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            #[doc = $params_doc:literal]
+            params;
+            $($rest:tt)*
+        }
+    ) => {
+        $(#[$meta])*
+        pub struct $name {
+            /// The stimulus name.
+            pub stimulus: String,
+            #[doc = $params_doc]
+            #[serde(default)]
+            pub params: serde_json::Map<String, serde_json::Value>,
+            /// Visual size (width, height) in degrees.
+            #[serde(default)]
+            pub visual_size: Option<(f64, f64)>,
+            /// Pixels per degree.
+            #[serde(default)]
+            pub ppd: Option<f64>,
+            /// Size (width, height) in pixels.
+            #[serde(default)]
+            pub shape: Option<(usize, usize)>,
+            $($rest)*
+        }
+
+        impl $name {
+            /// The size request this makes.
+            pub fn size(&self) -> $crate::visual_size::SizeRequest {
+                $crate::visual_size::SizeRequest {
+                    visual_size: self.visual_size,
+                    ppd: self.ppd,
+                    shape: self.shape,
+                }
+            }
+        }
+    };
+}
+pub(crate) use stimulus_request;
+
+stimulus_request! {
 /// A stimulus spec file: `{"stimulus": NAME, "params": {...}, "visual_size": [w, h],
 /// "ppd": N, "shape": [w, h], "seed": S}`; everything but `stimulus` is optional.
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    /// The stimulus name.
-    pub stimulus: String,
     /// Parameter values (checked against the stimulus's declarations).
-    #[serde(default)]
-    pub params: Map<String, Value>,
-    /// Visual size (width, height) in degrees.
-    #[serde(default)]
-    pub visual_size: Option<(f64, f64)>,
-    /// Pixels per degree.
-    #[serde(default)]
-    pub ppd: Option<f64>,
-    /// Size (width, height) in pixels.
-    #[serde(default)]
-    pub shape: Option<(usize, usize)>,
+    params;
     /// Random seed.
     #[serde(default)]
     pub seed: Option<u64>,
@@ -353,6 +388,7 @@ pub struct Spec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub docs: Option<String>,
 }
+}
 
 impl Spec {
     /// Reads and checks a spec file.
@@ -360,15 +396,6 @@ impl Spec {
         let bytes = crate::io::read_bytes(path)?;
         serde_json::from_slice(&bytes)
             .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))
-    }
-
-    /// The size request this spec makes.
-    pub fn size(&self) -> SizeRequest {
-        SizeRequest {
-            visual_size: self.visual_size,
-            ppd: self.ppd,
-            shape: self.shape,
-        }
     }
 }
 

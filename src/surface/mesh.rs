@@ -129,26 +129,6 @@ impl Mesh {
     ) -> Result<Surface> {
         self.rasterize_with(width, height, view, fill, MeshShading::Smooth)
     }
-
-    /// Rasterises the mesh orthographically into a `width` × `height` [`Surface`].
-    ///
-    /// The mesh is turned by `view`, then scaled and centred so that its projected bounding box
-    /// fills the fraction `fill` of the frame along its tighter axis (see [`Projection::fit`]).
-    /// Each pixel centre takes the nearest (largest z) triangle covering it; depth is in pixel
-    /// units above the mesh's farthest point. Normals face the viewer (n_z ≥ 0): a triangle
-    /// seen from behind (an open mesh seen through a hole) has its normal flipped, and a smooth
-    /// normal that would tilt away from the viewer near a silhouette is laid flat in the image
-    /// plane. A pixel centre on an edge shared by two triangles belongs to exactly one of them.
-    pub fn rasterize_with(
-        &self,
-        width: usize,
-        height: usize,
-        view: &Rotation3<f64>,
-        fill: f64,
-        shading: MeshShading,
-    ) -> Result<Surface> {
-        raster::rasterize(self, width, height, view, fill, shading)
-    }
 }
 
 /// Appends the fan (c0, ci, ci+1) of a polygon, dropping triangles that repeat an index.

@@ -7,10 +7,8 @@ use crate::analysis::picture::Domain;
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::io;
-use crate::visual_size::SizeRequest;
 use md5::{Digest, Md5};
 use serde::{Deserialize, Serialize};
-use serde_json::{Map, Value};
 use std::path::Path;
 
 /// A study spec.
@@ -62,38 +60,17 @@ fn default_domain() -> String {
     "image".into()
 }
 
+crate::stimulus::stimulus_request! {
 /// One stimulus of a study.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StimulusEntry {
-    /// The stimulus name.
-    pub stimulus: String,
     /// Parameters: a list is a grid axis, anything else a fixed value.
-    #[serde(default)]
-    pub params: Map<String, Value>,
-    /// Visual size (width, height) in degrees.
-    #[serde(default)]
-    pub visual_size: Option<(f64, f64)>,
-    /// Pixels per degree.
-    #[serde(default)]
-    pub ppd: Option<f64>,
-    /// Size (width, height) in pixels.
-    #[serde(default)]
-    pub shape: Option<(usize, usize)>,
+    params;
     /// Random seed.
     #[serde(default)]
     pub seed: u64,
 }
-
-impl StimulusEntry {
-    /// The size request this entry makes.
-    pub fn size(&self) -> SizeRequest {
-        SizeRequest {
-            visual_size: self.visual_size,
-            ppd: self.ppd,
-            shape: self.shape,
-        }
-    }
 }
 
 /// The observer priors of a study: every combination is applied to every point.

@@ -2,23 +2,20 @@
 //! preconditioner on the masked Laplacian, over the mask's pixels only. The multigrid-
 //! preconditioned solver in the parent module must reproduce its answer.
 
-use super::{build_rhs, check_inputs, Integration, PoissonOptions};
+use super::{Integration, PoissonOptions};
 use crate::error::Result;
-use crate::grid::{Grid, Image, Mask};
+use crate::grid::{Grid, Mask};
 use crate::imageops::parts::{graph_parts, SumOrder};
 
-/// [`super::integrate_differences`] by the original, unpreconditioned (Jacobi) conjugate
-/// gradients.
-pub(crate) fn integrate_differences_reference(
-    right: &Image,
-    down: &Image,
+/// The parent module's `solve` (L z = b on `mask`, for `full_b` on the full grid) by the
+/// original, unpreconditioned (Jacobi) conjugate gradients.
+pub(crate) fn solve_reference(
     mask: &Mask,
+    full_b: &[f64],
     options: &PoissonOptions,
 ) -> Result<Integration> {
-    check_inputs(right, down, mask, options)?;
     let (w, h) = (mask.width(), mask.height());
     let problem = Laplacian::new(mask);
-    let full_b = build_rhs(mask, |c, r| *right.get(c, r), |c, r| *down.get(c, r));
     let b: Vec<f64> = problem.pixels.iter().map(|&p| full_b[p]).collect();
     let (mut z, iterations, relative_residual, converged) = problem.solve(&b, options);
     // Means summed in index order, whatever order the search visited the nodes in.

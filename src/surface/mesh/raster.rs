@@ -25,113 +25,123 @@ pub const MAX_FILL: f64 = 16.0;
 /// functions are exact integers and shared edges never crack or double-cover.
 const SUBPIXEL: i64 = 256;
 
-/// See [`Mesh::rasterize_with`].
-pub(super) fn rasterize(
-    mesh: &Mesh,
-    width: usize,
-    height: usize,
-    view: &Rotation3<f64>,
-    fill: f64,
-    shading: MeshShading,
-) -> Result<Surface> {
-    let projection = Projection::fit(mesh, width, height, view, fill)?;
-    let pixel: Vec<Vector3<f64>> = mesh
-        .vertices
-        .iter()
-        .map(|v| projection.to_pixel(v))
-        .collect();
-    let snap = |v: f64| (v * SUBPIXEL as f64).round() as i64;
-    let fixed: Vec<[i64; 2]> = pixel.iter().map(|p| [snap(p.x), snap(p.y)]).collect();
+impl Mesh {
+    /// Rasterises the mesh orthographically into a `width` × `height` [`Surface`].
+    ///
+    /// The mesh is turned by `view`, then scaled and centred so that its projected bounding box
+    /// fills the fraction `fill` of the frame along its tighter axis (see [`Projection::fit`]).
+    /// Each pixel centre takes the nearest (largest z) triangle covering it; depth is in pixel
+    /// units above the mesh's farthest point. Normals face the viewer (n_z ≥ 0): a triangle
+    /// seen from behind (an open mesh seen through a hole) has its normal flipped, and a smooth
+    /// normal that would tilt away from the viewer near a silhouette is laid flat in the image
+    /// plane. A pixel centre on an edge shared by two triangles belongs to exactly one of them.
+    pub fn rasterize_with(
+        &self,
+        width: usize,
+        height: usize,
+        view: &Rotation3<f64>,
+        fill: f64,
+        shading: MeshShading,
+    ) -> Result<Surface> {
+        let projection = Projection::fit(self, width, height, view, fill)?;
+        let pixel: Vec<Vector3<f64>> = self
+            .vertices
+            .iter()
+            .map(|v| projection.to_pixel(v))
+            .collect();
+        let snap = |v: f64| (v * SUBPIXEL as f64).round() as i64;
+        let fixed: Vec<[i64; 2]> = pixel.iter().map(|p| [snap(p.x), snap(p.y)]).collect();
 
-    const NONE: u32 = u32::MAX;
-    let n = width * height;
-    let mut nearest = vec![f64::NEG_INFINITY; n];
-    let mut owner = vec![NONE; n];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let [a, b, c] = tri.map(|i| i as usize);
-        let corners = [fixed[a], fixed[b], fixed[c]];
-        let Some(plane) = DepthPlane::new(corners, [pixel[a].z, pixel[b].z, pixel[c].z]) else {
-            continue;
-        };
-        cover(corners, width, height, |col, row| {
-            let depth = plane.at(col, row);
-            let k = row * width + col;
-            if depth > nearest[k] {
-                nearest[k] = depth;
-                owner[k] = t as u32;
-            }
-        });
-    }
-    if owner.iter().all(|&t| t == NONE) {
-        return Err(Error::Compute(format!(
-            "the mesh covers no pixel centre of the {width}x{height} frame at fill {fill}"
-        )));
-    }
-
-    // Normals in the turned mesh frame (right-handed like the world frame; the uniform
-    // scale does not change directions).
-    let turned: Vec<Vector3<f64>> = mesh.vertices.iter().map(|v| view * v).collect();
-    let face_normals: Vec<Vector3<f64>> = mesh
-        .triangles
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (turned[a as usize], turned[b as usize], turned[c as usize]);
-            (b - a).cross(&(c - a))
-        })
-        .collect();
-    let vertex_normals = match shading {
-        MeshShading::Smooth => area_weighted_vertex_normals(&mesh.triangles, &face_normals),
-        MeshShading::Flat => Vec::new(),
-    };
-    let normal_at = |k: usize| -> Normal {
-        let t = owner[k] as usize;
-        let face = face_normals[t];
-        let length = face.norm();
-        if length == 0.0 {
-            return Vector3::z();
-        }
-        // Seen from behind: flip so the visible side faces the viewer.
-        let side = if face.z >= 0.0 { 1.0 } else { -1.0 };
-        let flat = face * (side / length);
-        if shading == MeshShading::Flat {
-            return flat;
-        }
-        let corners = mesh.triangles[t].map(|i| fixed[i as usize]);
-        let w = barycentric(corners, k % width, k / width);
-        let [a, b, c] = mesh.triangles[t].map(|i| vertex_normals[i as usize]);
-        let smooth = (a * w[0] + b * w[1] + c * w[2]) * side;
-        // Inconsistent winding or a sharp crease: the interpolated normal is meaningless.
-        if smooth.dot(&flat) <= 0.0 || smooth.norm() < 1e-12 {
-            return flat;
-        }
-        let mut normal = smooth.normalize();
-        if normal.z < 0.0 {
-            let planar = Vector3::new(normal.x, normal.y, 0.0);
-            let length = planar.norm();
-            normal = if length > 1e-12 {
-                planar / length
-            } else {
-                flat
+        const NONE: u32 = u32::MAX;
+        let n = width * height;
+        let mut nearest = vec![f64::NEG_INFINITY; n];
+        let mut owner = vec![NONE; n];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let [a, b, c] = tri.map(|i| i as usize);
+            let corners = [fixed[a], fixed[b], fixed[c]];
+            let Some(plane) = DepthPlane::new(corners, [pixel[a].z, pixel[b].z, pixel[c].z]) else {
+                continue;
             };
+            cover(corners, width, height, |col, row| {
+                let depth = plane.at(col, row);
+                let k = row * width + col;
+                if depth > nearest[k] {
+                    nearest[k] = depth;
+                    owner[k] = t as u32;
+                }
+            });
         }
-        normal
-    };
+        if owner.iter().all(|&t| t == NONE) {
+            return Err(Error::Compute(format!(
+                "the mesh covers no pixel centre of the {width}x{height} frame at fill {fill}"
+            )));
+        }
 
-    let mut depth = Grid::new(width, height, 0.0);
-    let mut normals = Grid::new(width, height, Vector3::z());
-    let mut mask = Grid::new(width, height, false);
-    for k in 0..n {
-        if owner[k] != NONE {
-            depth.data_mut()[k] = nearest[k];
-            normals.data_mut()[k] = normal_at(k);
-            mask.data_mut()[k] = true;
+        // Normals in the turned mesh frame (right-handed like the world frame; the uniform
+        // scale does not change directions).
+        let turned: Vec<Vector3<f64>> = self.vertices.iter().map(|v| view * v).collect();
+        let face_normals: Vec<Vector3<f64>> = self
+            .triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let (a, b, c) = (turned[a as usize], turned[b as usize], turned[c as usize]);
+                (b - a).cross(&(c - a))
+            })
+            .collect();
+        let vertex_normals = match shading {
+            MeshShading::Smooth => area_weighted_vertex_normals(&self.triangles, &face_normals),
+            MeshShading::Flat => Vec::new(),
+        };
+        let normal_at = |k: usize| -> Normal {
+            let t = owner[k] as usize;
+            let face = face_normals[t];
+            let length = face.norm();
+            if length == 0.0 {
+                return Vector3::z();
+            }
+            // Seen from behind: flip so the visible side faces the viewer.
+            let side = if face.z >= 0.0 { 1.0 } else { -1.0 };
+            let flat = face * (side / length);
+            if shading == MeshShading::Flat {
+                return flat;
+            }
+            let corners = self.triangles[t].map(|i| fixed[i as usize]);
+            let w = barycentric(corners, k % width, k / width);
+            let [a, b, c] = self.triangles[t].map(|i| vertex_normals[i as usize]);
+            let smooth = (a * w[0] + b * w[1] + c * w[2]) * side;
+            // Inconsistent winding or a sharp crease: the interpolated normal is meaningless.
+            if smooth.dot(&flat) <= 0.0 || smooth.norm() < 1e-12 {
+                return flat;
+            }
+            let mut normal = smooth.normalize();
+            if normal.z < 0.0 {
+                let planar = Vector3::new(normal.x, normal.y, 0.0);
+                let length = planar.norm();
+                normal = if length > 1e-12 {
+                    planar / length
+                } else {
+                    flat
+                };
+            }
+            normal
+        };
+
+        let mut depth = Grid::new(width, height, 0.0);
+        let mut normals = Grid::new(width, height, Vector3::z());
+        let mut mask = Grid::new(width, height, false);
+        for k in 0..n {
+            if owner[k] != NONE {
+                depth.data_mut()[k] = nearest[k];
+                normals.data_mut()[k] = normal_at(k);
+                mask.data_mut()[k] = true;
+            }
         }
+        Ok(Surface {
+            depth,
+            normals,
+            mask,
+        })
     }
-    Ok(Surface {
-        depth,
-        normals,
-        mask,
-    })
 }
 
 /// Area-weighted vertex normals (the sum of the unnormalised face normals around each vertex),
