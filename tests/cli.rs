@@ -355,3 +355,109 @@ fn the_built_in_bunny_renders_upright() {
     }
     assert!(up * 10 >= n * 8, "{up} of {n} top-edge normals point up");
 }
+
+/// Every flag that takes numbers or lists takes a negative value as written (`--light -1,0,1`,
+/// `--tilts -90:90:30`): the same outputs as the `--flag=value` form, never "unexpected
+/// argument".
+#[test]
+fn negative_values_are_values_not_flags() {
+    let dir = scratch("negative-values");
+    let run = |args: &[&str]| {
+        let mut full = vec!["--quiet"];
+        full.extend_from_slice(args);
+        let out = shadelab(&dir, &full);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    // render --light: the light from the left (x < 0) makes the left half brighter.
+    run(&[
+        "render", "sphere", "--size", "32", "--light", "-1,0,1", "--out", "a.png",
+    ]);
+    run(&[
+        "render",
+        "sphere",
+        "--size",
+        "32",
+        "--light=-1,0,1",
+        "--out",
+        "b.png",
+    ]);
+    assert_eq!(read("a.png"), read("b.png"));
+    let (image, _) = shadelab::io::read_gray(&dir.join("a.png"), 1 << 20).unwrap();
+    assert!(image.get(8, 16) > image.get(23, 16));
+    // solve --light.
+    run(&[
+        "solve",
+        "a.png",
+        "--mask",
+        "a_mask.png",
+        "--light",
+        "-1,0,1",
+        "--out",
+        "s1",
+    ]);
+    run(&[
+        "solve",
+        "a.png",
+        "--mask",
+        "a_mask.png",
+        "--light=-1,0,1",
+        "--out",
+        "s2",
+    ]);
+    assert_eq!(read("s1/depth.npy"), read("s2/depth.npy"));
+    // bench --light.
+    let out = run(&[
+        "bench", "--sizes", "8", "--repeat", "1", "--light", "-1,0,1",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("light (-0.707, 0.000, 0.707)"));
+    // prior-sweep --tilts and observer --rotations/--tilts.
+    let picture = [
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=1",
+        "--ppd",
+        "8",
+    ];
+    for (tilts, out) in [("-90:90:30", "p1"), ("=-90:90:30", "p2")] {
+        let flag = format!("--tilts{}", if tilts.starts_with('=') { tilts } else { "" });
+        let mut args = vec!["analyze", "prior-sweep"];
+        args.extend_from_slice(&picture);
+        args.push(&flag);
+        if !tilts.starts_with('=') {
+            args.push(tilts);
+        }
+        args.extend_from_slice(&["--out", out]);
+        run(&args);
+    }
+    assert_eq!(read("p1/sweep.csv"), read("p2/sweep.csv"));
+    let mut args = vec!["analyze", "observer"];
+    args.extend_from_slice(&picture);
+    args.extend_from_slice(&["--rotations", "-180:180:90", "--tilts", "-180:180:45"]);
+    args.extend_from_slice(&["--out", "obs"]);
+    run(&args);
+    let csv = String::from_utf8(read("obs/observer.csv")).unwrap();
+    let rotation = csv.lines().nth(1).unwrap().split(',').nth(1);
+    assert_eq!(rotation, Some("-180"), "{csv}");
+    // Values that are negative and wrong are refused for what they are.
+    let out = shadelab(&dir, &["--threads", "-1", "list"]);
+    assert_error(&out, 2, "invalid value '-1' for '--threads");
+    let out = shadelab(
+        &dir,
+        &["eval", "--data", "nowhere", "--diligent-light", "-1,0,1"],
+    );
+    assert_error(&out, 1, "nowhere: evaluation data folder not found");
+    let out = shadelab(
+        &dir,
+        &["study", "run", "x.json", "--shard", "-1/2", "--out", "st"],
+    );
+    assert_error(&out, 2, "--shard '-1/2'");
+}

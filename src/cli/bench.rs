@@ -23,7 +23,12 @@ pub struct Args {
     #[arg(long, value_name = "sphere|vase", default_value = "sphere")]
     pub shape: String,
     /// The light (x,y,z, tilt=T,slant=S or a name), z > 0.
-    #[arg(long, value_name = "L", default_value = "0,0,1")]
+    #[arg(
+        long,
+        value_name = "L",
+        default_value = "0,0,1",
+        allow_hyphen_values = true
+    )]
     pub light: String,
     /// Time plain Jacobi up to this side (it needs thousands of sweeps: 256² takes seconds,
     /// 1024² would take many minutes).

@@ -27,7 +27,12 @@ pub struct Args {
     #[arg(long, value_name = "NAMES", value_delimiter = ',')]
     pub objects: Vec<String>,
     /// The light the DiLiGenT normals are rendered under.
-    #[arg(long, value_name = "L", default_value = "tilt=0,slant=30")]
+    #[arg(
+        long,
+        value_name = "L",
+        default_value = "tilt=0,slant=30",
+        allow_hyphen_values = true
+    )]
     pub diligent_light: String,
     /// The ball photographs to run (comma separated; default 052,076,008,029,049,041).
     #[arg(long, value_name = "NAMES", value_delimiter = ',')]
@@ -37,14 +42,21 @@ pub struct Args {
     #[arg(long, value_name = "occluding|flat|free")]
     pub boundary: Option<String>,
     /// The quantile of a photograph's brightness (on its mask) taken as its albedo.
-    #[arg(long, value_name = "Q", default_value_t = shadelab::evaluation::albedo::BRIGHT_QUANTILE)]
+    #[arg(long, value_name = "Q", default_value_t = shadelab::evaluation::albedo::BRIGHT_QUANTILE,
+        allow_hyphen_values = true
+    )]
     pub albedo_quantile: f64,
     /// Divide the ball photographs by the albedo their true normals give (a reference for
     /// what the albedo estimate costs; not available for real use).
     #[arg(long)]
     pub ball_albedo_from_truth: bool,
     /// Side of the square frame the bunny is rasterised into, in pixels.
-    #[arg(long, value_name = "N", default_value_t = 256)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 256,
+        allow_hyphen_values = true
+    )]
     pub bunny_size: usize,
     #[command(flatten)]
     pub solver: SolverFlags,

@@ -23,10 +23,12 @@ pub struct Global {
     #[arg(long, global = true)]
     pub quiet: bool,
     /// Worker threads (default: all cores). Outputs are identical for any count.
-    #[arg(long, global = true, value_name = "N")]
+    #[arg(long, global = true, value_name = "N", allow_hyphen_values = true)]
     pub threads: Option<usize>,
     /// Largest image accepted or made, in pixels.
-    #[arg(long, global = true, value_name = "N", default_value_t = shadelab::grid::DEFAULT_MAX_PIXELS)]
+    #[arg(long, global = true, value_name = "N", default_value_t = shadelab::grid::DEFAULT_MAX_PIXELS,
+        allow_hyphen_values = true
+    )]
     pub max_pixels: usize,
     /// Replace existing files or folders that shadelab did not write.
     #[arg(long, global = true)]

@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = utf8_text())]
     pub set: Vec<String>,
     /// The light: x,y,z or tilt=T,slant=S or a name (front, above, below, left, right, above-left, above-right).
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
     pub light: Option<String>,
     /// The reflectance model (lambertian, blinn-phong, oren-nayar).
     #[arg(long, value_name = "NAME")]

@@ -16,7 +16,7 @@ pub struct Args {
     pub image: PathBuf,
     /// The light: x,y,z or tilt=T,slant=S or a name, with z > 0; or `estimate` to estimate it
     /// (and the albedo) from the image.
-    #[arg(long, value_name = "L|estimate")]
+    #[arg(long, value_name = "L|estimate", allow_hyphen_values = true)]
     pub light: String,
     /// The object's mask (PNG, nonzero = inside); default: the whole image.
     #[arg(long, value_name = "PNG")]

@@ -25,7 +25,7 @@ pub struct RunArgs {
     /// The study spec (JSON; see docs/studies.md).
     spec: PathBuf,
     /// Run only shard I of N (0 ≤ I < N): the grid points whose number is I modulo N.
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<String>,
     /// Output folder (written whole or not at all): results.csv, sweep.csv, study.json.
     #[arg(long, value_name = "DIR")]

@@ -33,11 +33,15 @@ pub struct Args {
     #[arg(long, value_name = "SIGMA", default_value_t = DEFAULT_NOISE, allow_hyphen_values = true)]
     noise: f64,
     /// Rotations of the picture to judge, degrees counter-clockwise: START:STOP:STEP or a list.
-    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_ROTATIONS)]
+    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_ROTATIONS,
+        allow_hyphen_values = true
+    )]
     rotations: String,
     /// Assumed light tilts of the sweep behind the observer; they must cover the circle in
     /// equal steps.
-    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_TILTS)]
+    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_TILTS,
+        allow_hyphen_values = true
+    )]
     tilts: String,
     /// Output folder (written whole or not at all).
     #[arg(long, value_name = "DIR")]

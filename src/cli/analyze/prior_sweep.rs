@@ -20,7 +20,7 @@ pub struct Args {
     picture: PictureArgs,
     /// Assumed light tilts, degrees: START:STOP:STEP (STOP excluded) or a list; 0 = from
     /// above, +90 = from the left.
-    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_TILTS)]
+    #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_TILTS, allow_hyphen_values = true)]
     tilts: String,
     /// Also read the tokens under one global light (estimate, or a tilt in degrees) and under
     /// a light estimated from each token alone.
