@@ -132,24 +132,64 @@ pub fn fenced_blocks(md: &str, lang: &str) -> Vec<String> {
     blocks
 }
 
-#[test]
-fn the_tutorial_runs_as_written_and_prints_what_it_shows() {
-    let md = read(&root().join("docs/tutorial.md"));
-    let script = fenced_blocks(&md, "sh").join("");
-    assert!(script.contains("shadelab render") && script.contains("study run"));
-    let d = scratch("tutorial");
+/// Runs `script` with bash (`-euo pipefail`) in `dir`, the shadelab binary first on the PATH.
+fn run_script(script: &str, dir: &Path) -> std::process::Output {
     let bin_dir = Path::new(env!("CARGO_BIN_EXE_shadelab")).parent().unwrap();
     let path = format!(
         "{}:{}",
         bin_dir.display(),
         std::env::var("PATH").unwrap_or_default()
     );
-    let out = Command::new("bash")
-        .args(["-euo", "pipefail", "-c", &script])
+    Command::new("bash")
+        .args(["-euo", "pipefail", "-c", script])
         .env("PATH", path)
-        .current_dir(&d)
+        .current_dir(dir)
         .output()
-        .expect("bash runs");
+        .expect("bash runs")
+}
+
+/// Every `shadelab` command of the README's shell blocks runs as written, in order, in an empty
+/// folder (the `cargo` lines — the gallery, the tests and the examples — are run elsewhere).
+#[test]
+fn the_readme_commands_run_as_written() {
+    let md = read(&root().join("README.md"));
+    let script: String = fenced_blocks(&md, "sh")
+        .join("")
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("cargo "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let commands = script
+        .lines()
+        .filter(|l| l.starts_with("shadelab "))
+        .count();
+    assert!(commands >= 10, "{script}");
+    let d = scratch("readme");
+    let out = run_script(&script, &d);
+    assert!(
+        out.status.success(),
+        "the README's commands failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "sphere.png",
+        "vase_depth.npy",
+        "vase-sfs/report.json",
+        "vase-estimated/report.json",
+        "checker-odog/lightness.json",
+        "fading/fading.gif",
+    ] {
+        assert!(d.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn the_tutorial_runs_as_written_and_prints_what_it_shows() {
+    let md = read(&root().join("docs/tutorial.md"));
+    let script = fenced_blocks(&md, "sh").join("");
+    assert!(script.contains("shadelab render") && script.contains("study run"));
+    let d = scratch("tutorial");
+    let out = run_script(&script, &d);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
