@@ -5,7 +5,7 @@ use clap::builder::TypedValueParser;
 use serde_json::Value;
 use shadelab::io::BitDepth;
 use shadelab::pipeline::render::{self, RenderConfig};
-use shadelab::stimulus::{ExportOptions, Range, Spec};
+use shadelab::stimulus::Range;
 use shadelab::visual_size::parse_pair;
 use shadelab::{Error, NoProgress};
 use std::path::PathBuf;
@@ -15,7 +15,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// What to render (see `shadelab list`); optional with --spec.
     pub name: Option<String>,
-    /// A JSON spec naming the stimulus and its parameters; flags given here override it.
+    /// A JSON spec naming the stimulus and its parameters, or the sidecar of an earlier render
+    /// (which reproduces it, files and all); flags given here override it.
     #[arg(long, value_name = "FILE.json")]
     pub spec: Option<PathBuf>,
     /// Set a parameter (repeatable); `shadelab describe NAME` lists them.
@@ -51,15 +52,16 @@ pub struct Args {
     /// Also write the ground-truth layers: FILE_depth.npy, FILE_normals.npy, FILE_shading.npy (FILE_mask.png, the target mask, is always written)
     #[arg(long)]
     pub layers: bool,
-    /// Bits per channel of PNG output.
-    #[arg(long, value_name = "8|16", default_value_t = 16, value_parser = clap::builder::PossibleValuesParser::new(["8", "16"]).map(|s| if s == "8" { 8u8 } else { 16u8 }))]
-    pub bit_depth: u8,
+    /// Bits per channel of PNG output [default: 16, or the sidecar's].
+    #[arg(long, value_name = "8|16", value_parser = clap::builder::PossibleValuesParser::new(["8", "16"]).map(|s| if s == "8" { 8u8 } else { 16u8 }))]
+    pub bit_depth: Option<u8>,
     /// Display gamma for PNG output (recorded); default: linear values.
     #[arg(long, value_name = "G", allow_hyphen_values = true)]
     pub gamma: Option<f64>,
-    /// Value range of float output: unit (0..1) or psychopy (-1..1).
-    #[arg(long, value_name = "unit|psychopy", default_value = "unit", value_parser = ["unit", "psychopy"])]
-    pub range: String,
+    /// Value range of float output: unit (0..1) or psychopy (-1..1) [default: unit, or the
+    /// sidecar's].
+    #[arg(long, value_name = "unit|psychopy", value_parser = ["unit", "psychopy"])]
+    pub range: Option<String>,
     /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5, double) or .svg (vector stimuli); the sidecar goes beside it as .json.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -78,15 +80,19 @@ pub fn utf8_text() -> impl TypedValueParser<Value = String> {
 
 /// Runs `render`.
 pub fn run(args: Args, global: &Global) -> CliResult {
-    let spec = args.spec.as_deref().map(Spec::load).transpose()?;
-    let mut config = match (&args.name, &spec) {
+    let spec = args
+        .spec
+        .as_deref()
+        .map(|path| RenderConfig::from_spec_file(path, &args.out))
+        .transpose()?;
+    let mut config = match (&args.name, spec) {
         (Some(n), Some(s)) if *n != s.stimulus => {
             return Err(CliError::usage(format!(
                 "the name '{n}' disagrees with the spec's stimulus '{}'",
                 s.stimulus
             )))
         }
-        (_, Some(s)) => RenderConfig::from_spec(s, &args.out),
+        (_, Some(s)) => s,
         (Some(n), None) => RenderConfig::new(n.as_str(), &args.out),
         (None, None) => {
             return Err(CliError::usage(
@@ -126,21 +132,24 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    config.export = ExportOptions {
-        bit_depth: if args.bit_depth == 8 {
-            BitDepth::Eight
-        } else {
-            BitDepth::Sixteen
-        },
-        gamma: args.gamma,
-        range: if args.range == "psychopy" {
-            Range::Psychopy
-        } else {
-            Range::Unit
-        },
-        layers: args.layers,
-        force: global.force,
-    };
+    // A flag given overrides what a sidecar recorded; the rest keeps the recorded values (or
+    // the defaults: 16 bits, no gamma, 0..1, no layers).
+    let export = &mut config.export;
+    match args.bit_depth {
+        Some(8) => export.bit_depth = BitDepth::Eight,
+        Some(_) => export.bit_depth = BitDepth::Sixteen,
+        None => {}
+    }
+    if args.gamma.is_some() {
+        export.gamma = args.gamma;
+    }
+    match args.range.as_deref() {
+        Some("psychopy") => export.range = Range::Psychopy,
+        Some(_) => export.range = Range::Unit,
+        None => {}
+    }
+    export.layers |= args.layers;
+    export.force = global.force;
     config.max_pixels = global.max_pixels;
     render_to(&config, global)
 }

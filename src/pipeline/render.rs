@@ -68,6 +68,40 @@ impl RenderConfig {
         }
     }
 
+    /// Renders what a spec file names to `out`: a stimulus spec ([`Spec`]), or a sidecar that
+    /// shadelab wrote beside an earlier render. A sidecar records everything that render used —
+    /// the stimulus, every parameter, the size in pixels and ppd, the seed, and how the files
+    /// were written (bit depth, gamma, value range, layers) — so rendering it again to a file of
+    /// the same name gives the same files, byte for byte.
+    ///
+    /// ```
+    /// use shadelab::RenderConfig;
+    /// let dir = std::env::temp_dir().join(format!("shadelab-doc-sidecar-{}", std::process::id()));
+    /// std::fs::create_dir_all(dir.join("again"))?;
+    /// let mut first = RenderConfig::new("bumps", dir.join("b.png"));
+    /// first.size.ppd = Some(8.0);
+    /// shadelab::pipeline::render::write(&first, &shadelab::pipeline::render::run(&first, &shadelab::NoProgress)?)?;
+    /// let again = RenderConfig::from_spec_file(&dir.join("b.json"), dir.join("again/b.png"))?;
+    /// shadelab::pipeline::render::write(&again, &shadelab::pipeline::render::run(&again, &shadelab::NoProgress)?)?;
+    /// assert_eq!(std::fs::read(dir.join("b.png"))?, std::fs::read(dir.join("again/b.png"))?);
+    /// assert_eq!(std::fs::read(dir.join("b.json"))?, std::fs::read(dir.join("again/b.json"))?);
+    /// # std::fs::remove_dir_all(&dir)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_spec_file(path: &Path, out: impl Into<PathBuf>) -> Result<RenderConfig> {
+        let bytes = crate::io::read_bytes(path)?;
+        let value: Value = serde_json::from_slice(&bytes)
+            .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))?;
+        let is_sidecar = value.get("program").and_then(Value::as_str) == Some("shadelab")
+            && value.get("parameters").is_some();
+        if !is_sidecar {
+            let spec: Spec = serde_json::from_value(value)
+                .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))?;
+            return Ok(RenderConfig::from_spec(&spec, out));
+        }
+        from_sidecar(&value, out.into()).map_err(|e| Error::format(path, format!("{e}")))
+    }
+
     /// Sets the space of a figure drawn in one (`pq` or `fg`, the reflectance map's), the same
     /// as the parameter `space`; fails for a stimulus without that parameter.
     pub fn set_space(&mut self, space: &str) -> Result<()> {
@@ -241,6 +275,67 @@ pub fn describe(name: &str) -> Result<Description> {
                 doc: p.doc,
             })
             .collect(),
+    })
+}
+
+/// The render a sidecar records.
+fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
+    let field = |key: &str| {
+        v.get(key)
+            .ok_or_else(|| Error::invalid(format!("the sidecar has no '{key}'")))
+    };
+    let bad =
+        |key: &str| Error::invalid(format!("the sidecar's '{key}' is not what shadelab writes"));
+    let stimulus = field("stimulus")?.as_str().ok_or_else(|| bad("stimulus"))?;
+    let params = field("parameters")?
+        .as_object()
+        .ok_or_else(|| bad("parameters"))?
+        .clone();
+    let seed = field("seed")?.as_u64().ok_or_else(|| bad("seed"))?;
+    let ppd = field("ppd")?.as_f64().ok_or_else(|| bad("ppd"))?;
+    let shape = field("shape_px")?;
+    let side = |key: &str| {
+        shape
+            .get(key)
+            .and_then(Value::as_u64)
+            .and_then(|n| usize::try_from(n).ok())
+            .ok_or_else(|| bad("shape_px"))
+    };
+    let bit_depth = match v.get("bit_depth") {
+        Some(Value::Number(n)) if n.as_u64() == Some(8) => crate::io::BitDepth::Eight,
+        Some(Value::Number(n)) if n.as_u64() == Some(16) => crate::io::BitDepth::Sixteen,
+        None | Some(Value::Null) => crate::io::BitDepth::Sixteen,
+        Some(_) => return Err(bad("bit_depth")),
+    };
+    let gamma = match v.get("gamma") {
+        None | Some(Value::Null) => None,
+        Some(g) => Some(g.as_f64().ok_or_else(|| bad("gamma"))?),
+    };
+    let range = match v.get("range").and_then(Value::as_str) {
+        None | Some("0..1") => stimulus::Range::Unit,
+        Some("-1..1") => stimulus::Range::Psychopy,
+        Some(_) => return Err(bad("range")),
+    };
+    let layers = v
+        .get("files")
+        .and_then(Value::as_object)
+        .is_some_and(|f| f.contains_key("depth"));
+    Ok(RenderConfig {
+        params,
+        size: SizeRequest {
+            visual_size: None,
+            ppd: Some(ppd),
+            shape: Some((side("width")?, side("height")?)),
+        },
+        seed,
+        export: ExportOptions {
+            bit_depth,
+            gamma,
+            range,
+            layers,
+            ..ExportOptions::default()
+        },
+        ..RenderConfig::new(stimulus, out)
     })
 }
 

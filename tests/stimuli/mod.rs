@@ -11,6 +11,7 @@ mod formats;
 mod gallery;
 mod golden;
 mod illusions;
+mod sidecar;
 
 use serde_json::{Map, Value};
 use shadelab::stimulus::{self, Output};
