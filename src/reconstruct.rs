@@ -196,11 +196,7 @@ impl Lighting {
         mask: &Mask,
     ) -> Result<Lighting> {
         if let Some(a) = albedo {
-            if !(a.is_finite() && a > 0.0) {
-                return Err(Error::invalid(format!(
-                    "albedo {a} must be a positive number"
-                )));
-            }
+            check_albedo(a)?;
         }
         let estimate = match given {
             Some(_) => None,
@@ -222,6 +218,17 @@ impl Lighting {
             albedo,
             estimate,
         })
+    }
+}
+
+/// Fails unless `albedo` is a positive number.
+pub fn check_albedo(albedo: f64) -> Result<()> {
+    if albedo.is_finite() && albedo > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!(
+            "albedo {albedo} must be a positive number"
+        )))
     }
 }
 

@@ -99,9 +99,15 @@ impl Picture {
             .as_ref()
             .map(|t| (&t.labels, t.names.as_slice()));
         let mut picture = Picture::from_image(image, targets)?;
-        picture.albedo = request.params.f64("albedo").ok();
-        picture.ambient = request.params.f64("ambient").ok();
+        picture.take_declared(&request.params);
         Ok(picture)
+    }
+
+    /// Takes the albedo and ambient level that a stimulus's parameters declare (none for a
+    /// stimulus without those parameters).
+    pub fn take_declared(&mut self, params: &crate::params::Params) {
+        self.albedo = params.f64("albedo").ok();
+        self.ambient = params.f64("ambient").ok();
     }
 
     /// The solve domain.

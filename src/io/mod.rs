@@ -23,7 +23,28 @@ pub use png::{
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
 
 use crate::error::{Error, Result};
+use crate::grid::Image;
 use std::path::Path;
+
+/// Reads a picture file as linear luminance: an 8/16-bit PNG ([`read_gray`]) or a float H×W
+/// `.npy` ([`read_image`]), with what was read (the PNG's [`GrayInfo`], or the `.npy` format)
+/// for reports. Any other extension is refused.
+pub fn read_luminance(path: &Path, max_pixels: usize) -> Result<(Image, serde_json::Value)> {
+    match extension(path).as_str() {
+        "png" => {
+            let (image, info) = read_gray(path, max_pixels)?;
+            Ok((image, serde_json::to_value(info).unwrap_or_default()))
+        }
+        "npy" => Ok((
+            read_image(path, max_pixels)?,
+            serde_json::json!({ "format": "npy float" }),
+        )),
+        other => Err(Error::invalid(format!(
+            "{}: the image must be a .png or .npy file (got '.{other}')",
+            path.display()
+        ))),
+    }
+}
 
 /// Reads a whole file, with the path in any error.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {

@@ -4,7 +4,7 @@
 
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
-use crate::gradient_space::angle_deg;
+use crate::evaluation::metrics::angular_error;
 use crate::light::Light;
 use crate::progress::Progress;
 use crate::reconstruct::{
@@ -13,7 +13,7 @@ use crate::reconstruct::{
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::solver::{Method, Solution};
-use crate::surface::{sphere, vase, Surface};
+use crate::surface::{sphere, vase};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -193,7 +193,9 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
             multigrid,
             jacobi_difference_deg: jacobi
                 .as_ref()
-                .map(|(_, j)| mean_difference(&surface, &fast, j)),
+                .map(|(_, j)| angular_error(&fast.normals(), &j.normals(), &surface.mask))
+                .transpose()?
+                .map(|e| e.mean_deg),
             jacobi: jacobi.map(|(t, _)| t),
             numpy,
         });
@@ -321,28 +323,6 @@ fn row(
         "{size:>6}  {method:<10}  {iterations:>16}  {:>10.4}  {vs_jacobi:>10}  {vs_numpy:>13}  {diff:>12}\n",
         t.seconds
     )
-}
-
-/// Mean angle (degrees) between two solutions' normals inside the mask.
-fn mean_difference(surface: &Surface, a: &Solution, b: &Solution) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for ((m, x), y) in surface
-        .mask
-        .data()
-        .iter()
-        .zip(a.normals().data())
-        .zip(b.normals().data())
-    {
-        if *m {
-            sum += angle_deg(x, y);
-            n += 1;
-        }
-    }
-    if n == 0 {
-        0.0
-    } else {
-        sum / n as f64
-    }
 }
 
 /// The NumPy reference solver, found and checked.

@@ -250,8 +250,7 @@ impl Config {
         let mut picture =
             Picture::from_image(loaded.luminance(), labels).map_err(|e| self.naming_mask(e))?;
         if let Some(request) = &request {
-            picture.albedo = request.params.f64("albedo").ok();
-            picture.ambient = request.params.f64("ambient").ok();
+            picture.take_declared(&request.params);
         }
         let max_pixels = self.source.max_pixels;
         let domain = self.domain.resolve(&picture, max_pixels)?;

@@ -16,7 +16,7 @@ use crate::progress::Progress;
 use crate::reconstruct::{Depth, Lighting, Problem, ReconstructOptions, Reconstructor, Shape};
 use crate::reflectance::BrdfSpec;
 use serde::Serialize;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -127,11 +127,7 @@ impl SolveConfig {
     pub fn validate(&self) -> Result<()> {
         self.options.validate()?;
         if let Some(a) = self.albedo {
-            if !(a.is_finite() && a > 0.0) {
-                return Err(Error::invalid(format!(
-                    "albedo {a} must be a positive number"
-                )));
-            }
+            crate::reconstruct::check_albedo(a)?;
         }
         if let LightChoice::Given(light) = &self.light {
             crate::reconstruct::check_light_in_front(light)?;
@@ -305,7 +301,7 @@ struct Solved {
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
-    let (image, image_info) = read_image(&config.image, config.max_pixels)?;
+    let (image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
     let (w, h) = (image.width(), image.height());
     let mask = read_mask(config, &image)?;
     let boundary = match &config.boundary {
@@ -584,24 +580,6 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
     #[cfg(not(feature = "plots"))]
     let _ = tol;
     Ok(())
-}
-
-/// Reads a PNG or `.npy` image, with what was read for the report.
-pub fn read_image(path: &Path, max_pixels: usize) -> Result<(Image, Value)> {
-    match io::extension(path).as_str() {
-        "png" => {
-            let (image, info) = io::read_gray(path, max_pixels)?;
-            Ok((image, serde_json::to_value(info).unwrap_or_default()))
-        }
-        "npy" => Ok((
-            io::read_image(path, max_pixels)?,
-            json!({ "format": "npy float" }),
-        )),
-        other => Err(Error::invalid(format!(
-            "{}: the image must be a .png or .npy file (got '.{other}')",
-            path.display()
-        ))),
-    }
 }
 
 /// The mask named by `config` (checked against the image), or the whole image.

@@ -85,16 +85,10 @@ impl PictureSource {
         let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
             (Some(path), _) => {
-                let pixels = match io::extension(path).as_str() {
-                    "png" if colour => Pixels::Rgb(io::read_rgb(path, max_pixels)?),
-                    "png" => Pixels::Gray(io::read_gray(path, max_pixels)?.0),
-                    "npy" => Pixels::Gray(io::read_image(path, max_pixels)?),
-                    other => {
-                        return Err(Error::invalid(format!(
-                            "{}: the image must be a .png or .npy file (got '.{other}')",
-                            path.display()
-                        )))
-                    }
+                let pixels = if colour && io::extension(path) == "png" {
+                    Pixels::Rgb(io::read_rgb(path, max_pixels)?)
+                } else {
+                    Pixels::Gray(io::read_luminance(path, max_pixels)?.0)
                 };
                 check_finite(&pixels, &path.display().to_string())?;
                 Picture {
