@@ -3,7 +3,7 @@
 //! domain's rim ([`BoundarySource`], as `solve` takes it), the lighting to assume besides its tilt, and the solver settings, with their
 //! defaults; [`Config::load`] turns them into a [`Setup`] ready to interpret.
 
-use super::solve::{read_boundary, BoundarySource};
+use super::solve::BoundarySource;
 use super::source::PictureSource;
 use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
 use crate::analysis::plot::Figure;
@@ -124,27 +124,6 @@ impl DomainSpec {
     }
 }
 
-/// The boundary as the user wrote it, for reports.
-fn boundary_text(boundary: &BoundarySource) -> String {
-    match boundary {
-        BoundarySource::Named(b) => b.name().to_string(),
-        BoundarySource::File(path) => path.display().to_string(),
-    }
-}
-
-/// The boundary for a `w`×`h` picture (a normals file is read and checked against it).
-fn resolve_boundary(
-    boundary: &BoundarySource,
-    w: usize,
-    h: usize,
-    max_pixels: usize,
-) -> Result<Boundary> {
-    match boundary {
-        BoundarySource::Named(b) => Ok(b.clone()),
-        BoundarySource::File(path) => read_boundary(path, w, h, max_pixels),
-    }
-}
-
 /// A picture and how to interpret it, as plain values.
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -255,7 +234,7 @@ impl Config {
         let max_pixels = self.source.max_pixels;
         let domain = self.domain.resolve(&picture, max_pixels)?;
         let (w, h) = (picture.image.width(), picture.image.height());
-        let boundary = resolve_boundary(&self.boundary, w, h, max_pixels)?;
+        let boundary = self.boundary.resolve(w, h, max_pixels)?;
         let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
         picture.albedo = Some(lighting.albedo);
         picture.ambient = Some(lighting.ambient);
@@ -263,7 +242,7 @@ impl Config {
             slant_deg: lighting.slant_deg,
             albedo: lighting.albedo,
             ambient: lighting.ambient,
-            boundary: boundary_text(&self.boundary),
+            boundary: self.boundary.to_string(),
             domain: self.domain.to_string(),
             lambda: options.lambda,
             tol: options.tol,

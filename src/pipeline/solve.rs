@@ -71,6 +71,26 @@ impl std::str::FromStr for BoundarySource {
     }
 }
 
+impl BoundarySource {
+    /// The boundary for a `w`×`h` picture (a normals file is read and checked against it).
+    pub fn resolve(&self, w: usize, h: usize, max_pixels: usize) -> Result<Boundary> {
+        match self {
+            BoundarySource::Named(b) => Ok(b.clone()),
+            BoundarySource::File(path) => read_boundary(path, w, h, max_pixels),
+        }
+    }
+}
+
+impl std::fmt::Display for BoundarySource {
+    /// The name of a built-in boundary, or the file's path.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BoundarySource::Named(b) => f.write_str(b.name()),
+            BoundarySource::File(path) => write!(f, "{}", path.display()),
+        }
+    }
+}
+
 /// Everything a solve needs, as plain values.
 #[derive(Debug, Clone)]
 pub struct SolveConfig {
@@ -304,10 +324,7 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
     let (image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
     let (w, h) = (image.width(), image.height());
     let mask = read_mask(config, &image)?;
-    let boundary = match &config.boundary {
-        BoundarySource::Named(b) => b.clone(),
-        BoundarySource::File(path) => read_boundary(path, w, h, config.max_pixels)?,
-    };
+    let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,
@@ -608,12 +625,7 @@ fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
 }
 
 /// Rim normals read from a `.npy` of the image's size.
-pub(crate) fn read_boundary(
-    path: &Path,
-    w: usize,
-    h: usize,
-    max_pixels: usize,
-) -> Result<Boundary> {
+fn read_boundary(path: &Path, w: usize, h: usize, max_pixels: usize) -> Result<Boundary> {
     let normals = io::read_normals(path, max_pixels)?;
     if (normals.width(), normals.height()) != (w, h) {
         return Err(Error::invalid(format!(
