@@ -1,9 +1,12 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
-use super::{flags::SolverFlags, progress::Bar, CliError, CliResult, Global};
+use super::flags::{usage, SolverFlags};
+use super::{progress::Bar, CliError, CliResult, Global};
 use shadelab::io::AtomicDir;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord, REPORT_FILE};
-use shadelab::reconstruct::{check_light_in_front, NonConvergence, ReconstructOptions};
+use shadelab::reconstruct::{
+    check_albedo, check_light_in_front, NonConvergence, ReconstructOptions,
+};
 use shadelab::reflectance::BrdfSpec;
 use shadelab::solver::{Method, SolveOptions};
 use std::path::PathBuf;
@@ -99,20 +102,13 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
         .validate()
         .map_err(|e| CliError::usage(e.to_string()))?;
     if let Some(a) = args.albedo {
-        if !(a.is_finite() && a > 0.0) {
-            return Err(CliError::usage(format!(
-                "--albedo {a} must be a positive number"
-            )));
-        }
+        check_albedo(a).map_err(|e| usage("--albedo", e))?;
     }
     let light: LightChoice = args.light.parse()?;
     if let LightChoice::Given(l) = &light {
-        check_light_in_front(l).map_err(|e| CliError::usage(format!("--light: {e}")))?;
+        check_light_in_front(l).map_err(|e| usage("--light", e))?;
     }
-    let boundary = args
-        .boundary
-        .parse()
-        .map_err(|e: shadelab::Error| CliError::usage(format!("--boundary: {e}")))?;
+    let boundary = args.boundary.parse().map_err(|e| usage("--boundary", e))?;
     Ok(SolveConfig {
         image: args.image.clone(),
         mask: args.mask.clone(),
