@@ -134,10 +134,7 @@ impl SizeRequest {
             (_, None, Some(s)) => (fit_ppd(visual_or_default, s), s),
             (None, Some(p), Some(s)) => (p, s),
             (_, Some(p), None) => (p, round_shape(visual_or_default, p)?),
-            (_, None, None) => (
-                default_ppd,
-                round_shape(visual_or_default, default_ppd)?,
-            ),
+            (_, None, None) => (default_ppd, round_shape(visual_or_default, default_ppd)?),
         };
         crate::grid::check_size(shape.1, shape.0, max_pixels)?;
         Ok(Geometry {
@@ -235,9 +232,13 @@ mod tests {
             assert_eq!((g.height, g.width, g.ppd), (shape.0, shape.1, ppd));
         }
         // Another aspect: the tighter axis sets the ppd, the other gets more field.
-        let g = shape_only((70, 180)).resolve((7.0, 9.0), 16.0, MAX).unwrap();
+        let g = shape_only((70, 180))
+            .resolve((7.0, 9.0), 16.0, MAX)
+            .unwrap();
         assert_eq!((g.ppd, g.height_deg(), g.width_deg()), (10.0, 7.0, 18.0));
-        let g = shape_only((140, 90)).resolve((7.0, 9.0), 16.0, MAX).unwrap();
+        let g = shape_only((140, 90))
+            .resolve((7.0, 9.0), 16.0, MAX)
+            .unwrap();
         assert_eq!((g.ppd, g.height_deg(), g.width_deg()), (10.0, 14.0, 9.0));
         // A ppd given with the shape keeps the scale: a larger shape is more field.
         let g = SizeRequest {

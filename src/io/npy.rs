@@ -345,12 +345,17 @@ pub fn encode_text(shape: &[usize], texts: &[String]) -> Result<Vec<u8>> {
             texts.len()
         )));
     }
-    let width = texts.iter().map(|t| t.chars().count()).max().unwrap_or(0).max(1);
+    let width = texts
+        .iter()
+        .map(|t| t.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(1);
     let mut out = npy_header(&format!("<U{width}"), shape)?;
     for text in texts {
         let chars = text.chars().count();
         out.extend(text.chars().flat_map(|c| (c as u32).to_le_bytes()));
-        out.extend(std::iter::repeat_n(0u8, 4 * (width - chars)));
+        out.resize(out.len() + 4 * (width - chars), 0);
     }
     Ok(out)
 }

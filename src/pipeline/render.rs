@@ -370,7 +370,10 @@ mod tests {
         assert_eq!(report.output.pixels.size(), (10, 20));
         let json = serde_json::to_value(&report).unwrap();
         assert_eq!(json["stimulus"], "sphere");
-        assert_eq!((&json["geometry"]["height"], &json["geometry"]["width"]), (&20.into(), &10.into()));
+        assert_eq!(
+            (&json["geometry"]["height"], &json["geometry"]["width"]),
+            (&20.into(), &10.into())
+        );
     }
 
     #[test]

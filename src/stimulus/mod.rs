@@ -11,8 +11,8 @@
 //! the generic [`Params`] that sidecars record.
 
 mod boundary_strips;
-pub mod bundle;
 mod bumps;
+pub mod bundle;
 mod checker_shadow;
 mod checkerboard;
 mod circles;

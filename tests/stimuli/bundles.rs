@@ -13,8 +13,20 @@ use std::process::Command;
 /// `file` in `dir`.
 fn render_bumps(dir: &Path, file: &str, extra: &[&str]) {
     let mut args = vec![
-        "--quiet", "render", "bumps", "--ppd", "10", "--set", "rows=2", "--set", "columns=3",
-        "--light", "-1,1,1", "--layers", "--out", file,
+        "--quiet",
+        "render",
+        "bumps",
+        "--ppd",
+        "10",
+        "--set",
+        "rows=2",
+        "--set",
+        "columns=3",
+        "--light",
+        "-1,1,1",
+        "--layers",
+        "--out",
+        file,
     ];
     args.extend_from_slice(extra);
     ok(&shadelab(dir, &args));
@@ -60,11 +72,17 @@ fn a_mat_bundle_holds_the_image_mask_parameters_and_layers() {
     assert_eq!(double("rows"), (vec![1, 1], vec![2.0]));
     assert_eq!(vars["stimulus"], MatValue::Char("bumps".into()));
     // The light as the sidecar records it (tilt 45: from the upper left), and as a vector.
-    assert_eq!(vars["light"], MatValue::Char("tilt=45,slant=54.73561".into()));
+    assert_eq!(
+        vars["light"],
+        MatValue::Char("tilt=45,slant=54.73561".into())
+    );
     let (dims, l) = double("light_direction");
     assert_eq!(dims, [1, 3]);
     let s = 3f64.sqrt();
-    assert!((l[0] + 1.0 / s).abs() < 1e-6 && (l[1] - 1.0 / s).abs() < 1e-6, "{l:?}");
+    assert!(
+        (l[0] + 1.0 / s).abs() < 1e-6 && (l[1] - 1.0 / s).abs() < 1e-6,
+        "{l:?}"
+    );
     // Every parameter the sidecar records is a field.
     let meta = sidecar(&d.join("b.json"));
     for key in meta["parameters"].as_object().unwrap().keys() {
@@ -142,8 +160,14 @@ fn an_npz_bundle_holds_the_same_fields_and_reproduces() {
     assert!(img.iter().all(|v| (-1.0..=1.0).contains(v)));
     assert!(img.iter().any(|&v| v < 0.0), "psychopy range");
     assert_eq!(npz_numbers(&members["target_mask"]).0, [100, 140]);
-    assert_eq!(npz_numbers(&members["shape"]), (vec![2], vec![100.0, 140.0]));
-    assert_eq!(npz_numbers(&members["visual_size"]), (vec![2], vec![10.0, 14.0]));
+    assert_eq!(
+        npz_numbers(&members["shape"]),
+        (vec![2], vec![100.0, 140.0])
+    );
+    assert_eq!(
+        npz_numbers(&members["visual_size"]),
+        (vec![2], vec![10.0, 14.0])
+    );
     assert_eq!(npz_numbers(&members["ppd"]), (vec![], vec![10.0]));
     assert_eq!(npz_numbers(&members["normals"]).0, [100, 140, 3]);
     assert_eq!(npz_texts(&members["stimulus"]), ["bumps"]);
@@ -153,7 +177,14 @@ fn an_npz_bundle_holds_the_same_fields_and_reproduces() {
     std::fs::create_dir_all(d.join("again")).unwrap();
     ok(&shadelab(
         &d,
-        &["--quiet", "render", "--spec", "b.json", "--out", "again/b.npz"],
+        &[
+            "--quiet",
+            "render",
+            "--spec",
+            "b.json",
+            "--out",
+            "again/b.npz",
+        ],
     ));
     assert_eq!(
         std::fs::read(d.join("b.npz")).unwrap(),
@@ -189,7 +220,15 @@ fn scipy_loadmat_and_numpy_load_read_the_bundles() {
     render_bumps(&d, "b.npz", &[]);
     ok(&shadelab(
         &d,
-        &["--quiet", "render", "fading-disk", "--size", "40x20", "--out", "f.mat"],
+        &[
+            "--quiet",
+            "render",
+            "fading-disk",
+            "--size",
+            "40x20",
+            "--out",
+            "f.mat",
+        ],
     ));
     let script = r#"
 import json, sys
@@ -234,9 +273,12 @@ print("ok")
 
 #[test]
 fn octave_loads_the_mat_bundle() {
-    let octave = ["octave-cli", "octave"]
-        .into_iter()
-        .find(|o| Command::new(o).arg("--version").output().is_ok_and(|out| out.status.success()));
+    let octave = ["octave-cli", "octave"].into_iter().find(|o| {
+        Command::new(o)
+            .arg("--version")
+            .output()
+            .is_ok_and(|out| out.status.success())
+    });
     let Some(octave) = octave else {
         println!("skipped: no octave-cli or octave on PATH (Debian: apt-get install octave)");
         return;
@@ -250,7 +292,13 @@ fn octave_loads_the_mat_bundle() {
         assert(iscell(target_names) && numel(target_names) == 6); \
         assert(isequal(size(normals), [100 140 3])); assert(rows == 2); disp('ok')";
     let out = Command::new(octave)
-        .args(["--no-gui", "--quiet", "--no-window-system", "--eval", script])
+        .args([
+            "--no-gui",
+            "--quiet",
+            "--no-window-system",
+            "--eval",
+            script,
+        ])
         .current_dir(&d)
         .output()
         .unwrap();

@@ -22,12 +22,7 @@ fn a_spec_gives_stimupys_shape_in_height_width_order() {
     let (img, _) = shadelab::io::read_gray(&d.join("c.png"), MAX).unwrap();
     assert_eq!((img.height(), img.width()), (128, 256));
     // 1° checks at 32 ppd: 4 rows and 8 columns of checks.
-    let changes = |values: Vec<f64>| {
-        values
-            .windows(2)
-            .filter(|pair| pair[0] != pair[1])
-            .count()
-    };
+    let changes = |values: Vec<f64>| values.windows(2).filter(|pair| pair[0] != pair[1]).count();
     assert_eq!(changes((0..256).map(|c| *img.get(c, 5)).collect()), 7);
     assert_eq!(changes((0..128).map(|r| *img.get(5, r)).collect()), 3);
     let meta = sidecar(&d.join("c.json"));
@@ -94,18 +89,26 @@ fn a_size_in_pixels_scales_every_stimulus_to_fill_it() {
     for s in shadelab::pipeline::render::list() {
         let info = stimulus::find(s.name).unwrap().info();
         let (w_deg, h_deg) = info.default_visual_size;
-        let small_shape = ((h_deg * 8.0).round() as usize, (w_deg * 8.0).round() as usize);
+        let small_shape = (
+            (h_deg * 8.0).round() as usize,
+            (w_deg * 8.0).round() as usize,
+        );
         let large_shape = (small_shape.0 * 2, small_shape.1 * 2);
         let (Ok((r1, o1)), Ok((r2, o2))) =
             (at_shape(s.name, small_shape), at_shape(s.name, large_shape))
         else {
             // A stimulus that needs a parameter (a mesh or depth-map file) to render at all.
             assert!(
-                at_shape(s.name, small_shape).is_err() && stimulus::generate(s.name, &Map::new(), &SizeRequest::default(), 0, MAX).is_err(),
+                at_shape(s.name, small_shape).is_err()
+                    && stimulus::generate(s.name, &Map::new(), &SizeRequest::default(), 0, MAX)
+                        .is_err(),
                 "{}: renders by default but not at a shape",
                 s.name
             );
-            println!("{}: skipped, it renders nothing without a file parameter", s.name);
+            println!(
+                "{}: skipped, it renders nothing without a file parameter",
+                s.name
+            );
             skipped += 1;
             continue;
         };
@@ -113,7 +116,13 @@ fn a_size_in_pixels_scales_every_stimulus_to_fill_it() {
         assert_eq!((g1.height, g1.width), small_shape, "{}", s.name);
         assert_eq!((g2.height, g2.width), large_shape, "{}", s.name);
         // The same degrees at twice the ppd.
-        assert!((g2.ppd / g1.ppd - 2.0).abs() < 1e-9, "{}: {} vs {}", s.name, g1.ppd, g2.ppd);
+        assert!(
+            (g2.ppd / g1.ppd - 2.0).abs() < 1e-9,
+            "{}: {} vs {}",
+            s.name,
+            g1.ppd,
+            g2.ppd
+        );
         assert!((g1.ppd - 8.0).abs() < 0.1, "{}: ppd {}", s.name, g1.ppd);
         // The same picture: the large one averaged over 2 × 2 blocks is the small one, up to
         // edges and antialiasing (the mean difference is small, where a padded picture, a
@@ -169,7 +178,10 @@ fn a_size_in_pixels_scales_every_stimulus_to_fill_it() {
         }
         checked += 1;
     }
-    assert!(skipped <= 2 && checked >= 18, "{checked} stimuli checked, {skipped} skipped");
+    assert!(
+        skipped <= 2 && checked >= 18,
+        "{checked} stimuli checked, {skipped} skipped"
+    );
 }
 
 #[test]
@@ -188,7 +200,11 @@ fn another_aspect_fits_the_stimulus_and_centres_it() {
             diff += (fitted.get(c, r + 20) - scaled.get(c, r)).abs();
         }
     }
-    assert!(diff / (140.0 * 100.0) < 0.01, "mean difference {}", diff / 14000.0);
+    assert!(
+        diff / (140.0 * 100.0) < 0.01,
+        "mean difference {}",
+        diff / 14000.0
+    );
     // With a ppd given, a size in pixels is more field at that scale instead.
     let size = SizeRequest {
         ppd: Some(5.0),
@@ -222,7 +238,14 @@ fn a_sidecar_in_the_old_form_still_renders_and_size_rescales_a_sidecar() {
     std::fs::write(d.join("old/b.json"), old.to_string()).unwrap();
     ok(&shadelab(
         &d,
-        &["--quiet", "render", "--spec", "old/b.json", "--out", "again.png"],
+        &[
+            "--quiet",
+            "render",
+            "--spec",
+            "old/b.json",
+            "--out",
+            "again.png",
+        ],
     ));
     assert_eq!(
         std::fs::read(d.join("b.png")).unwrap(),

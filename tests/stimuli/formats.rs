@@ -138,7 +138,10 @@ fn mat_files_hold_the_image_as_doubles_column_major() {
         panic!()
     };
     let a = mat::decode(&std::fs::read(d.join("s.mat")).unwrap()).unwrap();
-    assert_eq!(a.name, "img", "stimupy's name for the picture, the bundle's first field");
+    assert_eq!(
+        a.name, "img",
+        "stimupy's name for the picture, the bundle's first field"
+    );
     assert_eq!(a.dims, [30, 40]);
     for r in 0..30 {
         for c in 0..40 {
