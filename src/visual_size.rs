@@ -1,5 +1,18 @@
 //! The size triple of stimupy: visual size (degrees of visual angle), resolution (pixels per
-//! degree) and shape (pixels). Any two give the third; all three must agree.
+//! degree) and shape (pixels). Any two give the third.
+//!
+//! **Order: (height, width)**, as stimupy and NumPy write it: `visual_size: (4.0, 8.0)` is 4°
+//! tall and 8° wide, and `shape: (128, 256)` is 128 rows of 256 pixels. The same order holds in
+//! JSON specs, sidecars and the `.mat`/`.npz` bundles; only the CLI's `--size WxH` and
+//! `--visual-size WxH` name width first, explicitly (see [`parse_size`]).
+//!
+//! **One rule for a shape.** A shape given without a ppd sets the output size and scales the
+//! whole stimulus to fill it: the ppd is derived as the largest at which the stimulus's visual
+//! size (the one given, or its default) fits the shape, so a picture of another shape shows the
+//! same stimulus larger or smaller. When the shape's aspect differs from the visual size's, the
+//! stimulus fits along the tighter axis and the other axis gets more field (the stimulus stays
+//! centred): the resolved visual size is the shape divided by that ppd. Extra field at a fixed
+//! scale is what a ppd given with the visual size or the shape gives.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -32,31 +45,66 @@ impl Geometry {
     }
 }
 
-/// What the user gave of the triple; anything left `None` is derived or defaulted.
+/// What the user gave of the triple, in stimupy's order **(height, width)**; anything left
+/// `None` is derived or defaulted (see the [module](self) for the rule).
+///
+/// ```
+/// use shadelab::SizeRequest;
+/// // stimupy's checkerboard(visual_size=(4, 8), ppd=32): 128 rows of 256 pixels.
+/// let size = SizeRequest { visual_size: Some((4.0, 8.0)), ppd: Some(32.0), shape: None };
+/// let g = size.resolve((8.0, 8.0), 16.0, 1 << 24).unwrap();
+/// assert_eq!((g.height, g.width), (128, 256));
+/// // A shape alone scales the default visual size (here 8° × 8°) to fill it: ppd 32.
+/// let size = SizeRequest { shape: Some((256, 256)), ..Default::default() };
+/// assert_eq!(size.resolve((8.0, 8.0), 16.0, 1 << 24).unwrap().ppd, 32.0);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct SizeRequest {
-    /// (width, height) in degrees.
+    /// (height, width) in degrees of visual angle.
     pub visual_size: Option<(f64, f64)>,
     /// Pixels per degree.
     pub ppd: Option<f64>,
-    /// (width, height) in pixels.
+    /// (height, width) in pixels: rows, then columns.
     pub shape: Option<(usize, usize)>,
 }
 
 impl SizeRequest {
-    /// Resolves the triple: two given values fix the third (shape = round(visual size × ppd));
-    /// three must agree to within half a pixel; with fewer than two, `default_ppd` and then
-    /// `default_visual_size` fill in.
+    /// Sets the output size, (height, width) in pixels, so that the stimulus scales to fill it:
+    /// a ppd given before is dropped (the ppd is derived), after a ppd given with a shape (as a
+    /// sidecar records them) has become the visual size they made. Give a ppd after this for a
+    /// fixed scale instead.
+    ///
+    /// ```
+    /// use shadelab::SizeRequest;
+    /// // A sidecar's 64 × 96 pixels at 8 ppd, asked for at twice the size: 16 ppd, same degrees.
+    /// let mut size = SizeRequest { ppd: Some(8.0), shape: Some((64, 96)), ..Default::default() };
+    /// size.set_shape((128, 192));
+    /// assert_eq!(size.visual_size, Some((8.0, 12.0)));
+    /// assert_eq!(size.resolve((1.0, 1.0), 1.0, 1 << 24).unwrap().ppd, 16.0);
+    /// ```
+    pub fn set_shape(&mut self, shape: (usize, usize)) {
+        if let (None, Some(ppd), Some((h, w))) = (self.visual_size, self.ppd, self.shape) {
+            self.visual_size = Some((h as f64 / ppd, w as f64 / ppd));
+        }
+        self.ppd = None;
+        self.shape = Some(shape);
+    }
+
+    /// Resolves the triple (all pairs (height, width)). Visual size and ppd give the shape
+    /// (round(visual size × ppd)); ppd and shape give the visual size; a shape without a ppd
+    /// takes the largest ppd at which the visual size (`default_visual_size` when none is
+    /// given) fits it, the rest of the shape being field; all three must agree to within half
+    /// a pixel. Without a shape, `default_ppd` and then `default_visual_size` fill in.
     pub fn resolve(
         &self,
         default_visual_size: (f64, f64),
         default_ppd: f64,
         max_pixels: usize,
     ) -> Result<Geometry> {
-        if let Some((w, h)) = self.visual_size {
-            if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        if let Some((h, w)) = self.visual_size {
+            if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0) {
                 return Err(Error::invalid(format!(
-                    "visual size {w}x{h} degrees must be positive"
+                    "visual size {h}x{w} degrees (height x width) must be positive"
                 )));
             }
         }
@@ -67,62 +115,51 @@ impl SizeRequest {
                 )));
             }
         }
-        if let Some((w, h)) = self.shape {
+        if let Some((h, w)) = self.shape {
             crate::grid::check_size(w, h, max_pixels)?;
         }
-        let given = self.visual_size.is_some() as u8
-            + self.ppd.is_some() as u8
-            + self.shape.is_some() as u8;
-        let (visual, ppd, shape) = match (self.visual_size, self.ppd, self.shape) {
-            (Some(v), Some(p), Some(s)) => (v, p, s),
-            (Some(v), Some(p), None) => (v, p, round_shape(v, p)?),
-            (Some(v), None, Some(s)) => {
-                let p = s.0 as f64 / v.0;
-                (v, p, s)
-            }
-            (None, Some(p), Some(s)) => ((s.0 as f64 / p, s.1 as f64 / p), p, s),
-            (None, None, Some(s)) => (
-                (s.0 as f64 / default_ppd, s.1 as f64 / default_ppd),
-                default_ppd,
-                s,
-            ),
-            (Some(v), None, None) => (v, default_ppd, round_shape(v, default_ppd)?),
-            (None, Some(p), None) => (default_visual_size, p, round_shape(default_visual_size, p)?),
-            (None, None, None) => (
-                default_visual_size,
-                default_ppd,
-                round_shape(default_visual_size, default_ppd)?,
-            ),
-        };
-        if given >= 2 {
-            for (axis, deg, px) in [("width", visual.0, shape.0), ("height", visual.1, shape.1)] {
-                if (deg * ppd - px as f64).abs() > 0.5 {
-                    return Err(Error::invalid(format!(
-                        "inconsistent size: {axis} {deg}° × {ppd} ppd = {} px, not {px} px",
-                        deg * ppd
-                    )));
+        let visual_or_default = self.visual_size.unwrap_or(default_visual_size);
+        let (ppd, shape) = match (self.visual_size, self.ppd, self.shape) {
+            (Some(v), Some(p), Some(s)) => {
+                for (axis, deg, px) in [("height", v.0, s.0), ("width", v.1, s.1)] {
+                    if (deg * p - px as f64).abs() > 0.5 {
+                        return Err(Error::invalid(format!(
+                            "inconsistent size: {axis} {deg}° × {p} ppd = {} px, not {px} px",
+                            deg * p
+                        )));
+                    }
                 }
+                (p, s)
             }
-        }
-        crate::grid::check_size(shape.0, shape.1, max_pixels)?;
+            (_, None, Some(s)) => (fit_ppd(visual_or_default, s), s),
+            (None, Some(p), Some(s)) => (p, s),
+            (_, Some(p), None) => (p, round_shape(visual_or_default, p)?),
+            (_, None, None) => (default_ppd, round_shape(visual_or_default, default_ppd)?),
+        };
+        crate::grid::check_size(shape.1, shape.0, max_pixels)?;
         Ok(Geometry {
-            width: shape.0,
-            height: shape.1,
+            width: shape.1,
+            height: shape.0,
             ppd,
         })
     }
 }
 
+/// The largest ppd at which `visual` (height, width) fits `shape` (height, width).
+fn fit_ppd(visual: (f64, f64), shape: (usize, usize)) -> f64 {
+    (shape.0 as f64 / visual.0).min(shape.1 as f64 / visual.1)
+}
+
 fn round_shape(visual: (f64, f64), ppd: f64) -> Result<(usize, usize)> {
-    let w = (visual.0 * ppd).round();
-    let h = (visual.1 * ppd).round();
+    let h = (visual.0 * ppd).round();
+    let w = (visual.1 * ppd).round();
     if !(w >= 1.0 && h >= 1.0 && w < 1e9 && h < 1e9) {
         return Err(Error::invalid(format!(
-            "visual size {}x{}° at {ppd} ppd gives {w}x{h} pixels",
+            "visual size {}x{}° (height x width) at {ppd} ppd gives {h}x{w} pixels",
             visual.0, visual.1
         )));
     }
-    Ok((w as usize, h as usize))
+    Ok((h as usize, w as usize))
 }
 
 /// Parses `N` (square) or `WxH` into a (width, height) pair.
@@ -140,21 +177,31 @@ pub fn parse_pair<T: std::str::FromStr + Copy>(text: &str, what: &str) -> Result
     }
 }
 
+/// Parses a size written `N` (square) or `WxH` (width first, as on the command line) into the
+/// library's (height, width).
+///
+/// ```
+/// assert_eq!(shadelab::visual_size::parse_size::<usize>("256x128", "size").unwrap(), (128, 256));
+/// ```
+pub fn parse_size<T: std::str::FromStr + Copy>(text: &str, what: &str) -> Result<(T, T)> {
+    parse_pair(text, what).map(|(w, h)| (h, w))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     const MAX: usize = crate::grid::DEFAULT_MAX_PIXELS;
 
     #[test]
-    fn any_two_give_the_third() {
+    fn any_two_give_the_third_in_height_width_order() {
         let g = SizeRequest {
-            visual_size: Some((10.0, 5.0)),
+            visual_size: Some((5.0, 10.0)),
             ppd: Some(32.0),
             shape: None,
         }
         .resolve((1.0, 1.0), 1.0, MAX)
         .unwrap();
-        assert_eq!((g.width, g.height), (320, 160));
+        assert_eq!((g.height, g.width), (160, 320));
         let g = SizeRequest {
             visual_size: Some((10.0, 10.0)),
             ppd: None,
@@ -166,11 +213,51 @@ mod tests {
         let g = SizeRequest {
             visual_size: None,
             ppd: Some(20.0),
-            shape: Some((100, 60)),
+            shape: Some((60, 100)),
         }
         .resolve((1.0, 1.0), 1.0, MAX)
         .unwrap();
-        assert_eq!((g.width_deg(), g.height_deg()), (5.0, 3.0));
+        assert_eq!((g.height_deg(), g.width_deg()), (3.0, 5.0));
+    }
+
+    #[test]
+    fn a_shape_alone_scales_the_default_visual_size_to_fit() {
+        let shape_only = |shape| SizeRequest {
+            shape: Some(shape),
+            ..Default::default()
+        };
+        // 7° tall, 9° wide by default at 16 ppd; 70 × 90 pixels is 10 ppd, 140 × 180 is 20.
+        for (shape, ppd) in [((70, 90), 10.0), ((140, 180), 20.0)] {
+            let g = shape_only(shape).resolve((7.0, 9.0), 16.0, MAX).unwrap();
+            assert_eq!((g.height, g.width, g.ppd), (shape.0, shape.1, ppd));
+        }
+        // Another aspect: the tighter axis sets the ppd, the other gets more field.
+        let g = shape_only((70, 180))
+            .resolve((7.0, 9.0), 16.0, MAX)
+            .unwrap();
+        assert_eq!((g.ppd, g.height_deg(), g.width_deg()), (10.0, 7.0, 18.0));
+        let g = shape_only((140, 90))
+            .resolve((7.0, 9.0), 16.0, MAX)
+            .unwrap();
+        assert_eq!((g.ppd, g.height_deg(), g.width_deg()), (10.0, 14.0, 9.0));
+        // A ppd given with the shape keeps the scale: a larger shape is more field.
+        let g = SizeRequest {
+            ppd: Some(16.0),
+            shape: Some((160, 160)),
+            ..Default::default()
+        }
+        .resolve((7.0, 9.0), 16.0, MAX)
+        .unwrap();
+        assert_eq!((g.ppd, g.height_deg(), g.width_deg()), (16.0, 10.0, 10.0));
+        // set_shape turns a recorded ppd and shape into the visual size they made.
+        let mut size = SizeRequest {
+            ppd: Some(10.0),
+            shape: Some((70, 90)),
+            ..Default::default()
+        };
+        size.set_shape((35, 45));
+        let g = size.resolve((1.0, 1.0), 1.0, MAX).unwrap();
+        assert_eq!((g.ppd, g.height, g.width), (5.0, 35, 45));
     }
 
     #[test]
@@ -178,7 +265,7 @@ mod tests {
         let r = SizeRequest {
             visual_size: Some((10.0, 10.0)),
             ppd: Some(32.0),
-            shape: Some((300, 320)),
+            shape: Some((320, 300)),
         };
         assert!(r
             .resolve((1.0, 1.0), 1.0, MAX)
@@ -203,5 +290,6 @@ mod tests {
         assert!(r.resolve((1.0, 1.0), 1.0, MAX).is_err());
         assert!(parse_pair::<usize>("12x", "size").is_err());
         assert_eq!(parse_pair::<usize>("12x7", "size").unwrap(), (12, 7));
+        assert_eq!(parse_size::<usize>("12x7", "size").unwrap(), (7, 12));
     }
 }

@@ -21,7 +21,7 @@ use std::path::Path;
 fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Picture {
     let given: Map<String, Value> = shadelab::params::Params::parse_pairs(pairs).unwrap();
     let size = SizeRequest {
-        visual_size: Some((w as f64 / ppd, h as f64 / ppd)),
+        visual_size: Some((h as f64 / ppd, w as f64 / ppd)),
         ppd: Some(ppd),
         shape: None,
     };
@@ -498,7 +498,7 @@ const SPEC: &str = r#"{
     {"stimulus": "bumps", "params": {"rows": 1, "columns": 1, "pattern": ["bumps", "dimples"]},
      "shape": [32, 32], "ppd": 12},
     {"stimulus": "sideways", "params": {"rows": 2, "columns": 1, "side": ["left", "right"]},
-     "shape": [32, 64], "ppd": 12}
+     "shape": [64, 32], "ppd": 12}
   ],
   "tilts": "0:360:45",
   "slants": [30, 45],

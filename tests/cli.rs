@@ -71,7 +71,7 @@ fn render_writes_image_sidecar_mask_and_layers() {
     assert_eq!(sidecar["stimulus"], "sphere");
     assert_eq!(sidecar["parameters"]["light"], "tilt=0,slant=45");
     assert_eq!(sidecar["parameters"]["radius"], 0.45);
-    assert_eq!(sidecar["shape_px"]["width"], 64);
+    assert_eq!(sidecar["shape"], serde_json::json!([64, 64]));
     assert_eq!(sidecar["version"], env!("CARGO_PKG_VERSION"));
     // The PNG is 16-bit and equals the library's render to the last code.
     let (img, info) = shadelab::io::read_gray(&d.join("s.png"), 1 << 20).unwrap();

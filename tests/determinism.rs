@@ -103,7 +103,7 @@ fn one_and_two_threads_write_the_same_bytes() {
         std::fs::write(
             dir.join("study.json"),
             r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": [1, 2]},
-                "shape": [64, 24], "ppd": 12}], "tilts": "0:360:90", "slants": [30, 45]}"#,
+                "shape": [24, 64], "ppd": 12}], "tilts": "0:360:90", "slants": [30, 45]}"#,
         )
         .unwrap();
         let mut all: Vec<&[&str]> = runs.to_vec();

@@ -90,7 +90,7 @@ fn prepare_and_generate(
     let small = SizeRequest {
         visual_size: None,
         ppd: size.ppd,
-        shape: Some((48, 32)),
+        shape: Some((32, 48)),
     };
     if let Ok((stim, request)) = stimulus::prepare(name, params, &small, seed, 16 * 1024) {
         let _ = stim.generate(&request);

@@ -142,7 +142,7 @@ const RUNS: &[&[&str]] = &[
 ];
 
 const STUDY: &str = r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": [1, 2]},
-    "shape": [64, 24], "ppd": 12}], "tilts": "0:360:90", "slants": [30, 45]}"#;
+    "shape": [24, 64], "ppd": 12}], "tilts": "0:360:90", "slants": [30, 45]}"#;
 
 #[test]
 fn every_command_writes_what_it_wrote_before_the_refactor() {

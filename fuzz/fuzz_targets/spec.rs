@@ -35,7 +35,7 @@ fn prepare_and_generate(
     let small = SizeRequest {
         visual_size: None,
         ppd: size.ppd,
-        shape: Some((48, 32)),
+        shape: Some((32, 48)),
     };
     let Ok((stim, request)) = stimulus::prepare(name, params, &small, seed, MAX_PIXELS) else {
         return;

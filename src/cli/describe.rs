@@ -23,8 +23,8 @@ pub fn run(args: Args) -> CliResult {
     let d = describe(&args.name)?;
     println!("{} — {}", d.name, d.summary);
     println!(
-        "default size: {}x{} deg at {} ppd",
-        d.default_visual_size.0, d.default_visual_size.1, d.default_ppd
+        "default size: {}x{} deg (width x height) at {} ppd",
+        d.default_visual_size.1, d.default_visual_size.0, d.default_ppd
     );
     println!("parameters (--set key=value):");
     for p in &d.params {

@@ -6,7 +6,7 @@ use serde_json::Value;
 use shadelab::io::BitDepth;
 use shadelab::pipeline::render::{self, RenderConfig};
 use shadelab::stimulus::Range;
-use shadelab::visual_size::parse_pair;
+use shadelab::visual_size::parse_size;
 use shadelab::{Error, NoProgress};
 use std::path::PathBuf;
 
@@ -31,7 +31,8 @@ pub struct Args {
     /// The space of a reflectance-map figure: pq (gradient space) or fg (stereographic); the same as --set space=…
     #[arg(long, value_name = "pq|fg")]
     pub space: Option<String>,
-    /// Size in pixels: N (square) or WxH.
+    /// Size in pixels: N (square) or WxH (width first); the whole stimulus scales to fill it (ppd
+    /// derived; another aspect adds field on the longer side). With --ppd: that scale, and more or less field.
     #[arg(long, value_name = "N|WxH", conflicts_with_all = ["width", "height"], allow_hyphen_values = true)]
     pub size: Option<String>,
     /// Width in pixels (with --height).
@@ -40,7 +41,7 @@ pub struct Args {
     /// Height in pixels (with --width).
     #[arg(long, requires = "width", allow_hyphen_values = true)]
     pub height: Option<usize>,
-    /// Visual size in degrees: D (square) or WxH.
+    /// Visual size in degrees: D (square) or WxH (width first; JSON specs and sidecars write [h, w]).
     #[arg(long, value_name = "DEG|WxH", allow_hyphen_values = true)]
     pub visual_size: Option<String>,
     /// Pixels per degree of visual angle.
@@ -62,7 +63,7 @@ pub struct Args {
     /// sidecar's].
     #[arg(long, value_name = "unit|psychopy", value_parser = ["unit", "psychopy"])]
     pub range: Option<String>,
-    /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5, double) or .svg (vector stimuli); the sidecar goes beside it as .json.
+    /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5) or .npz (NumPy) bundles of img, target_mask and every parameter, or .svg (vector stimuli); the sidecar goes beside it as .json.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
 }
@@ -118,13 +119,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         })?;
     }
     if let Some(s) = &args.size {
-        config.size.shape = Some(parse_pair::<usize>(s, "--size")?);
+        config.size.set_shape(parse_size::<usize>(s, "--size")?);
     }
     if let (Some(w), Some(h)) = (args.width, args.height) {
-        config.size.shape = Some((w, h));
+        config.size.set_shape((h, w));
     }
     if let Some(v) = &args.visual_size {
-        config.size.visual_size = Some(parse_pair::<f64>(v, "--visual-size")?);
+        config.size.visual_size = Some(parse_size::<f64>(v, "--visual-size")?);
     }
     if args.ppd.is_some() {
         config.size.ppd = args.ppd;

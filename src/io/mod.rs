@@ -13,8 +13,8 @@ pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, Atom
 pub use csv::csv_field;
 pub use gif::write_gif;
 pub use npy::{
-    read_array, read_array_from_bytes, read_image, read_image_from_bytes, read_normals, write_f32,
-    write_image, write_normals, NpyArray,
+    encode_f64, encode_npz, encode_text, read_array, read_array_from_bytes, read_image,
+    read_image_from_bytes, read_normals, write_f32, write_image, write_normals, NpyArray,
 };
 pub use png::{
     read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes, read_rgb,

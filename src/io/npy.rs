@@ -289,29 +289,96 @@ pub fn read_normals(path: &Path, max_pixels: usize) -> Result<Grid<Normal>> {
     Grid::from_vec(w, h, normals)
 }
 
-/// Writes float32 values of `shape` (C order) as a `.npy` file, atomically.
-pub fn write_f32(path: &Path, shape: &[usize], data: impl Iterator<Item = f64>) -> Result<()> {
+/// The `.npy` header (magic, version 1.0, length, dict, padding to 64 bytes) of an array of
+/// dtype `descr` and `shape` in C order.
+fn npy_header(descr: &str, shape: &[usize]) -> Result<Vec<u8>> {
     let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
-    let shape_text = if dims.len() == 1 {
-        format!("({},)", dims[0])
-    } else {
-        format!("({})", dims.join(", "))
+    let shape_text = match dims.len() {
+        0 => "()".to_string(),
+        1 => format!("({},)", dims[0]),
+        _ => format!("({})", dims.join(", ")),
     };
-    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape_text}, }}");
+    let mut header =
+        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_text}, }}");
     // Magic (6) + version (2) + length (2) + header + '\n' is padded to a multiple of 64.
     let unpadded = 10 + header.len() + 1;
     header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
     header.push('\n');
     let header_len =
         u16::try_from(header.len()).map_err(|_| Error::invalid("array has too many dimensions"))?;
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&header_len.to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    Ok(out)
+}
+
+/// Writes float32 values of `shape` (C order) as a `.npy` file, atomically.
+pub fn write_f32(path: &Path, shape: &[usize], data: impl Iterator<Item = f64>) -> Result<()> {
+    let header = npy_header("<f4", shape)?;
     let values: Vec<u8> = data.flat_map(|v| (v as f32).to_le_bytes()).collect();
     super::write_atomic(path, |out| {
         let io = |e| Error::io(path, e);
-        out.write_all(b"\x93NUMPY\x01\x00").map_err(io)?;
-        out.write_all(&header_len.to_le_bytes()).map_err(io)?;
-        out.write_all(header.as_bytes()).map_err(io)?;
+        out.write_all(&header).map_err(io)?;
         out.write_all(&values).map_err(io)
     })
+}
+
+/// The bytes of a float64 `.npy` array of `shape` (C order; `[]` for a scalar).
+pub fn encode_f64(shape: &[usize], data: &[f64]) -> Result<Vec<u8>> {
+    if shape.iter().product::<usize>() != data.len() {
+        return Err(Error::invalid(format!(
+            ".npy array of {} values does not match shape {shape:?}",
+            data.len()
+        )));
+    }
+    let mut out = npy_header("<f8", shape)?;
+    out.extend(data.iter().flat_map(|v| v.to_le_bytes()));
+    Ok(out)
+}
+
+/// The bytes of a NumPy unicode (`<U`) `.npy` array: one string as a 0-d array (`shape`
+/// `[]`), or several as a 1-d array; `np.load` reads it without pickles.
+pub fn encode_text(shape: &[usize], texts: &[String]) -> Result<Vec<u8>> {
+    if shape.iter().product::<usize>() != texts.len() {
+        return Err(Error::invalid(format!(
+            ".npy array of {} strings does not match shape {shape:?}",
+            texts.len()
+        )));
+    }
+    let width = texts
+        .iter()
+        .map(|t| t.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let mut out = npy_header(&format!("<U{width}"), shape)?;
+    for text in texts {
+        let chars = text.chars().count();
+        out.extend(text.chars().flat_map(|c| (c as u32).to_le_bytes()));
+        out.resize(out.len() + 4 * (width - chars), 0);
+    }
+    Ok(out)
+}
+
+/// The bytes of an `.npz` archive (a zip of `.npy` members, stored uncompressed with a fixed
+/// timestamp so that equal arrays give equal files), as `numpy.savez` writes it: member
+/// `NAME.npy` for each (name, `.npy` bytes).
+pub fn encode_npz(members: &[(String, Vec<u8>)]) -> Result<Vec<u8>> {
+    use npyz::zip::{write::FileOptions, CompressionMethod, DateTime, ZipWriter};
+    use std::io::Write;
+    let fail = |e: &dyn std::fmt::Display| Error::Compute(format!("cannot write .npz: {e}"));
+    let mut zip = ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = FileOptions::default()
+        .compression_method(CompressionMethod::Stored)
+        .last_modified_time(DateTime::default())
+        .large_file(false);
+    for (name, bytes) in members {
+        zip.start_file(npyz::npz::file_name_from_array_name(name), options)
+            .map_err(|e| fail(&e))?;
+        zip.write_all(bytes).map_err(|e| fail(&e))?;
+    }
+    let cursor = zip.finish().map_err(|e| fail(&e))?;
+    Ok(cursor.into_inner())
 }
 
 /// Writes an image as an H×W float32 `.npy`.

@@ -7,10 +7,10 @@
 //! use shadelab::NoProgress;
 //!
 //! let mut config = RenderConfig::new("sphere", "sphere.png");
-//! config.size.shape = Some((32, 24));
+//! config.size.set_shape((24, 32)); // (height, width), as stimupy's shape
 //! config.validate().unwrap();
 //! let report = run(&config, &NoProgress).unwrap();
-//! assert_eq!((report.geometry.width, report.geometry.height), (32, 24));
+//! assert_eq!((report.geometry.height, report.geometry.width), (24, 32));
 //! assert_eq!(report.output.pixels.size(), (32, 24));
 //! // Nothing is written until `write` is called.
 //! assert!(!std::path::Path::new("sphere.png").exists());
@@ -32,7 +32,8 @@ pub struct RenderConfig {
     /// Parameter values, checked against the stimulus's declarations (see [`describe`]);
     /// missing ones take their defaults.
     pub params: Map<String, Value>,
-    /// Size in pixels and/or degrees; what is not given comes from the stimulus's defaults.
+    /// Size in pixels and/or degrees, (height, width) as in stimupy; what is not given comes
+    /// from the stimulus's defaults (see [`SizeRequest`] for the rule).
     pub size: SizeRequest,
     /// Seed for random layouts (recorded in the sidecar).
     pub seed: u64,
@@ -242,7 +243,7 @@ pub struct Description {
     pub name: &'static str,
     /// What it shows, in one line.
     pub summary: &'static str,
-    /// Default (width, height) in degrees.
+    /// Default (height, width) in degrees, as stimupy's `visual_size`.
     pub default_visual_size: (f64, f64),
     /// Default pixels per degree.
     pub default_ppd: f64,
@@ -263,7 +264,7 @@ pub fn describe(name: &str) -> Result<Description> {
     Ok(Description {
         name: info.name,
         summary: info.summary,
-        default_visual_size: info.default_visual_size,
+        default_visual_size: (info.default_visual_size.1, info.default_visual_size.0),
         default_ppd: info.default_ppd,
         params: info
             .params
@@ -293,14 +294,7 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
         .clone();
     let seed = field("seed")?.as_u64().ok_or_else(|| bad("seed"))?;
     let ppd = field("ppd")?.as_f64().ok_or_else(|| bad("ppd"))?;
-    let shape = field("shape_px")?;
-    let side = |key: &str| {
-        shape
-            .get(key)
-            .and_then(Value::as_u64)
-            .and_then(|n| usize::try_from(n).ok())
-            .ok_or_else(|| bad("shape_px"))
-    };
+    let shape = sidecar_shape(v).ok_or_else(|| bad("shape"))?;
     let bit_depth = match v.get("bit_depth") {
         Some(Value::Number(n)) if n.as_u64() == Some(8) => crate::io::BitDepth::Eight,
         Some(Value::Number(n)) if n.as_u64() == Some(16) => crate::io::BitDepth::Sixteen,
@@ -325,7 +319,7 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
         size: SizeRequest {
             visual_size: None,
             ppd: Some(ppd),
-            shape: Some((side("width")?, side("height")?)),
+            shape: Some(shape),
         },
         seed,
         export: ExportOptions {
@@ -337,6 +331,17 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
         },
         ..RenderConfig::new(stimulus, out)
     })
+}
+
+/// A sidecar's size in pixels, (height, width): `"shape": [h, w]` as shadelab writes it now,
+/// or the `"shape_px": {"width": w, "height": h}` of sidecars written before.
+fn sidecar_shape(v: &Value) -> Option<(usize, usize)> {
+    let px = |n: Option<&Value>| n?.as_u64().and_then(|n| usize::try_from(n).ok());
+    match (v.get("shape"), v.get("shape_px")) {
+        (Some(Value::Array(hw)), _) if hw.len() == 2 => Some((px(hw.first())?, px(hw.get(1))?)),
+        (None, Some(old)) => Some((px(old.get("height"))?, px(old.get("width"))?)),
+        _ => None,
+    }
 }
 
 #[cfg(test)]
@@ -361,10 +366,14 @@ mod tests {
         config = RenderConfig::from_spec(&spec, "b.png");
         assert_eq!((config.seed, config.size.shape), (7, Some((20, 10))));
         let report = run(&config, &NoProgress).unwrap();
-        assert_eq!(report.output.pixels.size(), (20, 10));
+        // (height, width): 20 rows of 10 pixels; `Pixels::size` is (width, height).
+        assert_eq!(report.output.pixels.size(), (10, 20));
         let json = serde_json::to_value(&report).unwrap();
         assert_eq!(json["stimulus"], "sphere");
-        assert_eq!(json["geometry"]["width"], 20);
+        assert_eq!(
+            (&json["geometry"]["height"], &json["geometry"]["width"]),
+            (&20.into(), &10.into())
+        );
     }
 
     #[test]

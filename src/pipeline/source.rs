@@ -101,7 +101,7 @@ impl PictureSource {
             (None, Some(name)) => {
                 let size = SizeRequest {
                     ppd: self.ppd,
-                    shape,
+                    shape: shape.map(|(w, h)| (h, w)),
                     ..Default::default()
                 };
                 let seed = self.seed.unwrap_or(0);

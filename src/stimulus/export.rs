@@ -1,6 +1,6 @@
 //! Writing a rendered stimulus: the picture in the format its extension names (.png, .npy,
-//! .mat, .svg), the target mask, the ground-truth layers and a JSON sidecar recording every
-//! parameter.
+//! .svg, or a `.mat`/`.npz` bundle of picture, mask and every parameter: see [`super::bundle`]),
+//! the target mask, the ground-truth layers and a JSON sidecar recording every parameter.
 
 use super::{Output, Pixels, Request};
 use crate::error::{Error, Result};
@@ -71,9 +71,9 @@ impl ExportOptions {
                     .join(", ")
             )));
         }
-        if self.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat") {
+        if self.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat" | "npz") {
             return Err(Error::invalid(format!(
-                "range psychopy applies to float formats (.npy, .mat), not .{ext}"
+                "range psychopy applies to float formats (.npy, .mat, .npz), not .{ext}"
             )));
         }
         if self.gamma.is_some() && ext != "png" {
@@ -86,10 +86,10 @@ impl ExportOptions {
 }
 
 /// The output formats, by extension.
-pub const FORMATS: &[&str] = &["png", "npy", "mat", "svg"];
+pub const FORMATS: &[&str] = &["png", "npy", "mat", "npz", "svg"];
 
-/// The name of the variable in `.mat` output.
-pub const MAT_VARIABLE: &str = "stimulus";
+/// The name of the picture in a `.mat` or `.npz` bundle (stimupy's).
+pub const MAT_VARIABLE: &str = "img";
 
 /// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
 /// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
@@ -219,13 +219,13 @@ fn write_all(
             &[img.height(), img.width(), 3],
             img.data().iter().flat_map(|p| p.map(to_range)),
         )?,
-        ("mat", pixels) => {
-            let (w, h) = pixels.size();
-            let (channels, values): (usize, Vec<f64>) = match pixels {
-                Pixels::Gray(img) => (1, img.data().iter().map(|&v| to_range(v)).collect()),
-                Pixels::Rgb(img) => (3, img.data().iter().flat_map(|p| p.map(to_range)).collect()),
+        ("mat" | "npz", _) => {
+            let fields = super::bundle::fields(name, request, output, options);
+            let bytes = if ext == "mat" {
+                super::bundle::to_mat(&fields)?
+            } else {
+                super::bundle::to_npz(&fields)?
             };
-            let bytes = super::mat::encode_image(MAT_VARIABLE, w, h, channels, &values)?;
             io::write_atomic(path, |out| {
                 out.write_all(&bytes).map_err(|e| Error::io(path, e))
             })?
@@ -248,7 +248,9 @@ fn write_all(
 }
 
 /// The sidecar of a rendered stimulus: program, version, conventions, stimulus, every
-/// parameter, geometry, seed, format, gamma, range, checksum, targets and files.
+/// parameter, geometry, seed, format, gamma, range, checksum, targets and files. The geometry
+/// is stimupy's triple in stimupy's order: `visual_size` [height, width] in degrees, `ppd`, and
+/// `shape` [height, width] in pixels.
 pub fn sidecar_json(
     name: &str,
     request: &Request,
@@ -275,9 +277,9 @@ pub fn sidecar_json(
         "stimulus": name,
         "parameters": request.params.to_json(),
         "seed": request.seed,
-        "visual_size_deg": { "width": g.width_deg(), "height": g.height_deg() },
+        "visual_size": [g.height_deg(), g.width_deg()],
         "ppd": g.ppd,
-        "shape_px": { "width": g.width, "height": g.height },
+        "shape": [g.height, g.width],
         "channels": channels,
         "format": format,
         "bit_depth": if format == "png" { Value::from(match options.bit_depth { BitDepth::Eight => 8, BitDepth::Sixteen => 16 }) } else { Value::Null },
@@ -286,7 +288,11 @@ pub fn sidecar_json(
             ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
             ("png", None) => "linear: code = round(v * max)".to_string(),
             ("svg", _) => "vector; colours are linear values as percentages, 1 user unit = 1 pixel".to_string(),
-            ("mat", _) => match options.range { Range::Unit => format!("MATLAB v5 double, linear 0..1, variable '{MAT_VARIABLE}' (H x W [x 3])"), Range::Psychopy => format!("MATLAB v5 double, linear mapped to -1..1 (v*2-1), variable '{MAT_VARIABLE}' (H x W [x 3])") },
+            ("mat" | "npz", _) => format!(
+                "{}; picture '{MAT_VARIABLE}' (H x W [x 3]) {}, with target_mask and every parameter as fields",
+                if format == "mat" { "MATLAB v5 bundle, doubles" } else { "NumPy npz bundle, float64" },
+                match options.range { Range::Unit => "linear 0..1", Range::Psychopy => "linear mapped to -1..1 (v*2-1)" }
+            ),
             _ => match options.range { Range::Unit => "float32, linear 0..1".to_string(), Range::Psychopy => "float32, linear mapped to -1..1 (v*2-1)".to_string() },
         },
         "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },

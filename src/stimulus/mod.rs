@@ -12,6 +12,7 @@
 
 mod boundary_strips;
 mod bumps;
+pub mod bundle;
 mod checker_shadow;
 mod checkerboard;
 mod circles;
@@ -67,7 +68,8 @@ pub struct Info {
     pub summary: &'static str,
     /// Its parameters.
     pub params: Vec<ParamSpec>,
-    /// Default (width, height) in degrees.
+    /// Default (width, height) in degrees (width first here only; [`prepare`] turns it into
+    /// the (height, width) of a [`SizeRequest`]).
     pub default_visual_size: (f64, f64),
     /// Default pixels per degree.
     pub default_ppd: f64,
@@ -210,8 +212,8 @@ pub trait Stimulus: Send + Sync {
     /// Renders it.
     fn generate(&self, request: &Request) -> Result<Output>;
 
-    /// The size in pixels the stimulus has by nature (a depth map's own size), used when the
-    /// user gives no size in pixels.
+    /// The size in pixels, (width, height), the stimulus has by nature (a depth map's own
+    /// size), used when the user gives no size in pixels.
     fn natural_shape(&self, _params: &Params) -> Result<Option<(usize, usize)>> {
         Ok(None)
     }
@@ -340,13 +342,13 @@ macro_rules! stimulus_request {
             #[doc = $params_doc]
             #[serde(default)]
             pub params: serde_json::Map<String, serde_json::Value>,
-            /// Visual size (width, height) in degrees.
+            /// Visual size (height, width) in degrees, as stimupy's `visual_size`.
             #[serde(default)]
             pub visual_size: Option<(f64, f64)>,
             /// Pixels per degree.
             #[serde(default)]
             pub ppd: Option<f64>,
-            /// Size (width, height) in pixels.
+            /// Size (height, width) in pixels, as stimupy's `shape`.
             #[serde(default)]
             pub shape: Option<(usize, usize)>,
             $($rest)*
@@ -367,8 +369,9 @@ macro_rules! stimulus_request {
 pub(crate) use stimulus_request;
 
 stimulus_request! {
-/// A stimulus spec file: `{"stimulus": NAME, "params": {...}, "visual_size": [w, h],
-/// "ppd": N, "shape": [w, h], "seed": S}`; everything but `stimulus` is optional.
+/// A stimulus spec file: `{"stimulus": NAME, "params": {...}, "visual_size": [h, w],
+/// "ppd": N, "shape": [h, w], "seed": S}`; everything but `stimulus` is optional. Sizes are
+/// (height, width) as in stimupy: `"visual_size": [4, 8], "ppd": 32` is 128 rows × 256 columns.
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
@@ -414,9 +417,10 @@ pub fn prepare(
         Params::resolve(&info.params, given).map_err(|e| Error::invalid(format!("{name}: {e}")))?;
     let mut size = *size;
     if size.shape.is_none() && !(size.visual_size.is_some() && size.ppd.is_some()) {
-        size.shape = stimulus.natural_shape(&params)?;
+        size.shape = stimulus.natural_shape(&params)?.map(|(w, h)| (h, w));
     }
-    let geometry = size.resolve(info.default_visual_size, info.default_ppd, max_pixels)?;
+    let (w, h) = info.default_visual_size;
+    let geometry = size.resolve((h, w), info.default_ppd, max_pixels)?;
     Ok((
         stimulus,
         Request {
@@ -497,7 +501,7 @@ mod tests {
     fn by_name_and_typed_give_the_same_output_and_params() {
         let given = Params::parse_pairs(&["light=left", "profile=gaussian", "rows=2"]).unwrap();
         let size = SizeRequest {
-            visual_size: Some((14.0, 10.0)),
+            visual_size: Some((10.0, 14.0)),
             ppd: Some(16.0),
             shape: None,
         };

@@ -36,7 +36,9 @@ fn degrees_times_ppd_is_pixels() {
     let (img, _) = io::read_gray(&d.join("c.png"), MAX).unwrap();
     assert_eq!((img.width(), img.height()), (300, 200));
     let meta = sidecar(&d.join("c.json"));
-    assert_eq!(meta["visual_size_deg"]["width"], 12.0);
+    // stimupy's order: [height, width].
+    assert_eq!(meta["visual_size"], serde_json::json!([8.0, 12.0]));
+    assert_eq!(meta["shape"], serde_json::json!([200, 300]));
     assert_eq!(meta["ppd"], 25.0);
     let centres = meta["notes"]["centres_px"].as_array().unwrap();
     let x = |i: usize| centres[i][0].as_f64().unwrap();
@@ -75,7 +77,7 @@ fn degrees_times_ppd_is_pixels() {
 #[test]
 fn every_format_is_bit_identical_on_rerun() {
     let d = scratch("stim-rerun");
-    for ext in ["png", "npy", "mat", "svg"] {
+    for ext in ["png", "npy", "mat", "npz", "svg"] {
         let render = |seed: &str, file: &str| {
             let args = [
                 "render",
@@ -124,7 +126,7 @@ fn mat_files_hold_the_image_as_doubles_column_major() {
         "strips",
         &Map::new(),
         &SizeRequest {
-            shape: Some((40, 30)),
+            shape: Some((30, 40)),
             ppd: Some(4.0),
             ..Default::default()
         },
@@ -136,7 +138,10 @@ fn mat_files_hold_the_image_as_doubles_column_major() {
         panic!()
     };
     let a = mat::decode(&std::fs::read(d.join("s.mat")).unwrap()).unwrap();
-    assert_eq!(a.name, "stimulus");
+    assert_eq!(
+        a.name, "img",
+        "stimupy's name for the picture, the bundle's first field"
+    );
     assert_eq!(a.dims, [30, 40]);
     for r in 0..30 {
         for c in 0..40 {

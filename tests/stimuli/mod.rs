@@ -7,6 +7,8 @@
 //! stimuli` rewrites the golden files.
 
 mod bad_input;
+mod bundles;
+mod conventions;
 mod formats;
 mod gallery;
 mod golden;
@@ -27,7 +29,7 @@ fn small(name: &str) -> shadelab::Result<(stimulus::Request, Output)> {
     let (w, h) = info.default_visual_size;
     let ppd = (128.0 / w.max(h)).min(info.default_ppd);
     let size = SizeRequest {
-        visual_size: Some(info.default_visual_size),
+        visual_size: Some((h, w)),
         ppd: Some(ppd),
         shape: None,
     };

@@ -88,6 +88,11 @@ fn the_way_of_writing_is_reproduced_too() {
         &[&sphere[..], &["--range", "psychopy"]].concat(),
     );
     reproduces(&dir, "s.mat", &sphere);
+    reproduces(
+        &dir,
+        "s.npz",
+        &[&sphere[..], &["--range", "psychopy"]].concat(),
+    );
     reproduces(&dir, "c.svg", &["circles-binary", "--ppd", "10"]);
     reproduces(
         &dir,
