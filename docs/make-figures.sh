@@ -82,6 +82,7 @@ keep strips2-sfs/normals.png prior-boundary-normals.png
 
 show prior-hollow-mask --spec "$root/stimuli/hollow-mask.json" --ppd 24
 show prior-hollow-mask-convex --spec "$root/stimuli/hollow-mask-convex.json" --ppd 24
+show prior-hollow-mask-pair --spec "$root/stimuli/hollow-mask-pair.json" --ppd 24
 shadelab analyze observer --stimulus hollow-mask --set face_width=4 --size 48x64 --ppd 10 \
   --domain tokens --convexity-bias 0 \
   --out mask-observer-0

@@ -66,6 +66,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../stimuli/hollow-mask-convex.json"),
     ),
     (
+        "hollow-mask-pair",
+        include_str!("../stimuli/hollow-mask-pair.json"),
+    ),
+    (
         "checker-shadow",
         include_str!("../stimuli/checker-shadow.json"),
     ),

@@ -246,7 +246,7 @@ fn a_strong_convexity_prior_makes_the_hollow_mask_convex_lit_from_below() {
     let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
     let (s, _) = interpretations(&p, Domain::Tokens, &tilts);
     // The engine alone: hollow under light from above, convex under light from below.
-    assert!(convexity(&s, 0.0, 0) < -0.02 && convexity(&s, 180.0, 0) > 0.02);
+    assert!(convexity(&s, 0.0, 0) < -0.01 && convexity(&s, 180.0, 0) > 0.01);
     let percept = |bias: f64| {
         let o = ObserverOptions {
             prior: LightPrior {

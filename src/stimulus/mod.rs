@@ -18,6 +18,7 @@ mod checkerboard;
 mod circles;
 mod crater;
 mod export;
+pub mod face;
 mod fading_disk;
 mod frame;
 mod hollow_mask;
@@ -42,7 +43,7 @@ pub use circles::{
 };
 pub use crater::{crater, CraterParams, CraterRotation};
 pub use fading_disk::{fading_disk, FadingDiskParams, FadingVariant};
-pub use hollow_mask::{hollow_mask, FaceMode, HollowMaskParams};
+pub use hollow_mask::{hollow_mask, FaceLayout, FaceMode, HollowMaskParams};
 pub use reflectance_map::{reflectance_map, OrientationSpace, ReflectanceMapParams};
 pub use strips::{strips, StripOrientation, StripProfile, StripsParams};
 pub use surfaces::{

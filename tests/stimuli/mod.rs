@@ -9,6 +9,7 @@
 mod bad_input;
 mod bundles;
 mod conventions;
+mod face;
 mod formats;
 mod gallery;
 mod golden;

@@ -35,6 +35,14 @@ impl Mesh {
     /// seen from behind (an open mesh seen through a hole) has its normal flipped, and a smooth
     /// normal that would tilt away from the viewer near a silhouette is laid flat in the image
     /// plane. A pixel centre on an edge shared by two triangles belongs to exactly one of them.
+    ///
+    /// A triangle on the same three vertices as an earlier one in the same winding is the same
+    /// surface again and is skipped; triangles on three vertices that also occur in the
+    /// opposite winding form a zero-thickness fin and are all skipped. Decimated scans such as
+    /// the Stanford bunny hold such fins (73 in the built-in bunny), whose opposite normals
+    /// cancel at their vertices and showed as dark slivers. A smooth normal is used only where all three corners' vertex normals lie on the
+    /// triangle's side; elsewhere (a fin, a crease sharper than 90°, inconsistent winding) the
+    /// triangle is shaded flat rather than with a normal turned away from it.
     pub fn rasterize_with(
         &self,
         width: usize,
@@ -56,7 +64,11 @@ impl Mesh {
         let n = width * height;
         let mut nearest = vec![f64::NEG_INFINITY; n];
         let mut owner = vec![NONE; n];
+        let distinct = distinct_triangles(&self.triangles);
         for (t, tri) in self.triangles.iter().enumerate() {
+            if !distinct[t] {
+                continue;
+            }
             let [a, b, c] = tri.map(|i| i as usize);
             let corners = [fixed[a], fixed[b], fixed[c]];
             let Some(plane) = DepthPlane::new(corners, [pixel[a].z, pixel[b].z, pixel[c].z]) else {
@@ -89,7 +101,9 @@ impl Mesh {
             })
             .collect();
         let vertex_normals = match shading {
-            MeshShading::Smooth => area_weighted_vertex_normals(&self.triangles, &face_normals),
+            MeshShading::Smooth => {
+                area_weighted_vertex_normals(&self.triangles, &face_normals, &distinct)
+            }
             MeshShading::Flat => Vec::new(),
         };
         let normal_at = |k: usize| -> Normal {
@@ -105,9 +119,13 @@ impl Mesh {
             if shading == MeshShading::Flat {
                 return flat;
             }
+            let [a, b, c] = self.triangles[t].map(|i| vertex_normals[i as usize]);
+            // A corner normal with no direction or turned against the face: shade flat.
+            if [a, b, c].iter().any(|v| v.dot(&face) <= 0.0) {
+                return flat;
+            }
             let corners = self.triangles[t].map(|i| fixed[i as usize]);
             let w = barycentric(corners, k % width, k / width);
-            let [a, b, c] = self.triangles[t].map(|i| vertex_normals[i as usize]);
             let smooth = (a * w[0] + b * w[1] + c * w[2]) * side;
             // Inconsistent winding or a sharp crease: the interpolated normal is meaningless.
             if smooth.dot(&flat) <= 0.0 || smooth.norm() < 1e-12 {
@@ -144,11 +162,41 @@ impl Mesh {
     }
 }
 
-/// Area-weighted vertex normals (the sum of the unnormalised face normals around each vertex),
-/// normalised; zero where the faces cancel.
+/// Which triangles are drawn: the first of those on the same three vertices in the same
+/// winding (a repeat is the same surface again), and none of those on three vertices that
+/// also appear in the opposite winding (a zero-thickness fin, which encloses nothing; the
+/// rasteriser shows both sides of a single triangle anyway).
+fn distinct_triangles(triangles: &[[u32; 3]]) -> Vec<bool> {
+    use std::collections::hash_map::{Entry, HashMap};
+    // Per vertex set: the first triangle, and which windings occur (bit 0 even, bit 1 odd).
+    let mut sets: HashMap<[u32; 3], (usize, u8)> = HashMap::with_capacity(triangles.len());
+    for (t, &[a, b, c]) in triangles.iter().enumerate() {
+        let mut key = [a, b, c];
+        key.sort_unstable();
+        // (a, b, c) is an even permutation of its sorted order when its inversions are even.
+        let inversions = u8::from(a > b) + u8::from(a > c) + u8::from(b > c);
+        let winding = 1 << (inversions % 2);
+        match sets.entry(key) {
+            Entry::Vacant(e) => {
+                e.insert((t, winding));
+            }
+            Entry::Occupied(mut e) => e.get_mut().1 |= winding,
+        }
+    }
+    let mut drawn = vec![false; triangles.len()];
+    for (first, windings) in sets.into_values() {
+        drawn[first] = windings != 3;
+    }
+    drawn
+}
+
+/// Area-weighted vertex normals of the `used` triangles (the sum of the unnormalised face
+/// normals around each vertex), normalised; zero where the faces cancel (the sum is under a
+/// millionth of the summed face areas: rounding left over, not a direction).
 fn area_weighted_vertex_normals(
     triangles: &[[u32; 3]],
     face_normals: &[Vector3<f64>],
+    used: &[bool],
 ) -> Vec<Vector3<f64>> {
     let count = triangles
         .iter()
@@ -157,14 +205,21 @@ fn area_weighted_vertex_normals(
         .max()
         .unwrap_or(0);
     let mut sums = vec![Vector3::zeros(); count];
-    for (tri, face) in triangles.iter().zip(face_normals) {
+    let mut areas = vec![0.0; count];
+    for ((tri, face), _) in triangles
+        .iter()
+        .zip(face_normals)
+        .zip(used)
+        .filter(|(_, &u)| u)
+    {
         for &i in tri {
             sums[i as usize] += face;
+            areas[i as usize] += face.norm();
         }
     }
-    for s in &mut sums {
+    for (s, area) in sums.iter_mut().zip(areas) {
         let length = s.norm();
-        *s = if length > 0.0 {
+        *s = if length > 1e-6 * area {
             *s / length
         } else {
             Vector3::zeros()
@@ -572,6 +627,36 @@ mod tests {
         .unwrap();
         let e = Projection::fit(&needle, 8, 8, &Rotation3::identity(), 0.5).unwrap_err();
         assert!(e.to_string().contains("single point"));
+    }
+
+    #[test]
+    fn zero_thickness_fins_and_repeated_triangles_are_not_drawn() {
+        // The raised-corner square, plus a fin standing on its diagonal toward the viewer
+        // (one triangle in both windings, as decimated scans hold them), plus a repeat of a
+        // square triangle in its own winding: the picture is the square's alone.
+        let m = quad_mesh();
+        let mut vertices = m.vertices.clone();
+        vertices.push(Vector3::new(0.6, 0.4, 2.0));
+        let fin = [0, 2, 4];
+        let mut triangles = m.triangles.clone();
+        triangles.extend([fin, [0, 4, 2], [1, 2, 0]]);
+        let with = Mesh::new(vertices, triangles).unwrap();
+        for shading in [MeshShading::Flat, MeshShading::Smooth] {
+            // Seen from the front, the apex lies over the square: both fit the same frame.
+            let view = Rotation3::identity();
+            let plain = m.rasterize_with(32, 32, &view, 0.8, shading).unwrap();
+            let drawn = with.rasterize_with(32, 32, &view, 0.8, shading).unwrap();
+            assert_eq!(drawn.mask, plain.mask);
+            for k in 0..32 * 32 {
+                if plain.mask.data()[k] {
+                    assert!(angle_deg(&drawn.normals.data()[k], &plain.normals.data()[k]) < 1e-9);
+                }
+            }
+        }
+        assert_eq!(
+            distinct_triangles(&[[0, 1, 2], [2, 1, 0], [1, 2, 3], [2, 3, 1], [3, 1, 2]]),
+            vec![false, false, true, false, false]
+        );
     }
 
     #[test]
