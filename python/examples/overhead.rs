@@ -37,17 +37,22 @@ fn main() -> Result<(), shadelab::Error> {
 
     let mut sphere = render::RenderConfig::new("sphere", "<array>");
     sphere.size.shape = Some((256, 256));
-    sphere
-        .params
-        .insert("light".into(), "0.3,0.4,0.866".into());
+    sphere.params.insert("light".into(), "0.3,0.4,0.866".into());
     let out = render::run(&sphere, &NoProgress)?.output;
     let (Pixels::Gray(image), Some(truth)) = (out.pixels, out.surface) else {
-        return Err(shadelab::Error::invalid("the sphere is a gray rendered surface"));
+        return Err(shadelab::Error::invalid(
+            "the sphere is a gray rendered surface",
+        ));
     };
     let config = solve::SolveConfig::new("<array>", "0.3,0.4,0.866".parse()?);
     let ms = median_ms(runs, || {
-        let run = solve::run_image(&config, image.clone(), Some(truth.mask.clone()), &NoProgress)
-            .expect("solves");
+        let run = solve::run_image(
+            &config,
+            image.clone(),
+            Some(truth.mask.clone()),
+            &NoProgress,
+        )
+        .expect("solves");
         std::hint::black_box(run);
     });
     println!("solve_ms {ms:.4}");

@@ -120,11 +120,38 @@ def _labels(mask: Any, what: str) -> Optional[np.ndarray]:
     return a.astype(np.uint16, copy=False)
 
 
-def _picture(picture: Any, colour: bool) -> Tuple[Optional[np.ndarray], Optional[str]]:
-    """(array, None) for an image, (None, name) for a stimulus to render by name."""
+def _opt(kind: type, value: Any) -> Any:
+    """`value` as `kind`, or None."""
+    return None if value is None else kind(value)
+
+
+def _picture_args(
+    picture: Any, colour: bool, params: Dict[str, Any], seed: Any, ppd: Any, shape: Any, mask: Any
+) -> Tuple[Any, ...]:
+    """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
+    the stimulus's parameters, seed, ppd, shape (height, width) and target labels."""
     if isinstance(picture, str):
-        return None, picture
-    return _float_image(picture, "image", colour), None
+        image, stimulus = None, picture
+    else:
+        image, stimulus = _float_image(picture, "image", colour), None
+    return (
+        image,
+        stimulus,
+        _params_json(params),
+        _opt(int, seed),
+        _opt(float, ppd),
+        _pair(shape, "shape", int),
+        _labels(mask, "mask"),
+    )
+
+
+def _assumptions(domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any) -> Tuple[Any, ...]:
+    """What the perception analyses assume, as the compiled module takes it."""
+    return (str(domain), str(boundary), float(slant), _opt(float, albedo), _opt(float, ambient))
+
+
+def _floats(values: Optional[Sequence[float]]) -> Optional[List[float]]:
+    return None if values is None else [float(v) for v in values]
 
 
 def stimuli() -> Dict[str, str]:
@@ -324,33 +351,21 @@ def prior_sweep(
     array's target labels (0 = background). ``tilts`` in degrees (0 = from above, +90 = from the
     left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
     light. Returns the report (what sweep.json holds) with two arrays added: ``tilts`` and
-    ``convexity`` (tokens × tilts, +1 convex … −1 concave).
+    ``convexities`` (tokens × tilts, positive convex, negative concave).
 
-    >>> r = prior_sweep("bumps", shape=(48, 96), tilts=[0, 180])
-    >>> r["convexity"].shape == (len(r["tokens"]), 2)
+    >>> r = prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0, 180])
+    >>> r["convexities"].shape == (len(r["tokens"]), 2)
     True
     """
-    image, stimulus = _picture(picture, colour=False)
-    size = _pair(shape, "shape", int)
     report_json, tilt_array, convexity = _shadelab.prior_sweep(
-        image,
-        stimulus,
-        _params_json(params),
-        None if seed is None else int(seed),
-        None if ppd is None else float(ppd),
-        size,
-        _labels(mask, "mask"),
-        None if tilts is None else [float(t) for t in tilts],
-        None if binding is None else str(binding),
-        str(domain),
-        str(boundary),
-        float(slant),
-        None if albedo is None else float(albedo),
-        None if ambient is None else float(ambient),
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        _floats(tilts),
+        _opt(str, binding),
     )
     report = json.loads(report_json)
     report["tilts"] = tilt_array
-    report["convexity"] = convexity
+    report["convexities"] = convexity
     return report
 
 
@@ -383,30 +398,17 @@ def observer(
     log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
     judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
     """
-    image, stimulus = _picture(picture, colour=False)
-
-    def floats(v: Optional[Sequence[float]]) -> Optional[List[float]]:
-        return None if v is None else [float(x) for x in v]
-
     report_json = _shadelab.observer(
-        image,
-        stimulus,
-        _params_json(params),
-        None if seed is None else int(seed),
-        None if ppd is None else float(ppd),
-        _pair(shape, "shape", int),
-        _labels(mask, "mask"),
-        None if prior_tilt is None else float(prior_tilt),
-        floats(kappas),
-        None if convexity_bias is None else float(convexity_bias),
-        None if noise is None else float(noise),
-        floats(rotations),
-        floats(tilts),
-        str(domain),
-        str(boundary),
-        float(slant),
-        None if albedo is None else float(albedo),
-        None if ambient is None else float(ambient),
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        (
+            _opt(float, prior_tilt),
+            _floats(kappas),
+            _opt(float, convexity_bias),
+            _opt(float, noise),
+            _floats(rotations),
+            _floats(tilts),
+        ),
     )
     return json.loads(report_json)
 
@@ -435,15 +437,8 @@ def lightness(
     >>> out.ndim
     2
     """
-    image, stimulus = _picture(picture, colour=True)
     out, report_json = _shadelab.lightness(
-        image,
-        stimulus,
-        _params_json(params),
-        None if seed is None else int(seed),
-        None if ppd is None else float(ppd),
-        _labels(mask, "mask"),
-        str(model),
+        _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
     )
     if mask is None and not targets:
         return out

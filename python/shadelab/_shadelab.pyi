@@ -42,48 +42,35 @@ def solve(
     npt.NDArray[np.float64],
     str,
 ]: ...
+#: (image, stimulus name, parameters JSON, seed, ppd, shape (h, w), target labels)
+PictureArgs = Tuple[
+    Optional[npt.NDArray[np.float64]],
+    Optional[str],
+    str,
+    Optional[int],
+    Optional[float],
+    Optional[Tuple[int, int]],
+    Optional[npt.NDArray[np.uint16]],
+]
+#: (domain, boundary, slant, albedo, ambient)
+AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float]]
+
 def prior_sweep(
-    image: Optional[npt.NDArray[np.float64]],
-    stimulus: Optional[str],
-    params_json: str,
-    seed: Optional[int],
-    ppd: Optional[float],
-    shape: Optional[Tuple[int, int]],
-    labels: Optional[npt.NDArray[np.uint16]],
+    picture: PictureArgs,
+    assumptions: AssumptionArgs,
     tilts: Optional[List[float]],
     binding: Optional[str],
-    domain: str,
-    boundary: str,
-    slant: float,
-    albedo: Optional[float],
-    ambient: Optional[float],
 ) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 def observer(
-    image: Optional[npt.NDArray[np.float64]],
-    stimulus: Optional[str],
-    params_json: str,
-    seed: Optional[int],
-    ppd: Optional[float],
-    shape: Optional[Tuple[int, int]],
-    labels: Optional[npt.NDArray[np.uint16]],
-    prior_tilt: Optional[float],
-    kappas: Optional[List[float]],
-    convexity_bias: Optional[float],
-    noise: Optional[float],
-    rotations: Optional[List[float]],
-    tilts: Optional[List[float]],
-    domain: str,
-    boundary: str,
-    slant: float,
-    albedo: Optional[float],
-    ambient: Optional[float],
+    picture: PictureArgs,
+    assumptions: AssumptionArgs,
+    settings: Tuple[
+        Optional[float],
+        Optional[List[float]],
+        Optional[float],
+        Optional[float],
+        Optional[List[float]],
+        Optional[List[float]],
+    ],
 ) -> str: ...
-def lightness(
-    image: Optional[npt.NDArray[np.float64]],
-    stimulus: Optional[str],
-    params_json: str,
-    seed: Optional[int],
-    ppd: Optional[float],
-    labels: Optional[npt.NDArray[np.uint16]],
-    model: str,
-) -> Tuple[npt.NDArray[np.float64], str]: ...
+def lightness(picture: PictureArgs, model: str) -> Tuple[npt.NDArray[np.float64], str]: ...

@@ -100,7 +100,11 @@ fn normals_array<'py>(
 ) -> Bound<'py, PyArray3<f64>> {
     let (w, h) = (normals.width(), normals.height());
     // Same size and alignment: the collect reuses the buffer.
-    let xyz: Vec<[f64; 3]> = normals.into_vec().into_iter().map(|n| [n.x, n.y, n.z]).collect();
+    let xyz: Vec<[f64; 3]> = normals
+        .into_vec()
+        .into_iter()
+        .map(|n| [n.x, n.y, n.z])
+        .collect();
     rgb_array(py, Grid::from_vec(w, h, xyz).expect("w × h normals"))
 }
 
@@ -139,7 +143,9 @@ impl ArrayIn<'_> {
                             .collect::<Vec<_>>()
                     })
                     .collect();
-                Ok(Pixels::Rgb(Grid::from_vec(w, h, data).expect("h × w pixels")))
+                Ok(Pixels::Rgb(
+                    Grid::from_vec(w, h, data).expect("h × w pixels"),
+                ))
             }
         }
     }
@@ -246,7 +252,8 @@ fn solve<'py>(
         options.max_iter = n;
     }
     let light_choice: pl::solve::LightChoice = light.parse().map_err(to_py)?;
-    let mut config = pl::solve::SolveConfig::new(shadelab::pipeline::source::IN_MEMORY, light_choice);
+    let mut config =
+        pl::solve::SolveConfig::new(shadelab::pipeline::source::IN_MEMORY, light_choice);
     config.boundary = boundary.parse().map_err(to_py)?;
     config.albedo = albedo;
     config.options =
@@ -256,7 +263,9 @@ fn solve<'py>(
         boundary: boundary.to_string(),
         out: String::new(),
     };
-    let run = run_released(py, || pl::solve::run_image(&config, image, mask, &NoProgress))?;
+    let run = run_released(py, || {
+        pl::solve::run_image(&config, image, mask, &NoProgress)
+    })?;
     let text = json_text(&run.report)?;
     let solution = run.shape.solution;
     let normals = normals_array(py, solution.normals());
@@ -269,42 +278,50 @@ fn solve<'py>(
     ))
 }
 
-/// The picture of an analysis: an array, or a stimulus rendered by name.
-#[allow(clippy::too_many_arguments)]
+/// The picture of an analysis, as the Python layer passes it: an array or a stimulus name,
+/// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width) and target
+/// labels.
+type PictureArgs<'py> = (
+    Option<ArrayIn<'py>>,
+    Option<String>,
+    String,
+    Option<u64>,
+    Option<f64>,
+    Option<(usize, usize)>,
+    Option<PyReadonlyArray2<'py, u16>>,
+);
+
+/// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
+type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
+
+/// The library's description of a picture, and the rendered shape (the library's order).
 fn picture_source(
-    image: Option<&ArrayIn<'_>>,
-    stimulus: Option<String>,
-    params_json: &str,
-    seed: Option<u64>,
-    ppd: Option<f64>,
-    labels: Option<PyReadonlyArray2<'_, u16>>,
-) -> PyResult<shadelab::PictureSource> {
-    Ok(shadelab::PictureSource {
-        pixels: image.map(ArrayIn::pixels).transpose()?,
+    picture: PictureArgs<'_>,
+) -> PyResult<(shadelab::PictureSource, Option<(usize, usize)>)> {
+    let (image, stimulus, params_json, seed, ppd, shape, labels) = picture;
+    let source = shadelab::PictureSource {
+        pixels: image.as_ref().map(ArrayIn::pixels).transpose()?,
         stimulus,
-        params: params_from(params_json)?,
+        params: params_from(&params_json)?,
         seed,
         ppd,
         labels: labels.map(|l| -> Labels { grid_from(l.as_array()) }),
         max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
         ..Default::default()
-    })
+    };
+    // The rendered size, converted like every other size (see `size_request`).
+    Ok((source, size_request(None, None, shape).shape))
 }
 
 /// The perception settings shared by `prior_sweep` and `observer`.
-#[allow(clippy::too_many_arguments)]
 fn perception_config(
-    source: shadelab::PictureSource,
-    shape: Option<(usize, usize)>,
-    domain: &str,
-    boundary: &str,
-    slant: f64,
-    albedo: Option<f64>,
-    ambient: Option<f64>,
+    picture: PictureArgs<'_>,
+    assumptions: AssumptionArgs,
 ) -> PyResult<perception::Config> {
+    let (source, size) = picture_source(picture)?;
+    let (domain, boundary, slant, albedo, ambient) = assumptions;
     let mut config = perception::Config::new(source);
-    // The rendered size, converted like every other size (see `size_request`).
-    config.size = size_request(None, None, shape).shape;
+    config.size = size;
     config.domain = domain.parse().map_err(to_py)?;
     config.boundary = boundary.parse().map_err(to_py)?;
     config.slant_deg = slant;
@@ -315,28 +332,16 @@ fn perception_config(
 
 /// The prior sweep: (report JSON, tilts, convexity tokens × tilts).
 #[pyfunction]
-#[pyo3(signature = (image, stimulus, params_json, seed, ppd, shape, labels, tilts, binding, domain, boundary, slant, albedo, ambient))]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+#[allow(clippy::type_complexity)]
 fn prior_sweep<'py>(
     py: Python<'py>,
-    image: Option<ArrayIn<'py>>,
-    stimulus: Option<String>,
-    params_json: &str,
-    seed: Option<u64>,
-    ppd: Option<f64>,
-    shape: Option<(usize, usize)>,
-    labels: Option<PyReadonlyArray2<'py, u16>>,
+    picture: PictureArgs<'py>,
+    assumptions: AssumptionArgs,
     tilts: Option<Vec<f64>>,
     binding: Option<&str>,
-    domain: &str,
-    boundary: &str,
-    slant: f64,
-    albedo: Option<f64>,
-    ambient: Option<f64>,
 ) -> PyResult<(String, Bound<'py, PyAny>, Bound<'py, PyArray2<f64>>)> {
-    let source = picture_source(image.as_ref(), stimulus, params_json, seed, ppd, labels)?;
-    let picture = perception_config(source, shape, domain, boundary, slant, albedo, ambient)?;
-    let mut config = pl::prior_sweep::Config::new(picture).map_err(to_py)?;
+    let mut config =
+        pl::prior_sweep::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
     if let Some(t) = tilts {
         config.tilts = t;
     }
@@ -358,52 +363,33 @@ fn prior_sweep<'py>(
     Ok((text, tilts.into_pyarray(py).into_any(), convexity))
 }
 
+/// The observer's own settings: prior tilt, kappas, convexity bias, noise, rotations, tilts.
+type ObserverArgs = (
+    Option<f64>,
+    Option<Vec<f64>>,
+    Option<f64>,
+    Option<f64>,
+    Option<Vec<f64>>,
+    Option<Vec<f64>>,
+);
+
 /// The Bayesian observer: report JSON.
 #[pyfunction]
-#[pyo3(signature = (image, stimulus, params_json, seed, ppd, shape, labels, prior_tilt, kappas, convexity_bias, noise, rotations, tilts, domain, boundary, slant, albedo, ambient))]
-#[allow(clippy::too_many_arguments)]
 fn observer(
     py: Python<'_>,
-    image: Option<ArrayIn<'_>>,
-    stimulus: Option<String>,
-    params_json: &str,
-    seed: Option<u64>,
-    ppd: Option<f64>,
-    shape: Option<(usize, usize)>,
-    labels: Option<PyReadonlyArray2<'_, u16>>,
-    prior_tilt: Option<f64>,
-    kappas: Option<Vec<f64>>,
-    convexity_bias: Option<f64>,
-    noise: Option<f64>,
-    rotations: Option<Vec<f64>>,
-    tilts: Option<Vec<f64>>,
-    domain: &str,
-    boundary: &str,
-    slant: f64,
-    albedo: Option<f64>,
-    ambient: Option<f64>,
+    picture: PictureArgs<'_>,
+    assumptions: AssumptionArgs,
+    settings: ObserverArgs,
 ) -> PyResult<String> {
-    let source = picture_source(image.as_ref(), stimulus, params_json, seed, ppd, labels)?;
-    let picture = perception_config(source, shape, domain, boundary, slant, albedo, ambient)?;
-    let mut config = pl::observer::Config::new(picture).map_err(to_py)?;
-    if let Some(v) = prior_tilt {
-        config.prior_tilt_deg = v;
-    }
-    if let Some(v) = kappas {
-        config.kappas = v;
-    }
-    if let Some(v) = convexity_bias {
-        config.convexity_bias = v;
-    }
-    if let Some(v) = noise {
-        config.noise = v;
-    }
-    if let Some(v) = rotations {
-        config.rotations = v;
-    }
-    if let Some(v) = tilts {
-        config.tilts = v;
-    }
+    let mut config =
+        pl::observer::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
+    let (prior_tilt, kappas, convexity_bias, noise, rotations, tilts) = settings;
+    config.prior_tilt_deg = prior_tilt.unwrap_or(config.prior_tilt_deg);
+    config.kappas = kappas.unwrap_or(config.kappas);
+    config.convexity_bias = convexity_bias.unwrap_or(config.convexity_bias);
+    config.noise = noise.unwrap_or(config.noise);
+    config.rotations = rotations.unwrap_or(config.rotations);
+    config.tilts = tilts.unwrap_or(config.tilts);
     let report = run_released(py, || {
         config.check()?;
         pl::observer::run(&config, &NoProgress)
@@ -413,19 +399,12 @@ fn observer(
 
 /// A lightness model's output: (H×W output, report JSON).
 #[pyfunction]
-#[pyo3(signature = (image, stimulus, params_json, seed, ppd, labels, model))]
-#[allow(clippy::too_many_arguments)]
 fn lightness<'py>(
     py: Python<'py>,
-    image: Option<ArrayIn<'py>>,
-    stimulus: Option<String>,
-    params_json: &str,
-    seed: Option<u64>,
-    ppd: Option<f64>,
-    labels: Option<PyReadonlyArray2<'py, u16>>,
+    picture: PictureArgs<'py>,
     model: &str,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
-    let source = picture_source(image.as_ref(), stimulus, params_json, seed, ppd, labels)?;
+    let (source, _) = picture_source(picture)?;
     let model: shadelab::LightnessModel = model.parse().map_err(to_py)?;
     let config = pl::lightness::LightnessConfig::new(source, vec![model]).map_err(to_py)?;
     let mut report = run_released(py, || pl::lightness::run(&config, &NoProgress))?;

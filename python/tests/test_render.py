@@ -123,14 +123,14 @@ def test_targets_of_checker_shadow():
 
 def test_same_numbers_as_the_cli_sidecar(tmp_path):
     """The dict's parameters and size are those the library records in a sidecar."""
-    s = shadelab.render("bumps", shape=(40, 60), seed=3, count=5)
-    assert s["count"] == 5 and s["seed"] == 3 and s["shape"] == (40, 60)
+    s = shadelab.render("bumps", shape=(96, 128), ppd=8, seed=3, rows=2)
+    assert s["rows"] == 2 and s["seed"] == 3 and s["shape"] == (96, 128)
     assert json.loads(json.dumps(s["parameters"])) == s["parameters"]
 
 
 def test_seed_changes_random_layouts_only():
-    a = shadelab.render("bumps", shape=64, seed=1)
-    b = shadelab.render("bumps", shape=64, seed=1)
+    a = shadelab.render("bumps", shape=96, ppd=8, seed=1)
+    b = shadelab.render("bumps", shape=96, ppd=8, seed=1)
     np.testing.assert_array_equal(a["img"], b["img"])
 
 

@@ -372,7 +372,12 @@ fn solve_loaded(
 /// memory (see [`run_into`] for the folder written as it goes).
 pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
     let started = Instant::now();
-    let mut solved = solve_stage(config, progress)?;
+    let solved = solve_stage(config, progress)?;
+    finish(config, solved, started)
+}
+
+/// Integrates a solve to depth and reports, keeping the solution.
+fn finish(config: &SolveConfig, mut solved: Solved, started: Instant) -> Result<SolveRun> {
     let (f, g) = (
         solved.shape.solution.f.clone(),
         solved.shape.solution.g.clone(),
@@ -424,18 +429,8 @@ pub fn run_image(
         None => Grid::new(image.width(), image.height(), true),
     };
     let info = serde_json::json!({ "format": "in memory" });
-    let mut solved = solve_loaded(config, image, info, mask, progress)?;
-    let (f, g) = (
-        solved.shape.solution.f.clone(),
-        solved.shape.solution.g.clone(),
-    );
-    let (depth, report) = integrate(config, &mut solved, f, g, started)?;
-    Ok(SolveRun {
-        shape: solved.shape,
-        mask: solved.mask,
-        depth,
-        report,
-    })
+    let solved = solve_loaded(config, image, info, mask, progress)?;
+    finish(config, solved, started)
 }
 
 /// [`run`] writing the outputs into `dir` as they are made, each dropped once written: the
