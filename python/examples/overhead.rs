@@ -3,23 +3,23 @@
 //! and the same calls from Python, and prints both).
 //!
 //! `CARGO_TARGET_DIR=../target/python cargo run --release --example overhead` in `python/`
-//! prints `render_ms <median>` and `solve_ms <median>`.
+//! prints `render_ms t1,t2,…` and `solve_ms t1,t2,…` (milliseconds per call).
 
 use shadelab::pipeline::{render, solve};
 use shadelab::{NoProgress, Pixels};
 use std::time::Instant;
 
-fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
-    f(); // warm up
-    let mut t: Vec<f64> = (0..runs)
+/// Every call's time in milliseconds, comma separated, after one call to warm up.
+fn times_ms(runs: usize, mut f: impl FnMut()) -> String {
+    f();
+    let t: Vec<String> = (0..runs)
         .map(|_| {
             let s = Instant::now();
             f();
-            s.elapsed().as_secs_f64() * 1e3
+            format!("{:.4}", s.elapsed().as_secs_f64() * 1e3)
         })
         .collect();
-    t.sort_by(f64::total_cmp);
-    t[runs / 2]
+    t.join(",")
 }
 
 fn main() -> Result<(), shadelab::Error> {
@@ -30,10 +30,10 @@ fn main() -> Result<(), shadelab::Error> {
     let mut board = render::RenderConfig::new("checkerboard", "<array>");
     board.size.shape = Some((1024, 1024));
     board.size.ppd = Some(32.0);
-    let ms = median_ms(runs, || {
+    let ms = times_ms(runs, || {
         std::hint::black_box(render::run(&board, &NoProgress).expect("renders"));
     });
-    println!("render_ms {ms:.4}");
+    println!("render_ms {ms}");
 
     let mut sphere = render::RenderConfig::new("sphere", "<array>");
     sphere.size.shape = Some((256, 256));
@@ -45,7 +45,7 @@ fn main() -> Result<(), shadelab::Error> {
         ));
     };
     let config = solve::SolveConfig::new("<array>", "0.3,0.4,0.866".parse()?);
-    let ms = median_ms(runs, || {
+    let ms = times_ms(runs, || {
         let run = solve::run_image(
             &config,
             image.clone(),
@@ -55,6 +55,6 @@ fn main() -> Result<(), shadelab::Error> {
         .expect("solves");
         std::hint::black_box(run);
     });
-    println!("solve_ms {ms:.4}");
+    println!("solve_ms {ms}");
     Ok(())
 }

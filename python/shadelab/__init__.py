@@ -171,11 +171,10 @@ def describe(name: str) -> Dict[str, Any]:
     (1.0, (8.0, 8.0), 32.0)
     """
     raw = json.loads(_shadelab.describe(name))
-    w_deg, h_deg = raw["default_visual_size"]  # the library's Description: (width, height)
     return {
         "name": raw["name"],
         "summary": raw["summary"],
-        "default_visual_size": (h_deg, w_deg),
+        "default_visual_size": tuple(raw["default_visual_size"]),
         "default_ppd": raw["default_ppd"],
         "params": {
             p["name"]: {"default": p["default"], "range": p["range"], "doc": p["doc"]}

@@ -43,20 +43,26 @@ fn run_released<T: Send>(
         .map_err(to_py)
 }
 
-/// The library's size request from Python's (height, width) pairs.
+/// A size pair between Python's (height, width) order and the library's.
 ///
-/// The ONE place where Python's (height, width) order meets the library's: `SizeRequest`
-/// holds (width, height) today, so both pairs are swapped here. When the library's
-/// `SizeRequest` takes (height, width) (as stimupy and NumPy do), drop the swaps.
+/// The ONE place where the two orders meet, used both ways (a swap is its own inverse): the
+/// library's `SizeRequest` and `Description::default_visual_size` hold (width, height) today,
+/// so the pairs are swapped here. When the library takes (height, width) (as stimupy and NumPy
+/// do), make this the identity. (`Geometry`'s named fields need no conversion.)
+fn swap_order<T>((a, b): (T, T)) -> (T, T) {
+    (b, a)
+}
+
+/// The library's size request from Python's (height, width) pairs.
 fn size_request(
     visual_size: Option<(f64, f64)>,
     ppd: Option<f64>,
     shape: Option<(usize, usize)>,
 ) -> SizeRequest {
     SizeRequest {
-        visual_size: visual_size.map(|(h, w)| (w, h)),
+        visual_size: visual_size.map(swap_order),
         ppd,
-        shape: shape.map(|(h, w)| (w, h)),
+        shape: shape.map(swap_order),
     }
 }
 
@@ -160,10 +166,13 @@ fn stimuli() -> Vec<(&'static str, &'static str)> {
         .collect()
 }
 
-/// A stimulus's description (parameters, defaults, ranges, docs) as JSON text.
+/// A stimulus's description (parameters, defaults, ranges, docs) as JSON text, its default
+/// visual size as (height, width).
 #[pyfunction]
 fn describe(name: &str) -> PyResult<String> {
-    json_text(&pl::render::describe(name).map_err(to_py)?)
+    let mut description = pl::render::describe(name).map_err(to_py)?;
+    description.default_visual_size = swap_order(description.default_visual_size);
+    json_text(&description)
 }
 
 /// Renders a stimulus: (report JSON, img, target_mask or None, target names, layers dict).
@@ -186,7 +195,7 @@ fn render<'py>(
     Vec<String>,
     Bound<'py, PyDict>,
 )> {
-    let mut config = pl::render::RenderConfig::new(name, "<array>");
+    let mut config = pl::render::RenderConfig::new(name, pl::source::IN_MEMORY);
     config.params = params_from(params_json)?;
     config.size = size_request(visual_size, ppd, shape);
     config.seed = seed;

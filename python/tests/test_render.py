@@ -154,3 +154,14 @@ def test_outputs_are_not_copied():
     for key in ("img", "target_mask", "depth", "normals"):
         assert owns_rust_buffer(s[key]), key
         assert s[key].flags.c_contiguous and s[key].flags.writeable, key
+
+
+@pytest.mark.parametrize("name", ["checker-shadow", "strips", "boundary-strips"])
+def test_default_size_is_height_width_like_describe(name):
+    """Non-square defaults: describe's (height, width) is the render's, and the image's."""
+    d = shadelab.describe(name)
+    h_deg, w_deg = d["default_visual_size"]
+    assert h_deg != w_deg
+    s = shadelab.render(name)
+    assert s["visual_size"] == (h_deg, w_deg)
+    assert s["img"].shape[:2] == (round(h_deg * d["default_ppd"]), round(w_deg * d["default_ppd"]))
