@@ -53,6 +53,15 @@ def main():
         py["solve_ms"] += times_ms(lambda: shadelab.solve(s["img"], light=light, mask=inside))
         for k, v in rust_times().items():
             rs[k] += v
+    # In one process: the whole Python call against the compiled module's call alone (the
+    # library's work and the arrays' handover), i.e. what the pure-Python layer adds.
+    raw = times_ms(lambda: shadelab._shadelab.render("checkerboard", "{}", None, 32.0,
+                                                     (1024, 1024), 0, False))
+    full = times_ms(lambda: shadelab.render("checkerboard", shape=1024, ppd=32))
+    tiny = times_ms(lambda: shadelab.render("checkerboard", shape=8, ppd=8))
+    print(f"render 1024², Python layer alone: {1e3 * (np.min(full) - np.min(raw)):+.1f} µs (min), "
+          f"{1e3 * (np.median(full) - np.median(raw)):+.1f} µs (median); "
+          f"a whole 8×8 render from Python: {1e3 * np.min(tiny):.1f} µs")
     for key, name in [("render_ms", "render 1024² checkerboard"), ("solve_ms", "solve 256² sphere")]:
         for stat in (np.min, np.median):
             p, r = float(stat(py[key])), float(stat(rs[key]))
