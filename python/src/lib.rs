@@ -178,7 +178,7 @@ fn describe(name: &str) -> PyResult<String> {
 /// Renders a stimulus: (report JSON, img, target_mask or None, target names, layers dict).
 #[pyfunction]
 #[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers))]
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
     name: &str,
