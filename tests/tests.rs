@@ -13,5 +13,6 @@ mod hostile;
 mod interrupt;
 mod lightness;
 mod mesh;
+mod python;
 mod solve;
 mod stimuli;

@@ -92,6 +92,7 @@ impl Source {
             ppd: self.ppd,
             mask: self.mask.clone(),
             max_pixels: global.max_pixels,
+            ..Default::default()
         })
     }
 }

@@ -322,8 +322,19 @@ struct Solved {
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
     let (image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
-    let (w, h) = (image.width(), image.height());
     let mask = read_mask(config, &image)?;
+    solve_loaded(config, image, image_info, mask, progress)
+}
+
+/// Solves an image and mask already read (or handed over in memory).
+fn solve_loaded(
+    config: &SolveConfig,
+    image: Image,
+    image_info: Value,
+    mask: Mask,
+    progress: &dyn Progress,
+) -> Result<Solved> {
+    let (w, h) = (image.width(), image.height());
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
@@ -361,7 +372,12 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
 /// memory (see [`run_into`] for the folder written as it goes).
 pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
     let started = Instant::now();
-    let mut solved = solve_stage(config, progress)?;
+    let solved = solve_stage(config, progress)?;
+    finish(config, solved, started)
+}
+
+/// Integrates a solve to depth and reports, keeping the solution.
+fn finish(config: &SolveConfig, mut solved: Solved, started: Instant) -> Result<SolveRun> {
     let (f, g) = (
         solved.shape.solution.f.clone(),
         solved.shape.solution.g.clone(),
@@ -373,6 +389,48 @@ pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
         depth,
         report,
     })
+}
+
+/// [`run`] on an image (and mask) already in memory, e.g. the Python module's NumPy arrays:
+/// `config.image` and `config.mask` are not read, only recorded in the report as the names of
+/// the inputs (e.g. `<array>`). The image is checked as a file's would be (size limit, finite
+/// values), the mask against the image's size; `None` is the whole image.
+///
+/// ```
+/// use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
+/// use shadelab::{Grid, NoProgress};
+/// let light: LightChoice = "0,0,1".parse()?;
+/// let config = SolveConfig::new("<array>", light);
+/// let flat = Grid::new(16, 8, 1.0); // lit head-on: a plane facing the viewer
+/// let run = run_image(&config, flat, None, &NoProgress)?;
+/// assert_eq!((run.report.input.width, run.report.input.height), (16, 8));
+/// assert!(run.report.solver.converged);
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+pub fn run_image(
+    config: &SolveConfig,
+    image: Image,
+    mask: Option<Mask>,
+    progress: &dyn Progress,
+) -> Result<SolveRun> {
+    let started = Instant::now();
+    config.validate()?;
+    let name = config.image.display().to_string();
+    crate::grid::check_size(image.width(), image.height(), config.max_pixels)?;
+    super::source::check_finite(image.data(), 1, image.width(), &name)?;
+    let mask = match mask {
+        Some(mask) => {
+            let mask_name = config
+                .mask
+                .as_deref()
+                .unwrap_or(Path::new(super::source::IN_MEMORY));
+            check_mask(mask, mask_name, config, &image)?
+        }
+        None => Grid::new(image.width(), image.height(), true),
+    };
+    let info = serde_json::json!({ "format": "in memory" });
+    let solved = solve_loaded(config, image, info, mask, progress)?;
+    finish(config, solved, started)
 }
 
 /// [`run`] writing the outputs into `dir` as they are made, each dropped once written: the
@@ -605,7 +663,12 @@ fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
     let Some(path) = &config.mask else {
         return Ok(Grid::new(w, h, true));
     };
-    let mask = io::read_mask(path, config.max_pixels)?;
+    check_mask(io::read_mask(path, config.max_pixels)?, path, config, image)
+}
+
+/// `mask` (named `path` in errors) if it has the image's size and a pixel inside.
+fn check_mask(mask: Mask, path: &Path, config: &SolveConfig, image: &Image) -> Result<Mask> {
+    let (w, h) = (image.width(), image.height());
     if !mask.same_size(image) {
         return Err(Error::invalid(format!(
             "mask {} is {}x{} but the image {} is {w}x{h}",

@@ -9,7 +9,10 @@ use crate::visual_size::SizeRequest;
 use serde_json::{json, Map, Value};
 use std::path::PathBuf;
 
-/// Plain values naming a picture: exactly one of `image` and `stimulus`.
+/// How a picture handed over in memory is named in reports and errors.
+pub const IN_MEMORY: &str = "<array>";
+
+/// Plain values naming a picture: exactly one of `image`, `stimulus` and `pixels`.
 #[derive(Debug, Clone, Default)]
 pub struct PictureSource {
     /// An 8/16-bit PNG (linear values) or a float H×W `.npy`.
@@ -26,6 +29,11 @@ pub struct PictureSource {
     pub mask: Option<PathBuf>,
     /// The largest picture accepted or made, in pixels.
     pub max_pixels: usize,
+    /// A picture already in memory (e.g. the Python module's NumPy array), checked as a file's
+    /// would be.
+    pub pixels: Option<Pixels>,
+    /// Target labels in memory (0 = background, 1..N = targets), instead of a `mask` file.
+    pub labels: Option<Labels>,
 }
 
 /// A loaded picture with what is known about it.
@@ -58,12 +66,20 @@ impl PictureSource {
                 )));
             }
         }
-        match (&self.image, &self.stimulus) {
-            (None, None) => Err(Error::invalid("give an image file or a stimulus name")),
-            (Some(_), Some(_)) => Err(Error::invalid(
+        let given = [
+            self.image.is_some(),
+            self.stimulus.is_some(),
+            self.pixels.is_some(),
+        ];
+        match given.iter().filter(|g| **g).count() {
+            0 => Err(Error::invalid("give an image file or a stimulus name")),
+            1 if self.mask.is_some() && self.labels.is_some() => Err(Error::invalid(
+                "give target labels as a mask file or in memory, not both",
+            )),
+            1 => Ok(()),
+            _ => Err(Error::invalid(
                 "give an image file or a stimulus name, not both",
             )),
-            _ => Ok(()),
         }
     }
 
@@ -84,13 +100,31 @@ impl PictureSource {
         let max_pixels = self.max_pixels;
         let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
+            (None, None) if self.pixels.is_some() => {
+                let pixels = self.in_memory(colour)?;
+                Picture {
+                    pixels,
+                    ppd: self.ppd,
+                    labels: None,
+                    origin: json!({ "image": IN_MEMORY }),
+                }
+            }
             (Some(path), _) => {
                 let pixels = if colour && io::extension(path) == "png" {
                     Pixels::Rgb(io::read_rgb(path, max_pixels)?)
                 } else {
                     Pixels::Gray(io::read_luminance(path, max_pixels)?.0)
                 };
-                check_finite(&pixels, &path.display().to_string())?;
+                let (values, channels) = match &pixels {
+                    Pixels::Gray(i) => (i.data(), 1),
+                    Pixels::Rgb(i) => (i.data().as_flattened(), 3),
+                };
+                check_finite(
+                    values,
+                    channels,
+                    pixels.size().0,
+                    &path.display().to_string(),
+                )?;
                 Picture {
                     pixels,
                     ppd: self.ppd,
@@ -137,25 +171,55 @@ impl PictureSource {
             }
             picture.labels = Some((labels, Vec::new()));
         }
+        if let Some(labels) = &self.labels {
+            let (w, h) = picture.pixels.size();
+            if (labels.width(), labels.height()) != (w, h) {
+                return Err(Error::invalid(format!(
+                    "the target labels are {}x{} but the image is {w}x{h}",
+                    labels.width(),
+                    labels.height()
+                )));
+            }
+            picture.labels = Some((labels.clone(), Vec::new()));
+        }
         Ok((picture, request))
+    }
+
+    /// The in-memory picture, checked as a file's would be (size, finite values); gray unless
+    /// `colour`.
+    fn in_memory(&self, colour: bool) -> Result<Pixels> {
+        let Some(pixels) = &self.pixels else {
+            return Err(Error::invalid("give an image file or a stimulus name"));
+        };
+        let (w, h) = pixels.size();
+        crate::grid::check_size(w, h, self.max_pixels)?;
+        let (values, channels) = match pixels {
+            Pixels::Gray(i) => (i.data(), 1),
+            Pixels::Rgb(i) => (i.data().as_flattened(), 3),
+        };
+        check_finite(values, channels, w, IN_MEMORY)?;
+        Ok(match pixels {
+            Pixels::Rgb(_) if !colour => Pixels::Gray(pixels.luminance()),
+            _ => pixels.clone(),
+        })
     }
 }
 
-/// Fails on the first NaN or infinity, naming its column and row.
-fn check_finite(pixels: &Pixels, what: &str) -> Result<()> {
-    let bad = match pixels {
-        Pixels::Gray(i) => i.data().iter().position(|v| !v.is_finite()),
-        Pixels::Rgb(i) => i
-            .data()
-            .iter()
-            .position(|p| p.iter().any(|v| !v.is_finite())),
-    };
-    if let Some(i) = bad {
-        let w = pixels.size().0;
+/// Fails on the first NaN or infinity of a picture `width` pixels wide with `channels` values
+/// per pixel, naming its column and row.
+pub(crate) fn check_finite(
+    values: &[f64],
+    channels: usize,
+    width: usize,
+    what: &str,
+) -> Result<()> {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        let pixel = i / channels.max(1);
+        let w = width.max(1);
         return Err(Error::invalid(format!(
             "{what}: the image has a non-finite value (NaN or Inf) at column {}, row {}",
-            i % w,
-            i / w
+            pixel % w,
+            pixel / w
         )));
     }
     Ok(())

@@ -1,0 +1,446 @@
+"""shadelab: shape-from-shading stimuli and analyses for vision science, as NumPy arrays.
+
+The functions here call the same library pipelines as the ``shadelab`` command line
+(``render``, ``solve``, ``analyze prior-sweep``, ``analyze observer``, ``analyze lightness``),
+in-process: no files, no subprocess. Conventions are stimupy's and NumPy's:
+
+* sizes are ``(height, width)``: ``visual_size`` in degrees of visual angle, ``shape`` in
+  pixels, ``ppd`` pixels per degree (any two give the third);
+* images are float64 arrays of linear luminance 0..1, row 0 the top row;
+* normals are ``H×W×3`` unit vectors, x right, y up, z toward the viewer; a light's tilt 0 is
+  from above and +90 from the left.
+
+Errors are ``ValueError`` (bad values), ``FileNotFoundError``/``OSError`` (files named in a
+parameter) and ``RuntimeError`` (a computation that cannot be done), each with the command
+line's one-line message. The GIL is released while the library works.
+
+>>> import shadelab
+>>> s = shadelab.render("checkerboard", visual_size=(4, 8), ppd=8)
+>>> s["img"].shape, s["shape"], s["visual_size"]
+((32, 64), (32, 64), (4.0, 8.0))
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _shadelab
+
+__all__ = [
+    "Reconstruction",
+    "describe",
+    "lightness",
+    "observer",
+    "prior_sweep",
+    "render",
+    "solve",
+    "stimuli",
+]
+
+__version__: str = _shadelab.__version__
+
+# The keys every `render` dict has besides the stimulus's parameters (these win on a clash).
+_RENDER_KEYS = ("img", "target_mask", "target_names", "visual_size", "ppd", "shape")
+
+
+def _pair(value: Any, what: str, kind: type) -> Optional[Tuple[Any, Any]]:
+    """A (height, width) pair from a pair or a single number (square), as stimupy takes them."""
+    if value is None:
+        return None
+    if np.ndim(value) == 0:
+        return (kind(value), kind(value))
+    items = list(np.asarray(value).ravel())
+    if len(items) != 2:
+        raise ValueError(f"{what} must be a number or a (height, width) pair, not {value!r}")
+    if kind is int and any(float(v) != int(v) for v in items):
+        raise ValueError(f"{what} must be whole pixels, not {value!r}")
+    return (kind(items[0]), kind(items[1]))
+
+
+def _light_text(light: Any) -> str:
+    """A light as the library reads it: ``x,y,z``, ``tilt=T,slant=S``, a name or ``estimate``."""
+    if isinstance(light, str):
+        return light
+    values = np.asarray(light, dtype=float).ravel()
+    if values.size != 3:
+        raise ValueError(
+            f"light must be an (x, y, z) vector, 'tilt=T,slant=S', a name or 'estimate', not {light!r}"
+        )
+    return ",".join(repr(float(v)) for v in values)
+
+
+def _params_json(params: Dict[str, Any]) -> str:
+    """Parameter values as JSON (NumPy scalars and arrays become plain numbers and lists)."""
+
+    def plain(v: Any) -> Any:
+        if isinstance(v, np.generic):
+            return v.item()
+        if isinstance(v, (np.ndarray, tuple)):
+            return np.asarray(v).tolist() if isinstance(v, np.ndarray) else list(v)
+        raise TypeError(f"parameter value {v!r} is not a number, string or boolean")
+
+    try:
+        return json.dumps(params, default=plain)
+    except (TypeError, ValueError) as e:
+        raise ValueError(str(e)) from None
+
+
+def _float_image(image: Any, what: str, colour: bool) -> np.ndarray:
+    """A float64 H×W (or, with `colour`, H×W×3) array from any real-valued array, read the
+    way the command line reads a ``.npy`` (integers and booleans keep their values)."""
+    a = np.asarray(image)
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{what}: unsupported dtype {a.dtype} (need a real number type)")
+    if a.ndim == 3 and a.shape[2] == 1:
+        a = a[:, :, 0]
+    if not (a.ndim == 2 or (colour and a.ndim == 3 and a.shape[2] == 3)):
+        need = "H×W or H×W×3" if colour else "2-D H×W"
+        raise ValueError(f"{what}: expected a {need} array, found shape {a.shape}")
+    if a.size == 0:
+        raise ValueError(f"{what}: the array is empty (shape {a.shape})")
+    return a.astype(np.float64, copy=False)
+
+
+def _labels(mask: Any, what: str) -> Optional[np.ndarray]:
+    """Target labels (0 = background, 1..N = targets) as uint16, or None."""
+    if mask is None:
+        return None
+    a = np.asarray(mask)
+    if a.ndim != 2:
+        raise ValueError(f"{what}: expected a 2-D H×W array, found shape {a.shape}")
+    if a.dtype.kind == "b":
+        return a.astype(np.uint16)
+    if a.dtype.kind not in "iuf" or (a.size and (a.min() < 0 or a.max() > 65535)):
+        raise ValueError(f"{what}: labels must be whole numbers 0..65535 (0 = background)")
+    if a.dtype.kind == "f" and not np.all(a == np.round(a)):
+        raise ValueError(f"{what}: labels must be whole numbers 0..65535 (0 = background)")
+    return a.astype(np.uint16, copy=False)
+
+
+def _opt(kind: type, value: Any) -> Any:
+    """`value` as `kind`, or None."""
+    return None if value is None else kind(value)
+
+
+def _picture_args(
+    picture: Any, colour: bool, params: Dict[str, Any], seed: Any, ppd: Any, shape: Any, mask: Any
+) -> Tuple[Any, ...]:
+    """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
+    the stimulus's parameters, seed, ppd, shape (height, width) and target labels."""
+    if isinstance(picture, str):
+        image, stimulus = None, picture
+    else:
+        image, stimulus = _float_image(picture, "image", colour), None
+    return (
+        image,
+        stimulus,
+        _params_json(params),
+        _opt(int, seed),
+        _opt(float, ppd),
+        _pair(shape, "shape", int),
+        _labels(mask, "mask"),
+    )
+
+
+def _assumptions(domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any) -> Tuple[Any, ...]:
+    """What the perception analyses assume, as the compiled module takes it."""
+    return (str(domain), str(boundary), float(slant), _opt(float, albedo), _opt(float, ambient))
+
+
+def _floats(values: Optional[Sequence[float]]) -> Optional[List[float]]:
+    return None if values is None else [float(v) for v in values]
+
+
+def stimuli() -> Dict[str, str]:
+    """Every stimulus and surface that :func:`render` knows, with a one-line description.
+
+    >>> "checkerboard" in stimuli()
+    True
+    """
+    return dict(_shadelab.stimuli())
+
+
+def describe(name: str) -> Dict[str, Any]:
+    """A stimulus's parameters: for each, its default, range and doc; and its default size.
+
+    >>> d = describe("checkerboard")
+    >>> d["params"]["check"]["default"], d["default_visual_size"], d["default_ppd"]
+    (1.0, (8.0, 8.0), 32.0)
+    """
+    raw = json.loads(_shadelab.describe(name))
+    return {
+        "name": raw["name"],
+        "summary": raw["summary"],
+        "default_visual_size": tuple(raw["default_visual_size"]),
+        "default_ppd": raw["default_ppd"],
+        "params": {
+            p["name"]: {"default": p["default"], "range": p["range"], "doc": p["doc"]}
+            for p in raw["params"]
+        },
+    }
+
+
+def render(
+    name: str,
+    *,
+    visual_size: Any = None,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    light: Any = None,
+    seed: Optional[int] = None,
+    layers: bool = False,
+    **params: Any,
+) -> Dict[str, Any]:
+    """Renders a stimulus as a stimupy-style dict.
+
+    ``visual_size`` (degrees) and ``shape`` (pixels) are ``(height, width)`` or one number for
+    a square; with ``ppd`` any two fix the third and what is missing takes the stimulus's
+    defaults (:func:`describe`). ``light`` is an ``(x, y, z)`` vector, ``"tilt=T,slant=S"`` or a
+    name (``above``, ``left``, …); other keyword arguments are the stimulus's parameters.
+
+    The dict holds ``img`` (float64, H×W or H×W×3, linear 0..1), ``target_mask`` (uint16,
+    0 = background, 1..n = the targets), ``target_names``, ``visual_size`` and ``shape``
+    ``(height, width)``, ``ppd``, ``stimulus``, ``seed``, ``notes`` (facts the stimulus
+    recorded) and every resolved parameter by name (and all of them again under
+    ``parameters``); with ``layers=True`` also ``depth``, ``normals`` (H×W×3) and ``shading``
+    (and ``albedo`` where the surface varies it), which take the place of parameters of the
+    same name. The numbers are those the command line writes.
+
+    >>> s = render("sphere", shape=(48, 64), light="tilt=30,slant=40", layers=True)
+    >>> s["img"].shape, s["normals"].shape, s["target_names"]
+    ((48, 64), (48, 64, 3), ['object'])
+    """
+    if light is not None:
+        params["light"] = _light_text(light)
+    report_json, img, target_mask, names, extra = _shadelab.render(
+        name,
+        _params_json(params),
+        _pair(visual_size, "visual_size", float),
+        None if ppd is None else float(ppd),
+        _pair(shape, "shape", int),
+        0 if seed is None else int(seed),
+        bool(layers),
+    )
+    report = json.loads(report_json)
+    geometry = report["geometry"]
+    height, width, resolution = geometry["height"], geometry["width"], geometry["ppd"]
+    out: Dict[str, Any] = dict(report["parameters"])
+    out.update(
+        img=img,
+        target_mask=target_mask
+        if target_mask is not None
+        else np.zeros((height, width), dtype=np.uint16),
+        target_names=list(names),
+        visual_size=(height / resolution, width / resolution),
+        ppd=resolution,
+        shape=(height, width),
+        stimulus=report["stimulus"],
+        seed=report["seed"],
+        notes=report["notes"],
+        parameters=dict(report["parameters"]),
+    )
+    if layers:
+        out.update(extra)
+        # Where the library keeps no separate shading, the shading is the image itself.
+        out.setdefault("shading", img)
+    return out
+
+
+class Reconstruction:
+    """What :func:`solve` recovered: ``normals`` (H×W×3, unit, x right, y up, z toward the
+    viewer), ``depth`` (H×W, pixels toward the viewer, lowest masked point 0), the
+    stereographic gradients ``f`` and ``g`` (H×W), whether the solver ``converged``, its
+    ``iterations``, and the ``report`` dict (what the command line writes as report.json)."""
+
+    __slots__ = ("normals", "depth", "f", "g", "converged", "iterations", "report")
+
+    def __init__(
+        self,
+        normals: np.ndarray,
+        depth: np.ndarray,
+        f: np.ndarray,
+        g: np.ndarray,
+        report: Dict[str, Any],
+    ) -> None:
+        self.normals = normals
+        self.depth = depth
+        self.f = f
+        self.g = g
+        self.report = report
+        self.converged: bool = bool(report["solver"]["converged"])
+        self.iterations: int = int(report["solver"]["iterations"])
+
+    def __repr__(self) -> str:
+        h, w = self.depth.shape
+        state = "converged" if self.converged else "NOT converged"
+        unit = self.report["solver"]["iteration_unit"]
+        return f"<Reconstruction {h}×{w}, {state} after {self.iterations} {unit}>"
+
+
+def solve(
+    image: Any,
+    *,
+    light: Any,
+    mask: Any = None,
+    boundary: str = "occluding",
+    albedo: Optional[float] = None,
+    lam: float = 1.0,
+    method: str = "multigrid",
+    tol: float = 1e-6,
+    max_iter: Optional[int] = None,
+) -> Reconstruction:
+    """Recovers shape from one H×W image of linear luminance (``shadelab solve``).
+
+    ``light`` is an ``(x, y, z)`` vector toward the light, ``"tilt=T,slant=S"``, a name, or
+    ``"estimate"`` (estimated from the image with the albedo). ``mask``: nonzero = the object
+    (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free`` or the path of
+    an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
+    estimated. ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``), ``tol`` and
+    ``max_iter`` are the solver's settings.
+
+    >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
+    >>> r = solve(s["img"], light=(0.3, 0.4, 0.866), mask=s["target_mask"])
+    >>> r.converged, r.normals.shape, r.depth.shape
+    (True, (64, 64, 3), (64, 64))
+    """
+    img = _float_image(image, "image", colour=False)
+    inside = None
+    if mask is not None:
+        m = np.asarray(mask)
+        if m.ndim != 2:
+            raise ValueError(f"mask: expected a 2-D H×W array, found shape {m.shape}")
+        inside = m != 0
+    normals, depth, f, g, report_json = _shadelab.solve(
+        img,
+        inside,
+        _light_text(light),
+        str(boundary),
+        None if albedo is None else float(albedo),
+        float(lam),
+        str(method),
+        float(tol),
+        None if max_iter is None else int(max_iter),
+    )
+    return Reconstruction(normals, depth, f, g, json.loads(report_json))
+
+
+def prior_sweep(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    mask: Any = None,
+    tilts: Optional[Sequence[float]] = None,
+    binding: Union[None, str, float] = None,
+    domain: str = "image",
+    boundary: str = "flat",
+    slant: float = 45.0,
+    albedo: Optional[float] = None,
+    ambient: Optional[float] = None,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Dict[str, Any]:
+    """How the picture reads under each assumed light tilt (``shadelab analyze prior-sweep``).
+
+    ``picture`` is a stimulus name (rendered with ``params``, ``seed``, ``ppd`` and ``shape``
+    ``(height, width)``, and read with its own targets) or an image array; ``mask`` gives an
+    array's target labels (0 = background). ``tilts`` in degrees (0 = from above, +90 = from the
+    left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
+    light. Returns the report (what sweep.json holds) with two arrays added: ``tilts`` and
+    ``convexities`` (tokens × tilts, positive convex, negative concave).
+
+    >>> r = prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0, 180])
+    >>> r["convexities"].shape == (len(r["tokens"]), 2)
+    True
+    """
+    report_json, tilt_array, convexity = _shadelab.prior_sweep(
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        _floats(tilts),
+        _opt(str, binding),
+    )
+    report = json.loads(report_json)
+    report["tilts"] = tilt_array
+    report["convexities"] = convexity
+    return report
+
+
+def observer(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    mask: Any = None,
+    prior_tilt: Optional[float] = None,
+    kappas: Optional[Sequence[float]] = None,
+    convexity_bias: Optional[float] = None,
+    noise: Optional[float] = None,
+    rotations: Optional[Sequence[float]] = None,
+    tilts: Optional[Sequence[float]] = None,
+    domain: str = "image",
+    boundary: str = "flat",
+    slant: float = 45.0,
+    albedo: Optional[float] = None,
+    ambient: Optional[float] = None,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Dict[str, Any]:
+    """A Bayesian observer's percepts of the picture at each rotation
+    (``shadelab analyze observer``): the report, as observer.json holds it.
+
+    ``picture``, ``ppd``, ``shape``, ``mask``, ``domain``, ``boundary``, ``slant``, ``albedo``,
+    ``ambient``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
+    and ``kappas`` describe the von Mises prior over the light's tilt, ``convexity_bias`` the
+    log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
+    judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
+    """
+    report_json = _shadelab.observer(
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        (
+            _opt(float, prior_tilt),
+            _floats(kappas),
+            _opt(float, convexity_bias),
+            _opt(float, noise),
+            _floats(rotations),
+            _floats(tilts),
+        ),
+    )
+    return json.loads(report_json)
+
+
+def lightness(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    model: str = "odog",
+    mask: Any = None,
+    targets: bool = False,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Any:
+    """A lightness model's output for the picture (``shadelab analyze lightness``), H×W.
+
+    ``picture`` is an image array (gray H×W, or RGB H×W×3 taken as its luminance) or a
+    stimulus name (rendered at ``ppd`` with ``params`` and ``seed``). ``ppd`` is required for
+    an array when the model works in degrees (every model but ``retinex``).
+    ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. With ``mask`` (target
+    labels, 0 = background) or ``targets=True`` (a stimulus's own targets), returns
+    ``(output, target_means)``: one dict per target with its ``label``, ``name``, ``pixels``,
+    mean ``luminance`` and mean model ``output``.
+
+    >>> out = lightness("checker-shadow", ppd=16, model="retinex")
+    >>> out.ndim
+    2
+    """
+    out, report_json = _shadelab.lightness(
+        _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
+    )
+    if mask is None and not targets:
+        return out
+    report = json.loads(report_json)
+    means = report["targets"][0]["targets"] if report["targets"] else []
+    return out, means

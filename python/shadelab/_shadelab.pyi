@@ -1,0 +1,76 @@
+"""Type stubs of the compiled module ``shadelab._shadelab`` (called by ``shadelab``; use the
+functions of ``shadelab`` itself, which take and give dicts, tuples and NumPy arrays)."""
+
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+def stimuli() -> List[Tuple[str, str]]: ...
+def describe(name: str) -> str: ...
+def render(
+    name: str,
+    params_json: str,
+    visual_size: Optional[Tuple[float, float]],
+    ppd: Optional[float],
+    shape: Optional[Tuple[int, int]],
+    seed: int,
+    layers: bool,
+) -> Tuple[
+    str,
+    npt.NDArray[np.float64],
+    Optional[npt.NDArray[np.uint16]],
+    List[str],
+    Dict[str, npt.NDArray[np.float64]],
+]: ...
+def solve(
+    image: npt.NDArray[np.float64],
+    mask: Optional[npt.NDArray[np.bool_]],
+    light: str,
+    boundary: str,
+    albedo: Optional[float],
+    lam: float,
+    method: str,
+    tol: float,
+    max_iter: Optional[int],
+) -> Tuple[
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    str,
+]: ...
+#: (image, stimulus name, parameters JSON, seed, ppd, shape (h, w), target labels)
+PictureArgs = Tuple[
+    Optional[npt.NDArray[np.float64]],
+    Optional[str],
+    str,
+    Optional[int],
+    Optional[float],
+    Optional[Tuple[int, int]],
+    Optional[npt.NDArray[np.uint16]],
+]
+#: (domain, boundary, slant, albedo, ambient)
+AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float]]
+
+def prior_sweep(
+    picture: PictureArgs,
+    assumptions: AssumptionArgs,
+    tilts: Optional[List[float]],
+    binding: Optional[str],
+) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+def observer(
+    picture: PictureArgs,
+    assumptions: AssumptionArgs,
+    settings: Tuple[
+        Optional[float],
+        Optional[List[float]],
+        Optional[float],
+        Optional[float],
+        Optional[List[float]],
+        Optional[List[float]],
+    ],
+) -> str: ...
+def lightness(picture: PictureArgs, model: str) -> Tuple[npt.NDArray[np.float64], str]: ...

@@ -1,0 +1,440 @@
+//! `shadelab._shadelab`: the compiled half of the Python package. Each function turns Python
+//! values into one of the library's pipeline configurations (`shadelab::pipeline::*`), runs the
+//! SAME `run` the command line runs with the GIL released, and hands the results back as NumPy
+//! arrays that own the library's buffers (no copy) and reports as JSON text (the pure-Python
+//! layer, `shadelab/__init__.py`, turns that into dicts). No algorithm lives here.
+
+use numpy::ndarray::{Array2, Array3, ArrayView2};
+use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use serde_json::{Map, Value};
+use shadelab::grid::{Grid, Image, Labels, Mask, RgbImage};
+use shadelab::pipeline::{self as pl, perception};
+use shadelab::{Error, NoProgress, Pixels, SizeRequest};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// The library's error as the Python exception a Python user expects, with its one-line text.
+fn to_py(e: Error) -> PyErr {
+    let text = e.to_string();
+    match &e {
+        Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+            PyFileNotFoundError::new_err(text)
+        }
+        Error::Io { .. } | Error::NotOurs { .. } => PyOSError::new_err(text),
+        Error::Compute(_) => PyRuntimeError::new_err(text),
+        _ => PyValueError::new_err(text),
+    }
+}
+
+/// Runs `work` with the GIL released; a library error becomes its Python exception and a panic
+/// (a bug, never expected) a RuntimeError without the panic's text.
+fn run_released<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> Result<T, Error> + Send,
+) -> PyResult<T> {
+    py.detach(|| catch_unwind(AssertUnwindSafe(work)))
+        .map_err(|_| {
+            PyRuntimeError::new_err(
+                "shadelab failed unexpectedly (an internal error); please report it with the call that caused it",
+            )
+        })?
+        .map_err(to_py)
+}
+
+/// A size pair between Python's (height, width) order and the library's.
+///
+/// The ONE place where the two orders meet, used both ways (a swap is its own inverse): the
+/// library's `SizeRequest` and `Description::default_visual_size` hold (width, height) today,
+/// so the pairs are swapped here. When the library takes (height, width) (as stimupy and NumPy
+/// do), make this the identity. (`Geometry`'s named fields need no conversion.)
+fn swap_order<T>((a, b): (T, T)) -> (T, T) {
+    (b, a)
+}
+
+/// The library's size request from Python's (height, width) pairs.
+fn size_request(
+    visual_size: Option<(f64, f64)>,
+    ppd: Option<f64>,
+    shape: Option<(usize, usize)>,
+) -> SizeRequest {
+    SizeRequest {
+        visual_size: visual_size.map(swap_order),
+        ppd,
+        shape: shape.map(swap_order),
+    }
+}
+
+/// A JSON object of parameters from its text (written by the Python layer's `json.dumps`).
+fn params_from(json: &str) -> PyResult<Map<String, Value>> {
+    match serde_json::from_str(json) {
+        Ok(Value::Object(map)) => Ok(map),
+        _ => Err(PyValueError::new_err(
+            "parameters must be a dict of numbers, strings and booleans",
+        )),
+    }
+}
+
+/// JSON text of any report.
+fn json_text(value: &impl serde::Serialize) -> PyResult<String> {
+    serde_json::to_string(value)
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))
+}
+
+/// An H×W array owning the grid's buffer (no copy).
+fn image_array<'py, T: numpy::Element>(py: Python<'py>, grid: Grid<T>) -> Bound<'py, PyArray2<T>> {
+    let (w, h) = (grid.width(), grid.height());
+    Array2::from_shape_vec((h, w), grid.into_vec())
+        .expect("a grid's buffer holds width × height values")
+        .into_pyarray(py)
+}
+
+/// An H×W×3 array owning the grid's buffer (no copy: `[f64; 3]` per pixel is already three
+/// consecutive values).
+fn rgb_array<'py>(py: Python<'py>, grid: RgbImage) -> Bound<'py, PyArray3<f64>> {
+    let (w, h) = (grid.width(), grid.height());
+    Array3::from_shape_vec((h, w, 3), grid.into_vec().into_flattened())
+        .expect("a grid's buffer holds width × height pixels")
+        .into_pyarray(py)
+}
+
+/// Unit normals (x right, y up, z toward the viewer) as an H×W×3 array.
+fn normals_array<'py>(
+    py: Python<'py>,
+    normals: Grid<shadelab::gradient_space::Normal>,
+) -> Bound<'py, PyArray3<f64>> {
+    let (w, h) = (normals.width(), normals.height());
+    // Same size and alignment: the collect reuses the buffer.
+    let xyz: Vec<[f64; 3]> = normals
+        .into_vec()
+        .into_iter()
+        .map(|n| [n.x, n.y, n.z])
+        .collect();
+    rgb_array(py, Grid::from_vec(w, h, xyz).expect("w × h normals"))
+}
+
+/// A grid from a 2-D array of any memory order or stride (values read in row-major order).
+fn grid_from<T: Clone + numpy::Element>(a: ArrayView2<'_, T>) -> Grid<T> {
+    let (h, w) = a.dim();
+    let data: Vec<T> = a.iter().cloned().collect();
+    Grid::from_vec(w, h, data).expect("h × w values")
+}
+
+/// The picture handed over from Python: H×W gray or H×W×3 RGB, float64 (the Python layer
+/// converts other real dtypes the way the command line reads a `.npy`).
+#[derive(FromPyObject)]
+enum ArrayIn<'py> {
+    Gray(PyReadonlyArray2<'py, f64>),
+    Rgb(PyReadonlyArray3<'py, f64>),
+}
+
+impl ArrayIn<'_> {
+    fn pixels(&self) -> PyResult<Pixels> {
+        match self {
+            ArrayIn::Gray(a) => Ok(Pixels::Gray(grid_from(a.as_array()))),
+            ArrayIn::Rgb(a) => {
+                let a = a.as_array();
+                let (h, w, c) = a.dim();
+                if c != 3 {
+                    return Err(PyValueError::new_err(format!(
+                        "an image must be H×W (gray) or H×W×3 (RGB), not {h}×{w}×{c}"
+                    )));
+                }
+                let data: Vec<[f64; 3]> = a
+                    .outer_iter()
+                    .flat_map(|row| {
+                        row.outer_iter()
+                            .map(|p| [p[0], p[1], p[2]])
+                            .collect::<Vec<_>>()
+                    })
+                    .collect();
+                Ok(Pixels::Rgb(
+                    Grid::from_vec(w, h, data).expect("h × w pixels"),
+                ))
+            }
+        }
+    }
+}
+
+/// The stimuli: (name, one-line description) in the library's order.
+#[pyfunction]
+fn stimuli() -> Vec<(&'static str, &'static str)> {
+    pl::render::list()
+        .into_iter()
+        .map(|s| (s.name, s.summary))
+        .collect()
+}
+
+/// A stimulus's description (parameters, defaults, ranges, docs) as JSON text, its default
+/// visual size as (height, width).
+#[pyfunction]
+fn describe(name: &str) -> PyResult<String> {
+    let mut description = pl::render::describe(name).map_err(to_py)?;
+    description.default_visual_size = swap_order(description.default_visual_size);
+    json_text(&description)
+}
+
+/// Renders a stimulus: (report JSON, img, target_mask or None, target names, layers dict).
+#[pyfunction]
+#[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn render<'py>(
+    py: Python<'py>,
+    name: &str,
+    params_json: &str,
+    visual_size: Option<(f64, f64)>,
+    ppd: Option<f64>,
+    shape: Option<(usize, usize)>,
+    seed: u64,
+    layers: bool,
+) -> PyResult<(
+    String,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyArray2<u16>>>,
+    Vec<String>,
+    Bound<'py, PyDict>,
+)> {
+    let mut config = pl::render::RenderConfig::new(name, pl::source::IN_MEMORY);
+    config.params = params_from(params_json)?;
+    config.size = size_request(visual_size, ppd, shape);
+    config.seed = seed;
+    let report = run_released(py, || pl::render::run(&config, &NoProgress))?;
+    let text = json_text(&report)?;
+    let output = report.output;
+    let img = match output.pixels {
+        Pixels::Gray(i) => image_array(py, i).into_any(),
+        Pixels::Rgb(i) => rgb_array(py, i).into_any(),
+    };
+    let (mask, names) = match output.targets {
+        Some(t) => (Some(image_array(py, t.labels)), t.names),
+        None => (None, Vec::new()),
+    };
+    let extra = PyDict::new(py);
+    if layers {
+        let Some(s) = output.surface else {
+            return Err(PyValueError::new_err(format!(
+                "'{name}' is not a rendered surface: it has no depth, normals or shading layers"
+            )));
+        };
+        extra.set_item("depth", image_array(py, s.depth))?;
+        extra.set_item("normals", normals_array(py, s.normals))?;
+        if let Some(a) = s.albedo {
+            extra.set_item("albedo", image_array(py, a))?;
+        }
+        if let Some(sh) = s.shading {
+            extra.set_item("shading", image_array(py, sh))?;
+        }
+    }
+    Ok((text, img, mask, names, extra))
+}
+
+/// Solves an image for shape: (normals, depth, f, g, report JSON).
+#[pyfunction]
+#[pyo3(signature = (image, mask, light, boundary, albedo, lam, method, tol, max_iter))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn solve<'py>(
+    py: Python<'py>,
+    image: PyReadonlyArray2<'py, f64>,
+    mask: Option<PyReadonlyArray2<'py, bool>>,
+    light: &str,
+    boundary: &str,
+    albedo: Option<f64>,
+    lam: f64,
+    method: &str,
+    tol: f64,
+    max_iter: Option<usize>,
+) -> PyResult<(
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    String,
+)> {
+    let image: Image = grid_from(image.as_array());
+    let mask: Option<Mask> = mask.map(|m| grid_from(m.as_array()));
+    let method: shadelab::Method = method.parse().map_err(to_py)?;
+    let mut options = shadelab::SolveOptions::for_method(method);
+    options.lambda = lam;
+    options.tol = tol;
+    if let Some(n) = max_iter {
+        options.max_iter = n;
+    }
+    let light_choice: pl::solve::LightChoice = light.parse().map_err(to_py)?;
+    let mut config =
+        pl::solve::SolveConfig::new(shadelab::pipeline::source::IN_MEMORY, light_choice);
+    config.boundary = boundary.parse().map_err(to_py)?;
+    config.albedo = albedo;
+    config.options =
+        shadelab::ReconstructOptions::from_solve(&options, shadelab::NonConvergence::Report);
+    config.record = pl::solve::SolveRecord {
+        light: light.to_string(),
+        boundary: boundary.to_string(),
+        out: String::new(),
+    };
+    let run = run_released(py, || {
+        pl::solve::run_image(&config, image, mask, &NoProgress)
+    })?;
+    let text = json_text(&run.report)?;
+    let solution = run.shape.solution;
+    let normals = normals_array(py, solution.normals());
+    Ok((
+        normals,
+        image_array(py, run.depth.depth),
+        image_array(py, solution.f),
+        image_array(py, solution.g),
+        text,
+    ))
+}
+
+/// The picture of an analysis, as the Python layer passes it: an array or a stimulus name,
+/// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width) and target
+/// labels.
+type PictureArgs<'py> = (
+    Option<ArrayIn<'py>>,
+    Option<String>,
+    String,
+    Option<u64>,
+    Option<f64>,
+    Option<(usize, usize)>,
+    Option<PyReadonlyArray2<'py, u16>>,
+);
+
+/// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
+type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
+
+/// The library's description of a picture, and the rendered shape (the library's order).
+fn picture_source(
+    picture: PictureArgs<'_>,
+) -> PyResult<(shadelab::PictureSource, Option<(usize, usize)>)> {
+    let (image, stimulus, params_json, seed, ppd, shape, labels) = picture;
+    let source = shadelab::PictureSource {
+        pixels: image.as_ref().map(ArrayIn::pixels).transpose()?,
+        stimulus,
+        params: params_from(&params_json)?,
+        seed,
+        ppd,
+        labels: labels.map(|l| -> Labels { grid_from(l.as_array()) }),
+        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        ..Default::default()
+    };
+    // The rendered size, converted like every other size (see `size_request`).
+    Ok((source, size_request(None, None, shape).shape))
+}
+
+/// The perception settings shared by `prior_sweep` and `observer`.
+fn perception_config(
+    picture: PictureArgs<'_>,
+    assumptions: AssumptionArgs,
+) -> PyResult<perception::Config> {
+    let (source, size) = picture_source(picture)?;
+    let (domain, boundary, slant, albedo, ambient) = assumptions;
+    let mut config = perception::Config::new(source);
+    config.size = size;
+    config.domain = domain.parse().map_err(to_py)?;
+    config.boundary = boundary.parse().map_err(to_py)?;
+    config.slant_deg = slant;
+    config.albedo = albedo;
+    config.ambient = ambient;
+    Ok(config)
+}
+
+/// The prior sweep: (report JSON, tilts, convexity tokens × tilts).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn prior_sweep<'py>(
+    py: Python<'py>,
+    picture: PictureArgs<'py>,
+    assumptions: AssumptionArgs,
+    tilts: Option<Vec<f64>>,
+    binding: Option<&str>,
+) -> PyResult<(String, Bound<'py, PyAny>, Bound<'py, PyArray2<f64>>)> {
+    let mut config =
+        pl::prior_sweep::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
+    if let Some(t) = tilts {
+        config.tilts = t;
+    }
+    config.binding = binding
+        .map(pl::prior_sweep::parse_global_light)
+        .transpose()
+        .map_err(to_py)?;
+    let report = run_released(py, || {
+        config.check()?;
+        pl::prior_sweep::run(&config, &NoProgress)
+    })?;
+    let text = json_text(&report)?;
+    let tilts = report.sweep.tilts();
+    let n = report.sweep.tokens.len();
+    let rows: Vec<f64> = (0..n).flat_map(|k| report.sweep.convexities(k)).collect();
+    let convexity = Array2::from_shape_vec((n, tilts.len()), rows)
+        .expect("one convexity per token and tilt")
+        .into_pyarray(py);
+    Ok((text, tilts.into_pyarray(py).into_any(), convexity))
+}
+
+/// The observer's own settings: prior tilt, kappas, convexity bias, noise, rotations, tilts.
+type ObserverArgs = (
+    Option<f64>,
+    Option<Vec<f64>>,
+    Option<f64>,
+    Option<f64>,
+    Option<Vec<f64>>,
+    Option<Vec<f64>>,
+);
+
+/// The Bayesian observer: report JSON.
+#[pyfunction]
+fn observer(
+    py: Python<'_>,
+    picture: PictureArgs<'_>,
+    assumptions: AssumptionArgs,
+    settings: ObserverArgs,
+) -> PyResult<String> {
+    let mut config =
+        pl::observer::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
+    let (prior_tilt, kappas, convexity_bias, noise, rotations, tilts) = settings;
+    config.prior_tilt_deg = prior_tilt.unwrap_or(config.prior_tilt_deg);
+    config.kappas = kappas.unwrap_or(config.kappas);
+    config.convexity_bias = convexity_bias.unwrap_or(config.convexity_bias);
+    config.noise = noise.unwrap_or(config.noise);
+    config.rotations = rotations.unwrap_or(config.rotations);
+    config.tilts = tilts.unwrap_or(config.tilts);
+    let report = run_released(py, || {
+        config.check()?;
+        pl::observer::run(&config, &NoProgress)
+    })?;
+    json_text(&report)
+}
+
+/// A lightness model's output: (H×W output, report JSON).
+#[pyfunction]
+fn lightness<'py>(
+    py: Python<'py>,
+    picture: PictureArgs<'py>,
+    model: &str,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
+    let (source, _) = picture_source(picture)?;
+    let model: shadelab::LightnessModel = model.parse().map_err(to_py)?;
+    let config = pl::lightness::LightnessConfig::new(source, vec![model]).map_err(to_py)?;
+    let mut report = run_released(py, || pl::lightness::run(&config, &NoProgress))?;
+    let text = json_text(&report)?;
+    let (_, out) = report
+        .images
+        .pop()
+        .ok_or_else(|| PyRuntimeError::new_err("the lightness model gave no output"))?;
+    Ok((image_array(py, out), text))
+}
+
+/// The compiled module.
+#[pymodule]
+fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(stimuli, m)?)?;
+    m.add_function(wrap_pyfunction!(describe, m)?)?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(prior_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(observer, m)?)?;
+    m.add_function(wrap_pyfunction!(lightness, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,167 @@
+"""render, stimuli and describe: stimupy-style dicts in (height, width) order."""
+
+import json
+
+import numpy as np
+import pytest
+
+import shadelab
+from conftest import owns_rust_buffer
+
+
+def test_stimuli_lists_names_with_descriptions():
+    s = shadelab.stimuli()
+    assert {"sphere", "checkerboard", "checker-shadow", "bumps"} <= set(s)
+    assert all(isinstance(v, str) and v for v in s.values())
+
+
+def test_describe_gives_defaults_ranges_and_docs():
+    d = shadelab.describe("checkerboard")
+    assert set(d["params"]) == {"check", "intensity_first", "intensity_second"}
+    check = d["params"]["check"]
+    assert check["default"] == 1.0 and "deg" in check["doc"] and check["range"]
+    assert d["default_visual_size"] == (8.0, 8.0) and d["default_ppd"] == 32.0
+
+
+def test_describe_unknown_stimulus_is_a_value_error():
+    with pytest.raises(ValueError, match="unknown stimulus 'nope'"):
+        shadelab.describe("nope")
+
+
+def test_dict_keys_as_stimupy():
+    s = shadelab.render("checkerboard", visual_size=(2, 3), ppd=10)
+    for key in ("img", "target_mask", "visual_size", "ppd", "shape"):
+        assert key in s
+    assert s["check"] == 1.0 and s["intensity_first"] == 0.0  # every parameter by name
+    assert s["stimulus"] == "checkerboard" and s["seed"] == 0
+
+
+def test_shapes_are_height_width():
+    s = shadelab.render("checkerboard", visual_size=(2, 3), ppd=10)
+    assert s["img"].shape == (20, 30)
+    assert s["shape"] == (20, 30)
+    assert s["visual_size"] == (2.0, 3.0)
+    assert s["target_mask"].shape == (20, 30)
+    assert s["img"].dtype == np.float64
+
+
+def test_shape_and_ppd_give_visual_size():
+    s = shadelab.render("disc", shape=(40, 80), ppd=20)
+    assert s["img"].shape == (40, 80)
+    assert s["visual_size"] == (2.0, 4.0)
+
+
+def test_one_number_is_a_square():
+    s = shadelab.render("checkerboard", shape=24, ppd=8)
+    assert s["img"].shape == (24, 24) and s["visual_size"] == (3.0, 3.0)
+
+
+def test_inconsistent_size_is_a_value_error():
+    with pytest.raises(ValueError, match="inconsistent size"):
+        shadelab.render("checkerboard", visual_size=(2, 3), ppd=10, shape=(20, 40))
+
+
+def checkerboard_by_hand(shape, check_px, first, second):
+    """stimupy's checkerboard (check_visual_size × ppd an integer): check (i, j) of the grid has
+    intensity_checks[0] where i + j is even, intensity_checks[1] where odd, from the top left."""
+    rows = np.arange(shape[0])[:, None] // check_px
+    cols = np.arange(shape[1])[None, :] // check_px
+    return np.where((rows + cols) % 2 == 0, first, second).astype(float)
+
+
+@pytest.mark.parametrize("size,ppd,check", [((4, 6), 10, 1.0), ((3, 5), 16, 0.5), ((8, 8), 32, 2.0)])
+def test_checkerboard_equals_stimupy(size, ppd, check):
+    s = shadelab.render("checkerboard", visual_size=size, ppd=ppd, check=check,
+                        intensity_first=0.2, intensity_second=0.9)
+    expected = checkerboard_by_hand(s["shape"], int(check * ppd), 0.2, 0.9)
+    np.testing.assert_array_equal(s["img"], expected)
+
+
+def test_checkerboard_against_stimupy_itself():
+    stimupy = pytest.importorskip("stimupy", reason="stimupy is not installed (pip install stimupy)")
+    from stimupy.stimuli.checkerboards import checkerboard
+
+    theirs = checkerboard(visual_size=(4, 6), ppd=10, check_visual_size=(1, 1),
+                          intensity_checks=(0.0, 1.0))
+    ours = shadelab.render("checkerboard", visual_size=(4, 6), ppd=10)
+    assert ours["shape"] == tuple(theirs["shape"])
+    np.testing.assert_array_equal(ours["img"], theirs["img"])
+
+
+def test_layers_of_a_surface():
+    s = shadelab.render("sphere", shape=(30, 40), layers=True)
+    assert s["depth"].shape == (30, 40)
+    assert s["normals"].shape == (30, 40, 3)
+    assert s["shading"].shape == (30, 40)
+    n = np.linalg.norm(s["normals"], axis=-1)
+    np.testing.assert_allclose(n, 1.0, atol=1e-9)
+    inside = s["target_mask"] == 1
+    assert s["target_names"] == ["object"] and inside.sum() > 0
+    assert np.all(s["depth"][~inside] == 0) and s["depth"][inside].max() > 0
+
+
+def test_layers_of_a_flat_stimulus_is_a_value_error():
+    with pytest.raises(ValueError, match="not a rendered surface"):
+        shadelab.render("checkerboard", layers=True)
+
+
+def test_light_as_vector_or_text():
+    a = shadelab.render("sphere", shape=32, light=(0, 0, 1))
+    b = shadelab.render("sphere", shape=32, light="front")
+    np.testing.assert_array_equal(a["img"], b["img"])
+    c = shadelab.render("sphere", shape=32, light="left")
+    assert not np.array_equal(a["img"], c["img"])
+
+
+def test_targets_of_checker_shadow():
+    s = shadelab.render("checker-shadow", ppd=16)
+    assert s["target_names"] == ["A", "B"]
+    a, b = s["img"][s["target_mask"] == 1], s["img"][s["target_mask"] == 2]
+    assert a.size > 0 and b.size > 0
+    assert np.all(a == a[0]) and np.all(b == a[0])  # the illusion: A and B are identical
+
+
+def test_same_numbers_as_the_cli_sidecar(tmp_path):
+    """The dict's parameters and size are those the library records in a sidecar."""
+    s = shadelab.render("bumps", shape=(96, 128), ppd=8, seed=3, rows=2)
+    assert s["rows"] == 2 and s["seed"] == 3 and s["shape"] == (96, 128)
+    assert json.loads(json.dumps(s["parameters"])) == s["parameters"]
+
+
+def test_seed_changes_random_layouts_only():
+    a = shadelab.render("bumps", shape=96, ppd=8, seed=1)
+    b = shadelab.render("bumps", shape=96, ppd=8, seed=1)
+    np.testing.assert_array_equal(a["img"], b["img"])
+
+
+def test_unknown_parameter_is_a_value_error():
+    with pytest.raises(ValueError, match="parameter"):
+        shadelab.render("checkerboard", chek=1.0)
+
+
+def test_out_of_range_parameter_is_a_value_error():
+    with pytest.raises(ValueError):
+        shadelab.render("checkerboard", intensity_first=3.0)
+
+
+def test_missing_file_is_file_not_found():
+    with pytest.raises(FileNotFoundError, match="no-such-file.npy"):
+        shadelab.render("heightfield", path="no-such-file.npy")
+
+
+def test_outputs_are_not_copied():
+    s = shadelab.render("sphere", shape=48, layers=True)
+    for key in ("img", "target_mask", "depth", "normals"):
+        assert owns_rust_buffer(s[key]), key
+        assert s[key].flags.c_contiguous and s[key].flags.writeable, key
+
+
+@pytest.mark.parametrize("name", ["checker-shadow", "strips", "boundary-strips"])
+def test_default_size_is_height_width_like_describe(name):
+    """Non-square defaults: describe's (height, width) is the render's, and the image's."""
+    d = shadelab.describe(name)
+    h_deg, w_deg = d["default_visual_size"]
+    assert h_deg != w_deg
+    s = shadelab.render(name)
+    assert s["visual_size"] == (h_deg, w_deg)
+    assert s["img"].shape[:2] == (round(h_deg * d["default_ppd"]), round(w_deg * d["default_ppd"]))

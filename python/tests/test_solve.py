@@ -1,0 +1,127 @@
+"""solve: accuracy on a rendered sphere, inputs of any dtype and layout, the report."""
+
+import numpy as np
+import pytest
+
+import shadelab
+from conftest import LIGHT, angular_error_deg, owns_rust_buffer
+
+
+def test_sphere_recovered_within_a_quarter_degree():
+    """A 128² sphere lit head-on: the normals within 0.25° of the render's own on average
+    (under an oblique light the attached shadow leaves the shape under-constrained)."""
+    s = shadelab.render("sphere", shape=128, light=(0, 0, 1), layers=True)
+    inside = s["target_mask"] == 1
+    r = shadelab.solve(s["img"], light=(0, 0, 1), mask=inside)
+    assert r.converged
+    err = angular_error_deg(r.normals, s["normals"], inside)
+    assert err <= 0.25, f"mean angular error {err:.3f} deg"
+
+
+def test_oblique_light_sphere_is_close(sphere):
+    inside = sphere["target_mask"] == 1
+    r = shadelab.solve(sphere["img"], light=LIGHT, mask=inside)
+    assert angular_error_deg(r.normals, sphere["normals"], inside) < 6.0
+
+
+def test_reconstruction_fields(sphere):
+    r = shadelab.solve(sphere["img"], light=LIGHT, mask=sphere["target_mask"])
+    h, w = sphere["shape"]
+    assert r.normals.shape == (h, w, 3)
+    assert r.depth.shape == r.f.shape == r.g.shape == (h, w)
+    assert r.iterations == r.report["solver"]["iterations"] > 0
+    assert r.report["command"] == "solve"
+    assert r.report["input"]["width"] == w and r.report["input"]["height"] == h
+    assert r.report["input"]["mask_pixels"] == int((sphere["target_mask"] != 0).sum())
+    assert "Reconstruction" in repr(r)
+
+
+def test_light_forms_agree(sphere):
+    inside = sphere["target_mask"] == 1
+    vec = shadelab.solve(sphere["img"], light=LIGHT, mask=inside)
+    tilt = float(np.degrees(np.arctan2(-LIGHT[0], LIGHT[1])))
+    slant = float(np.degrees(np.arccos(LIGHT[2] / np.linalg.norm(LIGHT))))
+    text = shadelab.solve(sphere["img"], light=f"tilt={tilt!r},slant={slant!r}", mask=inside)
+    np.testing.assert_allclose(vec.normals, text.normals, atol=1e-6)
+
+
+def test_estimated_light(sphere):
+    inside = sphere["target_mask"] == 1
+    r = shadelab.solve(sphere["img"], light="estimate", mask=inside)
+    assert r.report["light"]["estimated"] is True
+    est = np.array(r.report["light"]["vector"])
+    true = np.array(LIGHT) / np.linalg.norm(LIGHT)
+    assert np.degrees(np.arccos(np.clip(est @ true, -1, 1))) < 10
+
+
+def test_any_dtype_and_memory_order(sphere):
+    img = sphere["img"]
+    inside = sphere["target_mask"] == 1
+    base = shadelab.solve(img, light=LIGHT, mask=inside).normals
+    fortran = shadelab.solve(np.asfortranarray(img), light=LIGHT, mask=np.asfortranarray(inside))
+    np.testing.assert_array_equal(base, fortran.normals)
+    wide = np.zeros((img.shape[0], img.shape[1] * 2))
+    wide[:, ::2] = img  # a strided view
+    strided = shadelab.solve(wide[:, ::2], light=LIGHT, mask=inside)
+    np.testing.assert_array_equal(base, strided.normals)
+    as32 = shadelab.solve(img.astype(np.float32), light=LIGHT, mask=inside)
+    assert angular_error_deg(as32.normals, base, inside) < 0.05
+
+
+def test_integer_image_keeps_its_values():
+    """Integers are read as the command line reads an integer .npy: values as they are."""
+    img = np.full((16, 16), 1, dtype=np.uint8)
+    r = shadelab.solve(img, light=(0, 0, 1))
+    np.testing.assert_allclose(r.normals[..., 2], 1.0, atol=1e-9)
+
+
+def test_outputs_are_not_copied(sphere):
+    r = shadelab.solve(sphere["img"], light=LIGHT, mask=sphere["target_mask"])
+    for a in (r.normals, r.depth, r.f, r.g):
+        assert owns_rust_buffer(a)
+
+
+def test_bad_light_is_a_value_error(sphere):
+    with pytest.raises(ValueError, match="light"):
+        shadelab.solve(sphere["img"], light="sideways")
+    with pytest.raises(ValueError):
+        shadelab.solve(sphere["img"], light=(0, 0, -1))  # behind the surface
+    with pytest.raises(ValueError):
+        shadelab.solve(sphere["img"], light=(1, 2))
+
+
+def test_bad_settings_are_value_errors(sphere):
+    img = sphere["img"]
+    with pytest.raises(ValueError, match="solver method"):
+        shadelab.solve(img, light=LIGHT, method="newton")
+    with pytest.raises(ValueError):
+        shadelab.solve(img, light=LIGHT, tol=-1.0)
+    with pytest.raises(ValueError):
+        shadelab.solve(img, light=LIGHT, albedo=0.0)
+    with pytest.raises(ValueError, match="boundary"):
+        shadelab.solve(img, light=LIGHT, boundary="wobbly")
+
+
+def test_bad_arrays_are_value_errors():
+    with pytest.raises(ValueError, match="non-finite"):
+        shadelab.solve(np.full((8, 8), np.nan), light=(0, 0, 1))
+    with pytest.raises(ValueError, match="2-D"):
+        shadelab.solve(np.zeros(8), light=(0, 0, 1))
+    with pytest.raises(ValueError, match="dtype"):
+        shadelab.solve(np.zeros((8, 8), dtype=complex), light=(0, 0, 1))
+    with pytest.raises(ValueError, match="empty"):
+        shadelab.solve(np.zeros((8, 8)), light=(0, 0, 1), mask=np.zeros((8, 8), bool))
+    with pytest.raises(ValueError, match="8x4"):
+        shadelab.solve(np.zeros((8, 8)), light=(0, 0, 1), mask=np.ones((4, 8), bool))
+
+
+def test_missing_boundary_file_is_file_not_found():
+    with pytest.raises(FileNotFoundError, match="missing-rim.npy"):
+        shadelab.solve(np.ones((8, 8)), light=(0, 0, 1), boundary="missing-rim.npy")
+
+
+def test_not_converging_is_reported_not_raised(sphere):
+    r = shadelab.solve(sphere["img"], light=LIGHT, mask=sphere["target_mask"], method="jacobi",
+                       max_iter=3)
+    assert not r.converged and r.iterations == 3
+    assert "did not converge" in r.report["solver"]["warning"]
