@@ -43,26 +43,16 @@ fn run_released<T: Send>(
         .map_err(to_py)
 }
 
-/// A size pair between Python's (height, width) order and the library's.
-///
-/// The ONE place where the two orders meet, used both ways (a swap is its own inverse): the
-/// library's `SizeRequest` and `Description::default_visual_size` hold (width, height) today,
-/// so the pairs are swapped here. When the library takes (height, width) (as stimupy and NumPy
-/// do), make this the identity. (`Geometry`'s named fields need no conversion.)
-fn swap_order<T>((a, b): (T, T)) -> (T, T) {
-    (b, a)
-}
-
-/// The library's size request from Python's (height, width) pairs.
+/// The library's size request from Python's pairs: both are (height, width), as stimupy's.
 fn size_request(
     visual_size: Option<(f64, f64)>,
     ppd: Option<f64>,
     shape: Option<(usize, usize)>,
 ) -> SizeRequest {
     SizeRequest {
-        visual_size: visual_size.map(swap_order),
+        visual_size,
         ppd,
-        shape: shape.map(swap_order),
+        shape,
     }
 }
 
@@ -170,8 +160,7 @@ fn stimuli() -> Vec<(&'static str, &'static str)> {
 /// visual size as (height, width).
 #[pyfunction]
 fn describe(name: &str) -> PyResult<String> {
-    let mut description = pl::render::describe(name).map_err(to_py)?;
-    description.default_visual_size = swap_order(description.default_visual_size);
+    let description = pl::render::describe(name).map_err(to_py)?;
     json_text(&description)
 }
 
@@ -318,8 +307,8 @@ fn picture_source(
         max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };
-    // The rendered size, converted like every other size (see `size_request`).
-    Ok((source, size_request(None, None, shape).shape))
+    // The perception pipeline's size is (width, height) today (TODO(lead): flip to (h, w)).
+    Ok((source, shape.map(|(h, w)| (w, h))))
 }
 
 /// The perception settings shared by `prior_sweep` and `observer`.
