@@ -7,6 +7,7 @@
 //! stimuli` rewrites the golden files.
 
 mod bad_input;
+mod figures;
 mod formats;
 mod gallery;
 mod golden;
