@@ -423,13 +423,15 @@ mod tests {
     }
 
     #[test]
-    fn disc_area_is_pi_r_squared_in_pixels() {
+    fn disc_area_is_that_of_stimupys_stretched_circle() {
         let out = generate("disc", &["radius=2"], 200, 160, 20.0);
         let Pixels::Gray(img) = out.pixels else {
             panic!()
         };
         let area = img.data().iter().filter(|&&v| v == 1.0).count() as f64;
-        let expect = std::f64::consts::PI * 40.0 * 40.0;
+        // stimupy's axes put the end pixels on the frame's edges: 40 px of radius become
+        // 40·(n − 1)/n pixels along each axis.
+        let expect = std::f64::consts::PI * (40.0 * 199.0 / 200.0) * (40.0 * 159.0 / 160.0);
         assert!((area - expect).abs() / expect < 0.005, "{area} vs {expect}");
         // Symmetric about both axes of the frame.
         assert_eq!(img, img.rotated_180());
