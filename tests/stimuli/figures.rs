@@ -87,10 +87,7 @@ fn checker_shadow_letters_are_ink_outside_the_mask_and_the_proof_bar_has_the_sha
         .map(|i| l.data()[i])
         .collect();
     assert!(!inked.is_empty() && inked.iter().all(|&v| v < dark));
-    assert!(
-        inked.iter().any(|&v| v == 0.0),
-        "fully inked pixels are black"
-    );
+    assert!(inked.contains(&0.0), "fully inked pixels are black");
     // The proof: the pixel halfway between the letters' centres has exactly A's value.
     let proof = render_with("checker-shadow", &["proof=true"]);
     let Pixels::Gray(img) = &proof.pixels else {
