@@ -73,6 +73,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "checker-shadow",
         include_str!("../stimuli/checker-shadow.json"),
     ),
+    (
+        "checker-shadow-proof",
+        include_str!("../stimuli/checker-shadow-proof.json"),
+    ),
     ("fading-disk", include_str!("../stimuli/fading-disk.json")),
     (
         "fading-disk-achromatic",

@@ -12,13 +12,20 @@
 //! 0 in light and exactly 1 in the umbra, and a light square's shadowed value *is*
 //! `dark_square`. The cylinder is Lambertian with the same ambient fraction k.
 //!
+//! As in Adelson's figure, the letters A and B stand on their squares (black vector glyphs,
+//! anti-aliased; their pixels are not in the target mask), the shadow is a broad soft band that
+//! covers B and the squares beside it along the cylinder's side, and the cylinder may be green
+//! (`cylinder_colour=green`: RGB output whose luminance is the gray cylinder's). `proof=true`
+//! adds Adelson's proof: a bar of exactly the squares' shared value joins A to B, so a viewer
+//! sees one uniform gray run from one square to the other.
+//!
 //! Lengths are in degrees measured on the board (before foreshortening).
 
 use super::frame::{smoothstep, Frame};
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::params::{stimulus_params, ParamSet};
+use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::visual_size::Geometry;
 use serde_json::{json, Map};
 use std::f64::consts::SQRT_2;
@@ -36,6 +43,20 @@ fn segment_distance(x: f64, y: f64, ax: f64, bx: f64, ay: f64) -> f64 {
     dx.hypot(y - ay)
 }
 
+param_choice! {
+    /// The colour of the cylinder of [`checker_shadow`].
+    pub enum CylinderColour {
+        /// Gray, like the board: the output is one channel.
+        Gray = "gray",
+        /// Green, as in Adelson's figure: the output is RGB, with the gray cylinder's luminance.
+        Green = "green",
+    }
+}
+
+/// The green of the cylinder: linear RGB weights whose luminance (Rec. 709) is 1, so a green
+/// cylinder has the luminance of the gray one.
+const GREEN: [f64; 3] = [0.32, 1.24, 0.42];
+
 stimulus_params! {
     /// Parameters of [`checker_shadow`].
     pub struct CheckerShadowParams {
@@ -46,23 +67,29 @@ stimulus_params! {
         /// angle of the line of sight above the board (deg)
         view_elevation: f64 = 40.0, range 10.0..=90.0;
         /// angle of the light above the board (deg)
-        light_elevation: f64 = 45.0, range 10.0..=89.0;
+        light_elevation: f64 = 40.0, range 10.0..=89.0;
         /// luminance of a light square in light
         light_square: f64 = 0.8, range 0.0..=1.0;
         /// luminance of a dark square in light (= a light square in full shadow)
         dark_square: f64 = 0.4, range 0.0..=1.0;
         /// radius of the cylinder (deg)
-        cylinder_radius: f64 = 0.6, range 0.01..=30.0;
+        cylinder_radius: f64 = 0.72, range 0.01..=30.0;
         /// height of the cylinder (deg)
-        cylinder_height: f64 = 1.8, range 0.01..=60.0;
+        cylinder_height: f64 = 2.4, range 0.01..=60.0;
         /// distance from square B's centre to the cylinder's axis, toward the light (deg)
         cylinder_offset: f64 = 1.4, range 0.0..=60.0;
         /// half-width of the shadow's soft edge (deg)
-        penumbra: f64 = 0.12, range 0.0..=10.0;
+        penumbra: f64 = 0.24, range 0.0..=10.0;
         /// luminance of the cylinder's top
         cylinder_albedo: f64 = 0.5, range 0.0..=1.0;
+        /// colour of the cylinder (green gives RGB output of the same luminance)
+        cylinder_colour: CylinderColour = CylinderColour::Gray;
         /// luminance around the board
         background: f64 = 0.9, range 0.0..=1.0;
+        /// draw the letters A and B on their squares
+        letters: bool = true;
+        /// Adelson's proof: join A and B by a bar of their shared value
+        proof: bool = false;
     }
 }
 
@@ -126,6 +153,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     };
     let mut image = Grid::new(frame.w, frame.h, p.background);
     let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    let mut on_cylinder = Grid::new(frame.w, frame.h, false);
     let mut problems = Vec::new();
     for row in 0..frame.h {
         for col in 0..frame.w {
@@ -185,6 +213,8 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             *image.get_mut(col, row) = v;
             if cyl.is_none() {
                 *labels.get_mut(col, row) = label;
+            } else {
+                *on_cylinder.get_mut(col, row) = true;
             }
         }
     }
@@ -193,12 +223,74 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             "checker-shadow: with these parameters square A or B is {why}; change cylinder_offset, cylinder_radius, penumbra or the elevations"
         )));
     }
-    let peak = image.min_max().map_or(0.0, |m| m.1);
-    if peak > 1.0 {
+    let tint = match p.cylinder_colour {
+        CylinderColour::Gray => [1.0; 3],
+        CylinderColour::Green => GREEN.map(|c| c / crate::grid::luminance(GREEN)),
+    };
+    let cylinder_peak = image
+        .data()
+        .iter()
+        .zip(on_cylinder.data())
+        .filter(|(_, &c)| c)
+        .fold(0.0f64, |m, (&v, _)| m.max(v));
+    let channel_peak = cylinder_peak * tint.iter().fold(0.0f64, |a, &b| a.max(b));
+    if channel_peak > 1.0 {
         return Err(Error::invalid(format!(
-            "checker-shadow: the cylinder's lit side reaches {peak:.3} > 1; lower cylinder_albedo or raise light_elevation"
+            "checker-shadow: the cylinder's lit side reaches {channel_peak:.3} > 1; lower cylinder_albedo or raise light_elevation"
         )));
     }
+    // Where the squares' centres fall in the picture (SVG/pixmap coordinates: pixels from the
+    // top-left corner, y down).
+    let square_centre = |i: usize, j: usize| {
+        let (x, y) = (centre(i), centre(j));
+        let (u, w) = ((x - y) / SQRT_2, (x + y) / SQRT_2);
+        frame.svg_xy(u * side, (w * se + y_off) * side)
+    };
+    let (a_at, b_at) = (square_centre(ia, ja), square_centre(ib, jb));
+    if p.proof {
+        // A bar of the shared value from A's centre to B's; the squares keep their own pixels
+        // (of that value already), so A and B stay exactly equal.
+        let bar = coverage(
+            &frame,
+            |pb| {
+                pb.move_to(a_at.0 as f32, a_at.1 as f32);
+                pb.line_to(b_at.0 as f32, b_at.1 as f32);
+            },
+            0.45 * side,
+            tiny_skia::LineCap::Butt,
+        )?;
+        blend(&mut image, &labels, &bar, dark);
+    }
+    if p.letters {
+        // Upright glyphs half a square high, black, on the squares' centres.
+        let height = 0.5 * side * SQRT_2 * se;
+        let stroke = 0.14 * height;
+        for (at, glyph) in [(a_at, glyph_a as Glyph), (b_at, glyph_b as Glyph)] {
+            let ink = coverage(
+                &frame,
+                |pb| glyph(pb, at, height),
+                stroke,
+                tiny_skia::LineCap::Round,
+            )?;
+            for (l, &a) in labels.data_mut().iter_mut().zip(ink.data()) {
+                if a > 0.0 {
+                    *l = 0;
+                }
+            }
+            blend(&mut image, &labels, &ink, 0.0);
+        }
+    }
+    let pixels = if p.cylinder_colour == CylinderColour::Gray {
+        Pixels::Gray(image)
+    } else {
+        let data = image
+            .data()
+            .iter()
+            .zip(on_cylinder.data())
+            .map(|(&v, &cyl)| if cyl { tint.map(|t| v * t) } else { [v; 3] })
+            .collect();
+        Pixels::Rgb(Grid::from_vec(frame.w, frame.h, data)?)
+    };
     let mut notes = Map::new();
     notes.insert("a_and_b_value".into(), json!(dark));
     notes.insert("shadow_illumination".into(), json!(k));
@@ -206,8 +298,22 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         "squares_ij".into(),
         json!({"A": [ia, ja], "B": [ib, jb], "note": "i along the board's X (toward the light), j along Y; (0,0) is the left corner"}),
     );
+    // The squares whose centres lie at least half in shadow (the cylinder's base excluded).
+    let shadowed: Vec<[usize; 2]> = (0..n)
+        .flat_map(|i| (0..n).map(move |j| [i, j]))
+        .filter(|&[i, j]| {
+            let (x, y) = (centre(i), centre(j));
+            let dist = segment_distance(x, y, cx, shadow_end, cy);
+            (x - cx).hypot(y - cy) > rc && smoothstep(rc - pen, rc + pen, dist) <= 0.5
+        })
+        .collect();
+    notes.insert("shadowed_squares_ij".into(), json!(shadowed));
+    notes.insert(
+        "letter_centres_px".into(),
+        json!({"A": [a_at.0, a_at.1], "B": [b_at.0, b_at.1], "note": "from the top-left corner, y down"}),
+    );
     Ok(Output {
-        pixels: Pixels::Gray(image),
+        pixels,
         targets: Some(Targets {
             labels,
             names: vec!["A".into(), "B".into()],
@@ -216,6 +322,99 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         svg: None,
         notes,
     })
+}
+
+/// A glyph drawn as strokes into a path builder, centred at a point, `height` pixels high.
+type Glyph = fn(&mut tiny_skia::PathBuilder, (f64, f64), f64);
+
+/// The letter A: two legs meeting at the top and a crossbar.
+fn glyph_a(pb: &mut tiny_skia::PathBuilder, (cx, cy): (f64, f64), h: f64) {
+    let at = |dx: f64, dy: f64| ((cx + dx * h) as f32, (cy + dy * h) as f32);
+    let (x, y) = at(-0.36, 0.5);
+    pb.move_to(x, y);
+    let (x, y) = at(0.0, -0.5);
+    pb.line_to(x, y);
+    let (x, y) = at(0.36, 0.5);
+    pb.line_to(x, y);
+    let (x, y) = at(-0.2, 0.1);
+    pb.move_to(x, y);
+    let (x, y) = at(0.2, 0.1);
+    pb.line_to(x, y);
+}
+
+/// The letter B: a stem and two bowls.
+fn glyph_b(pb: &mut tiny_skia::PathBuilder, (cx, cy): (f64, f64), h: f64) {
+    let at = |dx: f64, dy: f64| ((cx + dx * h) as f32, (cy + dy * h) as f32);
+    let p =
+        |pb: &mut tiny_skia::PathBuilder, dx, dy, f: fn(&mut tiny_skia::PathBuilder, f32, f32)| {
+            let (x, y) = at(dx, dy);
+            f(pb, x, y);
+        };
+    p(pb, -0.3, 0.5, tiny_skia::PathBuilder::move_to);
+    p(pb, -0.3, -0.5, tiny_skia::PathBuilder::line_to);
+    p(pb, 0.02, -0.5, tiny_skia::PathBuilder::line_to);
+    let (c1, c2, end) = (at(0.3, -0.5), at(0.3, 0.0), at(0.02, 0.0));
+    pb.cubic_to(c1.0, c1.1, c2.0, c2.1, end.0, end.1);
+    p(pb, -0.3, 0.0, tiny_skia::PathBuilder::line_to);
+    p(pb, 0.06, 0.0, tiny_skia::PathBuilder::move_to);
+    let (c1, c2, end) = (at(0.36, 0.0), at(0.36, 0.5), at(0.06, 0.5));
+    pb.cubic_to(c1.0, c1.1, c2.0, c2.1, end.0, end.1);
+    p(pb, -0.3, 0.5, tiny_skia::PathBuilder::line_to);
+}
+
+/// The anti-aliased coverage (0..1 per pixel) of the path `draw` builds, stroked `width`
+/// pixels wide with round joins and `cap`.
+fn coverage(
+    frame: &Frame,
+    draw: impl FnOnce(&mut tiny_skia::PathBuilder),
+    width: f64,
+    cap: tiny_skia::LineCap,
+) -> Result<Grid<f64>> {
+    let internal = || Error::Compute("checker-shadow: could not draw the letters".into());
+    let mut pixmap = tiny_skia::Pixmap::new(
+        u32::try_from(frame.w).map_err(|_| internal())?,
+        u32::try_from(frame.h).map_err(|_| internal())?,
+    )
+    .ok_or_else(internal)?;
+    let mut pb = tiny_skia::PathBuilder::new();
+    draw(&mut pb);
+    let path = pb.finish().ok_or_else(internal)?;
+    let mut paint = tiny_skia::Paint::default();
+    paint.set_color_rgba8(0, 0, 0, 255);
+    paint.anti_alias = true;
+    let stroke = tiny_skia::Stroke {
+        width: width as f32,
+        line_cap: cap,
+        line_join: tiny_skia::LineJoin::Round,
+        ..Default::default()
+    };
+    pixmap.stroke_path(
+        &path,
+        &paint,
+        &stroke,
+        tiny_skia::Transform::identity(),
+        None,
+    );
+    let alpha = pixmap
+        .pixels()
+        .iter()
+        .map(|p| f64::from(p.alpha()) / 255.0)
+        .collect();
+    Grid::from_vec(frame.w, frame.h, alpha)
+}
+
+/// Paints `value` over `image` with the coverage `cover`, except on target pixels.
+fn blend(image: &mut Grid<f64>, labels: &Grid<u16>, cover: &Grid<f64>, value: f64) {
+    for ((v, &a), &l) in image
+        .data_mut()
+        .iter_mut()
+        .zip(cover.data())
+        .zip(labels.data())
+    {
+        if a > 0.0 && l == 0 {
+            *v = (1.0 - a) * *v + a * value;
+        }
+    }
 }
 
 /// The checker-shadow stimulus.
@@ -278,6 +477,21 @@ mod tests {
             // A light square in light is brighter than B; B's neighbours in shadow are darker.
             assert!(img.data().iter().any(|&v| v > dark * 1.5));
         }
+    }
+
+    #[test]
+    fn the_shadow_covers_b_and_its_neighbours_along_the_cylinders_side() {
+        let out = generate(&[], 40.0).unwrap();
+        let squares: Vec<[usize; 2]> =
+            serde_json::from_value(out.notes["shadowed_squares_ij"].clone()).unwrap();
+        let [ib, jb]: [usize; 2] =
+            serde_json::from_value(out.notes["squares_ij"]["B"].clone()).unwrap();
+        // B and the two squares beyond it, away from the light; A stays out.
+        for s in [[ib, jb], [ib - 1, jb], [ib - 2, jb]] {
+            assert!(squares.contains(&s), "{s:?} not in shadow: {squares:?}");
+        }
+        let a: [usize; 2] = serde_json::from_value(out.notes["squares_ij"]["A"].clone()).unwrap();
+        assert!(!squares.contains(&a));
     }
 
     #[test]

@@ -3,8 +3,13 @@
 //! disc and background intensities), so that shadelab can stand in for it and be compared with
 //! it.
 //!
-//! A pixel belongs to the check or disc that contains its centre (no anti-aliasing), as in
-//! stimupy; the SVG versions have their edges at the same places.
+//! No anti-aliasing: a pixel of the checkerboard belongs to the check that contains its centre,
+//! and a pixel of the disc follows stimupy's rule (see [`disc`]); the SVG versions have their
+//! edges at the same places.
+//!
+//! Targets are stimupy's: the checkerboard's mask is stimupy's `checker_mask` (every check its
+//! own label, in reading order) unless `targets` names checks as stimupy's `target_indices` do,
+//! and then it is stimupy's `target_mask` (those checks, drawn with `intensity_target`).
 
 use super::frame::Frame;
 use super::svg::{document, gray, num};
@@ -15,7 +20,7 @@ use crate::parallel::prelude::*;
 use crate::params::{stimulus_params, ParamSet};
 use crate::visual_size::Geometry;
 use serde_json::{json, Map};
-use svg::node::element::{Circle, Rectangle};
+use svg::node::element::{Circle, Ellipse, Rectangle};
 
 /// Rows per parallel work item: large enough that scheduling costs nothing.
 const ROWS_PER_TASK: usize = 64;
@@ -29,6 +34,10 @@ stimulus_params! {
         intensity_first: f64 = 0.0, range 0.0..=1.0;
         /// luminance of its neighbours
         intensity_second: f64 = 1.0, range 0.0..=1.0;
+        /// target checks as stimupy's target_indices: "row,col;row,col" from the top left, 0-based (empty: every check is a target, as stimupy's checker_mask)
+        targets: String = "";
+        /// luminance of the target checks (only with targets)
+        intensity_target: f64 = 0.5, range 0.0..=1.0;
     }
 }
 
@@ -44,7 +53,44 @@ stimulus_params! {
     }
 }
 
+/// The checks `text` names as `row,col` pairs separated by `;` (stimupy's `target_indices`),
+/// each inside a board of `rows` × `cols` checks.
+fn parse_targets(text: &str, rows: usize, cols: usize) -> Result<Vec<(usize, usize)>> {
+    let bad = |why: String| Error::invalid(format!("checkerboard: parameter targets: {why}"));
+    text.split(';')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|pair| {
+            let (r, c) = pair
+                .split_once(',')
+                .ok_or_else(|| bad(format!("'{pair}' is not row,col")))?;
+            let index = |t: &str| {
+                t.trim()
+                    .parse::<usize>()
+                    .map_err(|_| bad(format!("'{pair}' is not two check indices (0, 1, 2 ...)")))
+            };
+            let (r, c) = (index(r)?, index(c)?);
+            if r >= rows || c >= cols {
+                return Err(bad(format!(
+                    "check ({r},{c}) is outside the board of {rows} rows and {cols} columns"
+                )));
+            }
+            Ok((r, c))
+        })
+        .collect()
+}
+
+/// The name of the check in row `r` and column `c` (0-based from the top left).
+fn check_name(r: usize, c: usize) -> String {
+    format!("r{r}c{c}")
+}
+
 /// A plain checkerboard (as stimupy's), starting with the first intensity at the top left.
+///
+/// Its target mask is stimupy's: with no `targets`, every check is a target (label
+/// row·columns + column + 1, in reading order, as stimupy's `checker_mask`), named `r0c0`,
+/// `r0c1`, …; with `targets` (stimupy's `target_indices`), the named checks in the order given,
+/// drawn with `intensity_target` (as stimupy's `target_mask`).
 ///
 /// ```
 /// use shadelab::stimulus::{checkerboard, CheckerboardParams, Pixels};
@@ -53,10 +99,15 @@ stimulus_params! {
 /// // 0.5° checks at 4 ppd are 2 pixels wide: columns 0-1 dark, 2-3 light.
 /// let p = CheckerboardParams { check: 0.5, ..Default::default() };
 /// let g = Geometry { width: 6, height: 4, ppd: 4.0 };
-/// let Pixels::Gray(image) = checkerboard(&p, &g).unwrap().pixels else { panic!() };
+/// let out = checkerboard(&p, &g).unwrap();
+/// let Pixels::Gray(image) = &out.pixels else { panic!() };
 /// let top: Vec<f64> = (0..6).map(|c| *image.get(c, 0)).collect();
 /// assert_eq!(top, [0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
 /// assert_eq!(*image.get(0, 2), 1.0);
+/// // Six checks, each its own target in reading order.
+/// let targets = out.targets.unwrap();
+/// assert_eq!(targets.names, ["r0c0", "r0c1", "r0c2", "r1c0", "r1c1", "r1c2"]);
+/// assert_eq!(*targets.labels.get(5, 3), 6);
 /// ```
 pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
@@ -70,23 +121,67 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     }
     let (first, second) = (p.intensity_first, p.intensity_second);
     let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
-    let col_parity: Vec<usize> = (0..frame.w).map(|c| index(c) % 2).collect();
-    let mut data = vec![0.0; frame.w * frame.h];
-    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-        .enumerate()
-        .for_each(|(task, chunk)| {
-            for (k, row) in chunk.chunks_mut(frame.w).enumerate() {
-                let r = index(task * ROWS_PER_TASK + k) % 2;
-                for (v, &c) in row.iter_mut().zip(&col_parity) {
-                    *v = if (r + c) % 2 == 0 { first } else { second };
-                }
-            }
-        });
-    let image = Grid::from_vec(frame.w, frame.h, data)?;
     let (nx, ny) = (
         (frame.w as f64 / check).ceil() as usize,
         (frame.h as f64 / check).ceil() as usize,
     );
+    let chosen = parse_targets(&p.targets, ny, nx)?;
+    // The label of each check (row-major), 0 where it is not a target.
+    let (check_labels, names): (Vec<u16>, Vec<String>) = if chosen.is_empty() {
+        if nx * ny > usize::from(u16::MAX) {
+            return Err(Error::invalid(format!(
+                "checkerboard: {} checks are too many to label each as a target (at most {}); choose targets with the parameter targets or make the checks larger",
+                nx * ny,
+                u16::MAX
+            )));
+        }
+        let labels = (1..=nx * ny).map(|l| l as u16).collect();
+        let names = (0..ny)
+            .flat_map(|r| (0..nx).map(move |c| check_name(r, c)))
+            .collect();
+        (labels, names)
+    } else {
+        let mut labels = vec![0u16; nx * ny];
+        for (k, &(r, c)) in chosen.iter().enumerate() {
+            if labels[r * nx + c] != 0 {
+                return Err(Error::invalid(format!(
+                    "checkerboard: parameter targets names check ({r},{c}) twice"
+                )));
+            }
+            labels[r * nx + c] = k as u16 + 1;
+        }
+        let names = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
+        (labels, names)
+    };
+    let targets_drawn = !chosen.is_empty();
+    let target_value = p.intensity_target;
+    let cols: Vec<usize> = (0..frame.w).map(index).collect();
+    let mut data = vec![0.0; frame.w * frame.h];
+    let mut label_data = vec![0u16; frame.w * frame.h];
+    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
+        .zip(label_data.par_chunks_mut(frame.w * ROWS_PER_TASK))
+        .enumerate()
+        .for_each(|(task, (chunk, lab))| {
+            for (k, (row, lrow)) in chunk
+                .chunks_mut(frame.w)
+                .zip(lab.chunks_mut(frame.w))
+                .enumerate()
+            {
+                let r = index(task * ROWS_PER_TASK + k);
+                for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
+                    *l = check_labels[r * nx + c];
+                    *v = if targets_drawn && *l != 0 {
+                        target_value
+                    } else if (r + c) % 2 == 0 {
+                        first
+                    } else {
+                        second
+                    };
+                }
+            }
+        });
+    let image = Grid::from_vec(frame.w, frame.h, data)?;
+    let labels = Grid::from_vec(frame.w, frame.h, label_data)?;
     let mut notes = Map::new();
     notes.insert("checks".into(), json!([nx, ny]));
     let svg = if nx * ny > MAX_SVG_CHECKS {
@@ -99,11 +194,19 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
         );
         None
     } else {
-        Some(checks_svg(&frame, check, nx, ny, first, second))
+        let drawn: &[(usize, usize)] = if targets_drawn { &chosen } else { &[] };
+        Some(checks_svg(
+            &frame,
+            check,
+            (nx, ny),
+            (first, second),
+            drawn,
+            target_value,
+        ))
     };
     Ok(Output {
         pixels: Pixels::Gray(image),
-        targets: None,
+        targets: Some(Targets { labels, names }),
         surface: None,
         svg,
         notes,
@@ -113,23 +216,32 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
 /// The most checks an SVG document is made for (half of them become rectangles).
 const MAX_SVG_CHECKS: usize = 500_000;
 
-fn checks_svg(frame: &Frame, check: f64, nx: usize, ny: usize, first: f64, second: f64) -> String {
+fn checks_svg(
+    frame: &Frame,
+    check: f64,
+    (nx, ny): (usize, usize),
+    (first, second): (f64, f64),
+    targets: &[(usize, usize)],
+    target_value: f64,
+) -> String {
     let mut doc = document(frame, "checkerboard", first);
     for j in 0..ny {
         for i in 0..nx {
-            if (i + j) % 2 == 1 {
+            let is_target = targets.contains(&(j, i));
+            if (i + j) % 2 == 1 || is_target {
                 let (x0, y0) = (i as f64 * check, j as f64 * check);
                 let (x1, y1) = (
                     ((i + 1) as f64 * check).min(frame.w as f64),
                     ((j + 1) as f64 * check).min(frame.h as f64),
                 );
+                let fill = if is_target { target_value } else { second };
                 doc = doc.add(
                     Rectangle::new()
                         .set("x", num(x0))
                         .set("y", num(y0))
                         .set("width", num(x1 - x0))
                         .set("height", num(y1 - y0))
-                        .set("fill", gray(second)),
+                        .set("fill", gray(fill)),
                 );
             }
         }
@@ -137,13 +249,62 @@ fn checks_svg(frame: &Frame, check: f64, nx: usize, ny: usize, first: f64, secon
     doc.to_string()
 }
 
-/// A plain disc centred in the frame (as stimupy's).
+/// The x (or y) coordinates in degrees that stimupy gives the `n` pixels of an axis `n / ppd`
+/// degrees long with its default origin ("mean"): `numpy.linspace(−L/2, L/2, n)`, computed as
+/// NumPy does (start + i·step, the last one exactly L/2). The ends lie on the frame's edges, so
+/// the spacing is L/(n − 1), a little more than a pixel's 1/ppd.
+fn stimupy_axis(n: usize, ppd: f64) -> Vec<f64> {
+    let length = n as f64 / ppd;
+    let (start, stop) = (-length / 2.0, length / 2.0);
+    let step = if n > 1 {
+        (stop - start) / (n - 1) as f64
+    } else {
+        0.0
+    };
+    let mut axis: Vec<f64> = (0..n).map(|i| i as f64 * step + start).collect();
+    if let (true, Some(last)) = (n > 1, axis.last_mut()) {
+        *last = stop;
+    }
+    axis
+}
+
+/// NumPy's `round(v, 8)`: scaled by 10⁸, rounded half to even, scaled back.
+fn round8(v: f64) -> f64 {
+    (v * 1e8).round_ties_even() / 1e8
+}
+
+/// A plain disc centred in the frame, with stimupy's pixel rule
+/// (`stimupy.components.shapes.disc`, origin "mean"): pixel (col, row) lies at
+/// x = `linspace(−W/2, W/2, w)[col]`, y = `linspace(−H/2, H/2, h)[row]` degrees (W = w/ppd,
+/// H = h/ppd, so the outermost pixel centres sit on the frame's edges), and belongs to the disc
+/// when its distance from the origin, rounded to 8 decimals, is at most the radius
+/// (`distance <= radius`). The image and mask match stimupy's pixel for pixel.
+///
+/// ```
+/// use shadelab::stimulus::{disc, DiscParams, Pixels};
+/// use shadelab::visual_size::Geometry;
+///
+/// // 6 x 4 pixels at 2 ppd: x = -1.5, -0.9, -0.3, 0.3, 0.9, 1.5 and y = ±1, ±1/3 degrees, so
+/// // a disc of radius 1° holds the 8 pixels of the two middle rows but their end columns.
+/// let p = DiscParams { radius: 1.0, ..Default::default() };
+/// let g = Geometry { width: 6, height: 4, ppd: 2.0 };
+/// let Pixels::Gray(image) = disc(&p, &g).unwrap().pixels else { panic!() };
+/// assert_eq!(image.data().iter().filter(|&&v| v == 1.0).count(), 8);
+/// assert_eq!((*image.get(1, 1), *image.get(2, 0)), (1.0, 0.0));
+/// ```
 pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
     let frame = Frame::new(g);
-    let radius = frame.px(p.radius);
     let (inside, outside) = (p.intensity_disc, p.intensity_background);
-    let r2 = radius * radius;
+    let xs2: Vec<f64> = stimupy_axis(frame.w, frame.ppd)
+        .iter()
+        .map(|x| x * x)
+        .collect();
+    let ys2: Vec<f64> = stimupy_axis(frame.h, frame.ppd)
+        .iter()
+        .map(|y| y * y)
+        .collect();
+    let radius = p.radius;
     let mut data = vec![outside; frame.w * frame.h];
     let mut labels = vec![0u16; frame.w * frame.h];
     data.par_chunks_mut(frame.w * ROWS_PER_TASK)
@@ -155,29 +316,42 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
                 .zip(lab.chunks_mut(frame.w))
                 .enumerate()
             {
-                let y = frame.y(task * ROWS_PER_TASK + k);
-                let y2 = y * y;
-                if y2 >= r2 {
-                    continue;
-                }
-                // The disc's chord on this row, found once; the loop only fills it.
-                let half = (r2 - y2).sqrt();
-                for col in frame.cols(-half, half) {
-                    let x = frame.x(col);
-                    if x * x + y2 < r2 {
-                        row[col] = inside;
-                        lrow[col] = 1;
+                let y2 = ys2[task * ROWS_PER_TASK + k];
+                for ((v, l), x2) in row.iter_mut().zip(lrow.iter_mut()).zip(&xs2) {
+                    if round8((x2 + y2).sqrt()) <= radius {
+                        *v = inside;
+                        *l = 1;
                     }
                 }
             }
         });
+    // The SVG's edge passes where the raster's rule puts it: stimupy's axes are stretched by
+    // (n − 1)/n against pixel units, so the circle is an ellipse when width ≠ height.
     let (cx, cy) = frame.svg_xy(0.0, 0.0);
-    let doc = document(&frame, "disc", outside).add(
-        Circle::new()
-            .set("cx", num(cx))
-            .set("cy", num(cy))
-            .set("r", num(radius))
-            .set("fill", gray(inside)),
+    let semi = |n: usize| frame.px(radius) * (n.max(2) - 1) as f64 / n.max(2) as f64;
+    let (rx, ry) = (semi(frame.w), semi(frame.h));
+    let shape_svg = if rx == ry {
+        document(&frame, "disc", outside).add(
+            Circle::new()
+                .set("cx", num(cx))
+                .set("cy", num(cy))
+                .set("r", num(rx))
+                .set("fill", gray(inside)),
+        )
+    } else {
+        document(&frame, "disc", outside).add(
+            Ellipse::new()
+                .set("cx", num(cx))
+                .set("cy", num(cy))
+                .set("rx", num(rx))
+                .set("ry", num(ry))
+                .set("fill", gray(inside)),
+        )
+    };
+    let mut notes = Map::new();
+    notes.insert(
+        "pixel_rule".into(),
+        json!("stimupy's: pixel centres at linspace(-size/2, size/2, n) degrees on each axis; inside when round(distance, 8) <= radius"),
     );
     Ok(Output {
         pixels: Pixels::Gray(Grid::from_vec(frame.w, frame.h, data)?),
@@ -186,8 +360,8 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
             names: vec!["disc".into()],
         }),
         surface: None,
-        svg: Some(doc.to_string()),
-        notes: Map::new(),
+        svg: Some(shape_svg.to_string()),
+        notes,
     })
 }
 
@@ -196,14 +370,14 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![
         Typed::boxed(
             "checkerboard",
-            "a plain checkerboard (as stimupy's), starting with the first intensity at the top left",
+            "a plain checkerboard (as stimupy's), first intensity at the top left; targets: every check (r0c0, r0c1, ...) or those named by targets",
             (8.0, 8.0),
             32.0,
             |p, g, _| checkerboard(p, g),
         ),
         Typed::boxed(
             "disc",
-            "a plain disc centred in the frame (as stimupy's)",
+            "a plain disc centred in the frame, with stimupy's pixel rule (centres at linspace(-size/2, size/2, n) deg; inside when distance <= radius)",
             (8.0, 8.0),
             32.0,
             |p, g, _| disc(p, g),
@@ -249,13 +423,15 @@ mod tests {
     }
 
     #[test]
-    fn disc_area_is_pi_r_squared_in_pixels() {
+    fn disc_area_is_that_of_stimupys_stretched_circle() {
         let out = generate("disc", &["radius=2"], 200, 160, 20.0);
         let Pixels::Gray(img) = out.pixels else {
             panic!()
         };
         let area = img.data().iter().filter(|&&v| v == 1.0).count() as f64;
-        let expect = std::f64::consts::PI * 40.0 * 40.0;
+        // stimupy's axes put the end pixels on the frame's edges: 40 px of radius become
+        // 40·(n − 1)/n pixels along each axis.
+        let expect = std::f64::consts::PI * (40.0 * 199.0 / 200.0) * (40.0 * 159.0 / 160.0);
         assert!((area - expect).abs() / expect < 0.005, "{area} vs {expect}");
         // Symmetric about both axes of the frame.
         assert_eq!(img, img.rotated_180());

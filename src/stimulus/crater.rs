@@ -7,6 +7,12 @@
 //! (`crater_radius`) taken out of its top, which leaves a raised rim. Lambertian with an
 //! ambient level, the albedo chosen so that the flat ground has the `background` luminance,
 //! with cast shadows by default.
+//!
+//! The light has an angular size (`light_size`, its angular diameter): the cast shadow's edge
+//! is a penumbra whose value at each pixel is ambient + albedo·max(0, n·s)·V, where V is the
+//! fraction of the light's disc the pixel sees (its visibility, averaged over 32 fixed
+//! directions spread evenly over the disc on a sunflower spiral). With `light_size=0` the
+//! light is a point and the shadow is hard (V is 0 or 1).
 
 use super::frame::Frame;
 use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
@@ -16,7 +22,7 @@ use crate::grid::Grid;
 use crate::light::Light;
 use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::reflectance::Lambertian;
-use crate::render::{render, RenderOptions};
+use crate::render::{cast_shadows, render, RenderOptions};
 use crate::surface::Surface;
 use crate::visual_size::Geometry;
 use nalgebra::Vector3;
@@ -53,6 +59,8 @@ stimulus_params! {
         ambient: f64 = 0.1, range 0.0..=1.0;
         /// ray-march cast shadows over the heightfield
         cast_shadows: bool = true;
+        /// angular diameter of the light (deg): the shadow's penumbra widens with it; 0 = a point light and a hard shadow
+        light_size: f64 = 10.0, range 0.0..=60.0;
     }
 }
 
@@ -137,7 +145,10 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
         background: 0.0,
         cast_shadows: p.cast_shadows,
     };
-    let rendering = render(&surface, &reflectance, &options);
+    let mut rendering = render(&surface, &reflectance, &options);
+    if p.cast_shadows && p.light_size > 0.0 {
+        soften_shadow(&surface, &mut rendering, s, p.light_size, ambient);
+    }
     let peak = rendering.image.min_max().map_or(0.0, |m| m.1);
     if peak > 1.0 {
         return Err(Error::invalid(format!(
@@ -161,6 +172,62 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
         );
     }
     Ok(out)
+}
+
+/// How many directions sample the light's disc.
+const LIGHT_SAMPLES: usize = 32;
+
+/// `LIGHT_SAMPLES` unit directions spread evenly over the disc of angular diameter
+/// `size_deg` around `s` (a sunflower spiral: radius ∝ √((k + ½)/N), the golden angle apart).
+fn light_disc(s: Vector3<f64>, size_deg: f64) -> Vec<Vector3<f64>> {
+    // Two unit vectors perpendicular to s (s has z > 0, so x̂ × s is never zero unless s ∥ x̂).
+    let u = if s.x.abs() < 0.9 {
+        Vector3::x().cross(&s).normalize()
+    } else {
+        Vector3::y().cross(&s).normalize()
+    };
+    let v = s.cross(&u);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let radius = (size_deg / 2.0).to_radians();
+    (0..LIGHT_SAMPLES)
+        .map(|k| {
+            let angle = radius * ((k as f64 + 0.5) / LIGHT_SAMPLES as f64).sqrt();
+            let phi = golden * k as f64;
+            let (sa, ca) = angle.sin_cos();
+            (s * ca + (u * phi.cos() + v * phi.sin()) * sa).normalize()
+        })
+        .collect()
+}
+
+/// Replaces the hard cast shadow of `rendering` by the penumbra of a light of angular diameter
+/// `size_deg` around `s`: each pixel's lit part is scaled by the fraction of the light's disc
+/// it sees. The `cast_shadow` layer keeps the pixels that see none of it.
+fn soften_shadow(
+    surface: &Surface,
+    rendering: &mut crate::render::Rendering,
+    s: Vector3<f64>,
+    size_deg: f64,
+    ambient: f64,
+) {
+    use crate::parallel::prelude::*;
+    let directions = light_disc(s, size_deg);
+    let shadows: Vec<crate::grid::Mask> = directions
+        .par_iter()
+        .map(|d| cast_shadows(surface, *d))
+        .collect();
+    let (w, h) = (surface.width(), surface.height());
+    let mut hidden = Grid::new(w, h, 0usize);
+    for shadow in &shadows {
+        for (count, &dark) in hidden.data_mut().iter_mut().zip(shadow.data()) {
+            *count += usize::from(dark);
+        }
+    }
+    let n = directions.len() as f64;
+    rendering.image = Grid::from_fn(w, h, |c, r| {
+        let visible = 1.0 - *hidden.get(c, r) as f64 / n;
+        ambient + (*rendering.shading.get(c, r) - ambient) * visible
+    });
+    rendering.cast_shadow = hidden.map(|&k| k == directions.len());
 }
 
 /// The output turned by 180° in the image plane: pixels, labels and layers move with the

@@ -36,7 +36,7 @@ pub use bumps::{
     bumps, sideways, BumpsParams, DiscArrayParams, DiscPattern, DiscProfile, LightSide,
     SidewaysParams,
 };
-pub use checker_shadow::{checker_shadow, CheckerShadowParams};
+pub use checker_shadow::{checker_shadow, CheckerShadowParams, CylinderColour};
 pub use checkerboard::{checkerboard, disc, CheckerboardParams, DiscParams};
 pub use circles::{
     circles, CircleLayout, CirclePolarity, CircleShading, CirclesParams, ShadingAxis,

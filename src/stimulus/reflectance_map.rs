@@ -158,8 +158,30 @@ pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output>
         }
         viridis(v / top)
     });
+    // Targets: the orientations that face the light (lit) and the visible ones that face away
+    // from it (in attached shadow); outside the fg disc, no orientation.
+    let labels = Grid::from_fn(w, h, |c, r| {
+        let (a, b) = coord(c, r);
+        let n = if fg {
+            if a * a + b * b > 4.0 {
+                return 0u16;
+            }
+            normal_from_fg(a, b)
+        } else {
+            normal_from_pq(a, b)
+        };
+        if n.dot(&s) > 0.0 {
+            1
+        } else {
+            2
+        }
+    });
     let mut out = Output::gray(values.map(|v| v.unwrap_or(0.0)));
     out.pixels = Pixels::Rgb(image);
+    out.targets = Some(super::Targets {
+        labels,
+        names: vec!["lit".into(), "self-shadowed".into()],
+    });
     out.notes
         .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
     out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));

@@ -10,6 +10,7 @@ mod bad_input;
 mod bundles;
 mod conventions;
 mod face;
+mod figures;
 mod formats;
 mod gallery;
 mod golden;
