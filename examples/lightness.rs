@@ -6,8 +6,6 @@ use shadelab::{LightnessConfig, LightnessModel, NoProgress, PictureSource};
 fn main() -> shadelab::Result<()> {
     let source = PictureSource {
         stimulus: Some("checker-shadow".into()),
-        // The board without its A/B letters, whose black ink the filters would see too.
-        params: [("letters".to_string(), false.into())].into_iter().collect(),
         ppd: Some(12.0),
         max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
         ..Default::default()

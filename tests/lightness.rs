@@ -134,8 +134,6 @@ mod cli {
                 "lightness",
                 "--stimulus",
                 "checker-shadow",
-                "--set",
-                "letters=false",
                 "--ppd",
                 "20",
                 "--model",

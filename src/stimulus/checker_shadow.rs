@@ -12,8 +12,10 @@
 //! 0 in light and exactly 1 in the umbra, and a light square's shadowed value *is*
 //! `dark_square`. The cylinder is Lambertian with the same ambient fraction k.
 //!
-//! As in Adelson's figure, the letters A and B stand on their squares (black vector glyphs,
-//! anti-aliased; their pixels are not in the target mask), the shadow is a broad soft band that
+//! As in Adelson's figure, the letters A and B may stand on their squares (`letters=true`, as
+//! the gallery's figures do; off by default, because black ink is part of what an observer in
+//! an experiment or a lightness model sees: black vector glyphs, anti-aliased, their pixels
+//! not in the target mask), the shadow is a broad soft band that
 //! covers B and the squares beside it along the cylinder's side, and the cylinder may be green
 //! (`cylinder_colour=green`: RGB output whose luminance is the gray cylinder's). `proof=true`
 //! adds Adelson's proof: a bar of exactly the squares' shared value joins A to B, so a viewer
@@ -86,8 +88,9 @@ stimulus_params! {
         cylinder_colour: CylinderColour = CylinderColour::Gray;
         /// luminance around the board
         background: f64 = 0.9, range 0.0..=1.0;
-        /// draw the letters A and B on their squares
-        letters: bool = true;
+        /// draw the letters A and B on their squares (for a figure: off by default, since the
+        /// ink is part of the image an observer or a model sees)
+        letters: bool = false;
         /// Adelson's proof: join A and B by a bar of their shared value
         proof: bool = false;
     }

@@ -32,10 +32,10 @@ fn values(out: &Output, label: u16) -> Vec<f64> {
 #[test]
 fn checker_shadow_a_and_b_are_exactly_equal_with_letters_proof_and_colour() {
     for pairs in [
-        &[][..],
+        &["letters=true"][..],
         &["proof=true"],
         &["cylinder_colour=green"],
-        &["proof=true", "cylinder_colour=green", "letters=false"],
+        &["proof=true", "cylinder_colour=green", "letters=true"],
     ] {
         let out = render_with("checker-shadow", pairs);
         let t = out.targets.as_ref().unwrap();
@@ -60,8 +60,8 @@ fn checker_shadow_a_and_b_are_exactly_equal_with_letters_proof_and_colour() {
 
 #[test]
 fn checker_shadow_letters_are_ink_outside_the_mask_and_the_proof_bar_has_the_shared_value() {
-    let plain = render_with("checker-shadow", &["letters=false"]);
-    let lettered = render_with("checker-shadow", &[]);
+    let plain = render_with("checker-shadow", &[]);
+    let lettered = render_with("checker-shadow", &["letters=true"]);
     let (Pixels::Gray(p), Pixels::Gray(l)) = (&plain.pixels, &lettered.pixels) else {
         panic!("gray by default")
     };
@@ -89,7 +89,7 @@ fn checker_shadow_letters_are_ink_outside_the_mask_and_the_proof_bar_has_the_sha
     assert!(!inked.is_empty() && inked.iter().all(|&v| v < dark));
     assert!(inked.contains(&0.0), "fully inked pixels are black");
     // The proof: the pixel halfway between the letters' centres has exactly A's value.
-    let proof = render_with("checker-shadow", &["proof=true"]);
+    let proof = render_with("checker-shadow", &["proof=true", "letters=true"]);
     let Pixels::Gray(img) = &proof.pixels else {
         panic!()
     };
