@@ -283,30 +283,18 @@ impl LinePlot {
         let (chart_area, legend_area) = root.split_horizontally(w - legend_w);
         let (x0, x1) = self.x_range;
         let (y0, y1) = self.y_range();
-        let (xt, xd) = ticks(x0, x1, self.x_ticks);
-        let (yt, yd) = ticks(y0, y1, self.y_ticks);
-        let mut chart = ChartBuilder::on(&chart_area)
+        let mut builder = ChartBuilder::on(&chart_area);
+        builder
             .margin(14)
             .x_label_area_size(50)
-            .y_label_area_size(74)
-            .build_cartesian_2d(TickAxis::new(x0, x1, xt), TickAxis::new(y0, y1, yt))
-            .map_err(|e| fail(&e))?;
-        let (fx, fy) = (
-            move |v: &f64| tick_text(*v, xd),
-            move |v: &f64| tick_text(*v, yd),
-        );
-        chart
-            .configure_mesh()
-            .x_label_formatter(&fx)
-            .y_label_formatter(&fy)
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
-            .label_style((FAMILY, 15))
-            .axis_desc_style((FAMILY, 17))
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(RGBColor(220, 220, 220))
-            .draw()
-            .map_err(|e| fail(&e))?;
+            .y_label_area_size(74);
+        let mut chart = axes(
+            &mut builder,
+            &self.title,
+            (x0, x1, self.x_ticks, &self.x_label),
+            (y0, y1, self.y_ticks, &self.y_label),
+            true,
+        )?;
         if let Some(y) = self.reference_y {
             chart
                 .draw_series(LineSeries::new(
@@ -423,6 +411,47 @@ impl LinePlot {
 
 /// A rectangle of pixels: columns `.0`, rows `.1` (half-open).
 pub type PixelRect = (std::ops::Range<i32>, std::ops::Range<i32>);
+
+#[cfg(feature = "plots")]
+/// One axis of [`axes`]: from, to, its ticks and its label.
+type AxisSpec<'s> = (f64, f64, Ticks, &'s str);
+
+#[cfg(feature = "plots")]
+/// The one way every figure draws its axes: `x` and `y` with their ticks, tick labels and
+/// labels, and with `grid` light grey lines at the ticks. `what` names the figure in errors.
+fn axes<'a, DB: DrawingBackend>(
+    builder: &mut ChartBuilder<'a, '_, DB>,
+    what: &str,
+    x: AxisSpec<'_>,
+    y: AxisSpec<'_>,
+    grid: bool,
+) -> Result<ChartContext<'a, DB, Cartesian2d<TickAxis, TickAxis>>> {
+    let fail =
+        |e: &dyn std::fmt::Display| Error::Compute(format!("cannot draw the figure '{what}': {e}"));
+    let (xt, xd) = ticks(x.0, x.1, x.2);
+    let (yt, yd) = ticks(y.0, y.1, y.2);
+    let mut chart = builder
+        .build_cartesian_2d(TickAxis::new(x.0, x.1, xt), TickAxis::new(y.0, y.1, yt))
+        .map_err(|e| fail(&e))?;
+    let (fx, fy) = (
+        move |v: &f64| tick_text(*v, xd),
+        move |v: &f64| tick_text(*v, yd),
+    );
+    let mut mesh = chart.configure_mesh();
+    mesh.x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .x_desc(x.3)
+        .y_desc(y.3)
+        .label_style((FAMILY, 15))
+        .axis_desc_style((FAMILY, 17))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(220, 220, 220));
+    if !grid {
+        mesh.disable_mesh();
+    }
+    mesh.draw().map_err(|e| fail(&e))?;
+    Ok(chart)
+}
 
 #[cfg(feature = "plots")]
 /// A linear axis from `lo` to `hi` whose ticks (and grid lines) are exactly `ticks`.
@@ -692,31 +721,18 @@ impl MapFigure {
             .map_err(|e| fail(&e))?;
             let (x0, x1) = self.x_range;
             let (y0, y1) = self.y_range;
-            let (xt, xd) = ticks(x0, x1, Ticks::Auto);
-            let (yt, yd) = ticks(y0, y1, Ticks::Auto);
             let area = root
                 .clone()
                 .shrink((mx - 80, my), ((mw + 80) as u32, (mh + 58) as u32));
-            let mut chart = ChartBuilder::on(&area)
-                .x_label_area_size(58)
-                .y_label_area_size(80)
-                .build_cartesian_2d(TickAxis::new(x0, x1, xt), TickAxis::new(y0, y1, yt))
-                .map_err(|e| fail(&e))?;
-            let (fx, fy) = (
-                move |v: &f64| tick_text(*v, xd),
-                move |v: &f64| tick_text(*v, yd),
-            );
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_label_formatter(&fx)
-                .y_label_formatter(&fy)
-                .x_desc(&self.x_label)
-                .y_desc(&self.y_label)
-                .label_style((FAMILY, 15))
-                .axis_desc_style((FAMILY, 17))
-                .draw()
-                .map_err(|e| fail(&e))?;
+            let mut builder = ChartBuilder::on(&area);
+            builder.x_label_area_size(58).y_label_area_size(80);
+            let chart = axes(
+                &mut builder,
+                &self.title,
+                (x0, x1, Ticks::Auto, &self.x_label),
+                (y0, y1, Ticks::Auto, &self.y_label),
+                false,
+            )?;
             let map_rect = chart.plotting_area().get_pixel_range();
             let (b0, b1) = self.bar.range;
             let (bt, bd) = ticks(b0, b1, Ticks::Auto);
