@@ -6,6 +6,9 @@
 //! it appears complete or not at all. Nothing in it depends on the clock or the thread count,
 //! so two runs give identical folders.
 
+use crate::analysis::plot::Caption;
+#[cfg(feature = "plots")]
+use crate::analysis::plot::{caption_pixels, encode, write_rgb_png};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, RgbImage};
 use crate::io::{self, AtomicDir, BitDepth};
@@ -229,13 +232,7 @@ pub fn build(
             r
         })
         .collect::<Result<_>>()?;
-    let sheet = contact_sheet(&rendered);
-    io::write_rgb(
-        &dir.path().join("gallery.png"),
-        &sheet,
-        BitDepth::Eight,
-        Some(THUMBNAIL_GAMMA),
-    )?;
+    write_sheet(&dir.path().join("gallery.png"), &rendered)?;
     let html = index_html(&rendered, &options.docs_base);
     io::write_text(&dir.path().join(MARKER), &html)?;
     let folder = dir.commit()?;
@@ -324,16 +321,20 @@ fn thumbnail(output: &Output) -> RgbImage {
     })
 }
 
-/// All thumbnails on one sheet, four to a row, each centred in its cell.
+/// Height of the caption band under each thumbnail on the contact sheet, in pixels.
+const CAPTION: usize = 44;
+
+/// All thumbnails on one sheet, four to a row, each centred in its cell above a band for its
+/// caption.
 fn contact_sheet(rendered: &[Rendered]) -> RgbImage {
     let (cols, gap) = (4usize, 12usize);
     let rows = rendered.len().div_ceil(cols);
-    let cell = THUMBNAIL + gap;
-    let mut sheet = Grid::new(cols * cell + gap, rows * cell + gap, [1.0; 3]);
+    let (cell_w, cell_h) = (THUMBNAIL + gap, THUMBNAIL + CAPTION + gap);
+    let mut sheet = Grid::new(cols * cell_w + gap, rows * cell_h + gap, [1.0; 3]);
     for (i, r) in rendered.iter().enumerate() {
         let t = &r.thumbnail;
-        let x0 = gap + (i % cols) * cell + (THUMBNAIL - t.width()) / 2;
-        let y0 = gap + (i / cols) * cell + (THUMBNAIL - t.height()) / 2;
+        let x0 = gap + (i % cols) * cell_w + (THUMBNAIL - t.width()) / 2;
+        let y0 = gap + (i / cols) * cell_h + (THUMBNAIL - t.height()) / 2;
         for y in 0..t.height() {
             for x in 0..t.width() {
                 *sheet.get_mut(x0 + x, y0 + y) = *t.get(x, y);
@@ -341,6 +342,62 @@ fn contact_sheet(rendered: &[Rendered]) -> RgbImage {
         }
     }
     sheet
+}
+
+/// The captions of the contact sheet: under each thumbnail its preset's name and, on a second
+/// line, its title (or the stimulus's name).
+fn sheet_captions(rendered: &[Rendered]) -> Vec<Caption> {
+    let (cols, gap) = (4usize, 12usize);
+    let (cell_w, cell_h) = (THUMBNAIL + gap, THUMBNAIL + CAPTION + gap);
+    rendered
+        .iter()
+        .enumerate()
+        .flat_map(|(i, r)| {
+            let x = (gap + (i % cols) * cell_w + THUMBNAIL / 2) as i32;
+            let y = (gap + (i / cols) * cell_h + THUMBNAIL + 4) as i32;
+            let line = r
+                .preset
+                .spec
+                .title
+                .clone()
+                .unwrap_or_else(|| r.preset.spec.stimulus.clone());
+            [
+                Caption {
+                    at: (x, y),
+                    text: r.preset.name.clone(),
+                    size: 16.0,
+                    width: THUMBNAIL as u32,
+                },
+                Caption {
+                    at: (x, y + 20),
+                    text: line,
+                    size: 13.0,
+                    width: THUMBNAIL as u32,
+                },
+            ]
+        })
+        .collect()
+}
+
+/// Writes the contact sheet, display-encoded, with its captions where plots are built in.
+fn write_sheet(path: &Path, rendered: &[Rendered]) -> Result<()> {
+    let sheet = contact_sheet(rendered);
+    #[cfg(feature = "plots")]
+    {
+        let size = (sheet.width() as u32, sheet.height() as u32);
+        let mut bytes: Vec<u8> = sheet
+            .data()
+            .iter()
+            .flat_map(|p| p.map(|v| encode(v, Some(THUMBNAIL_GAMMA))))
+            .collect();
+        caption_pixels(&mut bytes, size, &sheet_captions(rendered))?;
+        write_rgb_png(path, &bytes, size)
+    }
+    #[cfg(not(feature = "plots"))]
+    {
+        let _ = sheet_captions;
+        io::write_rgb(path, &sheet, BitDepth::Eight, Some(THUMBNAIL_GAMMA))
+    }
 }
 
 fn escape(text: &str) -> String {

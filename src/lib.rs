@@ -46,7 +46,7 @@
 
 pub mod analysis;
 pub mod boundary;
-mod colormap;
+pub mod colormap;
 mod error;
 pub mod evaluation;
 pub mod gallery;

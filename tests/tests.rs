@@ -7,6 +7,7 @@ mod determinism;
 mod docs;
 mod evaluation;
 mod fast_solver;
+mod figures;
 mod fuzz_regressions;
 mod golden_outputs;
 mod hostile;

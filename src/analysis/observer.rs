@@ -24,7 +24,7 @@
 //! hypothesis t − θ of the sweep, and only the prior moves. This needs tilts that cover the
 //! circle in equal steps, so that the sum over t is a fair integral.
 
-use super::plot::{span, Legend, LinePlot, Marker, Series};
+use super::plot::{span, LinePlot, Marker, Series};
 use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
 use crate::error::{Error, Result};
 use crate::io::csv_field;
@@ -267,13 +267,12 @@ pub fn p_convex_plot(sweep: &Sweep, curves: &[Curve]) -> Result<LinePlot> {
             "P(convex) against rotation (prior tilt {}°, {kappa_text}, convexity bias {})",
             prior.mean_tilt_deg, prior.convexity_bias
         ),
-        "rotation of the picture (deg, counter-clockwise)",
-        "P(convex)",
+        "rotation of the picture (°, counter-clockwise)",
+        "P(convex) (probability)",
         (lo, hi),
     );
     plot.y_range = Some((-0.02, 1.02));
     plot.reference_y = Some(0.5);
-    plot.legend = Legend::Middle;
     let mean = prior.mean_tilt_deg;
     if mean >= lo && mean <= hi {
         plot.markers.push(Marker {
@@ -296,6 +295,10 @@ pub fn p_convex_plot(sweep: &Sweep, curves: &[Curve]) -> Result<LinePlot> {
                     .collect(),
             });
         }
+    }
+    if plot.close_circle() {
+        let (lo, hi) = plot.x_range;
+        plot.markers.retain(|m| m.x >= lo && m.x <= hi);
     }
     Ok(plot)
 }

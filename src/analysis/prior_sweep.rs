@@ -6,7 +6,7 @@
 //! changes sign: the assumed tilts at which a bump becomes a dimple.
 
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
-use super::plot::{span, Figure, Legend, LinePlot, Marker, Series};
+use super::plot::{span, Figure, LinePlot, Marker, Series};
 use crate::error::{Error, Result};
 use crate::io::csv_field;
 use crate::parallel::prelude::*;
@@ -94,26 +94,25 @@ impl Sweep {
     }
 
     /// Convexity (top; with one token, its flips marked) and surface residual (bottom) against
-    /// assumed tilt, one curve per token.
+    /// assumed tilt, one curve per token (grouped by class when there are many); a sweep that
+    /// covers the circle is shown over the full 0–360° with each curve closed.
     pub fn figure(&self) -> Figure {
         let tilts = self.tilts();
         let (lo, hi) = span(&tilts);
-        let x_label = "assumed light tilt (deg; 0 = above, 90 = left, 180 = below)";
+        let x_label = "assumed light tilt (°; 0 = above, 90 = left, 180 = below)";
         let mut convexity = LinePlot::new(
             "Convexity of each token under each assumed light",
             x_label,
-            "convexity (> 0 convex)",
+            "convexity (relief / half-width, no unit; > 0 convex)",
             (lo, hi),
         );
         convexity.reference_y = Some(0.0);
-        convexity.legend = Legend::Middle;
         let mut fit = LinePlot::new(
             "How well the recovered surface reproduces the picture",
             x_label,
-            "surface residual e_Z",
+            "surface residual e_Z (Σ squared error, luminance²)",
             (lo, hi),
         );
-        fit.legend = Legend::UpperMiddle;
         for (k, (_, name)) in self.tokens.iter().enumerate() {
             convexity.series.push(Series {
                 name: name.clone(),
@@ -128,6 +127,9 @@ impl Sweep {
                     .collect(),
             });
         }
+        convexity.close_circle();
+        fit.close_circle();
+        let (lo, hi) = convexity.x_range;
         if self.tokens.len() == 1 {
             for f in self.flips(0) {
                 if f >= lo && f <= hi {

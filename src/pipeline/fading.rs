@@ -8,6 +8,7 @@
 //! `blur = 0` (the sharp one), each with its own target named `disk`.
 
 use super::source::{Picture, PictureSource};
+use crate::analysis::plot::{LinePlot, Series};
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
@@ -224,7 +225,8 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
             sharp: course.sharp[last],
         },
         time_course: "time_course.csv: relative perceived contrast (RMS adapted band-pass \
-                      response in the border band over its value at onset) and eye position"
+                      response in the border band over its value at onset) and eye position; \
+                      time_course.png and .svg: the contrast of both disks against time"
             .into(),
         animation: Animation {
             file: "fading.gif".into(),
@@ -250,8 +252,9 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
 
 impl FadingReport {
     /// Writes the output folder `out` (whole or not at all; an existing folder is replaced
-    /// only with `force` and only when an earlier run wrote it): `time_course.csv`,
-    /// `fading.gif` and `fading.json`. Returns the folder written.
+    /// only with `force` and only when an earlier run wrote it): `time_course.csv`, with plots
+    /// `time_course.png` and `.svg` ([`FadingReport::time_course_plot`]), `fading.gif` and
+    /// `fading.json`. Returns the folder written.
     pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
         let folder = AtomicDir::create(out, FADING_REPORT, force)?;
         let dir = folder.path().to_path_buf();
@@ -264,6 +267,9 @@ impl FadingReport {
             ));
         }
         io::write_text(&dir.join("time_course.csv"), &csv)?;
+        let plot = self.time_course_plot();
+        plot.write_png(&dir.join("time_course.png"))?;
+        plot.write_svg(&dir.join("time_course.svg"))?;
         io::write_gif(
             &dir.join(&self.animation.file),
             &self.frames,
@@ -273,6 +279,40 @@ impl FadingReport {
             .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
         io::write_json(&dir.join(FADING_REPORT), &json)?;
         folder.commit()
+    }
+}
+
+impl FadingReport {
+    /// The time course as a plot: each disk's relative perceived contrast (1 = at onset)
+    /// against time since stimulus onset in seconds.
+    pub fn time_course_plot(&self) -> LinePlot {
+        let c = &self.course;
+        let end = c.times.last().copied().unwrap_or(1.0).max(1e-3);
+        let mut plot = LinePlot::new(
+            "Perceived contrast of the two disks during steady fixation",
+            "time since stimulus onset (s)",
+            "relative perceived contrast (1 = at onset)",
+            (0.0, end),
+        );
+        plot.reference_y = Some(1.0);
+        let top = c
+            .blurred
+            .iter()
+            .chain(&c.sharp)
+            .fold(1.0f64, |m, &v| m.max(v));
+        plot.y_range = Some((0.0, 1.05 * top));
+        for (name, values) in [("blurred disk", &c.blurred), ("sharp disk", &c.sharp)] {
+            plot.series.push(Series {
+                name: name.into(),
+                points: c
+                    .times
+                    .iter()
+                    .copied()
+                    .zip(values.iter().copied())
+                    .collect(),
+            });
+        }
+        plot
     }
 }
 

@@ -3,6 +3,8 @@
 //! and each model's verdict.
 
 use super::source::PictureSource;
+use crate::analysis::plot::{ColourBar, MapFigure, Outline};
+use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
 use crate::io::{self, AtomicDir, BitDepth};
@@ -79,6 +81,9 @@ pub struct LightnessOutput {
     pub npy: String,
     /// The output as a picture.
     pub png: String,
+    /// The output as a figure with axes, a colour bar and the targets outlined and named
+    /// (written by builds with plots).
+    pub figure: Option<String>,
     /// What the values mean.
     pub units: String,
 }
@@ -146,6 +151,9 @@ pub struct LightnessReport {
     /// Each model's output, in the order of `outputs`.
     #[serde(skip)]
     pub images: Vec<(Model, Image)>,
+    /// The targets, outlined on the figures.
+    #[serde(skip)]
+    pub outlines: Vec<Outline>,
 }
 
 /// Runs the lightness analysis.
@@ -172,6 +180,7 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
             model: model.name().into(),
             npy: format!("{stem}.npy"),
             png: format!("{stem}.png"),
+            figure: cfg!(feature = "plots").then(|| format!("{stem}_figure.png")),
             units: units(*model).into(),
         });
         images.push((*model, out));
@@ -210,6 +219,21 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
             total: started.elapsed().as_secs_f64(),
         },
         images,
+        outlines: input
+            .labels
+            .as_ref()
+            .map(|(labels, names)| {
+                names
+                    .iter()
+                    .enumerate()
+                    .map(|(i, name)| Outline {
+                        mask: labels.map(|&v| usize::from(v) == i + 1),
+                        name: name.clone(),
+                    })
+                    .filter(|o| o.mask.count() > 0)
+                    .collect()
+            })
+            .unwrap_or_default(),
     })
 }
 
@@ -229,12 +253,55 @@ impl LightnessReport {
                 BitDepth::Eight,
                 None,
             )?;
+            if let Some(file) = &files.figure {
+                self.figure(*model, image).write_png(&dir.join(file))?;
+            }
         }
         if !self.targets.is_empty() {
             write_targets(&dir, &self.targets)?;
         }
         io::write_json(&dir.join(LIGHTNESS_REPORT), &to_json(self)?)?;
         folder.commit()
+    }
+}
+
+impl LightnessReport {
+    /// One model's output as a figure: the same gray levels as its `.png`, in degrees when the
+    /// resolution is known, with a colour bar in the model's units and the targets outlined
+    /// and named.
+    pub fn figure(&self, model: Model, out: &Image) -> MapFigure {
+        let range = match model {
+            Model::Retinex => (0.0, 1.0),
+            Model::Odog(_) => {
+                let m = out.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if m > 0.0 {
+                    (-m, m)
+                } else {
+                    (-1.0, 1.0)
+                }
+            }
+        };
+        let bar = ColourBar {
+            colormap: Colormap::Gray,
+            range,
+            label: match model {
+                Model::Retinex => "estimated reflectance (lightest pixel = 1)",
+                Model::Odog(_) => "model brightness (arbitrary units, 0 = mid-grey)",
+            }
+            .into(),
+        };
+        let picture = Colormap::Gray.paint(out, range, None, [1.0; 3]);
+        let mut figure = MapFigure::new(&format!("{model}: predicted lightness"), picture, bar);
+        // The gray levels are the `.png`'s codes, written without gamma.
+        figure.gamma = None;
+        if let Some(ppd) = self.ppd.filter(|p| *p > 0.0) {
+            figure.x_label = "x (deg)".into();
+            figure.y_label = "y (deg, up)".into();
+            figure.x_range = (0.0, out.width() as f64 / ppd);
+            figure.y_range = (0.0, out.height() as f64 / ppd);
+        }
+        figure.outlines = self.outlines.clone();
+        figure
     }
 }
 

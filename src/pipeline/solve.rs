@@ -633,13 +633,14 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
     io::write_text(&dir.join("convergence.csv"), &csv)?;
     #[cfg(feature = "plots")]
     {
-        use crate::analysis::plot::{LinePlot, Series};
+        use crate::analysis::plot::{LinePlot, Series, Ticks};
         let mut plot = LinePlot::new(
             &format!("{method} convergence"),
-            unit,
-            "log10 of the largest update of f or g",
+            &format!("{} (count)", &unit[..unit.len() - 1]),
+            "log10 of the largest update of f or g (no unit)",
             (1.0, history.len().max(2) as f64),
         );
+        plot.x_ticks = Ticks::Integer;
         plot.reference_y = Some(tol.log10());
         plot.series.push(Series {
             name: method.to_string(),

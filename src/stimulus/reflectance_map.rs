@@ -4,7 +4,7 @@
 //! image alone does not fix the shape.
 
 use super::surfaces::LightingParams;
-use super::{Output, Pixels, Stimulus, Typed};
+use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::colormap::viridis;
 use crate::error::Result;
 use crate::gradient_space::{normal_from_fg, normal_from_pq};
@@ -34,6 +34,8 @@ stimulus_params! {
         contours: usize = 10, range 0..=100;
         /// the measured intensity whose contour is highlighted (0: none)
         intensity: f64 = 0.6, range 0.0..=1.0;
+        /// draw a figure for a slide or a paper: the map with labelled axes and ticks, a colour bar of R and a title, in a picture of the requested size, as display codes (write it without a gamma; needs a build with plots)
+        figure: bool = false;
         /// light and reflectance
         flatten lighting: LightingParams { light: "above-left" };
     }
@@ -54,13 +56,62 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 /// measured intensity highlighted.
 pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
+    let (w, h) = (g.width, g.height);
+    let map = map_picture(p, w, h, true)?;
+    let (extent, top, measured, fg) = (map.extent, map.top, p.intensity, map.fg);
+    let mut out = Output::gray(map.values.map(|v| v.unwrap_or(0.0)));
+    out.pixels = Pixels::Rgb(map.image);
+    out.targets = Some(Targets {
+        labels: map.labels,
+        names: vec!["lit".into(), "self-shadowed".into()],
+    });
+    if p.figure {
+        if let Some(figure) = figure_pixels(p, w, h)? {
+            out.pixels = Pixels::Rgb(figure);
+            // A figure's pixels are axes and labels, not orientations: no target mask.
+            out.targets = None;
+            out.notes.insert(
+                "figure".into(),
+                Value::from("the map with axes, tick labels, a colour bar of R and a title; pixel values are display codes (sRGB / 255)"),
+            );
+        }
+    }
+    out.notes
+        .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
+    out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));
+    out.notes
+        .insert("window_half_width".into(), Value::from(extent));
+    out.notes.insert("max_R".into(), Value::from(top));
+    out.notes
+        .insert("highlighted_intensity".into(), Value::from(measured));
+    out.notes.insert(
+        "white_dot".into(),
+        Value::from("the orientation facing the light (brightest)"),
+    );
+    Ok(out)
+}
+
+/// The map drawn at `w` × `h`: its picture (linear RGB), the values of R (none outside the
+/// f–g disc), the largest R, the window's half-width and whether it is f–g space.
+struct MapPicture {
+    image: crate::grid::RgbImage,
+    values: Grid<Option<f64>>,
+    /// 1 = orientations facing the light (lit), 2 = visible ones facing away from it (attached
+    /// shadow), 0 = outside the f–g disc (no orientation).
+    labels: Grid<u16>,
+    top: f64,
+    extent: f64,
+    fg: bool,
+}
+
+/// `ticks`: tick marks at every unit on the axes (a figure has labelled ticks of its own).
+fn map_picture(p: &ReflectanceMapParams, w: usize, h: usize, ticks: bool) -> Result<MapPicture> {
     let light = p.lighting.light;
     let reflectance = p.lighting.reflectance()?;
     let fg = p.space == OrientationSpace::Fg;
     let extent = if fg { 2.2 } else { p.extent };
     let contours = p.contours;
     let measured = p.intensity;
-    let (w, h) = (g.width, g.height);
     let scale = extent / (w.min(h) as f64 / 2.0);
     // Coordinates of pixel centres: first axis right, second axis up.
     let coord = |c: usize, r: usize| {
@@ -153,13 +204,11 @@ pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output>
         if a.abs() <= scale / 2.0 || b.abs() <= scale / 2.0 {
             return axis_grey;
         }
-        if (b.abs() <= tick && on_tick(a)) || (a.abs() <= tick && on_tick(b)) {
+        if ticks && ((b.abs() <= tick && on_tick(a)) || (a.abs() <= tick && on_tick(b))) {
             return axis_grey;
         }
         viridis(v / top)
     });
-    // Targets: the orientations that face the light (lit) and the visible ones that face away
-    // from it (in attached shadow); outside the fg disc, no orientation.
     let labels = Grid::from_fn(w, h, |c, r| {
         let (a, b) = coord(c, r);
         let n = if fg {
@@ -176,25 +225,78 @@ pub fn reflectance_map(p: &ReflectanceMapParams, g: &Geometry) -> Result<Output>
             2
         }
     });
-    let mut out = Output::gray(values.map(|v| v.unwrap_or(0.0)));
-    out.pixels = Pixels::Rgb(image);
-    out.targets = Some(super::Targets {
+    Ok(MapPicture {
+        image,
+        values,
         labels,
-        names: vec!["lit".into(), "self-shadowed".into()],
-    });
-    out.notes
-        .insert("space".into(), Value::from(if fg { "fg" } else { "pq" }));
-    out.notes.insert("axes".into(), Value::from(if fg { "f right, g up, ticks at every unit; black circle: the rim f²+g² = 4 (white outside it: no visible normal); orange ringed dots: (2,0) = normal (1,0,0) and (0,2) = normal (0,1,0)" } else { "p right, q up, ticks at every unit" }));
-    out.notes
-        .insert("window_half_width".into(), Value::from(extent));
-    out.notes.insert("max_R".into(), Value::from(top));
-    out.notes
-        .insert("highlighted_intensity".into(), Value::from(measured));
-    out.notes.insert(
-        "white_dot".into(),
-        Value::from("the orientation facing the light (brightest)"),
-    );
-    Ok(out)
+        top,
+        extent,
+        fg,
+    })
+}
+
+/// The map as a figure of `w` × `h` pixels (the map drawn afresh at the size it is shown, so
+/// that its contours stay whole), as display codes over 255; `None` in a build without plots.
+fn figure_pixels(
+    p: &ReflectanceMapParams,
+    w: usize,
+    h: usize,
+) -> Result<Option<crate::grid::RgbImage>> {
+    #[cfg(feature = "plots")]
+    {
+        use crate::analysis::plot::{ColourBar, MapFigure};
+        use crate::colormap::Colormap;
+        let fg = p.space == OrientationSpace::Fg;
+        let (space, a, b) = if fg {
+            ("f, g", "f", "g")
+        } else {
+            ("p, q", "p", "q")
+        };
+        let light = p.lighting.light;
+        let mut title = format!(
+            "Reflectance map R({space}), light tilt {:.0}°, slant {:.0}°",
+            light.tilt_deg(),
+            light.slant_deg()
+        );
+        if p.intensity > 0.0 {
+            title.push_str(&format!("; red: R = {}", p.intensity));
+        }
+        let bar = |top: f64| ColourBar {
+            colormap: Colormap::Viridis,
+            range: (0.0, top),
+            label: "R (radiance, linear luminance)".into(),
+        };
+        let mut figure = MapFigure::new(&title, Grid::new(w, h, [1.0; 3]), bar(1.0));
+        figure.size = (w as u32, h as u32);
+        let (mw, mh) = figure.map_size();
+        let map = map_picture(p, mw, mh, false)?;
+        let half = map.extent / (mw.min(mh) as f64 / 2.0);
+        figure.x_range = (-half * mw as f64 / 2.0, half * mw as f64 / 2.0);
+        figure.y_range = (-half * mh as f64 / 2.0, half * mh as f64 / 2.0);
+        figure.x_label = if fg {
+            format!("{a} (stereographic, = 2 n_x / (1 + n_z), no unit)")
+        } else {
+            format!("{a} (gradient space, = n_x / n_z, no unit)")
+        };
+        figure.y_label = if fg {
+            format!("{b} (= 2 n_y / (1 + n_z))")
+        } else {
+            format!("{b} (= n_y / n_z)")
+        };
+        figure.bar = bar(map.top);
+        figure.picture = map.image;
+        let (bytes, _, _) = figure.rgb()?;
+        let codes: Vec<[f64; 3]> = bytes
+            .chunks_exact(3)
+            .map(|c| [0, 1, 2].map(|k| c[k] as f64 / 255.0))
+            .collect();
+        Ok(Some(Grid::from_vec(w, h, codes)?))
+    }
+    #[cfg(not(feature = "plots"))]
+    {
+        let _ = (p, w, h);
+        Ok(None)
+    }
 }
 
 #[cfg(test)]
