@@ -13,5 +13,6 @@ mod hostile;
 mod interrupt;
 mod lightness;
 mod mesh;
+mod sidecar_input;
 mod solve;
 mod stimuli;

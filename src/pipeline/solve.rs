@@ -9,7 +9,7 @@
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
-use crate::io::{self, BitDepth};
+use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::Light;
 use crate::light_estimation::LightEstimate;
 use crate::progress::Progress;
@@ -202,6 +202,9 @@ pub struct SolveInput {
     pub mask: Option<String>,
     /// Pixels inside the mask.
     pub mask_pixels: usize,
+    /// The shadelab sidecar read beside the image (absent without one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sidecar: Option<Value>,
 }
 
 /// The request, as given.
@@ -240,6 +243,9 @@ pub struct LightReport {
     pub estimated: bool,
     /// The estimate, if estimated.
     pub estimate: Option<LightEstimate>,
+    /// The light the image was rendered under, from its sidecar (absent without one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub true_light: Option<TrueLight>,
 }
 
 /// The boundary condition used.
@@ -316,20 +322,36 @@ struct Solved {
     image_info: Value,
     boundary_kind: &'static str,
     solve_seconds: f64,
+    sidecar: Option<RenderSidecar>,
 }
 
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
-    let (image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
+    let (mut image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
+    // A shadelab render's sidecar: its values made linear again and its ambient level taken
+    // off (the solve's reflectance has no ambient term), its target mask as the object's.
+    let beside = RenderSidecar::beside(&config.image)?;
+    let sidecar = beside.sidecar();
+    if let Some(s) = sidecar {
+        let ambient = s.ambient.unwrap_or(0.0);
+        image = image.map(|&v| (s.linearise(v) - ambient).max(0.0));
+    }
     let (w, h) = (image.width(), image.height());
-    let mask = read_mask(config, &image)?;
+    let mask = match (&config.mask, sidecar.and_then(|s| s.target_mask.as_deref())) {
+        (None, Some(path)) => read_mask(path, config, &image)?,
+        (given, _) => match given {
+            Some(path) => read_mask(path, config, &image)?,
+            None => Grid::new(w, h, true),
+        },
+    };
+    let albedo = config.albedo.or(sidecar.and_then(|s| s.albedo));
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,
     };
-    let lighting = Lighting::resolve(given, config.albedo, &image, &mask)?;
+    let lighting = Lighting::resolve(given, albedo, &image, &mask)?;
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
     let reflectance = brdf.build(lighting.light)?;
@@ -354,6 +376,7 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         image_info,
         boundary_kind: boundary.name(),
         solve_seconds: started.elapsed().as_secs_f64(),
+        sidecar: beside.sidecar().cloned(),
     })
 }
 
@@ -462,8 +485,13 @@ fn report(
             image_info: solved.image_info.clone(),
             width: solved.mask.width(),
             height: solved.mask.height(),
-            mask: config.mask.as_ref().map(|p| p.display().to_string()),
+            mask: config
+                .mask
+                .as_ref()
+                .or(solved.sidecar.as_ref().and_then(|s| s.target_mask.as_ref()))
+                .map(|p| p.display().to_string()),
             mask_pixels: solved.mask.count(),
+            sidecar: solved.sidecar.as_ref().map(RenderSidecar::to_json),
         },
         parameters: SolveParameters {
             light: or(
@@ -488,6 +516,7 @@ fn report(
             slant_deg: lighting.light.slant_deg(),
             estimated: lighting.estimate.is_some(),
             estimate: lighting.estimate,
+            true_light: solved.sidecar.as_ref().and_then(|s| s.light),
         },
         boundary: BoundaryReport {
             kind: boundary_kind,
@@ -599,12 +628,9 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
     Ok(())
 }
 
-/// The mask named by `config` (checked against the image), or the whole image.
-fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
+/// The mask at `path` (nonzero = inside), checked against the image.
+fn read_mask(path: &Path, config: &SolveConfig, image: &Image) -> Result<Mask> {
     let (w, h) = (image.width(), image.height());
-    let Some(path) = &config.mask else {
-        return Ok(Grid::new(w, h, true));
-    };
     let mask = io::read_mask(path, config.max_pixels)?;
     if !mask.same_size(image) {
         return Err(Error::invalid(format!(

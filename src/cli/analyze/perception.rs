@@ -3,7 +3,7 @@
 
 use super::{CliError, Global, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
-use shadelab::pipeline::perception::Config;
+use shadelab::pipeline::perception::{Config, Header};
 use shadelab::visual_size::parse_pair;
 
 /// The picture and how to interpret it.
@@ -23,6 +23,23 @@ pub struct PictureArgs {
     pub analysis: AnalysisFlags,
     #[command(flatten)]
     pub solver: SolverFlags,
+}
+
+/// The first line of a perception summary: the assumed slant, albedo and ambient, and the true
+/// light when the stimulus or the image's sidecar gives it.
+pub fn true_light_line(header: &Header) -> String {
+    let p = &header.parameters;
+    let mut line = format!(
+        "assumed: slant {:.1}°, albedo {:.4}, ambient {:.4}",
+        p.slant_deg, p.albedo, p.ambient
+    );
+    if let Some(t) = &header.true_light {
+        line += &format!(
+            "; true light: tilt {:.1}° slant {:.1}°",
+            t.tilt_deg, t.slant_deg
+        );
+    }
+    line + "\n"
 }
 
 impl PictureArgs {
