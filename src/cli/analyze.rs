@@ -103,7 +103,8 @@ impl Source {
             max_pixels: global.max_pixels,
         };
         let out = Output::new(global);
-        for line in source.notes()? {
+        // A sidecar that cannot be read is reported when the picture is (after the image).
+        for line in source.notes().unwrap_or_default() {
             out.note(
                 line.replace("the given ppd", "--ppd")
                     .replace("the given mask", "--mask"),
@@ -114,13 +115,13 @@ impl Source {
 
     /// Whether the picture's resolution is known without reading it: --ppd, the sidecar's,
     /// or a stimulus's own.
-    pub fn knows_ppd(&self) -> Result<bool, CliError> {
-        Ok(self.image.is_none() || self.library_source().known_ppd()?.is_some())
+    pub fn knows_ppd(&self) -> bool {
+        self.library_source().ppd_known()
     }
 
     /// Whether the picture has target labels (--mask, the sidecar's, or a stimulus's own).
-    pub fn has_labels(&self) -> Result<bool, CliError> {
-        Ok(self.library_source().has_labels()?)
+    pub fn has_labels(&self) -> bool {
+        self.library_source().has_labels()
     }
 
     /// The files named, as the library's source (no parameters parsed, nothing printed).

@@ -64,7 +64,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..Default::default()
     };
     let out = Output::new(global);
-    for line in source.notes()? {
+    // A sidecar that cannot be read is reported by the solve (after the image).
+    for line in source.notes().unwrap_or_default() {
         out.note(line.replace("the given mask", "--mask"));
     }
     // Claim the output folder before the long part, so an unwritable one fails at once.

@@ -106,12 +106,17 @@ impl PictureSource {
             )),
             Beside::Ours(s) => {
                 lines.push(s.summary());
-                if let (Some(given), Some(own)) = (self.ppd, s.ppd) {
+                if let (Some(given), Some(own)) = (self.ppd, s.ppd.filter(|&p| Some(p) != self.ppd))
+                {
                     lines.push(format!(
                         "the given ppd {given} replaces the sidecar's {own}"
                     ));
                 }
-                if let (Some(given), Some(own)) = (&self.mask, &s.target_mask) {
+                let other_mask = s
+                    .target_mask
+                    .as_ref()
+                    .filter(|&m| self.mask.as_ref().is_some_and(|g| !same_file(g, m)));
+                if let (Some(given), Some(own)) = (&self.mask, other_mask) {
                     lines.push(format!(
                         "the given mask {} replaces the sidecar's {}",
                         given.display(),
@@ -123,25 +128,27 @@ impl PictureSource {
         Ok(lines)
     }
 
-    /// The picture's resolution when known without reading its pixels: the given ppd, else the
-    /// sidecar's; a stimulus or spec always has one.
-    pub fn known_ppd(&self) -> Result<Option<f64>> {
+    /// Whether the picture's resolution is known without reading its pixels: given, a
+    /// stimulus's or spec's own, or its sidecar's. A sidecar that cannot be read counts as
+    /// giving it: reading the picture reports what is wrong (the image first).
+    pub fn ppd_known(&self) -> bool {
         if self.ppd.is_some() || self.image.is_none() {
-            return Ok(self.ppd);
+            return true;
         }
-        Ok(self.beside()?.sidecar().and_then(|s| s.ppd))
+        self.beside()
+            .map_or(true, |b| b.sidecar().is_some_and(|s| s.ppd.is_some()))
     }
 
     /// Whether the picture has target labels: given, a stimulus's or spec's own, or its
-    /// sidecar's.
-    pub fn has_labels(&self) -> Result<bool> {
+    /// sidecar's (a sidecar that cannot be read counts as giving them, as in
+    /// [`ppd_known`](Self::ppd_known)).
+    pub fn has_labels(&self) -> bool {
         if self.mask.is_some() || self.image.is_none() {
-            return Ok(true);
+            return true;
         }
-        Ok(self
-            .beside()?
-            .sidecar()
-            .is_some_and(|s| s.target_mask.is_some()))
+        self.beside().map_or(true, |b| {
+            b.sidecar().is_some_and(|s| s.target_mask.is_some())
+        })
     }
 
     /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
@@ -162,13 +169,14 @@ impl PictureSource {
         let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
             (Some(path), _) => {
-                let beside = RenderSidecar::beside(path)?;
-                let sidecar = beside.sidecar();
                 let mut pixels = if colour && io::extension(path) == "png" {
                     Pixels::Rgb(io::read_rgb(path, max_pixels)?)
                 } else {
                     Pixels::Gray(io::read_luminance(path, max_pixels)?.0)
                 };
+                // The image is read first: a broken image is reported before its sidecar.
+                let beside = RenderSidecar::beside(path)?;
+                let sidecar = beside.sidecar();
                 if let Some(s) = sidecar {
                     pixels = match pixels {
                         Pixels::Gray(i) => Pixels::Gray(i.map(|&v| s.linearise(v))),
@@ -271,6 +279,14 @@ fn rendered(
         }),
         declared,
     })
+}
+
+/// Whether two paths name the same file (compared as written when either cannot be resolved).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
 }
 
 /// Fails unless the label map `labels` (read from `path`) has the picture's size.

@@ -83,13 +83,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     // The flags an image needs, named as flags (the library's messages name no flag).
     args.source.check()?;
     if args.source.image.is_some() {
-        if !args.source.knows_ppd()? {
+        if !args.source.knows_ppd() {
             return Err(CliError::usage(
                 "the fading analysis works in degrees of visual angle: give the image's \
                  resolution with --ppd N (pixels per degree)",
             ));
         }
-        if !args.source.has_labels()? {
+        if !args.source.has_labels() {
             return Err(CliError::usage(
                 "an image needs --mask LABELS.png with label 1 = the blurred disk and 2 = the \
                  sharp disk",

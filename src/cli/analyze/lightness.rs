@@ -25,7 +25,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let models = LightnessConfig::parse_models(&args.model)?;
     // The resolution flag, named as a flag (the library's messages name no flag).
     args.source.check()?;
-    if !args.source.knows_ppd()? {
+    if !args.source.knows_ppd() {
         if let Some(m) = models.iter().find(|m| m.needs_ppd()) {
             return Err(CliError::usage(format!(
                 "the {m} model works in degrees of visual angle: give the image's resolution \
