@@ -15,5 +15,6 @@ mod interrupt;
 mod lightness;
 mod mesh;
 mod python;
+mod sidecar_input;
 mod solve;
 mod stimuli;

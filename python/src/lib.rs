@@ -307,8 +307,7 @@ fn picture_source(
         max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };
-    // The perception pipeline's size is (width, height) today (TODO(lead): flip to (h, w)).
-    Ok((source, shape.map(|(h, w)| (w, h))))
+    Ok((source, shape))
 }
 
 /// The perception settings shared by `prior_sweep` and `observer`.

@@ -8,6 +8,7 @@ mod observer;
 mod perception;
 mod prior_sweep;
 
+use super::output::Output;
 use super::{CliError, CliResult, Global};
 use shadelab::pipeline::PictureSource;
 use std::path::PathBuf;
@@ -42,11 +43,17 @@ pub fn run(command: Command, global: &Global) -> CliResult {
 /// Where the picture comes from: a file or a stimulus rendered on the spot.
 #[derive(Debug, clap::Args)]
 pub struct Source {
-    /// The image: an 8/16-bit PNG (linear values) or a float H×W .npy. Or give --stimulus.
+    /// The image: an 8/16-bit PNG (linear values) or a float H×W .npy; a shadelab sidecar
+    /// beside it (IMAGE.json) gives its target mask and names, ppd, albedo, ambient, gamma and
+    /// true light (flags given win). Or give --stimulus or --spec.
     pub image: Option<PathBuf>,
     /// Render this stimulus (see `shadelab list`) and analyse it with its own target mask.
-    #[arg(long, value_name = "NAME", conflicts_with = "image")]
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["image", "spec"])]
     pub stimulus: Option<String>,
+    /// Render this stimulus spec or shadelab sidecar in memory (as `render --spec`) and
+    /// analyse it with its own target mask.
+    #[arg(long, value_name = "JSON", conflicts_with = "image")]
+    pub spec: Option<PathBuf>,
     /// A stimulus parameter (repeatable; with --stimulus).
     #[arg(long = "set", value_name = "KEY=VALUE", requires = "stimulus", value_parser = super::render::utf8_text())]
     pub set: Vec<String>,
@@ -73,19 +80,21 @@ impl Source {
                 )));
             }
         }
-        if self.image.is_none() && self.stimulus.is_none() {
+        if self.image.is_none() && self.stimulus.is_none() && self.spec.is_none() {
             return Err(CliError::usage(
-                "give an IMAGE (.png or .npy) or --stimulus NAME",
+                "give an IMAGE (.png or .npy), --stimulus NAME or --spec FILE.json",
             ));
         }
         Ok(())
     }
 
-    /// The library's description of the picture, from the flags.
+    /// The library's description of the picture, from the flags; says on stderr what the
+    /// image's sidecar gives (unless quiet).
     pub fn to_library(&self, global: &Global) -> Result<PictureSource, CliError> {
         self.check()?;
-        Ok(PictureSource {
+        let source = PictureSource {
             image: self.image.clone(),
+            spec: self.spec.clone(),
             stimulus: self.stimulus.clone(),
             params: shadelab::params::Params::parse_pairs(&self.set)?,
             seed: self.seed,
@@ -93,6 +102,37 @@ impl Source {
             mask: self.mask.clone(),
             max_pixels: global.max_pixels,
             ..Default::default()
-        })
+        };
+        let out = Output::new(global);
+        // A sidecar that cannot be read is reported when the picture is (after the image).
+        for line in source.notes().unwrap_or_default() {
+            out.note(
+                line.replace("the given ppd", "--ppd")
+                    .replace("the given mask", "--mask"),
+            );
+        }
+        Ok(source)
+    }
+
+    /// Whether the picture's resolution is known without reading it: --ppd, the sidecar's,
+    /// or a stimulus's own.
+    pub fn knows_ppd(&self) -> bool {
+        self.library_source().ppd_known()
+    }
+
+    /// Whether the picture has target labels (--mask, the sidecar's, or a stimulus's own).
+    pub fn has_labels(&self) -> bool {
+        self.library_source().has_labels()
+    }
+
+    /// The files named, as the library's source (no parameters parsed, nothing printed).
+    fn library_source(&self) -> PictureSource {
+        PictureSource {
+            image: self.image.clone(),
+            spec: self.spec.clone(),
+            mask: self.mask.clone(),
+            ppd: self.ppd,
+            ..PictureSource::default()
+        }
     }
 }

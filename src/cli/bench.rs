@@ -94,5 +94,5 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         max_pixels: global.max_pixels,
     };
     let report = bench::run(&config, &Bar::new(global.quiet))?;
-    super::print_stdout(&report.table())
+    super::output::Output::new(global).results(&report.table(), &report)
 }

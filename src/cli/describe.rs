@@ -1,7 +1,9 @@
 //! `shadelab list` and `shadelab describe NAME`.
 
-use super::CliResult;
+use super::output::Output;
+use super::{CliResult, Global};
 use shadelab::pipeline::render::{describe, list as all};
+use std::fmt::Write;
 
 /// Arguments of `describe`.
 #[derive(Debug, clap::Args)]
@@ -11,24 +13,29 @@ pub struct Args {
 }
 
 /// Prints one line per stimulus: its name and what it shows.
-pub fn list() -> CliResult {
-    for s in all() {
-        println!("{:<18} {}", s.name, s.summary);
+pub fn list(global: &Global) -> CliResult {
+    let all = all();
+    let mut text = String::new();
+    for s in &all {
+        let _ = writeln!(text, "{:<18} {}", s.name, s.summary);
     }
-    Ok(())
+    Output::new(global).results(&text, &all)
 }
 
 /// Prints a stimulus's parameters with defaults and ranges.
-pub fn run(args: Args) -> CliResult {
+pub fn run(args: Args, global: &Global) -> CliResult {
     let d = describe(&args.name)?;
-    println!("{} — {}", d.name, d.summary);
-    println!(
+    let mut text = String::new();
+    let _ = writeln!(text, "{} — {}", d.name, d.summary);
+    let _ = writeln!(
+        text,
         "default size: {}x{} deg (width x height) at {} ppd",
         d.default_visual_size.1, d.default_visual_size.0, d.default_ppd
     );
-    println!("parameters (--set key=value):");
+    let _ = writeln!(text, "parameters (--set key=value):");
     for p in &d.params {
-        println!(
+        let _ = writeln!(
+            text,
             "  {:<18} default {:<14} range {:<28} {}",
             p.name,
             p.default.to_string(),
@@ -36,5 +43,5 @@ pub fn run(args: Args) -> CliResult {
             p.doc
         );
     }
-    Ok(())
+    Output::new(global).results(&text, &d)
 }

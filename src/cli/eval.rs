@@ -1,5 +1,6 @@
 //! `shadelab eval`: the engine on the evaluation data, as a table (and a folder of results).
 
+use super::output::Output;
 use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
 use shadelab::boundary::Boundary;
 use shadelab::evaluation::{self, report, Config, Set};
@@ -123,21 +124,19 @@ pub fn run(args: Args, global: &Global) -> CliResult {
                 None => Ok(()),
             },
         )?;
-    print!("{}", report::markdown_table(&results));
+    let out = Output::new(global);
     if let Some(folder) = folder {
         let command: Vec<String> = std::env::args().collect();
         let seconds = started.elapsed().as_secs_f64();
         report::write_summary(folder.path(), &config, &results, &commit, &command, seconds)?;
         let target = folder.commit()?;
-        if !global.quiet {
-            eprintln!(
-                "{}: {} cases, {seconds:.1} s",
-                target.display(),
-                results.len()
-            );
-        }
+        out.note(format!(
+            "wrote {}: {} cases, {seconds:.1} s",
+            target.display(),
+            results.len()
+        ));
     }
-    Ok(())
+    out.results(&report::markdown_table(&results), &results)
 }
 
 /// The short commit of the git checkout in the current folder, `-dirty` when tracked files

@@ -32,13 +32,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         docs_base: args.docs_base,
     };
     let report = build(&config, &Bar::new(global.quiet))?;
-    if !global.quiet {
-        eprintln!(
-            "wrote {} ({} stimuli; open {})",
-            report.folder.display(),
-            report.presets.len(),
-            report.index.display()
-        );
-    }
-    Ok(())
+    let out = super::output::Output::new(global);
+    out.note(format!(
+        "wrote {} ({} stimuli; open {})",
+        report.folder.display(),
+        report.presets.len(),
+        report.index.display()
+    ));
+    // The folder is the result; with --json, its report.
+    out.results("", &report)
 }

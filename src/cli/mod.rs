@@ -8,6 +8,7 @@ mod describe;
 mod eval;
 mod flags;
 mod gallery;
+mod output;
 mod progress;
 mod render;
 mod solve;
@@ -19,9 +20,13 @@ use std::process::ExitCode;
 /// Options every subcommand accepts.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Global {
-    /// No progress bars or chatter on stderr.
+    /// No progress bars or chatter on stderr (results still print on stdout).
     #[arg(long, global = true)]
     pub quiet: bool,
+    /// Print the results on stdout as one JSON document (the command's report) instead of a
+    /// table.
+    #[arg(long, global = true)]
+    pub json: bool,
     /// Worker threads (default: all cores). Outputs are identical for any count.
     #[arg(long, global = true, value_name = "N", allow_hyphen_values = true)]
     pub threads: Option<usize>,
@@ -97,18 +102,6 @@ impl CliError {
             error: anyhow::anyhow!(message.into()),
             usage: true,
         }
-    }
-}
-
-/// Prints `text` on stdout; a closed pipe (`| head`) ends the output quietly.
-pub fn print_stdout(text: &str) -> CliResult {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(CliError::from(shadelab::Error::io("standard output", e)))
-        }
-        _ => Ok(()),
     }
 }
 
@@ -219,8 +212,8 @@ fn configure_threads(global: &Global) -> CliResult {
 fn run(command: Command, global: &Global) -> CliResult {
     match command {
         Command::Render(args) => render::run(args, global),
-        Command::List => describe::list(),
-        Command::Describe(args) => describe::run(args),
+        Command::List => describe::list(global),
+        Command::Describe(args) => describe::run(args, global),
         Command::Gallery(args) => gallery::run(args, global),
         Command::Solve(args) => solve::run(args, global),
         Command::Analyze(args) => analyze::run(args, global),

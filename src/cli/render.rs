@@ -161,10 +161,10 @@ pub fn render_to(config: &RenderConfig, global: &Global) -> CliResult {
     config.validate()?;
     let report = render::run(config, &NoProgress)?;
     let files = render::write(config, &report)?;
-    if !global.quiet {
-        for f in files {
-            eprintln!("wrote {}", f.display());
-        }
+    let out = super::output::Output::new(global);
+    for f in files {
+        out.note(format!("wrote {}", f.display()));
     }
-    Ok(())
+    // The files are the result; with --json, the report of what was rendered.
+    out.results("", &report)
 }

@@ -1,6 +1,7 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
 use super::flags::{usage, SolverFlags};
+use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
 use shadelab::io::AtomicDir;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord, REPORT_FILE};
@@ -56,6 +57,17 @@ pub struct Args {
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
     let config = config(&args, global)?;
+    // What the image's sidecar gives (the library reads it; this says so).
+    let source = shadelab::pipeline::PictureSource {
+        image: Some(args.image.clone()),
+        mask: args.mask.clone(),
+        ..Default::default()
+    };
+    let out = Output::new(global);
+    // A sidecar that cannot be read is reported by the solve (after the image).
+    for line in source.notes().unwrap_or_default() {
+        out.note(line.replace("the given mask", "--mask"));
+    }
     // Claim the output folder before the long part, so an unwritable one fails at once.
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
     let bar = Bar::new(global.quiet);
@@ -69,27 +81,46 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let solver = &report.solver;
     let unit = solver.iteration_unit;
     if !solver.converged {
-        eprintln!(
-            "warning: the {} solve did not converge within --max-iter {} {unit}: the last update \
+        out.warn(format!(
+            "the {} solve did not converge within --max-iter {} {unit}: the last update \
              {:.3e} is above --tol {:.3e}; raise --max-iter or --tol",
             solver.method, report.parameters.max_iter, solver.last_update, config.options.tol
+        ));
+    }
+    out.note(format!(
+        "wrote {} ({:.2} s)",
+        target.display(),
+        started.elapsed().as_secs_f64()
+    ));
+    let state = if solver.converged {
+        "converged"
+    } else {
+        "did NOT converge"
+    };
+    let light = &report.light;
+    let mut text = format!(
+        "{state} after {} {unit}, last update {:.2e}\n\
+         light: tilt {:.1}° slant {:.1}°{}\n",
+        solver.iterations,
+        solver.last_update,
+        light.tilt_deg,
+        light.slant_deg,
+        if light.estimated { " (estimated)" } else { "" },
+    );
+    if let Some(t) = &light.true_light {
+        text += &format!(
+            "true light (sidecar): tilt {:.1}° slant {:.1}°\n",
+            t.tilt_deg, t.slant_deg
         );
     }
-    if !global.quiet {
-        let state = if solver.converged {
-            "converged"
-        } else {
-            "did NOT converge (raise --max-iter or --tol)"
-        };
-        eprintln!(
-            "{}: {state} after {} {unit}, last update {:.2e}, {:.2} s",
-            target.display(),
-            solver.iterations,
-            solver.last_update,
-            started.elapsed().as_secs_f64()
-        );
-    }
-    Ok(())
+    text += &format!(
+        "albedo {:.4}; {} pixels solved; depth {:.3} to {:.3} px\n",
+        report.parameters.albedo,
+        report.input.mask_pixels,
+        report.depth_range[0],
+        report.depth_range[1]
+    );
+    out.results(&text, &report)
 }
 
 /// The library configuration from the flags; every flag is checked before any file is read.

@@ -2,6 +2,7 @@
 //! in parallel on one machine or in shards on many (see docs/studies.md), merged into the
 //! files a single run writes.
 
+use super::output::Output;
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
 use shadelab::analysis::study::{Shard, REPORT};
@@ -64,18 +65,20 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     report.write_into(folder.path())?;
     let target = folder.commit()?;
-    if !global.quiet {
-        eprintln!(
-            "{}: {} of {} grid points (shard {}/{}) in {:.2} s",
-            target.display(),
-            report.points.len(),
-            report.point_count,
-            shard.index,
-            shard.count,
-            started.elapsed().as_secs_f64()
-        );
-    }
-    Ok(())
+    let out = Output::new(global);
+    out.note(format!(
+        "wrote {} ({:.2} s)",
+        target.display(),
+        started.elapsed().as_secs_f64()
+    ));
+    let text = format!(
+        "{} of {} grid points (shard {}/{})\n",
+        report.points.len(),
+        report.point_count,
+        shard.index,
+        shard.count
+    );
+    out.results(&text, &report)
 }
 
 fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
@@ -83,12 +86,8 @@ fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
         .map_err(|e| CliError::usage(format!("--out {e}")))?;
     let report = pipeline::merge(&config, &Bar::new(global.quiet))?;
     let target = report.write(&args.out, global.force)?;
-    if !global.quiet {
-        eprintln!(
-            "{}: merged {} shard folders",
-            target.display(),
-            config.dirs.len()
-        );
-    }
-    Ok(())
+    let out = Output::new(global);
+    out.note(format!("wrote {}", target.display()));
+    let text = format!("merged {} shard folders\n", config.dirs.len());
+    out.results(&text, &report)
 }

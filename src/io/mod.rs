@@ -7,6 +7,7 @@ mod csv;
 mod gif;
 mod npy;
 mod png;
+pub mod render_sidecar;
 mod sidecar;
 
 pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, AtomicDir};
@@ -20,6 +21,7 @@ pub use png::{
     read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes, read_rgb,
     write_gray, write_labels, write_mask, write_rgb, BitDepth, GrayInfo, LUMINANCE_FORMULA,
 };
+pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight};
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
 
 use crate::error::{Error, Result};

@@ -65,13 +65,13 @@ impl FadingConfig {
         self.band.check()?;
         self.adaptation.check()?;
         if self.source.image.is_some() {
-            if self.source.ppd.is_none() {
+            if !self.source.ppd_known() {
                 return Err(Error::invalid(
                     "the fading analysis works in degrees of visual angle: give the image's \
                      resolution in pixels per degree",
                 ));
             }
-            if self.source.mask.is_none() {
+            if !self.source.has_labels() {
                 return Err(Error::invalid(
                     "an image needs target labels with label 1 = the blurred disk and 2 = the \
                      sharp disk",

@@ -60,7 +60,7 @@ impl LightnessConfig {
         if self.models.is_empty() {
             return Err(Error::invalid("no lightness model to run"));
         }
-        if self.source.stimulus.is_none() && self.source.ppd.is_none() {
+        if !self.source.ppd_known() {
             if let Some(m) = self.models.iter().find(|m| m.needs_ppd()) {
                 return Err(Error::invalid(format!(
                     "the {m} model works in degrees of visual angle: give the image's \

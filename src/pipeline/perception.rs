@@ -12,7 +12,7 @@ use crate::analysis::{Domain, Picture};
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
-use crate::io;
+use crate::io::{self, TrueLight};
 use crate::progress::Progress;
 use crate::solver::SolveOptions;
 use serde::{Serialize, Serializer};
@@ -129,7 +129,8 @@ impl DomainSpec {
 pub struct Config {
     /// The picture.
     pub source: PictureSource,
-    /// The rendered stimulus's size in pixels (width, height); only with a stimulus.
+    /// The rendered stimulus's size in pixels (height, width), as NumPy's shape; only with a
+    /// stimulus.
     pub size: Option<(usize, usize)>,
     /// Where the engine solves (default: the whole image).
     pub domain: DomainSpec,
@@ -166,7 +167,7 @@ impl Config {
     /// Checks everything that needs no file, naming the first bad field.
     pub fn check(&self) -> Result<(), BadSetting> {
         field("source", self.source.check())?;
-        if let Some((w, h)) = self.size {
+        if let Some((h, w)) = self.size {
             let ok = if self.source.stimulus.is_none() {
                 Err(Error::invalid("a size applies to a rendered stimulus only"))
             } else if w == 0 || h == 0 {
@@ -224,13 +225,13 @@ impl Config {
     pub fn load(&self) -> Result<Setup> {
         self.validate()?;
         let options = self.solver;
-        let (loaded, request) = self.source.load_shaped(false, self.size)?;
+        let (loaded, _) = self.source.load_shaped(false, self.size)?;
         let labels = loaded.labels.as_ref().map(|(l, n)| (l, n.as_slice()));
         let mut picture =
             Picture::from_image(loaded.luminance(), labels).map_err(|e| self.naming_mask(e))?;
-        if let Some(request) = &request {
-            picture.take_declared(&request.params);
-        }
+        // What the stimulus or the image's sidecar declares (the same reader for both).
+        picture.albedo = loaded.declared.albedo;
+        picture.ambient = loaded.declared.ambient;
         let max_pixels = self.source.max_pixels;
         let domain = self.domain.resolve(&picture, max_pixels)?;
         let (w, h) = (picture.image.width(), picture.image.height());
@@ -256,6 +257,7 @@ impl Config {
             lighting,
             options,
             origin: loaded.origin,
+            true_light: loaded.declared.light,
             parameters,
         })
     }
@@ -310,6 +312,8 @@ pub struct Setup {
     pub options: SolveOptions,
     /// Where the picture came from, for reports.
     pub origin: Value,
+    /// The light the picture was rendered under, when its stimulus or sidecar says.
+    pub true_light: Option<TrueLight>,
     /// The settings, for reports.
     pub parameters: Parameters,
 }
@@ -346,6 +350,7 @@ impl Setup {
             input: self.origin.clone(),
             width: self.picture.image.width(),
             height: self.picture.image.height(),
+            true_light: self.true_light,
             parameters: self.parameters.clone(),
         }
     }
@@ -369,6 +374,9 @@ pub struct Header {
     pub width: usize,
     /// The picture's height, pixels.
     pub height: usize,
+    /// The light the picture was rendered under (its stimulus's or sidecar's), beside the
+    /// assumed ones; `null` when unknown.
+    pub true_light: Option<TrueLight>,
     /// The settings used.
     pub parameters: Parameters,
 }

@@ -9,7 +9,7 @@
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
-use crate::io::{self, BitDepth};
+use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::Light;
 use crate::light_estimation::LightEstimate;
 use crate::progress::Progress;
@@ -202,6 +202,9 @@ pub struct SolveInput {
     pub mask: Option<String>,
     /// Pixels inside the mask.
     pub mask_pixels: usize,
+    /// The shadelab sidecar read beside the image (absent without one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sidecar: Option<Value>,
 }
 
 /// The request, as given.
@@ -240,6 +243,9 @@ pub struct LightReport {
     pub estimated: bool,
     /// The estimate, if estimated.
     pub estimate: Option<LightEstimate>,
+    /// The light the image was rendered under, from its sidecar (absent without one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub true_light: Option<TrueLight>,
 }
 
 /// The boundary condition used.
@@ -316,31 +322,51 @@ struct Solved {
     image_info: Value,
     boundary_kind: &'static str,
     solve_seconds: f64,
+    sidecar: Option<RenderSidecar>,
 }
 
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
-    let (image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
-    let mask = read_mask(config, &image)?;
-    solve_loaded(config, image, image_info, mask, progress)
+    let (mut image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
+    // A shadelab render's sidecar: its values made linear again and its ambient level taken
+    // off (the solve's reflectance has no ambient term), its target mask as the object's.
+    let beside = RenderSidecar::beside(&config.image)?;
+    let sidecar = beside.sidecar().cloned();
+    if let Some(s) = &sidecar {
+        let ambient = s.ambient.unwrap_or(0.0);
+        image = image.map(|&v| (s.linearise(v) - ambient).max(0.0));
+    }
+    let (w, h) = (image.width(), image.height());
+    let mask_file = config
+        .mask
+        .as_deref()
+        .or(sidecar.as_ref().and_then(|s| s.target_mask.as_deref()));
+    let mask = match mask_file {
+        Some(path) => read_mask(path, config, &image)?,
+        None => Grid::new(w, h, true),
+    };
+    solve_loaded(config, image, image_info, mask, sidecar, progress)
 }
 
-/// Solves an image and mask already read (or handed over in memory).
+/// Solves an image and mask already read (or handed over in memory), with what a render's
+/// sidecar declares (albedo) unless the config says otherwise.
 fn solve_loaded(
     config: &SolveConfig,
     image: Image,
     image_info: Value,
     mask: Mask,
+    sidecar: Option<RenderSidecar>,
     progress: &dyn Progress,
 ) -> Result<Solved> {
     let (w, h) = (image.width(), image.height());
+    let albedo = config.albedo.or(sidecar.as_ref().and_then(|s| s.albedo));
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,
     };
-    let lighting = Lighting::resolve(given, config.albedo, &image, &mask)?;
+    let lighting = Lighting::resolve(given, albedo, &image, &mask)?;
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
     let reflectance = brdf.build(lighting.light)?;
@@ -365,6 +391,7 @@ fn solve_loaded(
         image_info,
         boundary_kind: boundary.name(),
         solve_seconds: started.elapsed().as_secs_f64(),
+        sidecar,
     })
 }
 
@@ -429,7 +456,7 @@ pub fn run_image(
         None => Grid::new(image.width(), image.height(), true),
     };
     let info = serde_json::json!({ "format": "in memory" });
-    let solved = solve_loaded(config, image, info, mask, progress)?;
+    let solved = solve_loaded(config, image, info, mask, None, progress)?;
     finish(config, solved, started)
 }
 
@@ -520,8 +547,13 @@ fn report(
             image_info: solved.image_info.clone(),
             width: solved.mask.width(),
             height: solved.mask.height(),
-            mask: config.mask.as_ref().map(|p| p.display().to_string()),
+            mask: config
+                .mask
+                .as_ref()
+                .or(solved.sidecar.as_ref().and_then(|s| s.target_mask.as_ref()))
+                .map(|p| p.display().to_string()),
             mask_pixels: solved.mask.count(),
+            sidecar: solved.sidecar.as_ref().map(RenderSidecar::to_json),
         },
         parameters: SolveParameters {
             light: or(
@@ -546,6 +578,7 @@ fn report(
             slant_deg: lighting.light.slant_deg(),
             estimated: lighting.estimate.is_some(),
             estimate: lighting.estimate,
+            true_light: solved.sidecar.as_ref().and_then(|s| s.light),
         },
         boundary: BoundaryReport {
             kind: boundary_kind,
@@ -658,12 +691,8 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
     Ok(())
 }
 
-/// The mask named by `config` (checked against the image), or the whole image.
-fn read_mask(config: &SolveConfig, image: &Image) -> Result<Mask> {
-    let (w, h) = (image.width(), image.height());
-    let Some(path) = &config.mask else {
-        return Ok(Grid::new(w, h, true));
-    };
+/// The mask at `path` (nonzero = inside), checked against the image.
+fn read_mask(path: &Path, config: &SolveConfig, image: &Image) -> Result<Mask> {
     check_mask(io::read_mask(path, config.max_pixels)?, path, config, image)
 }
 

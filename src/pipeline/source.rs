@@ -1,9 +1,15 @@
-//! Where an analysed picture comes from: an image file (PNG or `.npy`) or a stimulus rendered on
-//! the spot, with its resolution and target labels when they are known.
+//! Where an analysed picture comes from: an image file (PNG or `.npy`), a stimulus rendered on
+//! the spot, or a render spec (or sidecar) rendered in memory, with its resolution, target
+//! labels and what its maker declares when they are known.
+//!
+//! An image file with a shadelab sidecar beside it (`X.png` → `X.json`, see
+//! [`RenderSidecar`]) is read as its render: the sidecar's target mask and names, ppd, albedo,
+//! ambient level and true light are taken, and a recorded display gamma or PsychoPy range is
+//! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels};
-use crate::io;
+use crate::io::{self, Beside, Declared, RenderSidecar};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
 use serde_json::{json, Map, Value};
@@ -12,11 +18,14 @@ use std::path::PathBuf;
 /// How a picture handed over in memory is named in reports and errors.
 pub const IN_MEMORY: &str = "<array>";
 
-/// Plain values naming a picture: exactly one of `image`, `stimulus` and `pixels`.
+/// Plain values naming a picture: exactly one of `image`, `stimulus`, `spec` and `pixels`.
 #[derive(Debug, Clone, Default)]
 pub struct PictureSource {
-    /// An 8/16-bit PNG (linear values) or a float H×W `.npy`.
+    /// An 8/16-bit PNG (linear values) or a float H×W `.npy`; a shadelab sidecar beside it is
+    /// read (see the module's documentation).
     pub image: Option<PathBuf>,
+    /// A stimulus spec or a shadelab sidecar, rendered in memory as `render` would.
+    pub spec: Option<PathBuf>,
     /// A stimulus to render (see [`crate::stimulus::names`]), analysed with its own targets.
     pub stimulus: Option<String>,
     /// The stimulus's parameters (checked against its declarations when it is rendered).
@@ -47,6 +56,8 @@ pub struct Picture {
     pub labels: Option<(Labels, Vec<String>)>,
     /// Where it came from, for reports.
     pub origin: Value,
+    /// What its maker declares: albedo, ambient level, true light (nothing for a bare image).
+    pub declared: Declared,
 }
 
 impl Picture {
@@ -69,18 +80,94 @@ impl PictureSource {
         let given = [
             self.image.is_some(),
             self.stimulus.is_some(),
+            self.spec.is_some(),
             self.pixels.is_some(),
         ];
-        match given.iter().filter(|g| **g).count() {
-            0 => Err(Error::invalid("give an image file or a stimulus name")),
+        match given.iter().filter(|&&g| g).count() {
+            0 => Err(Error::invalid(
+                "give an image file, a stimulus name or a stimulus spec",
+            )),
             1 if self.mask.is_some() && self.labels.is_some() => Err(Error::invalid(
                 "give target labels as a mask file or in memory, not both",
             )),
             1 => Ok(()),
             _ => Err(Error::invalid(
-                "give an image file or a stimulus name, not both",
+                "give one of an image file, a stimulus name and a stimulus spec, not several",
             )),
         }
+    }
+
+    /// What lies beside the image file ([`Beside::Nothing`] for a stimulus or a spec): its
+    /// shadelab sidecar is an error when malformed.
+    pub fn beside(&self) -> Result<Beside> {
+        match &self.image {
+            Some(path) => RenderSidecar::beside(path),
+            None => Ok(Beside::Nothing),
+        }
+    }
+
+    /// The lines that say what the picture's sidecar gives and what is given instead (none
+    /// without a sidecar), for a log.
+    pub fn notes(&self) -> Result<Vec<String>> {
+        let mut lines = Vec::new();
+        match self.beside()? {
+            Beside::Nothing => {}
+            Beside::Foreign(path) => lines.push(format!(
+                "{} is not a shadelab sidecar (no \"program\": \"shadelab\"): ignored",
+                path.display()
+            )),
+            Beside::Ours(s) => {
+                lines.push(s.summary());
+                if let (Some(given), Some(own)) = (self.ppd, s.ppd.filter(|&p| Some(p) != self.ppd))
+                {
+                    lines.push(format!(
+                        "the given ppd {given} replaces the sidecar's {own}"
+                    ));
+                }
+                let other_mask = s
+                    .target_mask
+                    .as_ref()
+                    .filter(|&m| self.mask.as_ref().is_some_and(|g| !same_file(g, m)));
+                if let (Some(given), Some(own)) = (&self.mask, other_mask) {
+                    lines.push(format!(
+                        "the given mask {} replaces the sidecar's {}",
+                        given.display(),
+                        own.display()
+                    ));
+                }
+            }
+        }
+        Ok(lines)
+    }
+
+    /// Whether the picture's resolution is known without reading its pixels: given, a
+    /// stimulus's or spec's own, or its sidecar's. A sidecar that cannot be read counts as
+    /// giving it: reading the picture reports what is wrong (the image first).
+    pub fn ppd_known(&self) -> bool {
+        if self.ppd.is_some() {
+            return true;
+        }
+        if self.image.is_none() {
+            // A stimulus or spec knows its own; pixels in memory have none.
+            return self.pixels.is_none();
+        }
+        self.beside()
+            .map_or(true, |b| b.sidecar().is_some_and(|s| s.ppd.is_some()))
+    }
+
+    /// Whether the picture has target labels: given, a stimulus's or spec's own, or its
+    /// sidecar's (a sidecar that cannot be read counts as giving them, as in
+    /// [`ppd_known`](Self::ppd_known)).
+    pub fn has_labels(&self) -> bool {
+        if self.mask.is_some() || self.labels.is_some() {
+            return true;
+        }
+        if self.image.is_none() {
+            return self.pixels.is_none();
+        }
+        self.beside().map_or(true, |b| {
+            b.sidecar().is_some_and(|s| s.target_mask.is_some())
+        })
     }
 
     /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
@@ -88,7 +175,7 @@ impl PictureSource {
         Ok(self.load_shaped(colour, None)?.0)
     }
 
-    /// Like [`load`](Self::load), but a stimulus is rendered `shape` = (width, height) pixels
+    /// Like [`load`](Self::load), but a stimulus is rendered `shape` = (height, width) pixels
     /// when given, and its request (resolved parameters and geometry) comes back too (`None`
     /// for an image file).
     pub fn load_shaped(
@@ -100,75 +187,94 @@ impl PictureSource {
         let max_pixels = self.max_pixels;
         let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
-            (None, None) if self.pixels.is_some() => {
-                let pixels = self.in_memory(colour)?;
-                Picture {
-                    pixels,
-                    ppd: self.ppd,
-                    labels: None,
-                    origin: json!({ "image": IN_MEMORY }),
-                }
-            }
             (Some(path), _) => {
-                let pixels = if colour && io::extension(path) == "png" {
+                let mut pixels = if colour && io::extension(path) == "png" {
                     Pixels::Rgb(io::read_rgb(path, max_pixels)?)
                 } else {
                     Pixels::Gray(io::read_luminance(path, max_pixels)?.0)
                 };
-                let (values, channels) = match &pixels {
-                    Pixels::Gray(i) => (i.data(), 1),
-                    Pixels::Rgb(i) => (i.data().as_flattened(), 3),
-                };
-                check_finite(
-                    values,
-                    channels,
-                    pixels.size().0,
-                    &path.display().to_string(),
-                )?;
-                Picture {
+                // The image is read first: a broken image is reported before its sidecar.
+                let beside = RenderSidecar::beside(path)?;
+                let sidecar = beside.sidecar();
+                if let Some(s) = sidecar {
+                    pixels = match pixels {
+                        Pixels::Gray(i) => Pixels::Gray(i.map(|&v| s.linearise(v))),
+                        Pixels::Rgb(i) => Pixels::Rgb(i.map(|p| p.map(|v| s.linearise(v)))),
+                    };
+                }
+                check_pixels_finite(&pixels, &path.display().to_string())?;
+                let mut origin = json!({ "image": path.display().to_string() });
+                let mut picture = Picture {
                     pixels,
                     ppd: self.ppd,
                     labels: None,
-                    origin: json!({ "image": path.display().to_string() }),
+                    origin: Value::Null,
+                    declared: Declared::default(),
+                };
+                if let Some(s) = sidecar {
+                    origin["sidecar"] = s.to_json();
+                    picture.ppd = self.ppd.or(s.ppd);
+                    picture.declared = Declared {
+                        albedo: s.albedo,
+                        ambient: s.ambient,
+                        light: s.light,
+                    };
+                    if let (Some(mask), None) = (&s.target_mask, &self.mask) {
+                        let labels = io::read_labels(mask, max_pixels)
+                            .map_err(|e| Error::invalid(format!("{}: {e}", s.path.display())))?;
+                        check_same_size(&labels, &picture.pixels, mask)?;
+                        picture.labels = Some((labels, s.target_names()));
+                    }
                 }
+                picture.origin = origin;
+                picture
+            }
+            (None, None) if self.pixels.is_some() => Picture {
+                pixels: self.in_memory(colour)?,
+                ppd: self.ppd,
+                labels: None,
+                origin: json!({ "image": IN_MEMORY }),
+                declared: Declared::default(),
+            },
+            (None, None) if self.spec.is_some() => {
+                let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
+                // The output name is not used: the spec is rendered in memory.
+                let config = crate::pipeline::render::RenderConfig::from_spec_file(spec, "")?;
+                let mut size = config.size;
+                if self.ppd.is_some() {
+                    size.ppd = self.ppd;
+                }
+                // Parameters given beside the spec win over its own.
+                let mut params = config.params.clone();
+                params.extend(self.params.clone());
+                let (made, output) =
+                    stimulus::generate(&config.stimulus, &params, &size, config.seed, max_pixels)?;
+                let picture = rendered(&config.stimulus, &made, output, config.seed)?;
+                request = Some(made);
+                picture
             }
             (None, Some(name)) => {
                 let size = SizeRequest {
                     ppd: self.ppd,
-                    shape: shape.map(|(w, h)| (h, w)),
+                    shape,
                     ..Default::default()
                 };
                 let seed = self.seed.unwrap_or(0);
                 let (made, output) =
                     stimulus::generate(name, &self.params, &size, seed, max_pixels)?;
-                let picture = Picture {
-                    pixels: output.pixels,
-                    ppd: Some(made.geometry.ppd),
-                    labels: output.targets.map(|t| (t.labels, t.names)),
-                    origin: json!({
-                        "stimulus": name,
-                        "parameters": made.params.to_json(),
-                        "seed": seed,
-                        "geometry": made.geometry,
-                        "notes": output.notes,
-                    }),
-                };
+                let picture = rendered(name, &made, output, seed)?;
                 request = Some(made);
                 picture
             }
-            (None, None) => return Err(Error::invalid("give an image file or a stimulus name")),
+            (None, None) => {
+                return Err(Error::invalid(
+                    "give an image file, a stimulus name or a stimulus spec",
+                ))
+            }
         };
         if let Some(path) = &self.mask {
             let labels = io::read_labels(path, max_pixels)?;
-            let (w, h) = picture.pixels.size();
-            if (labels.width(), labels.height()) != (w, h) {
-                return Err(Error::invalid(format!(
-                    "mask {} is {}x{} but the image is {w}x{h}",
-                    path.display(),
-                    labels.width(),
-                    labels.height()
-                )));
-            }
+            check_same_size(&labels, &picture.pixels, path)?;
             picture.labels = Some((labels, Vec::new()));
         }
         if let Some(labels) = &self.labels {
@@ -193,16 +299,69 @@ impl PictureSource {
         };
         let (w, h) = pixels.size();
         crate::grid::check_size(w, h, self.max_pixels)?;
-        let (values, channels) = match pixels {
-            Pixels::Gray(i) => (i.data(), 1),
-            Pixels::Rgb(i) => (i.data().as_flattened(), 3),
-        };
-        check_finite(values, channels, w, IN_MEMORY)?;
+        check_pixels_finite(pixels, IN_MEMORY)?;
         Ok(match pixels {
             Pixels::Rgb(_) if !colour => Pixels::Gray(pixels.luminance()),
             _ => pixels.clone(),
         })
     }
+}
+
+/// A rendered stimulus as a picture, with its targets and what it declares.
+fn rendered(
+    name: &str,
+    made: &stimulus::Request,
+    output: stimulus::Output,
+    seed: u64,
+) -> Result<Picture> {
+    let parameters = made.params.to_json();
+    let notes = Value::Object(output.notes.clone());
+    let declared = Declared::from_record(&parameters, &notes)
+        .map_err(|e| Error::invalid(format!("stimulus {name}: {e}")))?;
+    Ok(Picture {
+        pixels: output.pixels,
+        ppd: Some(made.geometry.ppd),
+        labels: output.targets.map(|t| (t.labels, t.names)),
+        origin: json!({
+            "stimulus": name,
+            "parameters": parameters,
+            "seed": seed,
+            "geometry": made.geometry,
+            "notes": notes,
+        }),
+        declared,
+    })
+}
+
+/// Whether two paths name the same file (compared as written when either cannot be resolved).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// Fails unless the label map `labels` (read from `path`) has the picture's size.
+fn check_same_size(labels: &Labels, pixels: &Pixels, path: &std::path::Path) -> Result<()> {
+    let (w, h) = pixels.size();
+    if (labels.width(), labels.height()) != (w, h) {
+        return Err(Error::invalid(format!(
+            "mask {} is {}x{} but the image is {w}x{h}",
+            path.display(),
+            labels.width(),
+            labels.height()
+        )));
+    }
+    Ok(())
+}
+
+/// Fails on the first NaN or infinity of `pixels`, naming its column and row.
+fn check_pixels_finite(pixels: &Pixels, what: &str) -> Result<()> {
+    let (values, channels) = match pixels {
+        Pixels::Gray(i) => (i.data(), 1),
+        Pixels::Rgb(i) => (i.data().as_flattened(), 3),
+    };
+    check_finite(values, channels, pixels.size().0, what)
 }
 
 /// Fails on the first NaN or infinity of a picture `width` pixels wide with `channels` values

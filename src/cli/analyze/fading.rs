@@ -3,6 +3,7 @@
 //! fixational jitter, and an animation in which the blurred disk fades.
 
 use super::{CliError, CliResult, Global, Source};
+use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::lightness::fading::{AdaptationOptions, DogBand};
 use shadelab::pipeline::fading::{self, FadingConfig};
@@ -82,13 +83,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     // The flags an image needs, named as flags (the library's messages name no flag).
     args.source.check()?;
     if args.source.image.is_some() {
-        if args.source.ppd.is_none() {
+        if !args.source.knows_ppd() {
             return Err(CliError::usage(
                 "the fading analysis works in degrees of visual angle: give the image's \
                  resolution with --ppd N (pixels per degree)",
             ));
         }
-        if args.source.mask.is_none() {
+        if !args.source.has_labels() {
             return Err(CliError::usage(
                 "an image needs --mask LABELS.png with label 1 = the blurred disk and 2 = the \
                  sharp disk",
@@ -111,19 +112,18 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let config = FadingConfig::new(args.source.to_library(global)?, band, adaptation)?;
     let report = fading::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&args.out, global.force)?;
-    if !global.quiet {
-        let (energy, last) = (&report.border_energy, &report.final_contrast);
-        eprintln!(
-            "border band-pass energy: blurred {:.3e}, sharp {:.3e}, ratio {:.4}",
-            energy.blurred, energy.sharp, energy.ratio
-        );
-        eprintln!(
-            "perceived contrast after {} s: blurred {:.3}, sharp {:.3}",
-            report.course.times.last().copied().unwrap_or_default(),
-            last.blurred,
-            last.sharp
-        );
-        eprintln!("wrote {}", target.display());
-    }
-    Ok(())
+    let out = Output::new(global);
+    out.note(format!("wrote {}", target.display()));
+    let (energy, last) = (&report.border_energy, &report.final_contrast);
+    let text = format!(
+        "border band-pass energy: blurred {:.3e}, sharp {:.3e}, ratio {:.4}\n\
+         perceived contrast after {} s: blurred {:.3}, sharp {:.3}\n",
+        energy.blurred,
+        energy.sharp,
+        energy.ratio,
+        report.course.times.last().copied().unwrap_or_default(),
+        last.blurred,
+        last.sharp
+    );
+    out.results(&text, &report)
 }

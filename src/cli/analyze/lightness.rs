@@ -3,6 +3,7 @@
 //! each model's verdict.
 
 use super::{CliError, CliResult, Global, Source};
+use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::lightness::{self, LightnessConfig};
 
@@ -24,7 +25,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let models = LightnessConfig::parse_models(&args.model)?;
     // The resolution flag, named as a flag (the library's messages name no flag).
     args.source.check()?;
-    if args.source.image.is_some() && args.source.ppd.is_none() {
+    if !args.source.knows_ppd() {
         if let Some(m) = models.iter().find(|m| m.needs_ppd()) {
             return Err(CliError::usage(format!(
                 "the {m} model works in degrees of visual angle: give the image's resolution \
@@ -35,22 +36,26 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let config = LightnessConfig::new(args.source.to_library(global)?, models)?;
     let report = lightness::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&args.out, global.force)?;
-    if !global.quiet {
-        for t in &report.targets {
-            for m in &t.targets {
-                eprintln!(
-                    "{}: {} (label {}): luminance {:.4}, output {:.4}",
-                    t.model, m.name, m.label, m.luminance, m.output
-                );
-            }
-        }
-        if let Some(c) = &report.checker_shadow {
-            eprintln!(
-                "checker-shadow: A and B pixels identical: {}",
-                c.identical_pixels
+    let out = Output::new(global);
+    out.note(format!(
+        "wrote {} ({:.2} s)",
+        target.display(),
+        report.seconds.total
+    ));
+    let mut text = String::new();
+    for t in &report.targets {
+        for m in &t.targets {
+            text += &format!(
+                "{}: {} (label {}): luminance {:.4}, output {:.4}\n",
+                t.model, m.name, m.label, m.luminance, m.output
             );
         }
-        eprintln!("wrote {} ({:.2} s)", target.display(), report.seconds.total);
     }
-    Ok(())
+    if let Some(c) = &report.checker_shadow {
+        text += &format!(
+            "checker-shadow: A and B pixels identical: {}\n",
+            c.identical_pixels
+        );
+    }
+    out.results(&text, &report)
 }

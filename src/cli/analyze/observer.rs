@@ -2,9 +2,10 @@
 //! picture's rotation, from one fine sweep of the upright picture (the work is
 //! [`shadelab::pipeline::observer`]).
 
-use super::perception::PictureArgs;
+use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::flags::{self, usage};
+use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::analysis::observer::{
     parse_kappas, LightPrior, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA, DEFAULT_PRIOR_TILT_DEG,
@@ -65,27 +66,27 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let report = observer::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;
-    if !global.quiet {
-        for curve in &report.percepts {
-            for (k, (_, name)) in report.sweep.tokens.iter().enumerate().take(12) {
-                let best = curve.percepts.iter().fold(&curve.percepts[0], |b, p| {
-                    if p.p_convex[k] > b.p_convex[k] {
-                        p
-                    } else {
-                        b
-                    }
-                });
-                eprintln!(
-                    "{name} (kappa {}): P(convex) is highest, {:.3}, at rotation {}°",
-                    curve.options.prior.kappa, best.p_convex[k], best.rotation_deg
-                );
-            }
+    let out = Output::new(global);
+    out.note(format!(
+        "wrote {} ({:.2} s)",
+        target.display(),
+        started.elapsed().as_secs_f64()
+    ));
+    let mut text = true_light_line(&report.header);
+    for curve in &report.percepts {
+        for (k, (_, name)) in report.sweep.tokens.iter().enumerate() {
+            let best = curve.percepts.iter().fold(&curve.percepts[0], |b, p| {
+                if p.p_convex[k] > b.p_convex[k] {
+                    p
+                } else {
+                    b
+                }
+            });
+            text += &format!(
+                "{name} (kappa {}): P(convex) is highest, {:.3}, at rotation {}°\n",
+                curve.options.prior.kappa, best.p_convex[k], best.rotation_deg
+            );
         }
-        eprintln!(
-            "wrote {} ({:.2} s)",
-            target.display(),
-            started.elapsed().as_secs_f64()
-        );
     }
-    Ok(())
+    out.results(&text, &report)
 }

@@ -3,8 +3,8 @@
 
 use super::{CliError, Global, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
-use shadelab::pipeline::perception::Config;
-use shadelab::visual_size::parse_pair;
+use shadelab::pipeline::perception::{Config, Header};
+use shadelab::visual_size::parse_size;
 
 /// The picture and how to interpret it.
 #[derive(Debug, clap::Args)]
@@ -25,12 +25,29 @@ pub struct PictureArgs {
     pub solver: SolverFlags,
 }
 
+/// The first line of a perception summary: the assumed slant, albedo and ambient, and the true
+/// light when the stimulus or the image's sidecar gives it.
+pub fn true_light_line(header: &Header) -> String {
+    let p = &header.parameters;
+    let mut line = format!(
+        "assumed: slant {:.1}°, albedo {:.4}, ambient {:.4}",
+        p.slant_deg, p.albedo, p.ambient
+    );
+    if let Some(t) = &header.true_light {
+        line += &format!(
+            "; true light: tilt {:.1}° slant {:.1}°",
+            t.tilt_deg, t.slant_deg
+        );
+    }
+    line + "\n"
+}
+
 impl PictureArgs {
     /// The library's configuration, from the flags (not yet checked as a whole).
     pub fn config(&self, global: &Global) -> Result<Config, CliError> {
         let mut config = Config::new(self.source.to_library(global)?);
         config.size = match &self.size {
-            Some(text) => Some(parse_pair(text, "--size").map_err(CliError::from)?),
+            Some(text) => Some(parse_size(text, "--size").map_err(CliError::from)?),
             None => None,
         };
         config.domain = self.analysis.domain()?;

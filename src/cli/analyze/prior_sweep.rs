@@ -2,9 +2,10 @@
 //! each token's convexity, residual and smoothness, and the tilts where it flips (the work is
 //! [`shadelab::pipeline::prior_sweep`]).
 
-use super::perception::PictureArgs;
+use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::flags::{self, usage};
+use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::io::AtomicDir;
 use shadelab::pipeline::prior_sweep::{
@@ -49,49 +50,49 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let report = prior_sweep::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;
+    let out = Output::new(global);
     if report.unconverged_solves > 0 {
-        eprintln!(
-            "warning: {} of {} solves did not converge within --max-iter {}",
+        out.warn(format!(
+            "{} of {} solves did not converge within --max-iter {}",
             report.unconverged_solves,
             report.tilts_deg.len(),
             report.header.parameters.max_iter
+        ));
+    }
+    out.note(format!(
+        "wrote {} ({:.2} s)",
+        target.display(),
+        started.elapsed().as_secs_f64()
+    ));
+    let mut text = true_light_line(&report.header);
+    for t in &report.tokens {
+        let flips: Vec<String> = t.flips_deg.iter().map(|f| format!("{f:.1}")).collect();
+        text += &format!(
+            "{}: convexity changes sign at assumed tilt {}\n",
+            t.name,
+            if flips.is_empty() {
+                "none".into()
+            } else {
+                flips.join(", ") + "°"
+            }
         );
     }
-    if !global.quiet {
-        for t in report.tokens.iter().take(12) {
-            let flips: Vec<String> = t.flips_deg.iter().map(|f| format!("{f:.1}")).collect();
-            eprintln!(
-                "{}: convexity changes sign at assumed tilt {}",
-                t.name,
-                if flips.is_empty() {
-                    "none".into()
-                } else {
-                    flips.join(", ") + "°"
-                }
-            );
-        }
-        if let Some(b) = &report.binding {
-            let signs = |v: &[f64]| -> String {
-                v.iter()
-                    .map(|&c| match c {
-                        c if c > 0.0 => '+',
-                        c if c < 0.0 => '-',
-                        _ => '0',
-                    })
-                    .collect()
-            };
-            eprintln!(
-                "one light (tilt {:.1}°): {}; a light per token: {}",
-                b.global_light.tilt_deg,
-                signs(&b.global),
-                signs(&b.per_token)
-            );
-        }
-        eprintln!(
-            "wrote {} ({:.2} s)",
-            target.display(),
-            started.elapsed().as_secs_f64()
+    if let Some(b) = &report.binding {
+        let signs = |v: &[f64]| -> String {
+            v.iter()
+                .map(|&c| match c {
+                    c if c > 0.0 => '+',
+                    c if c < 0.0 => '-',
+                    _ => '0',
+                })
+                .collect()
+        };
+        text += &format!(
+            "one light (tilt {:.1}°): {}; a light per token: {}\n",
+            b.global_light.tilt_deg,
+            signs(&b.global),
+            signs(&b.per_token)
         );
     }
-    Ok(())
+    out.results(&text, &report)
 }
