@@ -151,10 +151,11 @@ fn eval_writes_table_report_and_pictures() {
             < 3.0
     );
     assert_eq!(report["parameters"]["solver"]["method"], "multigrid");
-    // One picture: input, recovered normals, true normals, error, shaded depth side by side.
+    // One picture: input, recovered normals, true normals, error and its colour bar (14 px of
+    // bar and 46 of labels), shaded depth side by side, with 4 px gaps.
     let (w, h) = image_size(&res.join("ball-052-occluding.png"));
     assert_eq!(h, 146);
-    assert_eq!(w, 5 * 146 + 4 * 4);
+    assert_eq!(w, 5 * 146 + (14 + 46) + 5 * 4);
 }
 
 fn image_size(path: &std::path::Path) -> (usize, usize) {

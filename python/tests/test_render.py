@@ -17,7 +17,13 @@ def test_stimuli_lists_names_with_descriptions():
 
 def test_describe_gives_defaults_ranges_and_docs():
     d = shadelab.describe("checkerboard")
-    assert set(d["params"]) == {"check", "intensity_first", "intensity_second"}
+    assert set(d["params"]) == {
+        "check",
+        "intensity_first",
+        "intensity_second",
+        "targets",
+        "intensity_target",
+    }
     check = d["params"]["check"]
     assert check["default"] == 1.0 and "deg" in check["doc"] and check["range"]
     assert d["default_visual_size"] == (8.0, 8.0) and d["default_ppd"] == 32.0

@@ -264,7 +264,7 @@ pub fn describe(name: &str) -> Result<Description> {
     Ok(Description {
         name: info.name,
         summary: info.summary,
-        default_visual_size: (info.default_visual_size.1, info.default_visual_size.0),
+        default_visual_size: info.default_visual_size,
         default_ppd: info.default_ppd,
         params: info
             .params

@@ -229,7 +229,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![Typed::boxed(
         "boundary-strips",
         "one shading pattern inside sinusoidal, sawtooth, arched or straight outlines: the outline decides the shape",
-        (11.0, 12.0),
+        (12.0, 11.0),
         32.0,
         |p, g, _| boundary_strips(p, g),
     )]

@@ -324,14 +324,14 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
         Typed::boxed(
             "bumps",
             "discs shaded as bumps and dimples under one light (light-from-above prior)",
-            (14.0, 10.0),
+            (10.0, 14.0),
             32.0,
             bumps,
         ),
         Typed::boxed(
             "sideways",
             "discs lit from the left or right: bump or dimple is ambiguous (bistable)",
-            (14.0, 7.0),
+            (7.0, 14.0),
             32.0,
             sideways,
         ),
@@ -352,7 +352,7 @@ mod tests {
     fn request(s: &dyn Stimulus, pairs: &[&str], ppd: f64) -> Request {
         let info = s.info();
         let given = Params::parse_pairs(pairs).unwrap();
-        let (w, h) = info.default_visual_size;
+        let (h, w) = info.default_visual_size;
         Request {
             params: Params::resolve(&info.params, &given).unwrap(),
             geometry: Geometry {

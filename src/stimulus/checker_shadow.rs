@@ -425,7 +425,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![Typed::boxed(
         "checker-shadow",
         "Adelson's checker-shadow: squares A and B have the same value, B looks much lighter",
-        (9.0, 7.0),
+        (7.0, 9.0),
         40.0,
         |p, g, _| checker_shadow(p, g),
     )]

@@ -301,7 +301,7 @@ impl Circles {
 
 /// The circle arrays.
 pub fn all() -> Vec<Box<dyn Stimulus>> {
-    const SIZE: (f64, f64) = (15.0, 10.0);
+    const SIZE: (f64, f64) = (10.0, 15.0);
     const PPD: f64 = 32.0;
     vec![
         Typed::boxed(

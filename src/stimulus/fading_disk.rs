@@ -158,7 +158,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![Typed::boxed(
         "fading-disk",
         "a blurred blue disk in a green field fades under steady fixation (Troxler)",
-        (10.0, 8.0),
+        (8.0, 10.0),
         32.0,
         |p, g, _| fading_disk(p, g),
     )]

@@ -252,7 +252,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
         "hollow-mask",
         "a face (MediaPipe's canonical face), convex or hollow, or the pair with side profiles: \
          a hollow face lit from above looks convex, lit from below",
-        (7.0, 9.0),
+        (9.0, 7.0),
         40.0,
         |p, g, _| hollow_mask(p, g),
     )]

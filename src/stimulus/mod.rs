@@ -69,8 +69,7 @@ pub struct Info {
     pub summary: &'static str,
     /// Its parameters.
     pub params: Vec<ParamSpec>,
-    /// Default (width, height) in degrees (width first here only; [`prepare`] turns it into
-    /// the (height, width) of a [`SizeRequest`]).
+    /// Default (height, width) in degrees, as a [`SizeRequest`]'s.
     pub default_visual_size: (f64, f64),
     /// Default pixels per degree.
     pub default_ppd: f64,
@@ -420,8 +419,7 @@ pub fn prepare(
     if size.shape.is_none() && !(size.visual_size.is_some() && size.ppd.is_some()) {
         size.shape = stimulus.natural_shape(&params)?.map(|(w, h)| (h, w));
     }
-    let (w, h) = info.default_visual_size;
-    let geometry = size.resolve((h, w), info.default_ppd, max_pixels)?;
+    let geometry = size.resolve(info.default_visual_size, info.default_ppd, max_pixels)?;
     Ok((
         stimulus,
         Request {

@@ -204,7 +204,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![Typed::boxed(
         "strips",
         "parallel strips with opposite luminance gradients: one light for the whole scene",
-        (10.0, 9.0),
+        (9.0, 10.0),
         32.0,
         |p, g, _| strips(p, g),
     )]

@@ -88,7 +88,7 @@ fn a_size_in_pixels_scales_every_stimulus_to_fill_it() {
     let (mut checked, mut skipped) = (0, 0);
     for s in shadelab::pipeline::render::list() {
         let info = stimulus::find(s.name).unwrap().info();
-        let (w_deg, h_deg) = info.default_visual_size;
+        let (h_deg, w_deg) = info.default_visual_size;
         let small_shape = (
             (h_deg * 8.0).round() as usize,
             (w_deg * 8.0).round() as usize,

@@ -259,9 +259,9 @@ fn every_stimulus_writes_a_named_target_mask_beside_its_image() {
         let mut config = RenderConfig::new(s.name, &out);
         // Its default visual size, at a ppd that keeps the picture near 128 pixels.
         let info = stimulus::find(s.name).unwrap().info();
-        let (w, h) = info.default_visual_size;
+        let (h, w) = info.default_visual_size;
         config.size = SizeRequest {
-            visual_size: Some((w, h)),
+            visual_size: Some((h, w)),
             ppd: Some((128.0 / w.max(h)).min(info.default_ppd)),
             shape: None,
         };

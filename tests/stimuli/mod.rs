@@ -28,7 +28,7 @@ const MAX: usize = 1 << 24;
 /// Renders `name` with its defaults at a ppd that keeps the longer side near 128 pixels.
 fn small(name: &str) -> shadelab::Result<(stimulus::Request, Output)> {
     let info = stimulus::find(name)?.info();
-    let (w, h) = info.default_visual_size;
+    let (h, w) = info.default_visual_size;
     let ppd = (128.0 / w.max(h)).min(info.default_ppd);
     let size = SizeRequest {
         visual_size: Some((h, w)),
