@@ -357,3 +357,33 @@ fn a_closed_or_full_stdout_is_no_panic() {
         .unwrap();
     assert_error(&out, 1, "standard output");
 }
+
+#[test]
+fn solve_takes_a_silhouette_as_its_mask_and_solves_regions_whole() {
+    let d = scratch("sidecar-solve-mask");
+    // A rendered surface: its target is the object's silhouette, so the solve stays inside it.
+    ok(&shadelab(&d, &["render", "sphere", "--size", "64x64", "--out", "s.png"]));
+    let (o, e) = ok(&shadelab(&d, &["solve", "s.png", "--light", "0,0,1", "--out", "s"]));
+    assert!(o.ends_with('\n') && o.contains("pixels solved"), "{o}");
+    assert!(!e.contains("whole picture"), "{e}");
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(d.join("s/report.json")).unwrap()).unwrap();
+    let mask = io_mask(&d.join("s_mask.png"));
+    assert_eq!(report["input"]["mask"], "s_mask.png");
+    assert_eq!(report["input"]["mask_pixels"], mask);
+    assert!(mask < 64 * 64);
+    // Bumps: regions of one surface that goes on around them, so the whole picture is solved.
+    ok(&shadelab(&d, &["render", "bumps", "--size", "96x64", "--out", "b.png"]));
+    let (_, e) = ok(&shadelab(&d, &["solve", "b.png", "--light", "0,0,1", "--out", "b"]));
+    assert!(e.contains("the whole picture is solved (give --mask"), "{e}");
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(d.join("b/report.json")).unwrap()).unwrap();
+    assert_eq!(report["input"]["mask"], Value::Null);
+    assert_eq!(report["input"]["mask_pixels"], 96 * 64);
+}
+
+/// The number of nonzero pixels of a mask PNG.
+fn io_mask(path: &Path) -> u64 {
+    let labels = shadelab::io::read_labels(path, 1 << 24).unwrap();
+    labels.data().iter().filter(|&&l| l > 0).count() as u64
+}

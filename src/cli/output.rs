@@ -46,8 +46,10 @@ impl Output {
                 )))
             })?;
             print_stdout(&(json + "\n"))
-        } else {
+        } else if text.is_empty() || text.ends_with('\n') {
             print_stdout(text)
+        } else {
+            print_stdout(&format!("{text}\n"))
         }
     }
 }

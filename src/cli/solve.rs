@@ -58,15 +58,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
     let config = config(&args, global)?;
     // What the image's sidecar gives (the library reads it; this says so).
-    let source = shadelab::pipeline::PictureSource {
-        image: Some(args.image.clone()),
-        mask: args.mask.clone(),
-        ..Default::default()
-    };
     let out = Output::new(global);
-    // A sidecar that cannot be read is reported by the solve (after the image).
-    for line in source.notes().unwrap_or_default() {
-        out.note(line.replace("the given mask", "--mask"));
+    for line in solve::sidecar_notes(&config) {
+        out.note(
+            line.replace("the given mask", "--mask")
+                .replace("give a mask", "give --mask"),
+        );
     }
     // Claim the output folder before the long part, so an unwritable one fails at once.
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;

@@ -56,6 +56,10 @@ pub struct RenderSidecar {
     pub parameters: Value,
     /// The stimulus's notes, as recorded.
     pub notes: Value,
+    /// Whether the target mask is an object's silhouette against its background (an occluding
+    /// outline, as for the rendered surfaces: `notes.target_is_silhouette`), rather than
+    /// regions of a picture whose surface goes on outside them (bumps, discs, a crater).
+    pub silhouette: bool,
 }
 
 /// The light a picture was rendered under, as reports record it beside the assumed one.
@@ -265,6 +269,10 @@ impl RenderSidecar {
             psychopy_range,
             light: declared.light,
             parameters,
+            silhouette: notes
+                .get(crate::stimulus::SILHOUETTE_NOTE)
+                .and_then(Value::as_bool)
+                .unwrap_or(false),
             notes,
         })
     }
@@ -292,6 +300,12 @@ impl RenderSidecar {
             Some(g) => v.max(0.0).powf(g),
             None => v,
         }
+    }
+
+    /// The target mask when it is an object's silhouette ([`silhouette`](Self::silhouette)):
+    /// the mask a solve of the picture takes as the object's.
+    pub fn object_mask(&self) -> Option<&Path> {
+        self.target_mask.as_deref().filter(|_| self.silhouette)
     }
 
     /// One line saying what an analysis takes from the sidecar, e.g. "read crater.json: mask

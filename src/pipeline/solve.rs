@@ -341,7 +341,7 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
     let mask_file = config
         .mask
         .as_deref()
-        .or(sidecar.as_ref().and_then(|s| s.target_mask.as_deref()));
+        .or(sidecar.as_ref().and_then(|s| s.object_mask()));
     let mask = match mask_file {
         Some(path) => read_mask(path, config, &image)?,
         None => Grid::new(w, h, true),
@@ -393,6 +393,30 @@ fn solve_loaded(
         solve_seconds: started.elapsed().as_secs_f64(),
         sidecar,
     })
+}
+
+/// The lines that say what the image's shadelab sidecar gives the solve (none without one),
+/// for a log: what was read, what the config gives instead, and which mask is solved.
+/// A sidecar that cannot be read gives no lines here: [`run`] reports it, after the image.
+pub fn sidecar_notes(config: &SolveConfig) -> Vec<String> {
+    let source = super::PictureSource {
+        image: Some(config.image.clone()),
+        mask: config.mask.clone(),
+        ..Default::default()
+    };
+    let mut lines = source.notes().unwrap_or_default();
+    if let Ok(beside) = source.beside() {
+        if let Some(s) = beside.sidecar() {
+            if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
+                lines.push(
+                    "its targets are regions of a surface, not objects' outlines: the whole \
+                     picture is solved (give a mask to solve inside them)"
+                        .into(),
+                );
+            }
+        }
+    }
+    lines
 }
 
 /// Reads the inputs named by `config`, reconstructs, and reports, keeping everything in
@@ -550,8 +574,12 @@ fn report(
             mask: config
                 .mask
                 .as_ref()
-                .or(solved.sidecar.as_ref().and_then(|s| s.target_mask.as_ref()))
-                .map(|p| p.display().to_string()),
+                .map(|p| p.display().to_string())
+                .or(solved
+                    .sidecar
+                    .as_ref()
+                    .and_then(|s| s.object_mask())
+                    .map(|p| p.display().to_string())),
             mask_pixels: solved.mask.count(),
             sidecar: solved.sidecar.as_ref().map(RenderSidecar::to_json),
         },

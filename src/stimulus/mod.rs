@@ -75,6 +75,11 @@ pub struct Info {
     pub default_ppd: f64,
 }
 
+/// The sidecar note (`notes.target_is_silhouette: true`) that says a stimulus's target mask is
+/// an object's silhouette, its occluding outline against the background (the rendered
+/// surfaces), not regions of a surface that goes on outside them (bumps, discs, a crater).
+pub const SILHOUETTE_NOTE: &str = "target_is_silhouette";
+
 /// A fully resolved request to render a stimulus.
 #[derive(Debug, Clone)]
 pub struct Request {

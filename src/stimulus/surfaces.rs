@@ -85,12 +85,11 @@ fn render_surface(
         labels: surface.mask.map(|&m| u16::from(m)),
         names: vec!["object".into()],
     };
-    Ok(Output::rendered(
-        surface,
-        rendering,
-        targets,
-        Default::default(),
-    ))
+    // The target is the object's silhouette against the backdrop: an occluding outline, so a
+    // solve of the render takes it as the object's mask (see `io::RenderSidecar::silhouette`).
+    let mut notes = serde_json::Map::new();
+    notes.insert(super::SILHOUETTE_NOTE.into(), true.into());
+    Ok(Output::rendered(surface, rendering, targets, notes))
 }
 
 /// The frame's shorter side in pixels: the unit of the benchmark surfaces' lengths.
