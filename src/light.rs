@@ -87,7 +87,8 @@ impl Light {
         if self.dir.x.hypot(self.dir.y) < 1e-12 {
             return 0.0;
         }
-        let t = (-self.dir.x).atan2(self.dir.y).to_degrees();
+        // `+ 0.0` turns the −0 of a light straight above (x = −0) into 0.
+        let t = (-self.dir.x).atan2(self.dir.y).to_degrees() + 0.0;
         if t <= -180.0 {
             t + 360.0
         } else {
@@ -232,6 +233,10 @@ mod tests {
         assert!(right.direction().x > 0.0);
         assert!((right.tilt_deg() + 90.0).abs() < 1e-9);
         assert!((right.slant_deg() - 30.0).abs() < 1e-9);
+        // A light straight above with x = −0 reads tilt 0, never "-0" in a report.
+        let above = Light::from_vector(-0.0, 0.7, 0.7).unwrap();
+        assert!(above.tilt_deg().is_sign_positive());
+        assert_eq!(format!("{:.1}", above.tilt_deg()), "0.0");
     }
 
     #[test]

@@ -25,6 +25,8 @@ use crate::io::{self, BitDepth};
 #[cfg(feature = "plots")]
 use plotters::prelude::*;
 #[cfg(feature = "plots")]
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+#[cfg(feature = "plots")]
 use plotters::style::{register_font, FontStyle};
 use std::path::Path;
 #[cfg(feature = "plots")]
@@ -117,6 +119,8 @@ pub struct LinePlot {
     pub y_ticks: Ticks,
     /// A horizontal reference line (e.g. convexity 0 or P = ½).
     pub reference_y: Option<f64>,
+    /// What the reference line is, written above its right end (empty: nothing written).
+    pub reference_label: String,
     /// Vertical markers.
     pub markers: Vec<Marker>,
     /// The curves.
@@ -137,6 +141,7 @@ impl LinePlot {
             x_ticks: Ticks::Auto,
             y_ticks: Ticks::Auto,
             reference_y: None,
+            reference_label: String::new(),
             markers: Vec::new(),
             series: Vec::new(),
             size: (900, 540),
@@ -302,6 +307,19 @@ impl LinePlot {
                     RGBColor(120, 120, 120).stroke_width(1),
                 ))
                 .map_err(|e| fail(&e))?;
+            if !self.reference_label.is_empty() {
+                let style = (FAMILY, 14)
+                    .into_font()
+                    .color(&RGBColor(90, 90, 90))
+                    .pos(Pos::new(HPos::Right, VPos::Bottom));
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        self.reference_label.clone(),
+                        (x1 - 0.01 * (x1 - x0), y + 0.01 * (y1 - y0)),
+                        style,
+                    )))
+                    .map_err(|e| fail(&e))?;
+            }
         }
         for m in &self.markers {
             let style = RGBColor(150, 150, 150).stroke_width(1);

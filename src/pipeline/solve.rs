@@ -703,6 +703,7 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
         );
         plot.x_ticks = Ticks::Integer;
         plot.reference_y = Some(tol.log10());
+        plot.reference_label = format!("tolerance {tol:e}");
         plot.series.push(Series {
             name: method.to_string(),
             points: history
