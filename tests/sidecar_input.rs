@@ -362,8 +362,14 @@ fn a_closed_or_full_stdout_is_no_panic() {
 fn solve_takes_a_silhouette_as_its_mask_and_solves_regions_whole() {
     let d = scratch("sidecar-solve-mask");
     // A rendered surface: its target is the object's silhouette, so the solve stays inside it.
-    ok(&shadelab(&d, &["render", "sphere", "--size", "64x64", "--out", "s.png"]));
-    let (o, e) = ok(&shadelab(&d, &["solve", "s.png", "--light", "0,0,1", "--out", "s"]));
+    ok(&shadelab(
+        &d,
+        &["render", "sphere", "--size", "64x64", "--out", "s.png"],
+    ));
+    let (o, e) = ok(&shadelab(
+        &d,
+        &["solve", "s.png", "--light", "0,0,1", "--out", "s"],
+    ));
     assert!(o.ends_with('\n') && o.contains("pixels solved"), "{o}");
     assert!(!e.contains("whole picture"), "{e}");
     let report: Value =
@@ -373,9 +379,18 @@ fn solve_takes_a_silhouette_as_its_mask_and_solves_regions_whole() {
     assert_eq!(report["input"]["mask_pixels"], mask);
     assert!(mask < 64 * 64);
     // Bumps: regions of one surface that goes on around them, so the whole picture is solved.
-    ok(&shadelab(&d, &["render", "bumps", "--size", "96x64", "--out", "b.png"]));
-    let (_, e) = ok(&shadelab(&d, &["solve", "b.png", "--light", "0,0,1", "--out", "b"]));
-    assert!(e.contains("the whole picture is solved (give --mask"), "{e}");
+    ok(&shadelab(
+        &d,
+        &["render", "bumps", "--size", "96x64", "--out", "b.png"],
+    ));
+    let (_, e) = ok(&shadelab(
+        &d,
+        &["solve", "b.png", "--light", "0,0,1", "--out", "b"],
+    ));
+    assert!(
+        e.contains("the whole picture is solved (give --mask"),
+        "{e}"
+    );
     let report: Value =
         serde_json::from_slice(&std::fs::read(d.join("b/report.json")).unwrap()).unwrap();
     assert_eq!(report["input"]["mask"], Value::Null);
