@@ -350,8 +350,9 @@ impl Reference {
     /// Runs the reference's red-black SOR on `shape` at `size`² under `light`.
     fn run(&self, shape: &str, size: usize, light: &Light) -> Result<Timing> {
         let d = light.direction();
-        // The reference's y axis points down.
-        let light_arg = format!("{},{},{}", d.x, -d.y, d.z);
+        // The reference's y axis points down; `--light=x,y,z` in one word, so that argparse
+        // takes a vector that starts with a minus sign as the value, not as a flag.
+        let light_arg = format!("--light={},{},{}", d.x, -d.y, d.z);
         let out = Command::new("python3")
             .arg(&self.script)
             .args([
@@ -359,7 +360,6 @@ impl Reference {
                 &size.to_string(),
                 "--method",
                 "sor",
-                "--light",
                 &light_arg,
             ])
             .output()
