@@ -355,13 +355,7 @@ impl Reference {
         let light_arg = format!("--light={},{},{}", d.x, -d.y, d.z);
         let out = Command::new("python3")
             .arg(&self.script)
-            .args([
-                shape,
-                &size.to_string(),
-                "--method",
-                "sor",
-                &light_arg,
-            ])
+            .args([shape, &size.to_string(), "--method", "sor", &light_arg])
             .output()
             .map_err(|e| Error::Compute(format!("cannot run python3: {e}")))?;
         let text = String::from_utf8_lossy(&out.stdout);
