@@ -134,13 +134,14 @@ done
 [ "$state" = idle ] || fail "the node did not come up (state '$state')"
 
 # The study: two stimuli with varied parameters, two slants, two priors, three rotations.
+# Shapes are (height, width), as in every spec.
 cat >"$work/spec.json" <<'EOF'
 {
   "stimuli": [
     {"stimulus": "bumps", "params": {"rows": 1, "columns": 2, "pattern": ["alternate", "bumps"],
-     "radius": 1, "spacing": 3}, "shape": [96, 48], "ppd": 16},
+     "radius": 1, "spacing": 3}, "shape": [48, 96], "ppd": 16},
     {"stimulus": "sideways", "params": {"rows": 2, "columns": 1, "side": ["left", "right"]},
-     "shape": [48, 96], "ppd": 16},
+     "shape": [96, 48], "ppd": 16},
     {"stimulus": "crater", "params": {"rotation": ["0", "180"]}, "shape": [64, 64], "ppd": 10}
   ],
   "tilts": "0:360:20",
