@@ -233,7 +233,7 @@ def render(
         target_mask=target_mask
         if target_mask is not None
         else np.zeros((height, width), dtype=np.uint16),
-        target_names=list(names),
+        target_names=names.split("\n") if names else [],
         visual_size=(height / resolution, width / resolution),
         ppd=resolution,
         shape=(height, width),

@@ -22,7 +22,7 @@ def render(
     str,
     npt.NDArray[np.float64],
     Optional[npt.NDArray[np.uint16]],
-    List[str],
+    str,
     Dict[str, npt.NDArray[np.float64]],
 ]: ...
 def solve(

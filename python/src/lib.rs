@@ -164,7 +164,7 @@ fn describe(name: &str) -> PyResult<String> {
     json_text(&description)
 }
 
-/// Renders a stimulus: (report JSON, img, target_mask or None, target names, layers dict).
+/// Renders a stimulus: (report JSON, img, target_mask or None, target names one a line, layers dict).
 #[pyfunction]
 #[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers))]
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
@@ -181,7 +181,7 @@ fn render<'py>(
     String,
     Bound<'py, PyAny>,
     Option<Bound<'py, PyArray2<u16>>>,
-    Vec<String>,
+    String,
     Bound<'py, PyDict>,
 )> {
     let mut config = pl::render::RenderConfig::new(name, pl::source::IN_MEMORY);
@@ -195,9 +195,11 @@ fn render<'py>(
         Pixels::Gray(i) => image_array(py, i).into_any(),
         Pixels::Rgb(i) => rgb_array(py, i).into_any(),
     };
+    // The names as one text, a name a line (split by the Python layer): one string to hand
+    // over instead of one per target (a 32 × 32 checkerboard has 1024).
     let (mask, names) = match output.targets {
-        Some(t) => (Some(image_array(py, t.labels)), t.names),
-        None => (None, Vec::new()),
+        Some(t) => (Some(image_array(py, t.labels)), t.names.join("\n")),
+        None => (None, String::new()),
     };
     let extra = PyDict::new(py);
     if layers {
