@@ -15,6 +15,27 @@ pub fn threads() -> usize {
     }
 }
 
+/// The most worker threads worth starting: four per core of this machine, and at least 4.
+/// More only spend time starting threads; outputs are the same bytes for any count.
+pub fn thread_cap() -> usize {
+    std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .saturating_mul(4)
+        .max(4)
+}
+
+/// `asked` worker threads limited to [`thread_cap`]: the count to use, and whether it was cut.
+///
+/// ```
+/// use shadelab::parallel::{capped_threads, thread_cap};
+/// assert_eq!(capped_threads(2), (2, false));
+/// assert_eq!(capped_threads(usize::MAX), (thread_cap(), true));
+/// ```
+pub fn capped_threads(asked: usize) -> (usize, bool) {
+    let cap = thread_cap();
+    (asked.min(cap), asked > cap)
+}
+
 /// What parallel loops import: rayon's prelude with the `parallel` feature; without it,
 /// stand-ins that give slices the same `par_*` methods as plain sequential iterators.
 pub mod prelude {

@@ -461,3 +461,21 @@ fn negative_values_are_values_not_flags() {
     );
     assert_error(&out, 2, "--shard '-1/2'");
 }
+
+#[test]
+fn a_huge_thread_count_is_capped_with_a_warning() {
+    let d = scratch("threads-cap");
+    let out = shadelab(&d, &["--threads", "100000", "describe", "disc"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let cap = shadelab::parallel::thread_cap();
+    assert!(
+        err.contains(&format!("--threads 100000 is more than {cap}")),
+        "{err}"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("disc"));
+    // A count within the cap says nothing.
+    let out = shadelab(&d, &["--threads", "2", "describe", "disc"]);
+    assert!(out.status.success() && out.stderr.is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -201,6 +201,13 @@ fn configure_threads(global: &Global) -> CliResult {
         if n == 0 {
             return Err(CliError::usage("--threads must be at least 1"));
         }
+        let (n, capped) = shadelab::parallel::capped_threads(n);
+        if capped {
+            output::Output::new(global).warn(format!(
+                "--threads {} is more than {n} (4 per core of this machine): using {n}",
+                global.threads.unwrap_or(n)
+            ));
+        }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()

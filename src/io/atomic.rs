@@ -44,16 +44,36 @@ pub fn remove_pending() -> usize {
     paths.len()
 }
 
+/// The longest file name part kept as written in a temporary's name; a longer name is cut and
+/// followed by a hash of the whole, so that any legal final name (up to 255 bytes) has a
+/// temporary name that is legal too.
+const TEMP_STEM_BYTES: usize = 100;
+
+/// A hidden temporary beside `target`: `.NAME.tmp-PID-N`, with NAME cut to
+/// [`TEMP_STEM_BYTES`] (at a character boundary) plus 12 hex digits of the whole name's MD5
+/// when longer.
 fn temp_name(target: &Path) -> Result<PathBuf> {
     let name = target
         .file_name()
-        .ok_or_else(|| Error::invalid(format!("{}: not a file name", target.display())))?;
+        .ok_or_else(|| Error::invalid(format!("{}: not a file name", target.display())))?
+        .to_string_lossy();
+    let stem = if name.len() <= TEMP_STEM_BYTES {
+        name.to_string()
+    } else {
+        let mut cut = TEMP_STEM_BYTES;
+        while !name.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        use md5::{Digest, Md5};
+        let hash: String = Md5::digest(name.as_bytes())
+            .iter()
+            .take(6)
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        format!("{}~{hash}", &name[..cut])
+    };
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    Ok(target.with_file_name(format!(
-        ".{}.tmp-{}-{n}",
-        name.to_string_lossy(),
-        std::process::id()
-    )))
+    Ok(target.with_file_name(format!(".{stem}.tmp-{}-{n}", std::process::id())))
 }
 
 fn parent_of(target: &Path) -> &Path {
@@ -269,6 +289,41 @@ mod tests {
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    #[test]
+    fn any_legal_final_name_has_a_legal_temporary_name() {
+        let d = scratch("long-names");
+        // 255 bytes is the usual limit of one name; the temporary's prefix and suffix must
+        // not push it over (names of 240–248 bytes failed before).
+        for len in [1, 100, 101, 240, 248, 251] {
+            let name = format!("{}.png", "a".repeat(len));
+            let target = d.join(&name);
+            write_text(&target, "x").unwrap();
+            assert_eq!(fs::read_to_string(&target).unwrap(), "x", "{len}");
+            let temp = temp_name(&target).unwrap();
+            let temp_len = temp.file_name().unwrap().len();
+            assert!(temp_len <= 140, "{len}: {temp_len}");
+        }
+        // Two long names that share their first 100 bytes get different temporaries.
+        let (a, b) = (
+            d.join(format!("{}a.png", "x".repeat(150))),
+            d.join(format!("{}b.png", "x".repeat(150))),
+        );
+        let stem = |p: &Path| {
+            let n = temp_name(p)
+                .unwrap()
+                .file_name()
+                .unwrap()
+                .to_string_lossy()
+                .into_owned();
+            n[..n.find(".tmp-").unwrap()].to_string()
+        };
+        assert_ne!(stem(&a), stem(&b));
+        // A multi-byte name is cut at a character boundary.
+        let wide = d.join("é".repeat(120));
+        assert!(temp_name(&wide).is_ok());
+        let _ = fs::remove_dir_all(&d);
     }
 
     #[test]
