@@ -15,7 +15,7 @@ use super::frame::Frame;
 use super::svg::{document, gray, num};
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
-use crate::grid::Grid;
+use crate::grid::{Grid, Image, Labels};
 use crate::parallel::prelude::*;
 use crate::params::{stimulus_params, ParamSet};
 use crate::visual_size::Geometry;
@@ -51,6 +51,34 @@ stimulus_params! {
         /// luminance around it
         intensity_background: f64 = 0.0, range 0.0..=1.0;
     }
+}
+
+/// A picture of `frame`'s size and its label map, every value `background` and every label 0
+/// until `paint(row, values, labels)` fills row `row` (rows in parallel, the same bytes for any
+/// thread count).
+fn paint_rows(
+    frame: &Frame,
+    background: f64,
+    paint: impl Fn(usize, &mut [f64], &mut [u16]) + Send + Sync,
+) -> Result<(Image, Labels)> {
+    let mut data = vec![background; frame.w * frame.h];
+    let mut labels = vec![0u16; frame.w * frame.h];
+    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
+        .zip(labels.par_chunks_mut(frame.w * ROWS_PER_TASK))
+        .enumerate()
+        .for_each(|(task, (chunk, lab))| {
+            for (k, (row, lrow)) in chunk
+                .chunks_mut(frame.w)
+                .zip(lab.chunks_mut(frame.w))
+                .enumerate()
+            {
+                paint(task * ROWS_PER_TASK + k, row, lrow);
+            }
+        });
+    Ok((
+        Grid::from_vec(frame.w, frame.h, data)?,
+        Grid::from_vec(frame.w, frame.h, labels)?,
+    ))
 }
 
 /// The checks `text` names as `row,col` pairs separated by `;` (stimupy's `target_indices`),
@@ -156,32 +184,19 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     let targets_drawn = !chosen.is_empty();
     let target_value = p.intensity_target;
     let cols: Vec<usize> = (0..frame.w).map(index).collect();
-    let mut data = vec![0.0; frame.w * frame.h];
-    let mut label_data = vec![0u16; frame.w * frame.h];
-    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-        .zip(label_data.par_chunks_mut(frame.w * ROWS_PER_TASK))
-        .enumerate()
-        .for_each(|(task, (chunk, lab))| {
-            for (k, (row, lrow)) in chunk
-                .chunks_mut(frame.w)
-                .zip(lab.chunks_mut(frame.w))
-                .enumerate()
-            {
-                let r = index(task * ROWS_PER_TASK + k);
-                for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
-                    *l = check_labels[r * nx + c];
-                    *v = if targets_drawn && *l != 0 {
-                        target_value
-                    } else if (r + c) % 2 == 0 {
-                        first
-                    } else {
-                        second
-                    };
-                }
-            }
-        });
-    let image = Grid::from_vec(frame.w, frame.h, data)?;
-    let labels = Grid::from_vec(frame.w, frame.h, label_data)?;
+    let (image, labels) = paint_rows(&frame, 0.0, |y, row, lrow| {
+        let r = index(y);
+        for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
+            *l = check_labels[r * nx + c];
+            *v = if targets_drawn && *l != 0 {
+                target_value
+            } else if (r + c) % 2 == 0 {
+                first
+            } else {
+                second
+            };
+        }
+    })?;
     let mut notes = Map::new();
     notes.insert("checks".into(), json!([nx, ny]));
     let svg = if nx * ny > MAX_SVG_CHECKS {
@@ -305,26 +320,15 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
         .map(|y| y * y)
         .collect();
     let radius = p.radius;
-    let mut data = vec![outside; frame.w * frame.h];
-    let mut labels = vec![0u16; frame.w * frame.h];
-    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-        .zip(labels.par_chunks_mut(frame.w * ROWS_PER_TASK))
-        .enumerate()
-        .for_each(|(task, (chunk, lab))| {
-            for (k, (row, lrow)) in chunk
-                .chunks_mut(frame.w)
-                .zip(lab.chunks_mut(frame.w))
-                .enumerate()
-            {
-                let y2 = ys2[task * ROWS_PER_TASK + k];
-                for ((v, l), x2) in row.iter_mut().zip(lrow.iter_mut()).zip(&xs2) {
-                    if round8((x2 + y2).sqrt()) <= radius {
-                        *v = inside;
-                        *l = 1;
-                    }
-                }
+    let (image, labels) = paint_rows(&frame, outside, |y, row, lrow| {
+        let y2 = ys2[y];
+        for ((v, l), x2) in row.iter_mut().zip(lrow.iter_mut()).zip(&xs2) {
+            if round8((x2 + y2).sqrt()) <= radius {
+                *v = inside;
+                *l = 1;
             }
-        });
+        }
+    })?;
     // The SVG's edge passes where the raster's rule puts it: stimupy's axes are stretched by
     // (n − 1)/n against pixel units, so the circle is an ellipse when width ≠ height.
     let (cx, cy) = frame.svg_xy(0.0, 0.0);
@@ -354,9 +358,9 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
         json!("stimupy's: pixel centres at linspace(-size/2, size/2, n) degrees on each axis; inside when round(distance, 8) <= radius"),
     );
     Ok(Output {
-        pixels: Pixels::Gray(Grid::from_vec(frame.w, frame.h, data)?),
+        pixels: Pixels::Gray(image),
         targets: Some(Targets {
-            labels: Grid::from_vec(frame.w, frame.h, labels)?,
+            labels,
             names: vec!["disc".into()],
         }),
         surface: None,
