@@ -32,6 +32,11 @@ impl Output {
         }
     }
 
+    /// The chatter line that ends a command which wrote `target`: "wrote TARGET (S s)".
+    pub fn wrote(&self, target: &std::path::Path, seconds: f64) {
+        self.note(format!("wrote {} ({seconds:.2} s)", target.display()));
+    }
+
     /// A warning: stderr, even when quiet.
     pub fn warn(&self, line: impl std::fmt::Display) {
         stderr_line(&format!("warning: {line}"));

@@ -84,11 +84,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             solver.method, report.parameters.max_iter, solver.last_update, config.options.tol
         ));
     }
-    out.note(format!(
-        "wrote {} ({:.2} s)",
-        target.display(),
-        started.elapsed().as_secs_f64()
-    ));
+    out.wrote(&target, started.elapsed().as_secs_f64());
     let state = if solver.converged {
         "converged"
     } else {

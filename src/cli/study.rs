@@ -66,11 +66,7 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
     report.write_into(folder.path())?;
     let target = folder.commit()?;
     let out = Output::new(global);
-    out.note(format!(
-        "wrote {} ({:.2} s)",
-        target.display(),
-        started.elapsed().as_secs_f64()
-    ));
+    out.wrote(&target, started.elapsed().as_secs_f64());
     let text = format!(
         "{} of {} grid points (shard {}/{})\n",
         report.points.len(),

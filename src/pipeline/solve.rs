@@ -404,16 +404,17 @@ pub fn sidecar_notes(config: &SolveConfig) -> Vec<String> {
         mask: config.mask.clone(),
         ..Default::default()
     };
-    let mut lines = source.notes().unwrap_or_default();
-    if let Ok(beside) = source.beside() {
-        if let Some(s) = beside.sidecar() {
-            if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
-                lines.push(
-                    "its targets are regions of a surface, not objects' outlines: the whole \
-                     picture is solved (give a mask to solve inside them)"
-                        .into(),
-                );
-            }
+    let Ok(beside) = source.beside() else {
+        return Vec::new();
+    };
+    let mut lines = source.notes_on(&beside);
+    if let Some(s) = beside.sidecar() {
+        if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
+            lines.push(
+                "its targets are regions of a surface, not objects' outlines: the whole \
+                 picture is solved (give a mask to solve inside them)"
+                    .into(),
+            );
         }
     }
     lines

@@ -109,8 +109,13 @@ impl PictureSource {
     /// The lines that say what the picture's sidecar gives and what is given instead (none
     /// without a sidecar), for a log.
     pub fn notes(&self) -> Result<Vec<String>> {
+        Ok(self.notes_on(&self.beside()?))
+    }
+
+    /// [`notes`](Self::notes) on a sidecar already read by [`beside`](Self::beside).
+    pub fn notes_on(&self, beside: &Beside) -> Vec<String> {
         let mut lines = Vec::new();
-        match self.beside()? {
+        match beside {
             Beside::Nothing => {}
             Beside::Foreign(path) => lines.push(format!(
                 "{} is not a shadelab sidecar (no \"program\": \"shadelab\"): ignored",
@@ -137,7 +142,7 @@ impl PictureSource {
                 }
             }
         }
-        Ok(lines)
+        lines
     }
 
     /// Whether the picture's resolution is known without reading its pixels: given, a

@@ -37,11 +37,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let report = lightness::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&args.out, global.force)?;
     let out = Output::new(global);
-    out.note(format!(
-        "wrote {} ({:.2} s)",
-        target.display(),
-        report.seconds.total
-    ));
+    out.wrote(&target, report.seconds.total);
     let mut text = String::new();
     for t in &report.targets {
         for m in &t.targets {

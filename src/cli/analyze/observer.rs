@@ -67,11 +67,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     report.write(folder.path())?;
     let target = folder.commit()?;
     let out = Output::new(global);
-    out.note(format!(
-        "wrote {} ({:.2} s)",
-        target.display(),
-        started.elapsed().as_secs_f64()
-    ));
+    out.wrote(&target, started.elapsed().as_secs_f64());
     let mut text = true_light_line(&report.header);
     for curve in &report.percepts {
         for (k, (_, name)) in report.sweep.tokens.iter().enumerate() {

@@ -59,11 +59,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             report.header.parameters.max_iter
         ));
     }
-    out.note(format!(
-        "wrote {} ({:.2} s)",
-        target.display(),
-        started.elapsed().as_secs_f64()
-    ));
+    out.wrote(&target, started.elapsed().as_secs_f64());
     let mut text = true_light_line(&report.header);
     for t in &report.tokens {
         let flips: Vec<String> = t.flips_deg.iter().map(|f| format!("{f:.1}")).collect();
