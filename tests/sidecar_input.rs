@@ -36,40 +36,24 @@ fn token_names(report: &Value) -> Vec<String> {
 fn prior_sweep_of_a_render_matches_the_stimulus_itself() {
     let d = scratch("sidecar-sweep");
     ok(&shadelab(&d, &["render", "crater", "--out", "crater.png"]));
-    let tilts = "0:360:45";
-    let from_file = shadelab(
-        &d,
-        &[
-            "analyze",
-            "prior-sweep",
-            "crater.png",
-            "--tilts",
-            tilts,
-            "--json",
-            "--out",
-            "a",
-        ],
-    );
+    // The same sweep of one picture, named as `picture`, into the folder `out`.
+    let sweep = |picture: &[&str], out: &str| {
+        let args = [
+            &["analyze", "prior-sweep"][..],
+            picture,
+            &["--tilts", "0:360:45", "--json", "--out", out],
+        ]
+        .concat();
+        shadelab(&d, &args)
+    };
+    let from_file = sweep(&["crater.png"], "a");
     let err = String::from_utf8_lossy(&from_file.stderr).into_owned();
     assert!(
         err.contains("read crater.json: mask crater_mask.png, 2 targets (crater, mound), ppd 40, albedo 0.566, ambient 0.1, light tilt 0 slant 45"),
         "{err}"
     );
     let a = json(&from_file);
-    let b = json(&shadelab(
-        &d,
-        &[
-            "analyze",
-            "prior-sweep",
-            "--stimulus",
-            "crater",
-            "--tilts",
-            tilts,
-            "--json",
-            "--out",
-            "b",
-        ],
-    ));
+    let b = json(&sweep(&["--stimulus", "crater"], "b"));
     assert_eq!(token_names(&a), ["crater", "mound"]);
     assert_eq!(token_names(&a), token_names(&b));
     let (pa, pb) = (&a["parameters"], &b["parameters"]);
@@ -107,20 +91,7 @@ fn prior_sweep_of_a_render_matches_the_stimulus_itself() {
     let csv = std::fs::read_to_string(d.join("a/sweep.csv")).unwrap();
     assert!(csv.contains("crater") && csv.contains("mound"), "{csv}");
     // --spec SIDECAR renders it in memory: the stimulus's own numbers.
-    let c = json(&shadelab(
-        &d,
-        &[
-            "analyze",
-            "prior-sweep",
-            "--spec",
-            "crater.json",
-            "--tilts",
-            tilts,
-            "--json",
-            "--out",
-            "c",
-        ],
-    ));
+    let c = json(&sweep(&["--spec", "crater.json"], "c"));
     assert_eq!(c["tokens"], b["tokens"]);
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -236,22 +207,27 @@ fn a_recorded_gamma_is_undone() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-#[test]
-fn foreign_and_malformed_sidecars() {
-    let d = scratch("sidecar-bad");
+/// Renders a small crater as `c.png` (and its sidecar) in `d`; returns the arguments of a
+/// prior sweep of it, all but the output folder.
+fn small_crater(d: &Path) -> [&'static str; 6] {
     ok(&shadelab(
-        &d,
+        d,
         &["render", "crater", "--size", "64", "--out", "c.png"],
     ));
-    let args = [
+    [
         "analyze",
         "prior-sweep",
         "c.png",
         "--tilts",
         "0,180",
         "--out",
-        "o",
-    ];
+    ]
+}
+
+#[test]
+fn foreign_and_malformed_sidecars() {
+    let d = scratch("sidecar-bad");
+    let args = [&small_crater(&d)[..], &["o"]].concat();
     // Another program's JSON: ignored, with a note.
     std::fs::write(d.join("c.json"), r#"{"program": "elsewhere"}"#).unwrap();
     let (out, err) = ok(&shadelab(&d, &args));
@@ -275,18 +251,7 @@ fn foreign_and_malformed_sidecars() {
 #[test]
 fn results_on_stdout_chatter_on_stderr() {
     let d = scratch("stdout");
-    ok(&shadelab(
-        &d,
-        &["render", "crater", "--size", "64", "--out", "c.png"],
-    ));
-    let args = [
-        "analyze",
-        "prior-sweep",
-        "c.png",
-        "--tilts",
-        "0,180",
-        "--out",
-    ];
+    let args = small_crater(&d);
     let (out, err) = ok(&shadelab(&d, &[&args[..], &["a"]].concat()));
     assert!(out.contains("crater: convexity changes sign"), "{out}");
     assert!(err.contains("wrote ") && !out.contains("wrote "), "{err}");
