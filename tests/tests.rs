@@ -2,6 +2,7 @@
 
 mod analysis;
 mod browser;
+mod chromium;
 mod cli;
 mod determinism;
 mod docs;
