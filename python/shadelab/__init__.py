@@ -46,6 +46,20 @@ __version__: str = _shadelab.__version__
 _RENDER_KEYS = ("img", "target_mask", "target_names", "visual_size", "ppd", "shape")
 
 
+# The last target-name text and its names. Renders in a loop (an experiment's trials, a
+# parameter sweep) usually repeat their targets, and a checkerboard has one per check: the
+# names are then made once and each call's list shares them instead of splitting again.
+_last_names: Tuple[str, Tuple[str, ...]] = ("", ())
+
+
+def _target_names(text: str) -> List[str]:
+    """The names of the "\\n"-joined ``text`` the compiled module hands over, as a new list."""
+    global _last_names
+    if text != _last_names[0]:
+        _last_names = (text, tuple(text.split("\n")) if text else ())
+    return list(_last_names[1])
+
+
 def _pair(value: Any, what: str, kind: type) -> Optional[Tuple[Any, Any]]:
     """A (height, width) pair from a pair or a single number (square), as stimupy takes them."""
     if value is None:
@@ -233,7 +247,7 @@ def render(
         target_mask=target_mask
         if target_mask is not None
         else np.zeros((height, width), dtype=np.uint16),
-        target_names=names.split("\n") if names else [],
+        target_names=_target_names(names),
         visual_size=(height / resolution, width / resolution),
         ppd=resolution,
         shape=(height, width),

@@ -127,6 +127,19 @@ def test_targets_of_checker_shadow():
     assert np.all(a == a[0]) and np.all(b == a[0])  # the illusion: A and B are identical
 
 
+def test_target_names_are_each_calls_own_list():
+    # Repeated renders share the name strings, never the list: changing one result's list
+    # leaves the next result's alone, and other targets get their own names.
+    a = shadelab.render("checkerboard", shape=(16, 32), ppd=8)
+    assert a["target_names"][:3] == ["r0c0", "r0c1", "r0c2"]
+    assert len(a["target_names"]) == int(a["target_mask"].max()) == 8
+    a["target_names"].append("mine")
+    b = shadelab.render("checkerboard", shape=(16, 32), ppd=8)
+    assert b["target_names"] == a["target_names"][:-1] and b["target_names"] is not a["target_names"]
+    assert shadelab.render("checker-shadow", ppd=16)["target_names"] == ["A", "B"]
+    assert shadelab.render("checkerboard", shape=(16, 32), ppd=8)["target_names"] == b["target_names"]
+
+
 def test_same_numbers_as_the_cli_sidecar(tmp_path):
     """The dict's parameters and size are those the library records in a sidecar."""
     s = shadelab.render("bumps", shape=(96, 128), ppd=8, seed=3, rows=2)
