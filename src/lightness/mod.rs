@@ -49,6 +49,17 @@ impl Model {
         }
     }
 
+    /// The name as the literature writes it, for titles and captions: ODOG, LODOG, FLODOG
+    /// (Blakeslee & McCourt; Robinson, Hammon & de Sa), Retinex (Land & McCann).
+    pub fn title(&self) -> &'static str {
+        match self {
+            Model::Odog(Variant::Odog) => "ODOG",
+            Model::Odog(Variant::Lodog) => "LODOG",
+            Model::Odog(Variant::Flodog) => "FLODOG",
+            Model::Retinex => "Retinex",
+        }
+    }
+
     /// Whether the model needs the image's resolution in pixels per degree (the filter models
     /// are defined in degrees; Retinex works on neighbouring pixels).
     pub fn needs_ppd(&self) -> bool {

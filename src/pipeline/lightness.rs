@@ -291,7 +291,11 @@ impl LightnessReport {
             .into(),
         };
         let picture = Colormap::Gray.paint(out, range, None, [1.0; 3]);
-        let mut figure = MapFigure::new(&format!("{model}: predicted lightness"), picture, bar);
+        let mut figure = MapFigure::new(
+            &format!("{}: predicted lightness", model.title()),
+            picture,
+            bar,
+        );
         // The gray levels are the `.png`'s codes, written without gamma.
         figure.gamma = None;
         if let Some(ppd) = self.ppd.filter(|p| *p > 0.0) {
