@@ -188,6 +188,7 @@ impl Study {
             ObserverOptions {
                 prior,
                 noise: spec.noise,
+                ..ObserverOptions::default()
             }
             .validate()?;
         }
