@@ -217,7 +217,8 @@ impl Structure {
         let mut penalty = 0.0;
         for (j, &k) in self.harmonics.iter().enumerate().skip(1) {
             // h holds 2a and 2b of log p; the penalty is on a and b.
-            penalty += ROUGHNESS * (k as f64).powi(4) * (h[2 * j].powi(2) + h[2 * j + 1].powi(2)) / 4.0;
+            penalty +=
+                ROUGHNESS * (k as f64).powi(4) * (h[2 * j].powi(2) + h[2 * j + 1].powi(2)) / 4.0;
         }
         -log_likelihood_eta(data, lapse, |theta| self.eta(b0, h, theta)) + penalty
     }
@@ -333,7 +334,11 @@ pub fn nelder_mead(
             let expanded = along(-2.0);
             let fe = f(&expanded);
             evals += 1;
-            simplex[n] = if fe < fr { (expanded, fe) } else { (reflected, fr) };
+            simplex[n] = if fe < fr {
+                (expanded, fe)
+            } else {
+                (reflected, fr)
+            };
         } else if fr < simplex[n - 1].1 {
             simplex[n] = (reflected, fr);
         } else {
@@ -612,7 +617,11 @@ pub fn check_identifiable(data: &[Bin], options: &FitOptions, what: &str) -> Res
         )));
     }
     let free = 3 + usize::from(options.lapse.is_none());
-    let need = if options.nonparametric { free + 4 } else { free };
+    let need = if options.nonparametric {
+        free + 4
+    } else {
+        free
+    };
     if data.len() < need {
         return Err(Error::invalid(format!(
             "{what}: {} distinct rotations cannot identify {need} parameters (give at least {need})",
@@ -669,7 +678,8 @@ pub fn fit(data: &[Bin], options: &FitOptions, what: &str) -> Result<ObserverFit
             (v, p)
         })
         .collect();
-    let pick = |f: &dyn Fn(&PointFit) -> f64| -> Vec<f64> { replicates.iter().map(|r| f(&r.0)).collect() };
+    let pick =
+        |f: &dyn Fn(&PointFit) -> f64| -> Vec<f64> { replicates.iter().map(|r| f(&r.0)).collect() };
     let boot = options.bootstrap > 0;
     let linear = |value: f64, samples: Vec<f64>| Estimate {
         value,
@@ -846,9 +856,24 @@ mod tests {
     #[test]
     fn simulated_observers_are_recovered() {
         for (i, truth) in [
-            ModelParams { tilt_deg: 26.0, kappa: 2.0, convexity_prior: 0.5, lapse: 0.02 },
-            ModelParams { tilt_deg: -40.0, kappa: 1.5, convexity_prior: 0.7, lapse: 0.08 },
-            ModelParams { tilt_deg: 150.0, kappa: 4.0, convexity_prior: 0.3, lapse: 0.0 },
+            ModelParams {
+                tilt_deg: 26.0,
+                kappa: 2.0,
+                convexity_prior: 0.5,
+                lapse: 0.02,
+            },
+            ModelParams {
+                tilt_deg: -40.0,
+                kappa: 1.5,
+                convexity_prior: 0.7,
+                lapse: 0.08,
+            },
+            ModelParams {
+                tilt_deg: 150.0,
+                kappa: 4.0,
+                convexity_prior: 0.3,
+                lapse: 0.0,
+            },
         ]
         .iter()
         .enumerate()
@@ -859,7 +884,10 @@ mod tests {
             let dmu = super::super::wrap_180(p.tilt_deg - truth.tilt_deg).abs();
             assert!(dmu < 12.0, "{i}: {p:?}");
             assert!((p.kappa / truth.kappa).ln().abs() < 0.35, "{i}: {p:?}");
-            assert!((p.convexity_prior - truth.convexity_prior).abs() < 0.1, "{i}: {p:?}");
+            assert!(
+                (p.convexity_prior - truth.convexity_prior).abs() < 0.1,
+                "{i}: {p:?}"
+            );
             assert!((p.lapse - truth.lapse).abs() < 0.08, "{i}: {p:?}");
             // The optimum: the true parameters are no better.
             assert!(f.log_likelihood >= log_likelihood(truth, &data) - 1e-9);
@@ -868,9 +896,19 @@ mod tests {
 
     #[test]
     fn intervals_are_the_same_bits_every_time_and_cover_the_estimate() {
-        let truth = ModelParams { tilt_deg: 26.0, kappa: 1.5, convexity_prior: 0.6, lapse: 0.05 };
+        let truth = ModelParams {
+            tilt_deg: 26.0,
+            kappa: 1.5,
+            convexity_prior: 0.6,
+            lapse: 0.05,
+        };
         let data = simulate(&truth, &design(), 20, 7);
-        let options = FitOptions { bootstrap: 40, seed: 3, nonparametric: true, ..FitOptions::default() };
+        let options = FitOptions {
+            bootstrap: 40,
+            seed: 3,
+            nonparametric: true,
+            ..FitOptions::default()
+        };
         let a = fit(&data, &options, "test").unwrap();
         let b = fit(&data, &options, "test").unwrap();
         assert_eq!(a, b);
@@ -879,8 +917,7 @@ mod tests {
             assert!(lo <= e.value && e.value <= hi, "{e:?}");
         }
         let np = a.nonparametric_prior.unwrap();
-        let sum: f64 = np.density.iter().map(|d| d.value).sum::<f64>()
-            * std::f64::consts::TAU
+        let sum: f64 = np.density.iter().map(|d| d.value).sum::<f64>() * std::f64::consts::TAU
             / PRIOR_DIRECTIONS as f64;
         assert!((sum - 1.0).abs() < 1e-12);
         // The smooth prior peaks near the von Mises fit's mean.
@@ -893,21 +930,57 @@ mod tests {
     #[test]
     fn unidentifiable_data_are_refused_with_the_reason() {
         let o = FitOptions::default();
-        let one = [Bin { rotation_deg: 30.0, trials: 40, convex: 20 }];
-        assert!(check_identifiable(&one, &o, "p1").unwrap_err().to_string().contains("not identifiable"));
+        let one = [Bin {
+            rotation_deg: 30.0,
+            trials: 40,
+            convex: 20,
+        }];
+        assert!(check_identifiable(&one, &o, "p1")
+            .unwrap_err()
+            .to_string()
+            .contains("not identifiable"));
         let axis = [
-            Bin { rotation_deg: 0.0, trials: 40, convex: 30 },
-            Bin { rotation_deg: 180.0, trials: 40, convex: 10 },
+            Bin {
+                rotation_deg: 0.0,
+                trials: 40,
+                convex: 30,
+            },
+            Bin {
+                rotation_deg: 180.0,
+                trials: 40,
+                convex: 10,
+            },
         ];
-        assert!(check_identifiable(&axis, &o, "p1").unwrap_err().to_string().contains("axis"));
+        assert!(check_identifiable(&axis, &o, "p1")
+            .unwrap_err()
+            .to_string()
+            .contains("axis"));
         let same: Vec<Bin> = (0..24)
-            .map(|i| Bin { rotation_deg: 15.0 * i as f64, trials: 5, convex: 5 })
+            .map(|i| Bin {
+                rotation_deg: 15.0 * i as f64,
+                trials: 5,
+                convex: 5,
+            })
             .collect();
-        assert!(check_identifiable(&same, &o, "p1").unwrap_err().to_string().contains("all 120 responses are 'convex'"));
+        assert!(check_identifiable(&same, &o, "p1")
+            .unwrap_err()
+            .to_string()
+            .contains("all 120 responses are 'convex'"));
         let few = [
-            Bin { rotation_deg: 0.0, trials: 3, convex: 2 },
-            Bin { rotation_deg: 90.0, trials: 3, convex: 1 },
+            Bin {
+                rotation_deg: 0.0,
+                trials: 3,
+                convex: 2,
+            },
+            Bin {
+                rotation_deg: 90.0,
+                trials: 3,
+                convex: 1,
+            },
         ];
-        assert!(check_identifiable(&few, &o, "p1").unwrap_err().to_string().contains("too few"));
+        assert!(check_identifiable(&few, &o, "p1")
+            .unwrap_err()
+            .to_string()
+            .contains("too few"));
     }
 }

@@ -507,7 +507,12 @@ mod tests {
         let rotations: Vec<f64> = (0..72).map(|i| 5.0 * i as f64).collect();
         for p in observe(&sweep, &o, &rotations).unwrap() {
             let want = model.p_convex(p.rotation_deg);
-            assert!((p.p_convex[0] - want).abs() < 1e-9, "{}: {} vs {want}", p.rotation_deg, p.p_convex[0]);
+            assert!(
+                (p.p_convex[0] - want).abs() < 1e-9,
+                "{}: {} vs {want}",
+                p.rotation_deg,
+                p.p_convex[0]
+            );
         }
     }
 
@@ -521,12 +526,18 @@ mod tests {
         };
         let rotations: Vec<f64> = (0..24).map(|i| 15.0 * i as f64).collect();
         for p in observe(&sweep, &o, &rotations).unwrap() {
-            assert!(p.p_convex[0].is_finite() && p.p_light_above.is_finite(), "{p:?}");
+            assert!(
+                p.p_convex[0].is_finite() && p.p_light_above.is_finite(),
+                "{p:?}"
+            );
         }
-        let csv = curves_csv(&sweep, &[Curve {
-            options: o,
-            percepts: observe(&sweep, &o, &rotations).unwrap(),
-        }]);
+        let csv = curves_csv(
+            &sweep,
+            &[Curve {
+                options: o,
+                percepts: observe(&sweep, &o, &rotations).unwrap(),
+            }],
+        );
         assert!(!csv.to_lowercase().contains("nan"), "{csv}");
     }
 }

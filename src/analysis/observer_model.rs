@@ -139,7 +139,8 @@ pub fn sigmoid(x: f64) -> f64 {
 /// The von Mises density at angle `d_deg` from its mean, per radian: e^{κ cos d} / (2π I₀(κ)).
 pub fn von_mises(d_deg: f64, kappa: f64) -> f64 {
     // e^{κ(cos d − 1)} / (2π e^{−κ} I₀(κ)), stable for large κ.
-    (kappa * (d_deg.to_radians().cos() - 1.0)).exp() / (std::f64::consts::TAU * bessel_i0_scaled(kappa))
+    (kappa * (d_deg.to_radians().cos() - 1.0)).exp()
+        / (std::f64::consts::TAU * bessel_i0_scaled(kappa))
 }
 
 /// e^{−x}·I₀(x) for x ≥ 0 (Abramowitz & Stegun 9.8.1–9.8.2; relative error below 2·10⁻⁷).
@@ -149,7 +150,8 @@ pub fn bessel_i0_scaled(x: f64) -> f64 {
         let t = (x / 3.75).powi(2);
         let i0 = 1.0
             + t * (3.5156229
-                + t * (3.0899424 + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813)))));
+                + t * (3.0899424
+                    + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813)))));
         i0 * (-x).exp()
     } else {
         let t = 3.75 / x;
@@ -158,7 +160,8 @@ pub fn bessel_i0_scaled(x: f64) -> f64 {
                 + t * (0.00225319
                     + t * (-0.00157565
                         + t * (0.00916281
-                            + t * (-0.02057706 + t * (0.02635537 + t * (-0.01647633 + t * 0.00392377))))))))
+                            + t * (-0.02057706
+                                + t * (0.02635537 + t * (-0.01647633 + t * 0.00392377))))))))
             / x.sqrt()
     }
 }
@@ -187,11 +190,20 @@ mod tests {
             .sum();
         assert!((sum - 1.0).abs() < 1e-6, "{sum}");
         // Huge κ: no overflow, a step at ±90° from μ.
-        let sharp = ModelParams { kappa: 1e6, lapse: 0.0, ..m };
+        let sharp = ModelParams {
+            kappa: 1e6,
+            lapse: 0.0,
+            ..m
+        };
         assert_eq!(sharp.p_convex(26.0), 1.0);
         assert_eq!(sharp.p_convex(206.0), 0.0);
         assert!(sharp.prior_density(26.0).is_finite());
         assert!(ModelParams { lapse: 1.5, ..m }.validate().is_err());
-        assert!(ModelParams { convexity_prior: -0.1, ..m }.validate().is_err());
+        assert!(ModelParams {
+            convexity_prior: -0.1,
+            ..m
+        }
+        .validate()
+        .is_err());
     }
 }

@@ -677,6 +677,9 @@ pub struct PolarPlot {
     pub series: Vec<Series>,
     /// Directions to mark (a labelled spoke), degrees.
     pub markers: Vec<Marker>,
+    /// The palette index of each curve, so that a curve can match its colour in a
+    /// neighbouring plot (curves past the list's end take the palette in order).
+    pub colours: Vec<usize>,
 }
 
 /// A line plot beside a polar plot, in one picture.
@@ -692,7 +695,10 @@ pub struct LineAndPolar {
 
 #[cfg(feature = "plots")]
 impl PolarPlot {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<()> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<()> {
         register();
         let fail = |e: &dyn std::fmt::Display| {
             Error::Compute(format!("cannot draw the plot '{}': {e}", self.title))
@@ -711,7 +717,11 @@ impl PolarPlot {
             .filter(|r| r.is_finite())
             .fold(0.0f64, f64::max);
         let (rings, _) = ticks(0.0, if top > 0.0 { top } else { 1.0 }, Ticks::Auto);
-        let outer = rings.last().copied().filter(|r| *r >= top && *r > 0.0).unwrap_or(top.max(1e-9));
+        let outer = rings
+            .last()
+            .copied()
+            .filter(|r| *r >= top && *r > 0.0)
+            .unwrap_or(top.max(1e-9));
         let r = outer * 1.32;
         let (dw, dh) = disc.dim_in_pixel();
         let side = dw.min(dh);
@@ -743,7 +753,10 @@ impl PolarPlot {
         }
         for spoke in (0..8).map(|k| 45.0 * k as f64) {
             chart
-                .draw_series(LineSeries::new([(0.0, 0.0), at(spoke, outer)], grey.stroke_width(1)))
+                .draw_series(LineSeries::new(
+                    [(0.0, 0.0), at(spoke, outer)],
+                    grey.stroke_width(1),
+                ))
                 .map_err(|e| fail(&e))?;
             let name = match spoke as i32 {
                 0 => "0° above".to_string(),
@@ -774,8 +787,10 @@ impl PolarPlot {
                 ))
                 .map_err(|e| fail(&e))?;
         }
+        let colour_of =
+            |i: usize| COLOURS[self.colours.get(i).copied().unwrap_or(i) % COLOURS.len()];
         for (i, s) in self.series.iter().enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
+            let colour = colour_of(i);
             let mut points: Vec<(f64, f64)> = s
                 .points
                 .iter()
@@ -798,12 +813,19 @@ impl PolarPlot {
         let font = (FAMILY, 14).into_font();
         let mut y = 8;
         for (i, s) in self.series.iter().enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
+            let colour = colour_of(i);
             legend
-                .draw(&PathElement::new(vec![(20, y + 8), (44, y + 8)], colour.stroke_width(3)))
+                .draw(&PathElement::new(
+                    vec![(20, y + 8), (44, y + 8)],
+                    colour.stroke_width(3),
+                ))
                 .map_err(|e| fail(&e))?;
             legend
-                .draw(&Text::new(s.name.clone(), (52, y), font.clone().color(&BLACK)))
+                .draw(&Text::new(
+                    s.name.clone(),
+                    (52, y),
+                    font.clone().color(&BLACK),
+                ))
                 .map_err(|e| fail(&e))?;
             y += 24;
         }
@@ -822,7 +844,10 @@ impl PolarPlot {
 
 #[cfg(feature = "plots")]
 impl LineAndPolar {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<()> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<()> {
         let (w, _) = root.dim_in_pixel();
         let (left, right) = root.split_horizontally(w * 62 / 100);
         self.line.draw(left)?;

@@ -58,10 +58,16 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
         bootstrap: args.bootstrap,
         seed: args.seed,
     };
-    config
-        .options
-        .validate()
-        .map_err(|e| super::flags::usage(if args.lapse.is_some() { "--lapse" } else { "--bootstrap" }, e))?;
+    config.options.validate().map_err(|e| {
+        super::flags::usage(
+            if args.lapse.is_some() {
+                "--lapse"
+            } else {
+                "--bootstrap"
+            },
+            e,
+        )
+    })?;
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;

@@ -49,9 +49,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<(usize, Vec<String>)>, String> {
                     loop {
                         match chars.next() {
                             None => {
-                                return Err(format!(
-                                    "line {start}: a quoted field is never closed"
-                                ))
+                                return Err(format!("line {start}: a quoted field is never closed"))
                             }
                             Some('"') if chars.peek() == Some(&'"') => {
                                 chars.next();
@@ -68,9 +66,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<(usize, Vec<String>)>, String> {
                     }
                     match chars.peek() {
                         None | Some(',') | Some('\n') | Some('\r') => {}
-                        Some(_) => {
-                            return Err(format!("line {line}: text after a closing quote"))
-                        }
+                        Some(_) => return Err(format!("line {line}: text after a closing quote")),
                     }
                 }
                 Some(',') => {

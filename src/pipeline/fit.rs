@@ -143,17 +143,20 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
                     ),
                 )
             })?;
-        let convex = match row[response].trim().to_ascii_lowercase().as_str() {
-            "convex" | "1" => true,
-            "concave" | "0" => false,
-            other => {
-                return Err(Error::format(
+        let convex =
+            match row[response].trim().to_ascii_lowercase().as_str() {
+                "convex" | "1" => true,
+                "concave" | "0" => false,
+                other => return Err(Error::format(
                     path,
-                    format!("line {line}: unknown response '{other}' (valid: convex, concave, 1, 0)"),
-                ))
-            }
-        };
-        let who = participant.map(|p| row[p].trim().to_string()).unwrap_or_default();
+                    format!(
+                        "line {line}: unknown response '{other}' (valid: convex, concave, 1, 0)"
+                    ),
+                )),
+            };
+        let who = participant
+            .map(|p| row[p].trim().to_string())
+            .unwrap_or_default();
         match participants.iter_mut().find(|(p, _)| *p == who) {
             Some((_, trials)) => trials.push((theta, convex)),
             None => participants.push((who, vec![(theta, convex)])),
@@ -250,7 +253,14 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let pooled_bins = bins(&all);
     let name = config.responses.display().to_string();
     let several = responses.participants.len() > 1;
-    progress.start(1 + if several { responses.participants.len() as u64 } else { 0 }, "fit");
+    progress.start(
+        1 + if several {
+            responses.participants.len() as u64
+        } else {
+            0
+        },
+        "fit",
+    );
     let pooled = fit(&pooled_bins, &config.options, &name)?;
     progress.advance(1);
     let mut warnings = Vec::new();
@@ -269,14 +279,18 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
                     participant: who.clone(),
                     fit,
                 }),
-                Err(e) => warnings.push(format!("{e}: left out of the per-participant fits (kept in the pooled fit)")),
+                Err(e) => warnings.push(format!(
+                    "{e}: left out of the per-participant fits (kept in the pooled fit)"
+                )),
             }
             progress.advance(1);
         }
     }
     progress.finish();
     for b in &pooled.at_bounds {
-        warnings.push(format!("the pooled estimate of {b} lies at the bound of the search"));
+        warnings.push(format!(
+            "the pooled estimate of {b} lies at the bound of the search"
+        ));
     }
     let per = pooled_bins.iter().map(|b| b.trials);
     Ok(Report {
@@ -414,7 +428,9 @@ impl Report {
                 "fit: μ = {:.0}°, κ = {:.2}, π = {:.2}, λ = {:.3}",
                 m.tilt_deg, m.kappa, m.convexity_prior, m.lapse
             ),
-            points: (0..=360).map(|d| (d as f64, m.p_convex(d as f64))).collect(),
+            points: (0..=360)
+                .map(|d| (d as f64, m.p_convex(d as f64)))
+                .collect(),
         });
         line.intervals.push(IntervalSeries {
             name: format!("data ({} trials), 95% Wilson intervals", f.n_trials),
@@ -434,12 +450,17 @@ impl Report {
             radius_label: "density (per radian)".into(),
             series: vec![Series {
                 name: format!("von Mises, μ = {:.0}°, κ = {:.2}", m.tilt_deg, m.kappa),
-                points: (0..360).map(|d| (d as f64, m.prior_density(d as f64))).collect(),
+                points: (0..360)
+                    .map(|d| (d as f64, m.prior_density(d as f64)))
+                    .collect(),
             }],
             markers: vec![Marker {
                 x: m.tilt_deg,
                 label: format!("μ = {:.0}°", m.tilt_deg),
             }],
+            // The von Mises in the fitted curve's colour, the smooth prior in a third one
+            // (the second is the data's).
+            colours: vec![0, 2],
         };
         if let Some(np) = &f.nonparametric_prior {
             polar.series.push(Series {
@@ -504,7 +525,7 @@ impl Report {
                 self.participants.len()
             )
         } else {
-            "one participant".into()
+            "One participant".into()
         };
         let lapse = match self.settings.lapse {
             Some(l) => format!("a lapse rate fixed at λ = {l}"),
@@ -516,7 +537,7 @@ impl Report {
         let mut text = format!(
             "## Methods\n\n\
             **Design.** {who} judged whether a shaded disc was a bump (convex) or a dimple \
-            (concave) in {} test trials: {rotations}, {repeats}{}. The direction θ of the bright \
+            (concave) in {} test trials{}: {rotations}, {repeats}{}. The direction θ of the bright \
             side is given in the tilt convention (0° = up, +90° = left).\n\n\
             **Model.** Responses were fitted with an ideal-observer model in which the disc is \
             either a bump lit from θ or a dimple lit from θ + 180°, a von Mises prior over the \
@@ -532,6 +553,7 @@ impl Report {
             without a convexity prior (π = 0.5), ΔAIC = {:.2} and ΔBIC = {:.2} (positive values \
             favour a convexity prior).\n",
             d.trials,
+            if d.participants > 1 { " in all" } else { "" },
             if d.practice_rows > 0 {
                 format!(" ({} practice trials were not analysed)", d.practice_rows)
             } else {
@@ -590,12 +612,24 @@ mod tests {
         for (csv, needle) in [
             ("", "empty"),
             ("rotation,response\n0,convex\n", "no 'rotation_deg' column"),
-            ("rotation_deg,response\n0,yes\n", "line 2: unknown response 'yes'"),
-            ("rotation_deg,response\n0,convex\nx,concave\n", "line 3: rotation_deg 'x'"),
+            (
+                "rotation_deg,response\n0,yes\n",
+                "line 2: unknown response 'yes'",
+            ),
+            (
+                "rotation_deg,response\n0,convex\nx,concave\n",
+                "line 3: rotation_deg 'x'",
+            ),
             ("rotation_deg,response\n0,convex,9\n", "line 2: 3 fields"),
             ("rotation_deg,response\n\"0,convex\n", "never closed"),
-            ("block,rotation_deg,response\npractice,0,convex\n", "only practice"),
-            ("block,rotation_deg,response\nwarmup,0,convex\n", "block 'warmup'"),
+            (
+                "block,rotation_deg,response\npractice,0,convex\n",
+                "only practice",
+            ),
+            (
+                "block,rotation_deg,response\nwarmup,0,convex\n",
+                "block 'warmup'",
+            ),
             ("rotation_deg,response\nnan,convex\n", "not a finite number"),
         ] {
             let e = parse_responses(csv, p).unwrap_err().to_string();
@@ -610,7 +644,10 @@ mod tests {
         assert_eq!(r.practice_rows, 1);
         assert_eq!(
             r.participants,
-            vec![("a".into(), vec![(15.0, true)]), ("b".into(), vec![(30.0, false)])]
+            vec![
+                ("a".into(), vec![(15.0, true)]),
+                ("b".into(), vec![(30.0, false)])
+            ]
         );
     }
 }

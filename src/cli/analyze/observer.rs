@@ -34,7 +34,12 @@ pub struct Args {
     #[arg(long, value_name = "SIGMA", default_value_t = DEFAULT_NOISE, allow_hyphen_values = true)]
     noise: f64,
     /// Lapse rate λ: how often the observer answers at random (0..1).
-    #[arg(long, value_name = "L", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "L",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     lapse: f64,
     /// Take the prior tilt, kappa, convexity prior (as its log odds) and lapse from a
     /// fit.json written by `shadelab fit observer`.
@@ -72,9 +77,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..Config::new(args.picture.config(global)?)?
     };
     if let Some(path) = &args.prior {
-        config
-            .use_fit(path)
-            .map_err(|e| usage("--prior", e))?;
+        config.use_fit(path).map_err(|e| usage("--prior", e))?;
     }
     config.check().map_err(flags::setting)?;
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
