@@ -66,6 +66,11 @@ fn simulated_responses_are_fitted_back() {
     }
     assert_eq!(fit["n_trials"], 480);
     assert_eq!(fit["design"]["rotations_deg"].as_array().unwrap().len(), 24);
+    assert_eq!(fit["study"]["lapse"], fit["lapse"]["value"]);
+    assert_eq!(
+        fit["study"]["priors"]["tilt"][0],
+        fit["prior_tilt_deg"]["value"]
+    );
     assert!(fit["log_likelihood"].as_f64().unwrap() < 0.0);
     assert!(
         fit["models"][1]["log_likelihood"].as_f64().unwrap()
@@ -276,9 +281,90 @@ fn a_fit_fed_back_to_the_observer_predicts_the_formula() {
     );
     let csv = std::fs::read_to_string(dir.join("study/results.csv")).unwrap();
     assert!(!csv.to_lowercase().contains("nan"), "{csv}");
+    // A study with the fitted priors and lapse (as fit.json's "study" gives them) predicts the
+    // formula too.
+    let spec = format!(
+        r#"{{"stimuli": [{{"stimulus": "bumps", "params": {{"rows": 1, "columns": 1, "pattern": "bumps"}},
+            "shape": [48, 48], "ppd": 16}}], "tilts": "0:360:15", "rotations": "0:360:45",
+            "noise": 0.002, "priors": {{"tilt": [26], "kappa": [1.5], "convexity_bias": [{}]}},
+            "lapse": 0.05}}"#,
+        (0.7f64 / 0.3).ln()
+    );
+    std::fs::write(dir.join("fitted-study.json"), spec).unwrap();
+    let run = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "study",
+            "run",
+            "fitted-study.json",
+            "--out",
+            "fitted",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("fitted/results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 8);
+    for row in rows {
+        let f: Vec<&str> = row.split(',').collect();
+        let (theta, p): (f64, f64) = (f[7].parse().unwrap(), f[9].parse().unwrap());
+        let want = model.p_convex(theta);
+        assert!((p - want).abs() < 1e-6, "study θ = {theta}: {p} vs {want}");
+    }
     // A fit.json that is not one is refused, naming the file and the flag.
     std::fs::write(dir.join("bad.json"), r#"{"prior_tilt_deg": 3}"#).unwrap();
     let mut args = picture.to_vec();
     args.extend(["--prior", "bad.json", "--out", "x"]);
     assert_error(&shadelab(&dir, &args), 2, "no prior_tilt_deg.value");
+}
+
+/// The bootstrap gives the same bytes on one thread and on two.
+#[test]
+fn the_fit_is_the_same_for_any_thread_count() {
+    let dir = scratch("fit-threads");
+    let truth = ModelParams {
+        tilt_deg: -20.0,
+        kappa: 1.5,
+        convexity_prior: 0.55,
+        lapse: 0.05,
+    };
+    std::fs::write(
+        dir.join("r.csv"),
+        simulated_responses(&truth, &design(), 8, 3, "p"),
+    )
+    .unwrap();
+    let mut fits = Vec::new();
+    for threads in ["1", "2"] {
+        let out = format!("t{threads}");
+        let run = shadelab(
+            &dir,
+            &[
+                "--quiet",
+                "--threads",
+                threads,
+                "fit",
+                "observer",
+                "r.csv",
+                "--out",
+                &out,
+                "--bootstrap",
+                "60",
+                "--nonparametric",
+            ],
+        );
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mut v = read_json(&dir.join(&out).join("fit.json"));
+        v.as_object_mut().unwrap().remove("seconds");
+        fits.push(v);
+    }
+    assert_eq!(fits[0], fits[1]);
 }

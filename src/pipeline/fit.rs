@@ -143,17 +143,18 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
                     ),
                 )
             })?;
-        let convex =
-            match row[response].trim().to_ascii_lowercase().as_str() {
-                "convex" | "1" => true,
-                "concave" | "0" => false,
-                other => return Err(Error::format(
+        let convex = match row[response].trim().to_ascii_lowercase().as_str() {
+            "convex" | "1" => true,
+            "concave" | "0" => false,
+            other => {
+                return Err(Error::format(
                     path,
                     format!(
                         "line {line}: unknown response '{other}' (valid: convex, concave, 1, 0)"
                     ),
-                )),
-            };
+                ))
+            }
+        };
         let who = participant
             .map(|p| row[p].trim().to_string())
             .unwrap_or_default();
@@ -227,6 +228,9 @@ pub struct Report {
     pub pooled: ObserverFit,
     /// One fit per participant (when there are several).
     pub participants: Vec<ParticipantFit>,
+    /// The pooled fit as a study spec's observer settings (`priors` and `lapse`), to copy into
+    /// a spec so that the study predicts with the fitted model.
+    pub study: serde_json::Value,
     /// What was not fitted, and why; other cautions.
     pub warnings: Vec<String>,
     /// The files written and what they hold.
@@ -293,6 +297,15 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         ));
     }
     let per = pooled_bins.iter().map(|b| b.trials);
+    let m = pooled.params();
+    let study = serde_json::json!({
+        "priors": {
+            "tilt": [m.tilt_deg],
+            "kappa": [m.kappa],
+            "convexity_bias": [pooled.convexity_bias],
+        },
+        "lapse": m.lapse,
+    });
     Ok(Report {
         program: "shadelab",
         version: io::PROGRAM_VERSION,
@@ -309,6 +322,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         settings: config.options,
         pooled,
         participants,
+        study,
         warnings,
         outputs: BTreeMap::from([
             ("fit.json", "the estimates with 95% intervals, log-likelihood, AIC/BIC against the model without a convexity prior, counts per rotation, per-participant fits"),

@@ -106,7 +106,7 @@ impl Study {
             let options = ObserverOptions {
                 prior,
                 noise: self.spec.noise,
-                lapse: 0.0,
+                lapse: self.spec.lapse,
             };
             for percept in observe(&result, &options, &self.rotations)? {
                 for (k, p) in percept.p_convex.iter().enumerate() {
