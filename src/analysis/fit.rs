@@ -787,10 +787,12 @@ fn percentile_interval(mut samples: Vec<f64>) -> [f64; 2] {
     [at(0.025), at(0.975)]
 }
 
-fn simulate_counts(model: &ModelParams, like: &[Bin], rng: &mut SplitMix64) -> Vec<Bin> {
+/// `like`'s rotations and trial counts with answers drawn from `rng`: convex with probability
+/// `p(θ)`.
+fn draw_counts(like: &[Bin], rng: &mut SplitMix64, p: impl Fn(f64) -> f64) -> Vec<Bin> {
     like.iter()
         .map(|b| {
-            let p = model.p_convex(b.rotation_deg);
+            let p = p(b.rotation_deg);
             Bin {
                 convex: (0..b.trials).filter(|_| rng.next_f64() < p).count(),
                 ..*b
@@ -799,26 +801,22 @@ fn simulate_counts(model: &ModelParams, like: &[Bin], rng: &mut SplitMix64) -> V
         .collect()
 }
 
+fn simulate_counts(model: &ModelParams, like: &[Bin], rng: &mut SplitMix64) -> Vec<Bin> {
+    draw_counts(like, rng, |theta| model.p_convex(theta))
+}
+
 fn simulate_counts_np(np: &PointFit, like: &[Bin], rng: &mut SplitMix64) -> Vec<Bin> {
     // The smooth prior's P(convex) at θ: its log odds from the density at θ and θ + 180°.
     let density = np.prior_density.as_deref().unwrap_or(&[]);
     let b0 = convexity_bias(np.params.convexity_prior);
-    like.iter()
-        .map(|b| {
-            let p = match direction_index(b.rotation_deg) {
-                Some(i) if density.len() == PRIOR_DIRECTIONS => {
-                    let j = (i + PRIOR_DIRECTIONS / 2) % PRIOR_DIRECTIONS;
-                    let eta = b0 + (density[i] / density[j]).ln();
-                    super::observer_model::with_lapse(np.params.lapse, sigmoid(eta))
-                }
-                _ => np.params.p_convex(b.rotation_deg),
-            };
-            Bin {
-                convex: (0..b.trials).filter(|_| rng.next_f64() < p).count(),
-                ..*b
-            }
-        })
-        .collect()
+    draw_counts(like, rng, |theta| match direction_index(theta) {
+        Some(i) if density.len() == PRIOR_DIRECTIONS => {
+            let j = (i + PRIOR_DIRECTIONS / 2) % PRIOR_DIRECTIONS;
+            let eta = b0 + (density[i] / density[j]).ln();
+            super::observer_model::with_lapse(np.params.lapse, sigmoid(eta))
+        }
+        _ => np.params.p_convex(theta),
+    })
 }
 
 /// The index of `rotation_deg` among the [`PRIOR_DIRECTIONS`] directions, if it is one.

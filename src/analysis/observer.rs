@@ -36,7 +36,9 @@
 //! hypothesis t − θ of the sweep, and only the prior moves. This needs tilts that cover the
 //! circle in equal steps, so that the sum over t is a fair integral.
 
-use super::observer_model::{check_lapse, convexity_bias, with_lapse, ModelParams};
+use super::observer_model::{
+    check_lapse, check_tilt_prior, convexity_bias, with_lapse, ModelParams,
+};
 use super::plot::{span, LinePlot, Marker, Series};
 use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
 use crate::error::{Error, Result};
@@ -126,18 +128,7 @@ impl ObserverOptions {
     /// Checks every value, naming the bad one.
     pub fn validate(&self) -> Result<()> {
         let p = &self.prior;
-        if !p.mean_tilt_deg.is_finite() {
-            return Err(Error::invalid(format!(
-                "prior tilt {} must be a finite number of degrees",
-                p.mean_tilt_deg
-            )));
-        }
-        if !(p.kappa.is_finite() && p.kappa >= 0.0) {
-            return Err(Error::invalid(format!(
-                "prior kappa {} must be a number ≥ 0",
-                p.kappa
-            )));
-        }
+        check_tilt_prior(p.mean_tilt_deg, p.kappa)?;
         if !p.convexity_bias.is_finite() {
             return Err(Error::invalid(format!(
                 "convexity bias {} must be a finite number",

@@ -52,18 +52,7 @@ pub struct ModelParams {
 impl ModelParams {
     /// Checks every value, naming the bad one.
     pub fn validate(&self) -> Result<()> {
-        if !self.tilt_deg.is_finite() {
-            return Err(Error::invalid(format!(
-                "prior tilt {} must be a finite number of degrees",
-                self.tilt_deg
-            )));
-        }
-        if !(self.kappa.is_finite() && self.kappa >= 0.0) {
-            return Err(Error::invalid(format!(
-                "prior kappa {} must be a number ≥ 0",
-                self.kappa
-            )));
-        }
+        check_tilt_prior(self.tilt_deg, self.kappa)?;
         if !(0.0..=1.0).contains(&self.convexity_prior) {
             return Err(Error::invalid(format!(
                 "convexity prior {} must be a probability in 0..1",
@@ -85,6 +74,21 @@ impl ModelParams {
     pub fn prior_density(&self, t_deg: f64) -> f64 {
         von_mises(t_deg - self.tilt_deg, self.kappa)
     }
+}
+
+/// Checks a von Mises prior over light tilt: a finite mean (degrees) and a concentration ≥ 0.
+pub fn check_tilt_prior(mean_tilt_deg: f64, kappa: f64) -> Result<()> {
+    if !mean_tilt_deg.is_finite() {
+        return Err(Error::invalid(format!(
+            "prior tilt {mean_tilt_deg} must be a finite number of degrees"
+        )));
+    }
+    if !(kappa.is_finite() && kappa >= 0.0) {
+        return Err(Error::invalid(format!(
+            "prior kappa {kappa} must be a number ≥ 0"
+        )));
+    }
+    Ok(())
 }
 
 /// Checks a lapse rate: a probability in 0..1.

@@ -287,14 +287,8 @@ impl LinePlot {
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<PixelRect> {
-        register();
-        let fail = |e: &dyn std::fmt::Display| {
-            Error::Compute(format!("cannot draw the plot '{}': {e}", self.title))
-        };
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let root = root
-            .titled(&self.title, (FAMILY, 22))
-            .map_err(|e| fail(&e))?;
+        let fail = plot_failure(&self.title);
+        let root = titled_panel(root, &self.title, 22)?;
         let (colours, entries) = self.legend();
         let label_font = (FAMILY, 14).into_font();
         let label_style = TextStyle::from(label_font.clone());
@@ -469,6 +463,26 @@ impl LinePlot {
     pub fn write_svg(&self, path: &Path) -> Result<()> {
         io::write_text(path, &self.svg()?)
     }
+}
+
+#[cfg(feature = "plots")]
+/// The error of a plot titled `title` that could not be drawn.
+fn plot_failure(title: &str) -> impl Fn(&dyn std::fmt::Display) -> Error + '_ {
+    move |e| Error::Compute(format!("cannot draw the plot '{title}': {e}"))
+}
+
+#[cfg(feature = "plots")]
+/// A panel's area filled white with `title` set above it in `size` points: what is left for
+/// the plot.
+fn titled_panel<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    size: u32,
+) -> Result<DrawingArea<DB, plotters::coord::Shift>> {
+    register();
+    let fail = plot_failure(title);
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    root.titled(title, (FAMILY, size)).map_err(|e| fail(&e))
 }
 
 /// A rectangle of pixels: columns `.0`, rows `.1` (half-open).
@@ -699,14 +713,8 @@ impl PolarPlot {
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<()> {
-        register();
-        let fail = |e: &dyn std::fmt::Display| {
-            Error::Compute(format!("cannot draw the plot '{}': {e}", self.title))
-        };
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let root = root
-            .titled(&self.title, (FAMILY, 20))
-            .map_err(|e| fail(&e))?;
+        let fail = plot_failure(&self.title);
+        let root = titled_panel(root, &self.title, 20)?;
         let (w, h) = root.dim_in_pixel();
         let legend_h = 24 * self.series.len() as u32 + 30;
         let (disc, legend) = root.split_vertically(h.saturating_sub(legend_h));
