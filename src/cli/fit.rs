@@ -58,16 +58,23 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
         bootstrap: args.bootstrap,
         seed: args.seed,
     };
-    config.options.validate().map_err(|e| {
-        super::flags::usage(
-            if args.lapse.is_some() {
-                "--lapse"
-            } else {
-                "--bootstrap"
-            },
-            e,
-        )
-    })?;
+    // Each value alone, so that the error names its own flag.
+    let d = FitOptions::default();
+    let alone = |o: FitOptions, flag: &str| o.validate().map_err(|e| super::flags::usage(flag, e));
+    alone(
+        FitOptions {
+            lapse: args.lapse,
+            ..d
+        },
+        "--lapse",
+    )?;
+    alone(
+        FitOptions {
+            bootstrap: args.bootstrap,
+            ..d
+        },
+        "--bootstrap",
+    )?;
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
