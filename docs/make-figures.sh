@@ -130,6 +130,11 @@ show fading-disk --spec "$root/stimuli/fading-disk.json"
 shadelab analyze fading --stimulus fading-disk --ppd 12 --out fading
 keep fading/fading.gif fading-disk-animation.gif
 
+echo "== experiments.md: the worked example (Mamassian & Goutcher's design, simulated)"
+(cd "$root" && cargo run --quiet --release --example fit_recovery -- worked "$work/responses.csv")
+shadelab fit observer responses.csv --out mg-fit
+keep mg-fit/fit.png experiments-fit.png
+
 echo "== the tutorial (docs/tutorial.md): its own sh blocks, run as written"
 mkdir tutorial
 (cd tutorial && PATH="$(dirname "$S"):$PATH" bash -euo pipefail -c \

@@ -1,7 +1,7 @@
 //! The library-first refactor (issue 13) must not change what any command writes: every file
 //! of a render, a solve, a prior sweep, an observer, a study, a lightness analysis, the fading
-//! analysis and the gallery is compared, by MD5 digest, with the digests recorded before the
-//! refactor (`tests/data/golden-outputs.json`). JSON is compared without its timings and
+//! analysis, an observer fit and the gallery is compared, by MD5 digest, with the digests
+//! recorded before the refactor (`tests/data/golden-outputs.json`). JSON is compared without its timings and
 //! thread counts, as in the determinism test. `SHADELAB_BLESS=1` records the digests anew;
 //! do that only for a change that means to alter outputs, and say so in its commit.
 
@@ -138,6 +138,16 @@ const RUNS: &[&[&str]] = &[
         "fading",
     ],
     &["study", "run", "study.json", "--out", "study"],
+    &[
+        "fit",
+        "observer",
+        "responses.csv",
+        "--bootstrap",
+        "50",
+        "--nonparametric",
+        "--out",
+        "fit",
+    ],
     &["gallery", "--out", "gallery"],
 ];
 
@@ -148,6 +158,16 @@ const STUDY: &str = r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, 
 fn every_command_writes_what_it_wrote_before_the_refactor() {
     let dir = scratch("golden-outputs");
     std::fs::write(dir.join("study.json"), STUDY).unwrap();
+    // Responses of a simulated observer (26° left prior), 24 directions × 10 trials.
+    let model = shadelab::analysis::observer_model::ModelParams {
+        tilt_deg: 26.0,
+        kappa: 2.0,
+        convexity_prior: 0.6,
+        lapse: 0.03,
+    };
+    let rotations: Vec<f64> = (0..24).map(|i| 15.0 * i as f64).collect();
+    let csv = shadelab::pipeline::fit::simulated_responses(&model, &rotations, 10, 5, "p1");
+    std::fs::write(dir.join("responses.csv"), csv).unwrap();
     for args in RUNS {
         let mut full = vec!["--quiet"];
         full.extend_from_slice(args);
@@ -160,7 +180,7 @@ fn every_command_writes_what_it_wrote_before_the_refactor() {
     }
     let digests: BTreeMap<String, String> = outputs(&dir)
         .into_iter()
-        .filter(|(name, _)| name != "study.json")
+        .filter(|(name, _)| name != "study.json" && name != "responses.csv")
         .map(|(name, bytes)| (name, format!("{:x}", Md5::digest(&bytes))))
         .collect();
     if std::env::var_os("SHADELAB_BLESS").is_some() {

@@ -9,6 +9,7 @@ mod docs;
 mod evaluation;
 mod fast_solver;
 mod figures;
+mod fit;
 mod fuzz_regressions;
 mod golden_outputs;
 mod hostile;

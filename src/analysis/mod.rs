@@ -12,6 +12,9 @@
 //! - [`observer`]: a Bayesian observer, a von Mises prior over the light's tilt, an optional
 //!   convexity prior and a likelihood from the residuals, giving P(convex) against the
 //!   picture's rotation.
+//! - [`observer_model`]: the observer model P(convex | θ) that [`fit`] estimates from
+//!   bump/dimple responses (maximum likelihood, bootstrap intervals) and the observer predicts
+//!   with.
 //! - [`binding`]: one light for the whole scene versus a light per token (Ramachandran's arrays).
 //! - [`outline`]: where curvature concentrates in shapes recovered inside an outline (the
 //!   boundary-strips demonstration).
@@ -28,8 +31,10 @@
 
 pub mod binding;
 pub mod convexity;
+pub mod fit;
 pub mod interpretation;
 pub mod observer;
+pub mod observer_model;
 pub mod outline;
 pub mod picture;
 pub mod plot;

@@ -15,7 +15,19 @@
 //!   noise of standard deviation σ (`noise`, in luminance units) on every pixel.
 //!
 //! One scene, one light: the likelihood is the residual of the whole solve, and the posterior
-//! over t gives each token's P(convex) = Σ_t post(t)·[c_k(t) > 0] (½ where c_k(t) is 0).
+//! over t gives each token's P(convex) = Σ_t post(t)·[c_k(t) > 0] (½ where c_k(t) is 0). The
+//! answer adds a lapse λ (`lapse`): with probability λ the observer answers at random, so the
+//! reported P(convex) is λ/2 + (1 − λ)·Σ_t post(t)·[c_k(t) > 0].
+//!
+//! **One model family.** This is the observer model of [`super::observer_model`] computed
+//! from the picture: for one disc whose bright side faces θ, the two interpretations that
+//! render it exactly are a bump lit from θ and a dimple lit from θ + 180°, and as σ → 0 the
+//! likelihood keeps only those two, so P(convex) tends to
+//! λ/2 + (1 − λ)·π·vM(θ; μ, κ)/(π·vM(θ; μ, κ) + (1 − π)·vM(θ + 180°; μ, κ)) with π = e^B/(1 + e^B):
+//! the formula `fit observer` estimates. A fit's (μ, κ, π, λ) therefore give this observer's
+//! prior directly ([`ObserverOptions::from_model`]); a finite σ also counts the interpretations
+//! near those two, which matters for pictures with more than one token or no exact
+//! interpretation.
 //!
 //! Rotating the picture by θ (counter-clockwise) turns every interpretation with it: the picture
 //! turned by θ under tilt t gives the turned solution of the upright picture under t − θ, with
@@ -24,6 +36,9 @@
 //! hypothesis t − θ of the sweep, and only the prior moves. This needs tilts that cover the
 //! circle in equal steps, so that the sum over t is a fair integral.
 
+use super::observer_model::{
+    check_lapse, check_tilt_prior, convexity_bias, with_lapse, ModelParams,
+};
 use super::plot::{span, LinePlot, Marker, Series};
 use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
 use crate::error::{Error, Result};
@@ -67,6 +82,8 @@ pub struct ObserverOptions {
     pub prior: LightPrior,
     /// Image noise σ of the likelihood (> 0), luminance units.
     pub noise: f64,
+    /// The lapse rate λ in 0..1: how often the observer answers at random (0 = never).
+    pub lapse: f64,
 }
 
 impl Default for ObserverOptions {
@@ -74,26 +91,44 @@ impl Default for ObserverOptions {
         ObserverOptions {
             prior: LightPrior::default(),
             noise: DEFAULT_NOISE,
+            lapse: 0.0,
         }
     }
 }
 
 impl ObserverOptions {
+    /// The observer whose prior and lapse are the observer model's `model` (a fit's
+    /// estimates): tilt prior vM(μ, κ), convexity bias B = logit π, lapse λ; with image noise
+    /// `noise`. Fails on a convexity prior of exactly 0 or 1 (an infinite bias).
+    ///
+    /// ```
+    /// use shadelab::analysis::observer::ObserverOptions;
+    /// use shadelab::analysis::observer_model::ModelParams;
+    /// let m = ModelParams { tilt_deg: 26.0, kappa: 1.5, convexity_prior: 0.75, lapse: 0.04 };
+    /// let o = ObserverOptions::from_model(&m, 0.01).unwrap();
+    /// assert_eq!(o.prior.mean_tilt_deg, 26.0);
+    /// assert!((o.prior.convexity_bias - 3f64.ln()).abs() < 1e-12);
+    /// assert_eq!(o.lapse, 0.04);
+    /// ```
+    pub fn from_model(model: &ModelParams, noise: f64) -> Result<ObserverOptions> {
+        model.validate()?;
+        let options = ObserverOptions {
+            prior: LightPrior {
+                mean_tilt_deg: model.tilt_deg,
+                kappa: model.kappa,
+                convexity_bias: convexity_bias(model.convexity_prior),
+            },
+            noise,
+            lapse: model.lapse,
+        };
+        options.validate()?;
+        Ok(options)
+    }
+
     /// Checks every value, naming the bad one.
     pub fn validate(&self) -> Result<()> {
         let p = &self.prior;
-        if !p.mean_tilt_deg.is_finite() {
-            return Err(Error::invalid(format!(
-                "prior tilt {} must be a finite number of degrees",
-                p.mean_tilt_deg
-            )));
-        }
-        if !(p.kappa.is_finite() && p.kappa >= 0.0) {
-            return Err(Error::invalid(format!(
-                "prior kappa {} must be a number ≥ 0",
-                p.kappa
-            )));
-        }
+        check_tilt_prior(p.mean_tilt_deg, p.kappa)?;
         if !p.convexity_bias.is_finite() {
             return Err(Error::invalid(format!(
                 "convexity bias {} must be a finite number",
@@ -106,7 +141,7 @@ impl ObserverOptions {
                 self.noise
             )));
         }
-        Ok(())
+        check_lapse(self.lapse)
     }
 }
 
@@ -151,7 +186,11 @@ pub fn posterior(sweep: &Sweep, options: &ObserverOptions, rotation_deg: f64) ->
                 .iter()
                 .map(|r| p.convexity_bias * verdict(r.convexity))
                 .sum::<f64>();
-            p.kappa * t.cos() - (i.surface_residual - e_min) / two_var + convex
+            // The residual's excess over the best, in units of 2σ²: 0 for the best
+            // interpretation even when 2σ² underflows to 0 (a tiny σ keeps only the best).
+            let excess = i.surface_residual - e_min;
+            let misfit = if excess > 0.0 { excess / two_var } else { 0.0 };
+            p.kappa * t.cos() - misfit + convex
         })
         .collect();
     let top = log_weights
@@ -327,12 +366,13 @@ pub fn observe(
             let post = posterior(sweep, options, rotation)?;
             let p_convex = (0..sweep.tokens.len())
                 .map(|k| {
-                    sweep
+                    let p = sweep
                         .interpretations
                         .iter()
                         .zip(&post)
                         .map(|(i, w)| w * verdict(i.tokens[k].convexity))
-                        .sum()
+                        .sum();
+                    with_lapse(options.lapse, p)
                 })
                 .collect();
             let best = post
@@ -410,6 +450,7 @@ mod tests {
                     ..LightPrior::default()
                 },
                 noise: 0.05,
+                lapse: 0.0,
             };
             observe(&sweep, &o, &rotations)
                 .unwrap()
@@ -439,5 +480,55 @@ mod tests {
             ..ObserverOptions::default()
         };
         assert!(observe(&ideal_sweep(90.0), &bad, &[0.0]).is_err());
+    }
+
+    /// The image observer on one disc is the fitted formula: with a small image noise, at
+    /// every rotation θ of the sweep's grid, its P(convex) is the observer model's
+    /// P(convex | θ) for the same (μ, κ, π, λ).
+    #[test]
+    fn on_one_disc_the_observer_is_the_formula() {
+        let sweep = ideal_sweep(5.0);
+        let model = ModelParams {
+            tilt_deg: 26.0,
+            kappa: 1.3,
+            convexity_prior: 0.7,
+            lapse: 0.06,
+        };
+        let o = ObserverOptions::from_model(&model, 1e-3).unwrap();
+        let rotations: Vec<f64> = (0..72).map(|i| 5.0 * i as f64).collect();
+        for p in observe(&sweep, &o, &rotations).unwrap() {
+            let want = model.p_convex(p.rotation_deg);
+            assert!(
+                (p.p_convex[0] - want).abs() < 1e-9,
+                "{}: {} vs {want}",
+                p.rotation_deg,
+                p.p_convex[0]
+            );
+        }
+    }
+
+    /// A noise so small that 2σ² underflows keeps the best interpretations and never gives NaN.
+    #[test]
+    fn a_tiny_noise_gives_numbers_not_nan() {
+        let sweep = ideal_sweep(15.0);
+        let o = ObserverOptions {
+            noise: 1e-200,
+            ..ObserverOptions::default()
+        };
+        let rotations: Vec<f64> = (0..24).map(|i| 15.0 * i as f64).collect();
+        for p in observe(&sweep, &o, &rotations).unwrap() {
+            assert!(
+                p.p_convex[0].is_finite() && p.p_light_above.is_finite(),
+                "{p:?}"
+            );
+        }
+        let csv = curves_csv(
+            &sweep,
+            &[Curve {
+                options: o,
+                percepts: observe(&sweep, &o, &rotations).unwrap(),
+            }],
+        );
+        assert!(!csv.to_lowercase().contains("nan"), "{csv}");
     }
 }

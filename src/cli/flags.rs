@@ -125,6 +125,7 @@ const FIELD_FLAGS: &[(&str, &str)] = &[
     ("kappas", "--prior-kappa"),
     ("convexity_bias", "--convexity-bias"),
     ("noise", "--noise"),
+    ("lapse", "--lapse"),
 ];
 
 /// A bad setting, named by its flag.

@@ -6,6 +6,7 @@ mod analyze;
 mod bench;
 mod describe;
 mod eval;
+mod fit;
 mod flags;
 mod gallery;
 mod output;
@@ -75,6 +76,10 @@ enum Command {
     Study(study::Command),
     /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
     Eval(eval::Args),
+    /// Fit models to responses: `fit observer` estimates a light prior, a convexity prior and
+    /// a lapse rate from bump/dimple judgements.
+    #[command(subcommand)]
+    Fit(fit::Command),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -227,5 +232,6 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Bench(args) => bench::run(args, global),
         Command::Study(args) => study::run(args, global),
         Command::Eval(args) => eval::run(args, global),
+        Command::Fit(args) => fit::run(args, global),
     }
 }

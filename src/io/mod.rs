@@ -11,7 +11,7 @@ pub mod render_sidecar;
 mod sidecar;
 
 pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, AtomicDir};
-pub use csv::csv_field;
+pub use csv::{csv_field, parse_csv};
 pub use gif::write_gif;
 pub use npy::{
     encode_f64, encode_npz, encode_text, read_array, read_array_from_bytes, read_image,

@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod fading;
+pub mod fit;
 pub mod gallery;
 pub mod lightness;
 pub mod observer;

@@ -38,6 +38,10 @@ pub struct Config {
     pub convexity_bias: f64,
     /// Image noise σ of the likelihood, luminance units.
     pub noise: f64,
+    /// The lapse rate λ: how often the observer answers at random.
+    pub lapse: f64,
+    /// The `fit.json` the prior and lapse were read from, if any (for the report).
+    pub prior_from: Option<String>,
     /// Rotations of the picture to judge, degrees counter-clockwise.
     pub rotations: Vec<f64>,
     /// Assumed light tilts of the sweep; they must cover the circle in equal steps.
@@ -54,9 +58,25 @@ impl Config {
             kappas: vec![DEFAULT_PRIOR_KAPPA],
             convexity_bias: 0.0,
             noise: DEFAULT_NOISE,
+            lapse: 0.0,
+            prior_from: None,
             rotations: parse_angles(DEFAULT_ROTATIONS, "rotations")?,
             tilts: parse_angles(DEFAULT_TILTS, "tilts")?,
         })
+    }
+
+    /// Takes the prior (μ, κ, B = logit π) and the lapse from a `fit.json` written by
+    /// [`crate::pipeline::fit`], so that the observer predicts with the fitted model.
+    pub fn use_fit(&mut self, path: &Path) -> Result<()> {
+        let model = crate::pipeline::fit::read_fit(path)?;
+        let o = ObserverOptions::from_model(&model, self.noise)
+            .map_err(|e| Error::format(path, e.to_string()))?;
+        self.prior_tilt_deg = o.prior.mean_tilt_deg;
+        self.kappas = vec![o.prior.kappa];
+        self.convexity_bias = o.prior.convexity_bias;
+        self.lapse = o.lapse;
+        self.prior_from = Some(path.display().to_string());
+        Ok(())
     }
 
     /// The observer's options for each κ.
@@ -70,6 +90,7 @@ impl Config {
                     convexity_bias: self.convexity_bias,
                 },
                 noise: self.noise,
+                lapse: self.lapse,
             })
             .collect()
     }
@@ -116,6 +137,13 @@ impl Config {
                 ..d
             }),
         )?;
+        field(
+            "lapse",
+            alone(ObserverOptions {
+                lapse: self.lapse,
+                ..d
+            }),
+        )?;
         self.picture.check()
     }
 }
@@ -131,6 +159,11 @@ pub struct ObserverSettings {
     pub convexity_bias: f64,
     /// Image noise σ of the likelihood.
     pub noise: f64,
+    /// The lapse rate λ.
+    pub lapse: f64,
+    /// The `fit.json` the prior and lapse came from, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior_from: Option<String>,
 }
 
 /// A token's label and name.
@@ -191,8 +224,10 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             prior_kappa: config.kappas.clone(),
             convexity_bias: config.convexity_bias,
             noise: config.noise,
+            lapse: config.lapse,
+            prior_from: config.prior_from.clone(),
         },
-        model: "posterior over the sweep's interpretations: von Mises prior on the light tilt (in the rotated picture's frame) x exp(B) per token read as convex x exp(-(e_R - min e_R)/(2 noise^2)); rotating the picture by r turns interpretation t into t + r",
+        model: "posterior over the sweep's interpretations: von Mises prior on the light tilt (in the rotated picture's frame) x exp(B) per token read as convex x exp(-(e_R - min e_R)/(2 noise^2)); rotating the picture by r turns interpretation t into t + r; P(convex) = lapse/2 + (1 - lapse) x posterior P(convex) (for one disc and small noise: the observer model that fit observer estimates, with B = logit(convexity prior))",
         tilts_deg: config.tilts.clone(),
         tokens: result
             .tokens

@@ -106,6 +106,7 @@ impl Study {
             let options = ObserverOptions {
                 prior,
                 noise: self.spec.noise,
+                lapse: self.spec.lapse,
             };
             for percept in observe(&result, &options, &self.rotations)? {
                 for (k, p) in percept.p_convex.iter().enumerate() {

@@ -33,6 +33,10 @@ pub struct StudySpec {
     /// Image noise σ of the observer's likelihood.
     #[serde(default = "default_noise")]
     pub noise: f64,
+    /// The observer's lapse rate λ (0..1; 0, the default, is left out of the canonical JSON,
+    /// so older specs keep their md5).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub lapse: f64,
     /// Boundary condition: `flat`, `free` or `occluding`.
     #[serde(default = "default_boundary")]
     pub boundary: String,
@@ -52,6 +56,9 @@ fn default_rotations() -> String {
 }
 fn default_noise() -> f64 {
     crate::analysis::observer::DEFAULT_NOISE
+}
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 fn default_boundary() -> String {
     "flat".into()
@@ -188,6 +195,7 @@ impl Study {
             ObserverOptions {
                 prior,
                 noise: spec.noise,
+                lapse: spec.lapse,
             }
             .validate()?;
         }

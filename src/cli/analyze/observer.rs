@@ -33,6 +33,20 @@ pub struct Args {
     /// Image noise σ of the likelihood, luminance units.
     #[arg(long, value_name = "SIGMA", default_value_t = DEFAULT_NOISE, allow_hyphen_values = true)]
     noise: f64,
+    /// Lapse rate λ: how often the observer answers at random (0..1).
+    #[arg(
+        long,
+        value_name = "L",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    lapse: f64,
+    /// Take the prior tilt, kappa, convexity prior (as its log odds) and lapse from a
+    /// fit.json written by `shadelab fit observer`.
+    #[arg(long, value_name = "FIT_JSON",
+        conflicts_with_all = ["prior_tilt", "prior_kappa", "convexity_bias", "lapse"]
+    )]
+    prior: Option<PathBuf>,
     /// Rotations of the picture to judge, degrees counter-clockwise: START:STOP:STEP or a list.
     #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_ROTATIONS,
         allow_hyphen_values = true
@@ -52,15 +66,19 @@ pub struct Args {
 /// Runs `analyze observer`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
-    let config = Config {
+    let mut config = Config {
         tilts: flags::angles(&args.tilts, "--tilts")?,
         rotations: flags::angles(&args.rotations, "--rotations")?,
         kappas: parse_kappas(&args.prior_kappa).map_err(|e| usage("--prior-kappa", e))?,
         prior_tilt_deg: args.prior_tilt,
         convexity_bias: args.convexity_bias,
         noise: args.noise,
+        lapse: args.lapse,
         ..Config::new(args.picture.config(global)?)?
     };
+    if let Some(path) = &args.prior {
+        config.use_fit(path).map_err(|e| usage("--prior", e))?;
+    }
     config.check().map_err(flags::setting)?;
     let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
     let report = observer::run(&config, &Bar::new(global.quiet))?;

@@ -1,0 +1,111 @@
+//! `shadelab fit observer`: the observer model fitted to bump/dimple responses (the work is
+//! [`shadelab::pipeline::fit`]).
+
+use super::output::Output;
+use super::progress::Bar;
+use super::{CliResult, Global};
+use shadelab::analysis::fit::FitOptions;
+use shadelab::io::AtomicDir;
+use shadelab::pipeline::fit::{self as pipeline, Config, REPORT_FILE};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The subcommands of `fit`.
+#[derive(Debug, clap::Subcommand)]
+pub enum Command {
+    /// Fit the observer model P(convex | θ) (von Mises light prior μ, κ; convexity prior π;
+    /// lapse λ) to a responses CSV by maximum likelihood, with bootstrap 95% intervals.
+    Observer(ObserverArgs),
+}
+
+/// Arguments of `fit observer`.
+#[derive(Debug, clap::Args)]
+pub struct ObserverArgs {
+    /// The responses CSV (as `shadelab experiment` writes it): columns rotation_deg and
+    /// response (convex/concave or 1/0) at least; block (test rows are fitted) and
+    /// participant (one fit each, beside the pooled fit) when present.
+    responses: PathBuf,
+    /// Output folder (written whole or not at all): fit.json, fit.png, fit.svg, methods.md.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Parametric-bootstrap replicates for the 95% intervals (0: no intervals).
+    #[arg(long, value_name = "N", default_value_t = FitOptions::default().bootstrap)]
+    bootstrap: usize,
+    /// The bootstrap's random seed.
+    #[arg(long, value_name = "S", default_value_t = FitOptions::default().seed)]
+    seed: u64,
+    /// Also fit a smooth, non-parametric prior over light tilt (24 directions).
+    #[arg(long)]
+    nonparametric: bool,
+    /// Fix the lapse rate at this value instead of estimating it.
+    #[arg(long, value_name = "FIXED", allow_hyphen_values = true)]
+    lapse: Option<f64>,
+}
+
+/// Runs `fit`.
+pub fn run(command: Command, global: &Global) -> CliResult {
+    match command {
+        Command::Observer(a) => observer(a, global),
+    }
+}
+
+fn observer(args: ObserverArgs, global: &Global) -> CliResult {
+    let started = Instant::now();
+    let mut config = Config::new(&args.responses);
+    config.options = FitOptions {
+        lapse: args.lapse,
+        nonparametric: args.nonparametric,
+        bootstrap: args.bootstrap,
+        seed: args.seed,
+    };
+    // Each value alone, so that the error names its own flag.
+    let d = FitOptions::default();
+    let alone = |o: FitOptions, flag: &str| o.validate().map_err(|e| super::flags::usage(flag, e));
+    alone(
+        FitOptions {
+            lapse: args.lapse,
+            ..d
+        },
+        "--lapse",
+    )?;
+    alone(
+        FitOptions {
+            bootstrap: args.bootstrap,
+            ..d
+        },
+        "--bootstrap",
+    )?;
+    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let report = pipeline::run(&config, &Bar::new(global.quiet))?;
+    report.write(folder.path())?;
+    let target = folder.commit()?;
+    let out = Output::new(global);
+    for w in &report.warnings {
+        out.warn(w);
+    }
+    out.wrote(&target, started.elapsed().as_secs_f64());
+    let f = &report.pooled;
+    let ci = |c: Option<[f64; 2]>| match c {
+        Some([lo, hi]) => format!(" [{lo:.3}, {hi:.3}]"),
+        None => String::new(),
+    };
+    let mut text = format!(
+        "{} trials at {} rotations, {} participant(s)\n",
+        report.design.trials,
+        report.design.rotations_deg.len(),
+        report.design.participants
+    );
+    for (name, e) in [
+        ("prior tilt (deg)", f.prior_tilt_deg),
+        ("prior kappa", f.prior_kappa),
+        ("convexity prior", f.convexity_prior),
+        ("lapse", f.lapse),
+    ] {
+        text += &format!("{name}: {:.3}{}\n", e.value, ci(e.ci95));
+    }
+    text += &format!(
+        "log-likelihood {:.2}; delta AIC {:.2}, delta BIC {:.2} against no convexity prior\n",
+        f.log_likelihood, f.delta_aic, f.delta_bic
+    );
+    out.results(&text, &report)
+}

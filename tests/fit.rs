@@ -1,0 +1,370 @@
+//! `shadelab fit observer` end to end: simulated responses fitted back, per-participant fits,
+//! refusals of data that cannot identify the model, and one model family with
+//! `analyze observer` (a fit.json fed back predicts the fitted formula) and a study.
+
+use super::cli::{assert_error, scratch, shadelab};
+use serde_json::Value;
+use shadelab::analysis::observer_model::ModelParams;
+use shadelab::pipeline::fit::{simulated_responses, RESPONSES_HEADER};
+use std::path::Path;
+
+fn design() -> Vec<f64> {
+    (0..24).map(|i| 15.0 * i as f64).collect()
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Mamassian & Goutcher's design with a 26°-left prior, fitted back: every estimate near the
+/// truth, its interval around the estimate, fit.json in the documented form, the figure and
+/// the Methods paragraph written; the same seed gives the same bytes.
+#[test]
+fn simulated_responses_are_fitted_back() {
+    let dir = scratch("fit-recovery");
+    let truth = ModelParams {
+        tilt_deg: 26.0,
+        kappa: 2.0,
+        convexity_prior: 0.65,
+        lapse: 0.03,
+    };
+    std::fs::write(
+        dir.join("r.csv"),
+        simulated_responses(&truth, &design(), 20, 11, "p1"),
+    )
+    .unwrap();
+    for out in ["a", "b"] {
+        let run = shadelab(
+            &dir,
+            &[
+                "--quiet",
+                "fit",
+                "observer",
+                "r.csv",
+                "--out",
+                out,
+                "--bootstrap",
+                "200",
+            ],
+        );
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let fit = read_json(&dir.join("a/fit.json"));
+    let value = |k: &str| fit[k]["value"].as_f64().unwrap();
+    assert!((value("prior_tilt_deg") - 26.0).abs() < 10.0, "{fit}");
+    assert!((value("prior_kappa") / 2.0).ln().abs() < 0.4, "{fit}");
+    assert!((value("convexity_prior") - 0.65).abs() < 0.1, "{fit}");
+    assert!((value("lapse") - 0.03).abs() < 0.06, "{fit}");
+    for k in ["prior_tilt_deg", "prior_kappa", "convexity_prior", "lapse"] {
+        let ci = fit[k]["ci95"].as_array().unwrap();
+        let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+        assert!(lo <= value(k) && value(k) <= hi, "{k}: {fit}");
+    }
+    assert_eq!(fit["n_trials"], 480);
+    assert_eq!(fit["design"]["rotations_deg"].as_array().unwrap().len(), 24);
+    assert_eq!(fit["study"]["lapse"], fit["lapse"]["value"]);
+    assert_eq!(
+        fit["study"]["priors"]["tilt"][0],
+        fit["prior_tilt_deg"]["value"]
+    );
+    assert!(fit["log_likelihood"].as_f64().unwrap() < 0.0);
+    assert!(
+        fit["models"][1]["log_likelihood"].as_f64().unwrap()
+            <= fit["log_likelihood"].as_f64().unwrap() + 1e-9
+    );
+    let methods = std::fs::read_to_string(dir.join("a/methods.md")).unwrap();
+    assert!(
+        methods.contains("24 directions of the bright side, every 15°"),
+        "{methods}"
+    );
+    assert!(
+        methods.contains("Mamassian, P., & Goutcher, R. (2001)"),
+        "{methods}"
+    );
+    assert!(dir.join("a/fit.png").is_file() || !cfg!(feature = "plots"));
+    // Seeded: the same files, bar the timing.
+    let strip = |mut v: Value| {
+        v.as_object_mut().unwrap().remove("seconds");
+        v
+    };
+    assert_eq!(
+        strip(fit.clone()),
+        strip(read_json(&dir.join("b/fit.json")))
+    );
+    assert_eq!(
+        std::fs::read(dir.join("a/methods.md")).unwrap(),
+        std::fs::read(dir.join("b/methods.md")).unwrap()
+    );
+}
+
+/// Several participants: one fit each beside the pooled one; a participant with too few
+/// trials is left out with a warning, never given a made-up estimate.
+#[test]
+fn participants_are_fitted_one_by_one() {
+    let dir = scratch("fit-participants");
+    let mut csv = String::from(RESPONSES_HEADER);
+    for (who, tilt, seed) in [("ann", 30.0, 1), ("bob", -30.0, 2)] {
+        let m = ModelParams {
+            tilt_deg: tilt,
+            kappa: 3.0,
+            convexity_prior: 0.5,
+            lapse: 0.02,
+        };
+        let text = simulated_responses(&m, &design(), 15, seed, who);
+        csv.push_str(text.strip_prefix(RESPONSES_HEADER).unwrap());
+    }
+    csv.push_str("cat,1,test,disc,0,convex,400,f,\ncat,2,test,disc,180,concave,400,j,\n");
+    std::fs::write(dir.join("r.csv"), csv).unwrap();
+    let run = shadelab(
+        &dir,
+        &[
+            "fit",
+            "observer",
+            "r.csv",
+            "--out",
+            "f",
+            "--bootstrap",
+            "20",
+            "--lapse",
+            "0.02",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("warning: participant 'cat': 2 trials is too few"),
+        "{err}"
+    );
+    let fit = read_json(&dir.join("f/fit.json"));
+    let people = fit["participants"].as_array().unwrap();
+    assert_eq!(people.len(), 2);
+    assert_eq!(people[0]["participant"], "ann");
+    let tilt = |p: &Value| p["prior_tilt_deg"]["value"].as_f64().unwrap();
+    assert!((tilt(&people[0]) - 30.0).abs() < 15.0, "{}", people[0]);
+    assert!((tilt(&people[1]) + 30.0).abs() < 15.0, "{}", people[1]);
+    // The fixed lapse is reported as fixed: no interval.
+    assert_eq!(fit["lapse"]["value"], 0.02);
+    assert!(fit["lapse"]["ci95"].is_null());
+    assert_eq!(fit["design"]["participants"], 3);
+}
+
+/// Data that cannot identify the model, or are not responses, are refused in one line.
+#[test]
+fn bad_responses_are_refused_in_one_line() {
+    let dir = scratch("fit-bad");
+    let all_convex: String = std::iter::once("rotation_deg,response\n".to_string())
+        .chain((0..48).map(|i| format!("{},convex\n", 15 * (i % 24))))
+        .collect();
+    let one_rotation: String = std::iter::once("rotation_deg,response\n".to_string())
+        .chain((0..48).map(|i| format!("90,{}\n", i % 2)))
+        .collect();
+    for (csv, code, needle) in [
+        (
+            "rotation_deg,response\n0,convex\n30,bump\n",
+            1,
+            "line 3: unknown response 'bump'",
+        ),
+        ("rotation_deg,answer\n0,convex\n", 1, "no 'response' column"),
+        (
+            "rotation_deg,response\n0,convex\n\"15,concave\n",
+            1,
+            "line 3: a quoted field is never closed",
+        ),
+        (all_convex.as_str(), 2, "all 48 responses are 'convex'"),
+        (one_rotation.as_str(), 2, "light prior is not identifiable"),
+    ] {
+        std::fs::write(dir.join("r.csv"), csv).unwrap();
+        let out = shadelab(
+            &dir,
+            &["fit", "observer", "r.csv", "--out", "f", "--bootstrap", "5"],
+        );
+        assert_error(&out, code, needle);
+        assert!(!dir.join("f").exists());
+    }
+    let out = shadelab(
+        &dir,
+        &["fit", "observer", "r.csv", "--out", "f", "--lapse", "0.9"],
+    );
+    assert_error(&out, 2, "--lapse");
+}
+
+/// One model family: `analyze observer --prior fit.json` on one bump, with a small image
+/// noise, predicts the fitted formula's P(convex | θ) at every rotation (to 1e-6; the engine's
+/// bump and dimple interpretations render the disc exactly). A tiny noise never writes NaN.
+#[test]
+fn a_fit_fed_back_to_the_observer_predicts_the_formula() {
+    let dir = scratch("fit-observer");
+    let fit = r#"{"program": "shadelab", "prior_tilt_deg": {"value": 26.0, "ci95": null},
+        "prior_kappa": {"value": 1.5, "ci95": null}, "convexity_prior": {"value": 0.7, "ci95": null},
+        "lapse": {"value": 0.05, "ci95": null}}"#;
+    std::fs::write(dir.join("fit.json"), fit).unwrap();
+    let model = ModelParams {
+        tilt_deg: 26.0,
+        kappa: 1.5,
+        convexity_prior: 0.7,
+        lapse: 0.05,
+    };
+    let picture = [
+        "--quiet",
+        "analyze",
+        "observer",
+        "--stimulus",
+        "bumps",
+        "--set",
+        "rows=1",
+        "--set",
+        "columns=1",
+        "--set",
+        "pattern=bumps",
+        "--ppd",
+        "16",
+        "--size",
+        "48x48",
+        "--tilts",
+        "0:360:15",
+        "--rotations",
+        "0:360:45",
+    ];
+    let mut args = picture.to_vec();
+    args.extend(["--noise", "0.002", "--prior", "fit.json", "--out", "obs"]);
+    let run = shadelab(&dir, &args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("obs/observer.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 8);
+    for row in rows {
+        let f: Vec<&str> = row.split(',').collect();
+        let (theta, p): (f64, f64) = (f[1].parse().unwrap(), f[4].parse().unwrap());
+        let want = model.p_convex(theta);
+        assert!((p - want).abs() < 1e-6, "θ = {theta}: {p} vs {want}");
+    }
+    let report = read_json(&dir.join("obs/observer.json"));
+    assert_eq!(report["observer"]["lapse"], 0.05);
+    assert_eq!(report["observer"]["prior_from"], "fit.json");
+    // A noise so small that 2σ² underflows: numbers, never NaN.
+    let mut args = picture.to_vec();
+    args.extend(["--noise", "1e-200", "--out", "tiny"]);
+    let run = shadelab(&dir, &args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("tiny/observer.csv")).unwrap();
+    assert!(!csv.to_lowercase().contains("nan"), "{csv}");
+    std::fs::write(
+        dir.join("study.json"),
+        r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": 1}, "shape": [24, 24], "ppd": 12}],
+            "tilts": "0:360:90", "rotations": "0:360:90", "noise": 1e-200}"#,
+    )
+    .unwrap();
+    let run = shadelab(
+        &dir,
+        &["--quiet", "study", "run", "study.json", "--out", "study"],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("study/results.csv")).unwrap();
+    assert!(!csv.to_lowercase().contains("nan"), "{csv}");
+    // A study with the fitted priors and lapse (as fit.json's "study" gives them) predicts the
+    // formula too.
+    let spec = format!(
+        r#"{{"stimuli": [{{"stimulus": "bumps", "params": {{"rows": 1, "columns": 1, "pattern": "bumps"}},
+            "shape": [48, 48], "ppd": 16}}], "tilts": "0:360:15", "rotations": "0:360:45",
+            "noise": 0.002, "priors": {{"tilt": [26], "kappa": [1.5], "convexity_bias": [{}]}},
+            "lapse": 0.05}}"#,
+        (0.7f64 / 0.3).ln()
+    );
+    std::fs::write(dir.join("fitted-study.json"), spec).unwrap();
+    let run = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "study",
+            "run",
+            "fitted-study.json",
+            "--out",
+            "fitted",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("fitted/results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 8);
+    for row in rows {
+        let f: Vec<&str> = row.split(',').collect();
+        let (theta, p): (f64, f64) = (f[7].parse().unwrap(), f[9].parse().unwrap());
+        let want = model.p_convex(theta);
+        assert!((p - want).abs() < 1e-6, "study θ = {theta}: {p} vs {want}");
+    }
+    // A fit.json that is not one is refused, naming the file and the flag.
+    std::fs::write(dir.join("bad.json"), r#"{"prior_tilt_deg": 3}"#).unwrap();
+    let mut args = picture.to_vec();
+    args.extend(["--prior", "bad.json", "--out", "x"]);
+    assert_error(&shadelab(&dir, &args), 2, "no prior_tilt_deg.value");
+}
+
+/// The bootstrap gives the same bytes on one thread and on two.
+#[test]
+fn the_fit_is_the_same_for_any_thread_count() {
+    let dir = scratch("fit-threads");
+    let truth = ModelParams {
+        tilt_deg: -20.0,
+        kappa: 1.5,
+        convexity_prior: 0.55,
+        lapse: 0.05,
+    };
+    std::fs::write(
+        dir.join("r.csv"),
+        simulated_responses(&truth, &design(), 8, 3, "p"),
+    )
+    .unwrap();
+    let mut fits = Vec::new();
+    for threads in ["1", "2"] {
+        let out = format!("t{threads}");
+        let run = shadelab(
+            &dir,
+            &[
+                "--quiet",
+                "--threads",
+                threads,
+                "fit",
+                "observer",
+                "r.csv",
+                "--out",
+                &out,
+                "--bootstrap",
+                "60",
+                "--nonparametric",
+            ],
+        );
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mut v = read_json(&dir.join(&out).join("fit.json"));
+        v.as_object_mut().unwrap().remove("seconds");
+        fits.push(v);
+    }
+    assert_eq!(fits[0], fits[1]);
+}
