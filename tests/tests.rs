@@ -19,3 +19,4 @@ mod python;
 mod sidecar_input;
 mod solve;
 mod stimuli;
+mod teaching;
