@@ -363,7 +363,13 @@ function main() {
       requestAnimationFrame(() => { pending = false; render(); });
     }
   };
-  const lightDial = new Dial($("light-dial"), state.light, schedule);
+  // The sideways discs are lit from the left or the right only: the true light snaps to the
+  // side its tilt is on (the engine picks the side the same way: tilts 0..180 are left).
+  const sideOnly = () => stimuli.find((x) => x.name === state.stimulus).lit === "side";
+  const snapLight = () => {
+    if (sideOnly()) state.light.tilt = state.light.tilt < 180 ? 90 : 270;
+  };
+  const lightDial = new Dial($("light-dial"), state.light, () => { snapLight(); lightDial.draw(); schedule(); });
   const assumeDial = new Dial($("assume-dial"), state.assume, schedule);
 
   function describeStimulus() {
@@ -375,6 +381,8 @@ function main() {
     const painted = s.lit === "painted";
     $("light-dial").setAttribute("aria-disabled", String(painted));
     $("light-dial").style.opacity = painted ? 0.4 : 1;
+    snapLight();
+    lightDial.draw();
   }
 
   // The observer's P(convex) for the last frame's bright side.

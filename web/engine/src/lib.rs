@@ -74,7 +74,7 @@ pub const STIMULI: &[Stimulus] = &[
         name: "sideways",
         params: &[],
         lit: Lit::Side,
-        explanation: "The same discs lit from the side. The light-from-above prior says nothing about left or right, so each disc flips between bump and dimple (bistable). The light dial's tilt only picks the side: left (tilt 0–180°) or right.",
+        explanation: "The same discs lit from the side. The light-from-above prior says little about left or right, so each disc flips between bump and dimple (bistable); the prior's small leftward bias tips discs lit from the left toward bumps. The light dial only picks the side: left or right.",
         docs: "docs/priors.md#light-from-the-side",
     },
     Stimulus {
@@ -606,7 +606,7 @@ mod tests {
         for s in STIMULI {
             let f = frame(&request(s.name, 0.0, 0.0)).unwrap_or_else(|e| panic!("{}: {e}", s.name));
             assert!(f.width.max(f.height) == 128, "{}", s.name);
-            assert!(f.target.iter().any(|&t| t == 1), "{}", s.name);
+            assert!(f.target.contains(&1), "{}", s.name);
             assert!(f.convexity.is_finite(), "{}", s.name);
         }
         let json = stimuli_json().unwrap();
