@@ -73,6 +73,21 @@ impl Token {
         (self.core_mean(depth) - self.rim_mean(depth)) / self.half_width
     }
 
+    /// The token's centroid (column, row) in pixels, in a picture `width` pixels wide.
+    ///
+    /// ```
+    /// use shadelab::analysis::convexity::Token;
+    /// assert_eq!(Token::whole(4, 3)?.centroid(4), (1.5, 1.0));
+    /// # Ok::<(), shadelab::Error>(())
+    /// ```
+    pub fn centroid(&self, width: usize) -> (f64, f64) {
+        let n = self.pixels.len().max(1) as f64;
+        let (sx, sy) = self.pixels.iter().fold((0.0, 0.0), |(sx, sy), &p| {
+            (sx + (p % width) as f64, sy + (p / width) as f64)
+        });
+        (sx / n, sy / n)
+    }
+
     /// The direction the token's bright side faces in `image` (a picture of the labels' size),
     /// as a tilt in degrees in [0, 360) (0 = up, +90 = left, the light's convention), and how
     /// lopsided the brightness is (0 = evenly lit, larger = brighter on that side).
@@ -182,11 +197,8 @@ impl std::fmt::Display for Verdict {
 pub fn central_token(tokens: &[Token], width: usize, height: usize) -> Option<usize> {
     let (cx, cy) = ((width as f64 - 1.0) / 2.0, (height as f64 - 1.0) / 2.0);
     let distance = |t: &Token| {
-        let n = t.pixels.len().max(1) as f64;
-        let (sx, sy) = t.pixels.iter().fold((0.0, 0.0), |(sx, sy), &p| {
-            (sx + (p % width) as f64, sy + (p / width) as f64)
-        });
-        (sx / n - cx).hypot(sy / n - cy)
+        let (x, y) = t.centroid(width);
+        (x - cx).hypot(y - cy)
     };
     let mut best: Option<(usize, f64)> = None;
     for (i, t) in tokens.iter().enumerate() {

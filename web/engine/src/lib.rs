@@ -328,10 +328,6 @@ pub fn frame(request: &Request) -> Result<Frame> {
     for &p in token.pixels() {
         target[p] = 1;
     }
-    let n = token.pixels().len().max(1) as f64;
-    let (sx, sy) = token.pixels().iter().fold((0.0, 0.0), |(sx, sy), &p| {
-        (sx + (p % w) as f64, sy + (p / w) as f64)
-    });
     let (bright_side, lopsided) = token.bright_side(&image);
     let convexity = reading.tokens[k].convexity;
     let target_name = names
@@ -357,7 +353,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
         depth: depth.data().iter().map(|&z| z as f32).collect(),
         target,
         target_name,
-        target_centre: (sx / n, sy / n),
+        target_centre: token.centroid(w),
         convexity,
         verdict: Verdict::of(convexity),
         bright_side_deg: bright_side,
