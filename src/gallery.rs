@@ -93,6 +93,11 @@ pub const BUILTIN: &[(&str, &str)] = &[
 /// The file that marks a folder as a shadelab gallery.
 pub const MARKER: &str = "index.html";
 
+/// Where the gallery's index links to the interactive teaching page, relative to the gallery's
+/// folder: `web/build.sh GALLERY/teach` builds it there (the gallery itself needs no WebAssembly
+/// toolchain, so it does not build the page).
+pub const TEACHING_PAGE: &str = "teach/index.html";
+
 /// Longest side of a thumbnail, in pixels.
 pub const THUMBNAIL: usize = 256;
 
@@ -445,9 +450,13 @@ its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named target
 Each picture links to the page of shadelab's documentation that explains it (the links assume
 this folder sits one level below the repository, as <code>gallery/</code> does; see
 <code>shadelab gallery --help</code>, <code>--docs-base</code>, for a gallery kept elsewhere).</p>
+<p>Move the light yourself: the <a href="{teach}">interactive teaching page</a> renders these
+stimuli and runs shadelab's shape-from-shading engine live in the browser (WebAssembly). Build it
+beside this page with <code>web/build.sh GALLERY/teach</code> (see docs/teaching.md).</p>
 "#,
         version = io::PROGRAM_VERSION,
         gamma = THUMBNAIL_GAMMA,
+        teach = TEACHING_PAGE,
     );
     for r in rendered {
         let p = &r.preset;
@@ -544,6 +553,12 @@ mod tests {
         out.pixels = Pixels::Gray(Grid::new(10, 10, 0.5));
         assert_eq!(thumbnail(&out).width(), 10);
         assert!(escape("<a & \"b\">").contains("&lt;a &amp; &quot;b&quot;&gt;"));
+    }
+
+    #[test]
+    fn the_index_links_to_the_teaching_page() {
+        let html = index_html(&[], "..");
+        assert!(html.contains("<a href=\"teach/index.html\">interactive teaching page</a>"));
     }
 
     #[test]

@@ -20,3 +20,4 @@ mod python;
 mod sidecar_input;
 mod solve;
 mod stimuli;
+mod teaching;

@@ -73,10 +73,141 @@ impl Token {
         (self.core_mean(depth) - self.rim_mean(depth)) / self.half_width
     }
 
+    /// The token's centroid (column, row) in pixels, in a picture `width` pixels wide.
+    ///
+    /// ```
+    /// use shadelab::analysis::convexity::Token;
+    /// assert_eq!(Token::whole(4, 3)?.centroid(4), (1.5, 1.0));
+    /// # Ok::<(), shadelab::Error>(())
+    /// ```
+    pub fn centroid(&self, width: usize) -> (f64, f64) {
+        let n = self.pixels.len().max(1) as f64;
+        let (sx, sy) = self.pixels.iter().fold((0.0, 0.0), |(sx, sy), &p| {
+            (sx + (p % width) as f64, sy + (p / width) as f64)
+        });
+        (sx / n, sy / n)
+    }
+
+    /// The direction the token's bright side faces in `image` (a picture of the labels' size),
+    /// as a tilt in degrees in [0, 360) (0 = up, +90 = left, the light's convention), and how
+    /// lopsided the brightness is (0 = evenly lit, larger = brighter on that side).
+    ///
+    /// It is the direction from the token's centroid to its brightness-weighted centroid:
+    /// d = Σ (I − Ī)·(x − x̄, y − ȳ) over the token's pixels (x right, y up, Ī the token's mean
+    /// luminance); the strength is |d| / (Σ |I − Ī| · D) with D the half-width. A bump lit from
+    /// tilt t faces its bright side to t, a dimple to t + 180°: this is the θ of the observer's
+    /// P(convex | θ). An evenly lit token gives tilt 0 and strength 0.
+    ///
+    /// ```
+    /// use shadelab::analysis::convexity::Token;
+    /// use shadelab::Grid;
+    /// // Brighter toward the top row: the bright side faces up (tilt 0).
+    /// let image = Grid::from_fn(9, 9, |_, r| 1.0 - r as f64 / 10.0);
+    /// let (tilt, strength) = Token::whole(9, 9)?.bright_side(&image);
+    /// assert!(tilt.abs() < 1e-9 && strength > 0.0);
+    /// # Ok::<(), shadelab::Error>(())
+    /// ```
+    pub fn bright_side(&self, image: &Image) -> (f64, f64) {
+        let w = image.width();
+        let n = self.pixels.len().max(1) as f64;
+        let at = |p: usize| (p % w) as f64;
+        let up = |p: usize| -((p / w) as f64);
+        let (mx, my, mi) = self.pixels.iter().fold((0.0, 0.0, 0.0), |(x, y, i), &p| {
+            (x + at(p), y + up(p), i + image.data()[p])
+        });
+        let (mx, my, mi) = (mx / n, my / n, mi / n);
+        let (mut dx, mut dy, mut spread) = (0.0, 0.0, 0.0);
+        for &p in &self.pixels {
+            let weight = image.data()[p] - mi;
+            dx += weight * (at(p) - mx);
+            dy += weight * (up(p) - my);
+            spread += weight.abs();
+        }
+        let length = dx.hypot(dy);
+        if length == 0.0 || !length.is_finite() {
+            return (0.0, 0.0);
+        }
+        // Tilt 0 is +y (up), +90 is −x (left).
+        let tilt = crate::analysis::wrap_360((-dx).atan2(dy).to_degrees());
+        (tilt, length / (spread * self.half_width.max(1.0)))
+    }
+
     /// Whether every pixel of the token is set in `mask`.
     pub fn inside(&self, mask: &crate::grid::Mask) -> bool {
         self.pixels.iter().all(|&p| mask.data()[p])
     }
+}
+
+/// The reading of a token's signed convexity: convex, concave, or flat when it is within
+/// [`CONVEXITY_ZERO`](super::prior_sweep::CONVEXITY_ZERO) of zero.
+///
+/// ```
+/// use shadelab::analysis::convexity::Verdict;
+/// assert_eq!(Verdict::of(0.3), Verdict::Convex);
+/// assert_eq!(Verdict::of(-0.3).to_string(), "concave");
+/// assert_eq!(Verdict::of(0.0), Verdict::Flat);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    /// The middle stands out toward the viewer.
+    Convex,
+    /// The middle lies back, away from the viewer.
+    Concave,
+    /// Neither: the convexity is (numerically) zero.
+    Flat,
+}
+
+impl Verdict {
+    /// The verdict on a signed convexity (NaN reads as flat).
+    pub fn of(convexity: f64) -> Verdict {
+        if convexity.is_nan() || convexity.abs() <= super::prior_sweep::CONVEXITY_ZERO {
+            Verdict::Flat
+        } else if convexity > 0.0 {
+            Verdict::Convex
+        } else {
+            Verdict::Concave
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Verdict::Convex => "convex",
+            Verdict::Concave => "concave",
+            Verdict::Flat => "flat",
+        })
+    }
+}
+
+/// The index of the token whose centroid lies nearest the centre of a `width`-pixel-wide
+/// picture (the first of equals), `None` when there are no tokens: the *central target* a
+/// single judgement is about.
+///
+/// ```
+/// use shadelab::analysis::convexity::{central_token, tokens_from_labels};
+/// use shadelab::Grid;
+/// // Two 4x4 squares in a 12x4 picture: label 1 on the left, label 2 in the middle.
+/// let labels = Grid::from_fn(12, 4, |c, _| if c < 4 { 1u16 } else if (4..8).contains(&c) { 2 } else { 0 });
+/// let tokens = tokens_from_labels(&labels, &[])?;
+/// assert_eq!(central_token(&tokens, 12, 4), Some(1));
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+pub fn central_token(tokens: &[Token], width: usize, height: usize) -> Option<usize> {
+    let (cx, cy) = ((width as f64 - 1.0) / 2.0, (height as f64 - 1.0) / 2.0);
+    let distance = |t: &Token| {
+        let (x, y) = t.centroid(width);
+        (x - cx).hypot(y - cy)
+    };
+    let mut best: Option<(usize, f64)> = None;
+    for (i, t) in tokens.iter().enumerate() {
+        let d = distance(t);
+        if best.map_or(true, |(_, b)| d < b) {
+            best = Some((i, d));
+        }
+    }
+    best.map(|(i, _)| i)
 }
 
 fn mean_over(depth: &Image, pixels: &[usize]) -> f64 {
@@ -258,6 +389,63 @@ fn lower_envelope(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 mod tests {
     use super::*;
     use crate::grid::Grid;
+
+    #[test]
+    fn verdicts_and_the_central_token() {
+        use crate::analysis::prior_sweep::CONVEXITY_ZERO;
+        assert_eq!(Verdict::of(2.0 * CONVEXITY_ZERO), Verdict::Convex);
+        assert_eq!(Verdict::of(-2.0 * CONVEXITY_ZERO), Verdict::Concave);
+        assert_eq!(Verdict::of(CONVEXITY_ZERO), Verdict::Flat);
+        assert_eq!(Verdict::of(f64::NAN), Verdict::Flat);
+        assert_eq!(
+            serde_json::to_string(&Verdict::Concave).unwrap(),
+            "\"concave\""
+        );
+        // A 3x3 grid of 5x5 squares in a 17x17 picture: the middle one (label 5) is central,
+        // whatever the label order.
+        let labels = Grid::from_fn(17, 17, |c, r| {
+            let (i, j) = (c / 6, r / 6);
+            if c % 6 == 5 || r % 6 == 5 {
+                0u16
+            } else {
+                [3u16, 1, 7, 2, 5, 8, 9, 4, 6][j * 3 + i]
+            }
+        });
+        let tokens = tokens_from_labels(&labels, &[]).unwrap();
+        let k = central_token(&tokens, 17, 17).unwrap();
+        assert_eq!(tokens[k].label, 5);
+        assert_eq!(central_token(&[], 17, 17), None);
+    }
+
+    #[test]
+    fn the_bright_side_of_a_lit_bump_faces_the_light_and_a_dimple_away() {
+        use crate::light::Light;
+        // A hemisphere of radius 10 under lights of several tilts: the bright side faces the
+        // light's tilt; the depth-negated dimple faces the opposite way.
+        let (w, h, rad) = (25usize, 25usize, 10.0);
+        for tilt in [0.0, 26.0, 90.0, 200.0, 300.0] {
+            let s = Light::from_tilt_slant(tilt, 45.0).unwrap().direction();
+            for sign in [1.0, -1.0] {
+                let image = Grid::from_fn(w, h, |c, r| {
+                    let (x, y) = (c as f64 - 12.0, 12.0 - r as f64);
+                    let z2 = rad * rad - x * x - y * y;
+                    let n = if z2 > 0.0 {
+                        [sign * x / rad, sign * y / rad, z2.sqrt() / rad]
+                    } else {
+                        [0.0, 0.0, 1.0]
+                    };
+                    (n[0] * s.x + n[1] * s.y + n[2] * s.z).max(0.0)
+                });
+                let (side, strength) = Token::whole(w, h).unwrap().bright_side(&image);
+                let want = if sign > 0.0 { tilt } else { tilt + 180.0 };
+                let off = crate::analysis::wrap_180(side - want).abs();
+                assert!(off < 1.0, "tilt {tilt} sign {sign}: {side}");
+                assert!(strength > 0.01, "{strength}");
+            }
+        }
+        let flat = Grid::new(5, 5, 0.5);
+        assert_eq!(Token::whole(5, 5).unwrap().bright_side(&flat), (0.0, 0.0));
+    }
 
     /// Brute-force distance from each token pixel to the nearest non-token pixel (the frame
     /// counting as outside).

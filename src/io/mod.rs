@@ -18,8 +18,9 @@ pub use npy::{
     read_image_from_bytes, read_normals, write_f32, write_image, write_normals, NpyArray,
 };
 pub use png::{
-    read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes, read_rgb,
-    write_gray, write_labels, write_mask, write_rgb, BitDepth, GrayInfo, LUMINANCE_FORMULA,
+    display_rgba8, read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes,
+    read_rgb, write_gray, write_labels, write_mask, write_rgb, BitDepth, GrayInfo,
+    LUMINANCE_FORMULA,
 };
 pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight};
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};

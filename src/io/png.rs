@@ -224,6 +224,29 @@ fn encode(v: f64, gamma: Option<f64>, max: f64) -> f64 {
     (v * max).round()
 }
 
+/// `image` (linear RGB 0..1, clamped; NaN as 0) as 8-bit RGBA bytes, row-major from the top
+/// row, opaque, display-encoded with v^(1/gamma) when `gamma` is given: the layout of a
+/// browser's `ImageData`. Fails on a gamma outside (0, 10].
+///
+/// ```
+/// use shadelab::{io::display_rgba8, Grid};
+/// let image = Grid::from_vec(2, 1, vec![[0.0, 0.5, 1.0], [0.25; 3]])?;
+/// assert_eq!(display_rgba8(&image, None)?, [0, 128, 255, 255, 64, 64, 64, 255]);
+/// assert_eq!(display_rgba8(&image, Some(2.0))?[4], 128); // 0.25^(1/2) = 0.5
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+pub fn display_rgba8(image: &RgbImage, gamma: Option<f64>) -> Result<Vec<u8>> {
+    check_gamma(gamma)?;
+    Ok(image
+        .data()
+        .iter()
+        .flat_map(|p| {
+            let [r, g, b] = p.map(|v| encode(v, gamma, 255.0) as u8);
+            [r, g, b, 255]
+        })
+        .collect())
+}
+
 fn write_png(
     path: &Path,
     w: usize,
