@@ -18,6 +18,7 @@
 
 use serde_json::{json, Value};
 use shadelab::analysis::convexity::{central_token, Verdict};
+use shadelab::analysis::observer_model::ModelParams;
 use shadelab::analysis::rotation::rotate_quarter_turns;
 use shadelab::analysis::Interpreter;
 use shadelab::colormap::Colormap;
@@ -363,14 +364,12 @@ pub fn frame(request: &Request) -> Result<Frame> {
     })
 }
 
-/// The observer's P(convex | θ) = λ/2 + (1 − λ)·π·vM(θ; μ, κ) / (π·vM(θ; μ, κ) + (1 − π)·vM(θ +
-/// 180°; μ, κ)), with θ the direction the bright side faces, μ the prior's light tilt (degrees,
-/// tilt convention), κ ≥ 0 its concentration, π the convexity prior and λ the lapse rate.
-///
-/// The model of issue 17, computed here until the library's observer
-/// (`shadelab::analysis::observer`) has it; then this should call that one. The von Mises
-/// normalisers cancel, so the ratio is 1 / (1 + ((1 − π)/π)·e^(−2κ·cos(θ − μ))). NaN when a
-/// value is out of range (κ < 0, π or λ outside 0..1).
+/// The observer's P(convex | θ) for the bright side facing `theta_deg` (tilt convention), with
+/// the prior's light tilt `mu_deg`, concentration `kappa`, convexity prior `pi` and lapse rate
+/// `lapse`: the library's one observer model
+/// ([`shadelab::analysis::observer_model::ModelParams::p_convex`]), the model `shadelab fit
+/// observer` estimates. NaN when a value is out of range (κ < 0, π or λ outside 0..1), so the
+/// page shows no number rather than a wrong one.
 ///
 /// ```
 /// use shadelab_web::p_convex_model;
@@ -379,26 +378,16 @@ pub fn frame(request: &Request) -> Result<Frame> {
 /// assert!(p_convex_model(180.0, 26.0, 2.0, 0.5, 0.0) < 0.1);
 /// ```
 pub fn p_convex_model(theta_deg: f64, mu_deg: f64, kappa: f64, pi: f64, lapse: f64) -> f64 {
-    let ok = |v: f64| (0.0..=1.0).contains(&v);
-    if !(theta_deg.is_finite() && mu_deg.is_finite() && kappa >= 0.0 && ok(pi) && ok(lapse)) {
-        return f64::NAN;
-    }
-    let c = (theta_deg - mu_deg).to_radians().cos();
-    let posterior = if pi == 0.0 {
-        0.0
-    } else if pi == 1.0 {
-        1.0
-    } else {
-        let x = ((1.0 - pi) / pi).ln() - 2.0 * kappa * c;
-        // 1 / (1 + e^x), without overflow for large x.
-        if x > 0.0 {
-            let e = (-x).exp();
-            e / (1.0 + e)
-        } else {
-            1.0 / (1.0 + x.exp())
-        }
+    let model = ModelParams {
+        tilt_deg: mu_deg,
+        kappa,
+        convexity_prior: pi,
+        lapse,
     };
-    lapse / 2.0 + (1.0 - lapse) * posterior
+    match (theta_deg.is_finite(), model.validate()) {
+        (true, Ok(())) => model.p_convex(theta_deg),
+        _ => f64::NAN,
+    }
 }
 
 // ---- The C ABI the page calls (one instance, one thread). ----
