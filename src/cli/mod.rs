@@ -6,6 +6,7 @@ mod analyze;
 mod bench;
 mod describe;
 mod eval;
+mod experiment;
 mod flags;
 mod gallery;
 mod output;
@@ -75,6 +76,8 @@ enum Command {
     Study(study::Command),
     /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
     Eval(eval::Args),
+    /// Write a self-contained browser experiment (bump or dimple?) with a pilot mode.
+    Experiment(experiment::Args),
 }
 
 /// An error from a subcommand, with whether it is a usage error (exit 2).
@@ -227,5 +230,6 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Bench(args) => bench::run(args, global),
         Command::Study(args) => study::run(args, global),
         Command::Eval(args) => eval::run(args, global),
+        Command::Experiment(args) => experiment::run(args, global),
     }
 }
