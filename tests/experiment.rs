@@ -383,25 +383,13 @@ fn results(dom: &str) -> Option<String> {
     )
 }
 
-/// Where the bright side of the middle of a screenshot faces (tilt convention, degrees).
+/// Where the bright side of the middle 300 × 300 pixels of a screenshot faces (tilt
+/// convention, degrees), as the library measures its images.
 fn bright_side_on_screen(path: &Path) -> f64 {
     let (image, _) = shadelab::io::read_luminance(path, 1 << 24).unwrap();
-    let (w, h) = (image.width(), image.height());
-    let (cx, cy, half) = (w / 2, h / 2, 150);
-    let pixels: Vec<(f64, f64, f64)> = (cy - half..cy + half)
-        .flat_map(|r| (cx - half..cx + half).map(move |c| (c, r)))
-        .map(|(c, r)| (c as f64 - cx as f64, cy as f64 - r as f64, *image.get(c, r)))
-        .collect();
-    let m = pixels.iter().map(|p| p.2).sum::<f64>() / pixels.len() as f64;
-    let (dx, dy) = pixels.iter().fold((0.0, 0.0), |(sx, sy), &(x, y, v)| {
-        (sx + (v - m) * x, sy + (v - m) * y)
-    });
-    assert!(
-        dx.hypot(dy) > 1.0,
-        "nothing shaded in the middle of {}",
-        path.display()
-    );
-    (-dx).atan2(dy).to_degrees().rem_euclid(360.0)
+    let (cx, cy) = (image.width() / 2, image.height() / 2);
+    experiment::bright_side(&image, &|c, r| c.abs_diff(cx) < 150 && r.abs_diff(cy) < 150)
+        .unwrap_or_else(|| panic!("nothing shaded in the middle of {}", path.display()))
 }
 
 #[test]

@@ -328,8 +328,8 @@ pub struct ImageEntry {
     /// The light it was rendered under.
     pub light: String,
     /// Where its bright side faces, measured on the pixels (tilt convention, degrees): the
-    /// direction of the luminance-weighted centroid of the target, which must lie within 45°
-    /// of the rotation.
+    /// direction of the luminance-weighted centroid of the target (to 0.01°), which must lie
+    /// within 45° of the rotation.
     pub bright_side_deg: f64,
 }
 
@@ -426,26 +426,32 @@ fn image_stem(deg: f64) -> String {
     }
 }
 
-/// Where the bright side of the target faces (tilt convention, degrees in [0, 360)): the
-/// direction from the target's centre to its luminance-weighted centroid; `None` for a flat
-/// target.
+/// Where the bright side of the target faces (tilt convention, degrees in [0, 360)): see
+/// [`bright_side`]; `None` for a colour picture, one without a target, or a flat target.
 pub fn bright_side_deg(output: &Output) -> Option<f64> {
     let Pixels::Gray(image) = &output.pixels else {
         return None;
     };
     let labels = &output.targets.as_ref()?.labels;
+    bright_side(image, &|c, r| *labels.get(c, r) != 0)
+}
+
+/// Where the bright side of the pixels `inside` faces (tilt convention: 0 = up, +90 = left;
+/// degrees in [0, 360)): the direction of Σ (v − v̄)·(x, y) over those pixels, their
+/// luminance-weighted centroid seen from their plain centroid; `None` when it is zero (a flat
+/// region). Used on every image of an experiment, and by the tests on screenshots of the page.
+pub fn bright_side(
+    image: &crate::grid::Image,
+    inside: &dyn Fn(usize, usize) -> bool,
+) -> Option<f64> {
     let (w, h) = (image.width(), image.height());
-    let inside: Vec<(f64, f64, f64)> = (0..h)
+    let pixels: Vec<(f64, f64, f64)> = (0..h)
         .flat_map(|r| (0..w).map(move |c| (c, r)))
-        .filter(|&(c, r)| *labels.get(c, r) != 0)
-        .map(|(c, r)| {
-            let x = c as f64 - (w as f64 - 1.0) / 2.0;
-            let y = (h as f64 - 1.0) / 2.0 - r as f64;
-            (x, y, *image.get(c, r))
-        })
+        .filter(|&(c, r)| inside(c, r))
+        .map(|(c, r)| (c as f64, -(r as f64), *image.get(c, r)))
         .collect();
-    let mean = inside.iter().map(|p| p.2).sum::<f64>() / inside.len().max(1) as f64;
-    let (dx, dy) = inside.iter().fold((0.0, 0.0), |(sx, sy), &(x, y, v)| {
+    let mean = pixels.iter().map(|p| p.2).sum::<f64>() / pixels.len().max(1) as f64;
+    let (dx, dy) = pixels.iter().fold((0.0, 0.0), |(sx, sy), &(x, y, v)| {
         (sx + (v - mean) * x, sy + (v - mean) * y)
     });
     if dx.hypot(dy) < 1e-9 {
@@ -520,7 +526,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             rotation_deg: deg,
             file: format!("images/{}.png", image_stem(deg)),
             light: light(deg),
-            bright_side_deg: bright,
+            bright_side_deg: (bright * 100.0).round() / 100.0,
         });
     }
     let first = rendered
