@@ -526,7 +526,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             rotation_deg: deg,
             file: format!("images/{}.png", image_stem(deg)),
             light: light(deg),
-            bright_side_deg: (bright * 100.0).round() / 100.0,
+            bright_side_deg: ((bright * 100.0).round() / 100.0).rem_euclid(360.0),
         });
     }
     let first = rendered
