@@ -93,6 +93,7 @@ pub use visual_size::{Geometry, SizeRequest};
 // The commands as library pipelines.
 pub use lightness::Model as LightnessModel;
 pub use pipeline::bench::{BenchConfig, BenchReport};
+pub use pipeline::experiment::{Config as ExperimentConfig, Report as ExperimentReport};
 pub use pipeline::fading::{FadingConfig, FadingReport};
 pub use pipeline::gallery::{GalleryConfig, GalleryReport};
 pub use pipeline::lightness::{LightnessConfig, LightnessReport};

@@ -149,6 +149,17 @@ const RUNS: &[&[&str]] = &[
         "fit",
     ],
     &["gallery", "--out", "gallery"],
+    &[
+        "experiment",
+        "--out",
+        "experiment",
+        "--rotations",
+        "0:360:90",
+        "--repeats",
+        "2",
+        "--ppd",
+        "16",
+    ],
 ];
 
 const STUDY: &str = r#"{"stimuli": [{"stimulus": "bumps", "params": {"rows": 1, "columns": [1, 2]},

@@ -7,6 +7,7 @@ mod cli;
 mod determinism;
 mod docs;
 mod evaluation;
+mod experiment;
 mod fast_solver;
 mod figures;
 mod fit;

@@ -6,6 +6,7 @@ mod analyze;
 mod bench;
 mod describe;
 mod eval;
+mod experiment;
 mod fit;
 mod flags;
 mod gallery;
@@ -76,6 +77,8 @@ enum Command {
     Study(study::Command),
     /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
     Eval(eval::Args),
+    /// Write a self-contained browser experiment (bump or dimple?) with a pilot mode.
+    Experiment(experiment::Args),
     /// Fit models to responses: `fit observer` estimates a light prior, a convexity prior and
     /// a lapse rate from bump/dimple judgements.
     #[command(subcommand)]
@@ -232,6 +235,7 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Bench(args) => bench::run(args, global),
         Command::Study(args) => study::run(args, global),
         Command::Eval(args) => eval::run(args, global),
+        Command::Experiment(args) => experiment::run(args, global),
         Command::Fit(args) => fit::run(args, global),
     }
 }

@@ -1,0 +1,114 @@
+//! `shadelab experiment --out DIR`: a self-contained browser experiment ("bump or dimple?").
+
+use super::progress::Bar;
+use super::{CliError, CliResult, Global};
+use shadelab::pipeline::experiment::{run as build, write, Config};
+use shadelab::visual_size::parse_size;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `experiment`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Output folder (written whole, or not at all): index.html, experiment.js, experiment.css, design.json, README.md and images/.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// The stimulus shown (any with a light and one target, e.g. bumps, gaussian, sphere) [default: bumps, one bump].
+    #[arg(long, value_name = "NAME")]
+    pub stimulus: Option<String>,
+    /// Set a stimulus parameter (repeatable); `shadelab describe NAME` lists them. Not the light: each trial's rotation sets it.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::render::utf8_text())]
+    pub set: Vec<String>,
+    /// The rotations θ (the direction the bright side faces; 0 = up, +90 = left), degrees: START:STOP:STEP or a list [default: 0:360:15].
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
+    pub rotations: Option<String>,
+    /// Test trials per rotation [default: 16].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub repeats: Option<usize>,
+    /// Practice trials before the test [default: 8].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub practice: Option<usize>,
+    /// The light's slant, degrees from the line of sight [default: 45].
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub slant: Option<f64>,
+    /// Size of each image in degrees: D (square) or WxH (width first; design.json writes [h, w]) [default: 4].
+    #[arg(long, value_name = "DEG|WxH", allow_hyphen_values = true)]
+    pub visual_size: Option<String>,
+    /// Pixels per degree of the images (and of the display when the page is not calibrated) [default: 32].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub ppd: Option<f64>,
+    /// Viewing distance in cm, for the page's credit-card calibration [default: 57].
+    #[arg(long, value_name = "CM", allow_hyphen_values = true)]
+    pub viewing_distance: Option<f64>,
+    /// Seed of the trial order [default: 1].
+    #[arg(long, allow_hyphen_values = true)]
+    pub seed: Option<u64>,
+    /// The two response keys, bump then dimple, e.g. fj [default: fj].
+    #[arg(long, value_name = "BUMP,DIMPLE")]
+    pub keys: Option<String>,
+}
+
+/// Runs `experiment`.
+pub fn run(args: Args, global: &Global) -> CliResult {
+    let started = Instant::now();
+    let mut config = Config::new(&args.out);
+    if let Some(name) = &args.stimulus {
+        config.set_stimulus(name)?;
+    }
+    config
+        .params
+        .extend(shadelab::params::Params::parse_pairs(&args.set)?);
+    if let Some(text) = &args.rotations {
+        config.rotations = super::flags::angles(text, "--rotations")?;
+    }
+    if let Some(n) = args.repeats {
+        config.repeats = n;
+    }
+    if let Some(n) = args.practice {
+        config.practice = n;
+    }
+    if let Some(s) = args.slant {
+        config.slant_deg = s;
+    }
+    if let Some(v) = &args.visual_size {
+        config.visual_size = parse_size::<f64>(v, "--visual-size")?;
+    }
+    if let Some(p) = args.ppd {
+        config.ppd = p;
+    }
+    if let Some(d) = args.viewing_distance {
+        config.viewing_distance_cm = d;
+    }
+    if let Some(seed) = args.seed {
+        config.seed = seed;
+    }
+    if let Some(keys) = &args.keys {
+        let chars: Vec<char> = keys.chars().filter(|c| *c != ',').collect();
+        let [convex, concave] = chars[..] else {
+            return Err(CliError::usage(format!(
+                "--keys '{keys}' must be two keys, bump then dimple (e.g. fj)"
+            )));
+        };
+        config.keys.convex = convex.to_ascii_lowercase();
+        config.keys.concave = concave.to_ascii_lowercase();
+    }
+    config.force = global.force;
+    config.max_pixels = global.max_pixels;
+    config.validate()?;
+    let report = build(&config, &Bar::new(global.quiet))?;
+    let folder = write(&config, &report)?;
+    let out = super::output::Output::new(global);
+    out.wrote(&folder, started.elapsed().as_secs_f64());
+    let d = &report.design;
+    out.results(
+        &format!(
+            "{} trials ({} practice, {} rotations x {} repeats); open {}/index.html from a web server (python3 -m http.server), or pilot it with index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1",
+            d.trials.len(),
+            d.practice_trials,
+            d.rotations_deg.len(),
+            d.repeats,
+            folder.display()
+        ),
+        &report,
+    )
+}

@@ -1,0 +1,749 @@
+//! `experiment` as a pipeline: a self-contained browser experiment that measures a person's
+//! light-from-above and convexity priors. One shaded bump per trial, its light turned to each
+//! rotation θ (the direction its bright side faces; tilt convention, 0 = up, +90 = left), a
+//! "bump or dimple?" key response, and the responses as a CSV that `shadelab fit observer`
+//! reads (`participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image`).
+//!
+//! [`run`] renders one image per rotation (with the render pipeline, so every image has its
+//! sidecar) and draws the seeded trial order; [`write`] lands the folder whole: `index.html`
+//! (the design embedded), `experiment.js` (a plain-JavaScript runner, no libraries, no
+//! network), `experiment.css`, `design.json` (every trial), `README.md` and `images/`.
+//!
+//! ```
+//! use shadelab::pipeline::experiment::{run, write, Config};
+//! use shadelab::NoProgress;
+//!
+//! let dir = std::env::temp_dir().join(format!("shadelab-doc-experiment-{}", std::process::id()));
+//! let mut config = Config::new(&dir);
+//! config.rotations = vec![0.0, 90.0, 180.0, 270.0];
+//! config.repeats = 2;
+//! config.practice = 1;
+//! config.validate()?;
+//! let report = run(&config, &NoProgress)?;
+//! assert_eq!(report.design.trials.len(), 4 * 2 + 1);
+//! let folder = write(&config, &report)?;
+//! assert!(folder.join("index.html").exists() && folder.join("design.json").exists());
+//! assert!(folder.join("images/theta-090.png").exists());
+//! # std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use crate::error::{Error, Result};
+use crate::io::{self, AtomicDir, BitDepth};
+use crate::parallel::prelude::*;
+use crate::progress::Progress;
+use crate::random::SplitMix64;
+use crate::stimulus::{self, ExportOptions, Output, Pixels, Request};
+use crate::visual_size::{Geometry, SizeRequest};
+use serde::Serialize;
+use serde_json::{Map, Value};
+use std::path::PathBuf;
+
+/// The file that marks a folder as a shadelab experiment (its `program` is `shadelab`).
+pub const MARKER: &str = "design.json";
+
+/// The header of the responses CSV the page writes (and `fit observer` reads).
+pub const CSV_HEADER: &str =
+    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image";
+
+/// The observer model the pilot mode simulates and `fit observer` estimates.
+pub const MODEL: &str =
+    "P(convex | θ) = λ/2 + (1 − λ) · π·vM(θ; μ, κ) / (π·vM(θ; μ, κ) + (1 − π)·vM(θ + 180°; μ, κ))";
+
+/// What θ means in the design, the CSV and the model.
+pub const CONVENTION: &str = "rotation_deg = θ = the direction the stimulus's bright side faces \
+     (its light's tilt): 0 = up, +90 = left (counter-clockwise), in [0, 360)";
+
+/// Default repeats of each rotation: with 24 rotations, enough for a 95 % interval of about
+/// ±10° on the prior's direction at κ = 1 (docs/experiments.md gives the argument).
+pub const DEFAULT_REPEATS: usize = 16;
+
+/// Most repeats of each rotation accepted.
+pub const MAX_REPEATS: usize = 1000;
+
+/// Most practice trials accepted.
+pub const MAX_PRACTICE: usize = 100;
+
+/// The runner and its style sheet, copied into every experiment folder.
+const RUNNER_JS: &str = include_str!("../../assets/experiment/experiment.js");
+const RUNNER_CSS: &str = include_str!("../../assets/experiment/experiment.css");
+const PAGE_HTML: &str = include_str!("../../assets/experiment/index.html");
+
+/// The response keys (lower-case letters or digits).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Keys {
+    /// The key for "bump" (convex).
+    pub convex: char,
+    /// The key for "dimple" (concave).
+    pub concave: char,
+}
+
+impl Default for Keys {
+    fn default() -> Self {
+        Keys {
+            convex: 'f',
+            concave: 'j',
+        }
+    }
+}
+
+/// How long the screens between responses last, in milliseconds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Timing {
+    /// The fixation cross before each stimulus.
+    pub fixation_ms: u32,
+    /// The blank screen after each response.
+    pub blank_ms: u32,
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Timing {
+            fixation_ms: 500,
+            blank_ms: 300,
+        }
+    }
+}
+
+/// An experiment to write: the stimulus, the design, the display and the output folder.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// The stimulus (any shadelab stimulus with a `light` parameter and one target).
+    pub stimulus: String,
+    /// Its parameters (not `light`: each trial's rotation sets it); missing ones take their
+    /// defaults.
+    pub params: Map<String, Value>,
+    /// The slant of the light, degrees from the line of sight (0 < slant < 90).
+    pub slant_deg: f64,
+    /// The rotations θ in degrees (normalised to [0, 360)); each is shown `repeats` times.
+    pub rotations: Vec<f64>,
+    /// How many times each rotation is shown in the test block.
+    pub repeats: usize,
+    /// Practice trials before the test (rotations drawn with the seed; not for analysis).
+    pub practice: usize,
+    /// Pixels per degree of the rendered images (and of the display when the page is not
+    /// calibrated: one image pixel per CSS pixel).
+    pub ppd: f64,
+    /// The viewing distance the calibration step assumes, in centimetres.
+    pub viewing_distance_cm: f64,
+    /// The size of each image in degrees, (height, width).
+    pub visual_size: (f64, f64),
+    /// Seed of the trial order (and of the stimulus's own random layout, if any).
+    pub seed: u64,
+    /// The response keys.
+    pub keys: Keys,
+    /// Fixation and blank durations.
+    pub timing: Timing,
+    /// Display gamma of the images (8-bit PNGs for the browser; `None` writes linear values).
+    pub gamma: Option<f64>,
+    /// The output folder.
+    pub out: PathBuf,
+    /// Replace a folder that shadelab did not write.
+    pub force: bool,
+    /// The largest image made, in pixels.
+    pub max_pixels: usize,
+}
+
+impl Config {
+    /// The default experiment into `out`: one hemispherical bump (shadelab's `bumps` with one
+    /// disc), 4° × 4° at 32 ppd, lit at slant 45°, rotations every 15° (24), 16 repeats, 8
+    /// practice trials, 57 cm viewing distance, keys F = bump and J = dimple, seed 1.
+    pub fn new(out: impl Into<PathBuf>) -> Config {
+        Config {
+            stimulus: "bumps".into(),
+            params: default_params("bumps"),
+            slant_deg: 45.0,
+            rotations: (0..24).map(|i| f64::from(i) * 15.0).collect(),
+            repeats: DEFAULT_REPEATS,
+            practice: 8,
+            ppd: 32.0,
+            viewing_distance_cm: 57.0,
+            visual_size: (4.0, 4.0),
+            seed: 1,
+            keys: Keys::default(),
+            timing: Timing::default(),
+            gamma: Some(2.2),
+            out: out.into(),
+            force: false,
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+        }
+    }
+
+    /// Shows `name` instead, with the parameters that make it one target (for `bumps`: one
+    /// bump; for the others, their defaults).
+    pub fn set_stimulus(&mut self, name: &str) -> Result<()> {
+        stimulus::find(name)?;
+        self.stimulus = name.to_string();
+        self.params = default_params(name);
+        Ok(())
+    }
+
+    /// Checks everything that needs no rendering; each problem is one line.
+    pub fn validate(&self) -> Result<()> {
+        let info = stimulus::find(&self.stimulus)?.info();
+        if !info.params.iter().any(|p| p.name == "light") {
+            return Err(Error::invalid(format!(
+                "'{}' has no light to turn: the experiment rotates the shading by turning the light (use a shaded stimulus such as bumps, gaussian or sphere)",
+                self.stimulus
+            )));
+        }
+        if self.params.contains_key("light") {
+            return Err(Error::invalid(
+                "the light is set by each trial's rotation; give its slant instead of a light parameter",
+            ));
+        }
+        if !(self.slant_deg.is_finite() && self.slant_deg > 0.0 && self.slant_deg < 90.0) {
+            return Err(Error::invalid(format!(
+                "the light's slant {} must be above 0 and below 90 degrees",
+                self.slant_deg
+            )));
+        }
+        rotations(&self.rotations)?;
+        if self.repeats == 0 || self.repeats > MAX_REPEATS {
+            return Err(Error::invalid(format!(
+                "repeats {} must be 1 to {MAX_REPEATS}",
+                self.repeats
+            )));
+        }
+        if self.practice > MAX_PRACTICE {
+            return Err(Error::invalid(format!(
+                "practice trials {} must be at most {MAX_PRACTICE}",
+                self.practice
+            )));
+        }
+        if !(self.ppd.is_finite() && self.ppd > 0.0 && self.ppd <= 1000.0) {
+            return Err(Error::invalid(format!(
+                "pixels per degree {} must be above 0 and at most 1000",
+                self.ppd
+            )));
+        }
+        if !(self.viewing_distance_cm.is_finite()
+            && (10.0..=1000.0).contains(&self.viewing_distance_cm))
+        {
+            return Err(Error::invalid(format!(
+                "the viewing distance {} cm must be 10 to 1000 cm",
+                self.viewing_distance_cm
+            )));
+        }
+        let (h, w) = self.visual_size;
+        if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0 && h <= 180.0 && w <= 180.0) {
+            return Err(Error::invalid(format!(
+                "the visual size {h} x {w} degrees (height x width) must be above 0 and at most 180 each"
+            )));
+        }
+        let key_ok = |k: char| k.is_ascii_lowercase() || k.is_ascii_digit();
+        if !key_ok(self.keys.convex) || !key_ok(self.keys.concave) {
+            return Err(Error::invalid(format!(
+                "the response keys '{}' and '{}' must be lower-case letters or digits",
+                self.keys.convex, self.keys.concave
+            )));
+        }
+        if self.keys.convex == self.keys.concave {
+            return Err(Error::invalid(format!(
+                "the two response keys are both '{}'",
+                self.keys.convex
+            )));
+        }
+        if self.timing.fixation_ms > 10_000 || self.timing.blank_ms > 10_000 {
+            return Err(Error::invalid(
+                "the fixation and blank screens must each last at most 10000 ms",
+            ));
+        }
+        if let Some(g) = self.gamma {
+            if !(g.is_finite() && (0.1..=10.0).contains(&g)) {
+                return Err(Error::invalid(format!(
+                    "the display gamma {g} must be 0.1 to 10"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The parameters that make `name` one target: `bumps` with one bump, the others as they are.
+fn default_params(name: &str) -> Map<String, Value> {
+    let mut params = Map::new();
+    if name == "bumps" {
+        params.insert("rows".into(), 1.into());
+        params.insert("columns".into(), 1.into());
+        params.insert("pattern".into(), "bumps".into());
+    }
+    params
+}
+
+/// The rotations normalised to [0, 360), refused when empty, not finite or repeated.
+fn rotations(given: &[f64]) -> Result<Vec<f64>> {
+    if given.is_empty() {
+        return Err(Error::invalid("the experiment needs at least one rotation"));
+    }
+    if given.len() > 360 {
+        return Err(Error::invalid(format!(
+            "{} rotations are too many (at most 360)",
+            given.len()
+        )));
+    }
+    let mut out: Vec<f64> = Vec::with_capacity(given.len());
+    for &r in given {
+        if !r.is_finite() {
+            return Err(Error::invalid(format!("the rotation {r} is not a number")));
+        }
+        let n = r.rem_euclid(360.0);
+        // 359.9999999 and 0 are the same direction on screen.
+        let n = if (360.0 - n) < 1e-9 { 0.0 } else { n };
+        if out.iter().any(|o| (o - n).abs() < 1e-9) {
+            return Err(Error::invalid(format!(
+                "the rotation {r} is given twice (rotations are taken modulo 360)"
+            )));
+        }
+        out.push(n);
+    }
+    Ok(out)
+}
+
+/// The display the images were made for.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Display {
+    /// Pixels per degree of the images.
+    pub ppd: f64,
+    /// The viewing distance the calibration assumes, centimetres.
+    pub viewing_distance_cm: f64,
+    /// Each image's size in degrees, (height, width).
+    pub visual_size: (f64, f64),
+    /// Each image's size in pixels, (height, width).
+    pub shape: (usize, usize),
+    /// The display gamma of the images, if any.
+    pub gamma: Option<f64>,
+    /// The page's background, the images' own background colour (`#rrggbb`), so their edges
+    /// do not show.
+    pub background: String,
+}
+
+/// One stimulus image of the folder.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImageEntry {
+    /// The rotation θ it shows, degrees.
+    pub rotation_deg: f64,
+    /// Its path in the folder (`images/theta-015.png`); its sidecar and mask lie beside it.
+    pub file: String,
+    /// The light it was rendered under.
+    pub light: String,
+    /// Where its bright side faces, measured on the pixels (tilt convention, degrees): the
+    /// direction of the luminance-weighted centroid of the target (to 0.01°), which must lie
+    /// within 45° of the rotation.
+    pub bright_side_deg: f64,
+}
+
+/// One trial, in presentation order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Trial {
+    /// Its number, from 1, over practice and test.
+    pub trial: usize,
+    /// `practice` or `test`.
+    pub block: &'static str,
+    /// The rotation θ shown, degrees.
+    pub rotation_deg: f64,
+    /// The image shown.
+    pub image: String,
+}
+
+/// The model and conventions the design and its responses follow.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelNote {
+    /// What θ is.
+    pub convention: &'static str,
+    /// The observer model.
+    pub formula: &'static str,
+    /// The responses CSV's header.
+    pub responses_csv: &'static str,
+}
+
+/// Everything the page runs: `design.json`, also embedded in `index.html`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Design {
+    /// Always `shadelab`.
+    pub program: &'static str,
+    /// The version that wrote it.
+    pub version: &'static str,
+    /// The stimulus.
+    pub stimulus: String,
+    /// Its parameters, defaults filled in (without the light, which each image's entry gives).
+    pub parameters: Value,
+    /// The light's slant, degrees.
+    pub light_slant_deg: f64,
+    /// The seed of the trial order.
+    pub seed: u64,
+    /// The rotations, degrees in [0, 360).
+    pub rotations_deg: Vec<f64>,
+    /// Test trials per rotation.
+    pub repeats: usize,
+    /// Practice trials.
+    pub practice_trials: usize,
+    /// Test trials.
+    pub test_trials: usize,
+    /// The display.
+    pub display: Display,
+    /// The response keys.
+    pub keys: Keys,
+    /// Fixation and blank durations.
+    pub timing: Timing,
+    /// θ's convention, the model, the CSV.
+    pub model: ModelNote,
+    /// One image per rotation.
+    pub images: Vec<ImageEntry>,
+    /// Every trial in presentation order: the practice trials, then the shuffled test trials.
+    pub trials: Vec<Trial>,
+}
+
+/// One rendered image, kept for the writer.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// The resolved request (parameters, size, seed).
+    pub request: Request,
+    /// The picture and its target.
+    pub output: Output,
+}
+
+/// What [`run`] made: the design, and the images to write.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// The design (what `design.json` holds).
+    pub design: Design,
+    /// The images, in the order of `design.images`.
+    #[serde(skip)]
+    pub images: Vec<Rendered>,
+}
+
+/// The file name of the image for rotation `deg`: `theta-015`, or `theta-007.5` for a
+/// fractional one.
+fn image_stem(deg: f64) -> String {
+    if deg.fract() == 0.0 {
+        format!("theta-{deg:03.0}")
+    } else {
+        let text = format!("{deg:.6}");
+        let text = text.trim_end_matches('0');
+        let (whole, frac) = text.split_once('.').unwrap_or((text, ""));
+        format!("theta-{whole:0>3}.{frac}")
+    }
+}
+
+/// Where the bright side of the target faces (tilt convention, degrees in [0, 360)): see
+/// [`bright_side`]; `None` for a colour picture, one without a target, or a flat target.
+pub fn bright_side_deg(output: &Output) -> Option<f64> {
+    let Pixels::Gray(image) = &output.pixels else {
+        return None;
+    };
+    let labels = &output.targets.as_ref()?.labels;
+    bright_side(image, &|c, r| *labels.get(c, r) != 0)
+}
+
+/// Where the bright side of the pixels `inside` faces (tilt convention: 0 = up, +90 = left;
+/// degrees in [0, 360)): the direction of Σ (v − v̄)·(x, y) over those pixels, their
+/// luminance-weighted centroid seen from their plain centroid; `None` when it is zero (a flat
+/// region). Used on every image of an experiment, and by the tests on screenshots of the page.
+pub fn bright_side(
+    image: &crate::grid::Image,
+    inside: &dyn Fn(usize, usize) -> bool,
+) -> Option<f64> {
+    let (w, h) = (image.width(), image.height());
+    let pixels: Vec<(f64, f64, f64)> = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .filter(|&(c, r)| inside(c, r))
+        .map(|(c, r)| (c as f64, -(r as f64), *image.get(c, r)))
+        .collect();
+    let mean = pixels.iter().map(|p| p.2).sum::<f64>() / pixels.len().max(1) as f64;
+    let (dx, dy) = pixels.iter().fold((0.0, 0.0), |(sx, sy), &(x, y, v)| {
+        (sx + (v - mean) * x, sy + (v - mean) * y)
+    });
+    if dx.hypot(dy) < 1e-9 {
+        return None;
+    }
+    // Tilt: 0 = up (+y), +90 = left (−x).
+    Some((-dx).atan2(dy).to_degrees().rem_euclid(360.0))
+}
+
+/// The signed difference a − b of two directions, in (−180, 180].
+fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(360.0);
+    if d > 180.0 {
+        d - 360.0
+    } else {
+        d
+    }
+}
+
+/// Renders one image per rotation and draws the trial order (nothing is written; see
+/// [`write`]). Refuses a stimulus that does not show one target, or whose bright side does not
+/// face its light (a dimple), since θ would then mean something else.
+pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
+    config.validate()?;
+    let rotations = rotations(&config.rotations)?;
+    let size = SizeRequest {
+        visual_size: Some(config.visual_size),
+        ppd: Some(config.ppd),
+        shape: None,
+    };
+    let light = |deg: f64| format!("tilt={deg},slant={}", config.slant_deg);
+    progress.start(rotations.len() as u64, "experiment");
+    let rendered: Vec<Rendered> = rotations
+        .par_iter()
+        .map(|&deg| {
+            let mut params = config.params.clone();
+            params.insert("light".into(), Value::from(light(deg)));
+            let (request, output) = stimulus::generate(
+                &config.stimulus,
+                &params,
+                &size,
+                config.seed,
+                config.max_pixels,
+            )?;
+            progress.advance(1);
+            Ok(Rendered { request, output })
+        })
+        .collect::<Result<_>>()?;
+    progress.finish();
+    let mut images = Vec::with_capacity(rendered.len());
+    for (&deg, r) in rotations.iter().zip(&rendered) {
+        let targets = r.output.targets.as_ref().map_or(0, |t| t.names.len());
+        if targets != 1 {
+            return Err(Error::invalid(format!(
+                "'{}' with these parameters shows {targets} targets; the experiment shows one per trial",
+                config.stimulus
+            )));
+        }
+        let bright = bright_side_deg(&r.output).ok_or_else(|| {
+            Error::invalid(format!(
+                "'{}' lit from {deg} degrees has no bright side (its target is flat)",
+                config.stimulus
+            ))
+        })?;
+        if angle_between(bright, deg).abs() > 45.0 {
+            return Err(Error::invalid(format!(
+                "the bright side of '{}' lit from {deg} degrees faces {bright:.0} degrees; the experiment needs a stimulus whose bright side faces its light (a bump, not a dimple)",
+                config.stimulus
+            )));
+        }
+        images.push(ImageEntry {
+            rotation_deg: deg,
+            file: format!("images/{}.png", image_stem(deg)),
+            light: light(deg),
+            bright_side_deg: ((bright * 100.0).round() / 100.0).rem_euclid(360.0),
+        });
+    }
+    let first = rendered
+        .first()
+        .ok_or_else(|| Error::Compute("internal: no image rendered".into()))?;
+    let geometry: Geometry = first.request.geometry;
+    let trials = trial_order(&images, config.repeats, config.practice, config.seed);
+    let mut parameters = first.request.params.to_json();
+    if let Value::Object(map) = &mut parameters {
+        map.remove("light");
+    }
+    let design = Design {
+        program: "shadelab",
+        version: io::PROGRAM_VERSION,
+        stimulus: config.stimulus.clone(),
+        parameters,
+        light_slant_deg: config.slant_deg,
+        seed: config.seed,
+        rotations_deg: rotations,
+        repeats: config.repeats,
+        practice_trials: config.practice,
+        test_trials: images.len() * config.repeats,
+        display: Display {
+            ppd: geometry.ppd,
+            viewing_distance_cm: config.viewing_distance_cm,
+            visual_size: (geometry.height_deg(), geometry.width_deg()),
+            shape: (geometry.height, geometry.width),
+            gamma: config.gamma,
+            background: background_css(&first.output, config.gamma),
+        },
+        keys: config.keys,
+        timing: config.timing,
+        model: ModelNote {
+            convention: CONVENTION,
+            formula: MODEL,
+            responses_csv: CSV_HEADER,
+        },
+        images,
+        trials,
+    };
+    Ok(Report {
+        design,
+        images: rendered,
+    })
+}
+
+/// The practice trials (rotations drawn with the seed), then every rotation `repeats` times in
+/// a seeded shuffle (Fisher–Yates with SplitMix64).
+fn trial_order(images: &[ImageEntry], repeats: usize, practice: usize, seed: u64) -> Vec<Trial> {
+    let mut rng = SplitMix64::new(seed);
+    let trial = |block: &'static str, image: &ImageEntry| Trial {
+        trial: 0,
+        block,
+        rotation_deg: image.rotation_deg,
+        image: image.file.clone(),
+    };
+    let mut trials: Vec<Trial> = (0..practice)
+        .map(|_| trial("practice", &images[rng.below(images.len())]))
+        .collect();
+    let mut test: Vec<Trial> = (0..repeats)
+        .flat_map(|_| images.iter().map(|i| trial("test", i)))
+        .collect();
+    for i in (1..test.len()).rev() {
+        test.swap(i, rng.below(i + 1));
+    }
+    trials.extend(test);
+    for (n, t) in trials.iter_mut().enumerate() {
+        t.trial = n + 1;
+    }
+    trials
+}
+
+/// The colour of the image's top-left pixel (its background) as CSS `#rrggbb`.
+fn background_css(output: &Output, gamma: Option<f64>) -> String {
+    let v = match &output.pixels {
+        Pixels::Gray(g) => [*g.get(0, 0); 3],
+        Pixels::Rgb(c) => *c.get(0, 0),
+    };
+    let [r, g, b] = v.map(|v| crate::analysis::plot::encode(v, gamma));
+    format!("#{r:02x}{g:02x}{b:02x}")
+}
+
+/// Writes the experiment folder whole (or not at all) and returns its path: `index.html`,
+/// `experiment.js`, `experiment.css`, `design.json`, `README.md` and `images/` (per rotation
+/// a PNG, its sidecar and its target mask).
+pub fn write(config: &Config, report: &Report) -> Result<PathBuf> {
+    let dir = AtomicDir::create(&config.out, MARKER, config.force)?;
+    let images = dir.path().join("images");
+    std::fs::create_dir(&images).map_err(|e| Error::io(&images, e))?;
+    let options = ExportOptions {
+        bit_depth: BitDepth::Eight,
+        gamma: config.gamma,
+        force: true,
+        ..ExportOptions::default()
+    };
+    let design = &report.design;
+    report
+        .images
+        .par_iter()
+        .zip(design.images.par_iter())
+        .map(|(r, entry)| {
+            stimulus::write_output(
+                &design.stimulus,
+                &r.request,
+                &r.output,
+                &dir.path().join(&entry.file),
+                &options,
+            )
+            .map(|_| ())
+        })
+        .collect::<Result<Vec<()>>>()?;
+    let json = serde_json::to_value(design)
+        .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?;
+    io::write_json(&dir.path().join(MARKER), &json)?;
+    // The page carries the design itself, so it also runs when opened as a file; `<` is
+    // escaped so that no text of the design can close the script element.
+    let embedded = serde_json::to_string(&json)
+        .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?
+        .replace('<', "\\u003c");
+    let page = PAGE_HTML
+        .replace("{{BACKGROUND}}", &design.display.background)
+        .replace("{{DESIGN}}", &embedded);
+    io::write_text(&dir.path().join("experiment.js"), RUNNER_JS)?;
+    io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
+    io::write_text(&dir.path().join("README.md"), &readme(design))?;
+    io::write_text(&dir.path().join("index.html"), &page)?;
+    dir.commit()
+}
+
+/// The lab's README for one experiment folder.
+fn readme(d: &Design) -> String {
+    let rotations: Vec<String> = d.rotations_deg.iter().map(|r| format!("{r}")).collect();
+    format!(
+        "# A shadelab experiment: bump or dimple?\n\n\
+Written by shadelab {version}. Each trial shows one shaded `{stimulus}` (lit at slant \
+{slant}°) turned so that its bright side faces θ (0 = up, +90 = left); the participant presses \
+**{convex}** for a bump (convex) and **{concave}** for a dimple (concave). {practice} practice \
+trials, then {test} test trials: the rotations {rotations} degrees, {repeats} times each, in the \
+seeded order of `design.json` (seed {seed}).\n\n\
+## Running it\n\n\
+The folder is self-contained (no network, no server code). Serve it from any static host, or \
+locally:\n\n\
+    python3 -m http.server 8000   # in this folder, then open http://localhost:8000/\n\n\
+`index.html?participant=ID` fills in the participant id. The page asks for consent and an id, \
+offers a screen calibration (a credit card held to the screen gives pixels per cm; with the \
+viewing distance of {distance} cm that gives pixels per degree, and the images are scaled to \
+{h}° × {w}°; skipped, each image pixel is one CSS pixel, {ppd} pixels per degree), runs the \
+practice and the test with a fixation cross ({fixation} ms) before each image and a progress \
+bar, and ends with the responses as a CSV to download and in `<pre id=\"results\">`.\n\n\
+## Checking the design first (pilot mode)\n\n\
+`index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1` answers every trial at once \
+from the observer model below (prior light tilt 26° left, concentration 2, convexity prior \
+0.7, lapse rate 0.02, random seed 1) and shows the CSV. `tilt` and `kappa` are required; \
+`convex` defaults to 0.5, `lapse` to 0, `seed` to 1. Fit it with `shadelab fit observer` to see \
+how well this design recovers a prior.\n\n\
+## The responses CSV\n\n\
+    {header}\n\n\
+One row per trial; `block` is `practice` or `test`, `rotation_deg` is θ, `response` is \
+`convex` or `concave`, `rt_ms` the reaction time from the image's onset (milliseconds), `key` \
+the key pressed, `image` the file shown.\n\n\
+## The model\n\n\
+{model}\n\n\
+with θ = rotation_deg, vM a von Mises density, μ the prior's light tilt, κ its concentration, \
+π the convexity prior and λ the lapse rate.\n\n\
+## Files\n\n\
+- `index.html`, `experiment.js` (the runner, plain JavaScript), `experiment.css`\n\
+- `design.json`: every trial in order, the seed, the display, the keys and this convention\n\
+- `images/theta-DDD.png`: one image per rotation (8-bit, display gamma {gamma}), with its \
+shadelab sidecar (`.json`, every parameter: `shadelab render --spec` reproduces it) and target \
+mask (`_mask.png`)\n",
+        version = d.version,
+        stimulus = d.stimulus,
+        slant = d.light_slant_deg,
+        convex = d.keys.convex.to_ascii_uppercase(),
+        concave = d.keys.concave.to_ascii_uppercase(),
+        practice = d.practice_trials,
+        test = d.test_trials,
+        rotations = rotations.join(", "),
+        repeats = d.repeats,
+        seed = d.seed,
+        distance = d.display.viewing_distance_cm,
+        h = d.display.visual_size.0,
+        w = d.display.visual_size.1,
+        ppd = d.display.ppd,
+        fixation = d.timing.fixation_ms,
+        header = CSV_HEADER,
+        model = MODEL,
+        gamma = d
+            .display
+            .gamma
+            .map_or_else(|| "none (linear)".to_string(), |g| g.to_string()),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_names_sort_by_rotation_and_keep_fractions() {
+        assert_eq!(image_stem(0.0), "theta-000");
+        assert_eq!(image_stem(15.0), "theta-015");
+        assert_eq!(image_stem(345.0), "theta-345");
+        assert_eq!(image_stem(7.5), "theta-007.5");
+        assert_eq!(image_stem(112.25), "theta-112.25");
+    }
+
+    #[test]
+    fn rotations_are_normalised_and_twins_refused() {
+        assert_eq!(
+            rotations(&[-90.0, 360.0, 45.0]).unwrap(),
+            vec![270.0, 0.0, 45.0]
+        );
+        assert!(rotations(&[0.0, 360.0]).is_err());
+        assert!(rotations(&[]).is_err());
+        assert!(rotations(&[f64::NAN]).is_err());
+        assert_eq!(angle_between(10.0, 350.0), 20.0);
+        assert_eq!(angle_between(350.0, 10.0), -20.0);
+    }
+}
