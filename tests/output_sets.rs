@@ -200,7 +200,7 @@ fn an_interrupted_render_leaves_the_old_set_or_the_new_set_whole() {
         assert!(run_args(&out_dir, &old_args).status.success());
         let args: Vec<&str> = new_args.iter().map(String::as_str).collect();
         let child = spawn(&out_dir, &args);
-        std::thread::sleep(Duration::from_millis(delay_ms(trial, 5, 500)));
+        std::thread::sleep(Duration::from_millis(delay_ms(trial, 5, 300)));
         signal(&child, "-INT");
         let out = child.wait_with_output().unwrap();
         let what = format!("trial {trial}");
@@ -287,7 +287,7 @@ fn a_render_killed_with_sigkill_is_cleaned_up_by_the_next_run() {
         while hidden(&out_dir).is_empty() && started.elapsed() < Duration::from_secs(20) {
             std::thread::sleep(Duration::from_millis(1));
         }
-        std::thread::sleep(Duration::from_millis(delay_ms(trial, 0, 200)));
+        std::thread::sleep(Duration::from_millis(delay_ms(trial, 0, 120)));
         child.kill().unwrap();
         child.wait().unwrap();
         if !hidden(&out_dir).is_empty() {
@@ -310,18 +310,22 @@ fn a_render_killed_with_sigkill_is_cleaned_up_by_the_next_run() {
     );
 }
 
-/// Runs `args` with stdout (or stderr) a pipe whose reader has gone.
+/// Runs `args` with stdout (or stderr) a pipe whose reader is closed as soon as the process is
+/// started (long before it prints anything).
 fn with_closed(d: &Path, args: &[&str], close_stdout: bool) -> Output {
-    let (reader, writer) = std::io::pipe().unwrap();
-    drop(reader);
-    let mut command = Command::new(env!("CARGO_BIN_EXE_shadelab"));
-    command.args(args).current_dir(d);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_shadelab"))
+        .args(args)
+        .current_dir(d)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     if close_stdout {
-        command.stdout(writer).stderr(Stdio::piped());
+        drop(child.stdout.take());
     } else {
-        command.stderr(writer).stdout(Stdio::piped());
+        drop(child.stderr.take());
     }
-    command.output().unwrap()
+    child.wait_with_output().unwrap()
 }
 
 #[test]

@@ -105,10 +105,11 @@ pub fn remove_dead_temporaries(dir: &Path) -> Vec<PathBuf> {
         return Vec::new();
     };
     let mut removed = Vec::new();
+    let me = identity();
     for entry in entries.flatten() {
         let name = entry.file_name();
-        let dead =
-            temporary_owner(&name).is_some_and(|(pid, start)| running(pid, start) == Some(false));
+        let dead = temporary_owner(&name)
+            .is_some_and(|owner| owner != me && running(owner.0, owner.1) == Some(false));
         if dead && remove_any(&entry.path()).is_ok() {
             removed.push(entry.path());
         }
@@ -421,6 +422,29 @@ impl OutputSet {
             })
     }
 
+    /// `error` with the final name of a file in place of its temporary's, so that a message
+    /// names the file the user asked for.
+    pub fn final_names(&self, error: Error) -> Error {
+        let target_of = |path: &Path| {
+            self.journal
+                .entries
+                .iter()
+                .find(|e| e.staged == path)
+                .map(|e| e.target.clone())
+        };
+        match error {
+            Error::Io { path, source } => Error::Io {
+                path: target_of(&path).unwrap_or(path),
+                source,
+            },
+            Error::Format { path, message } => Error::Format {
+                path: target_of(&path).unwrap_or(path),
+                message,
+            },
+            other => other,
+        }
+    }
+
     /// The lock file (it exists while the set is being written).
     pub fn lock_path(&self) -> &Path {
         &self.lock
@@ -549,7 +573,7 @@ fn take_over(lock: &Path, dir: &Path) -> Result<()> {
         Err(e) => return Err(Error::io(lock, e)),
     }
     let text = fs::read_to_string(&aside).unwrap_or_default();
-    let recovered = Journal::parse(&text, dir).is_none_or(|j| j.recover());
+    let recovered = Journal::parse(&text, dir).map_or(true, |j| j.recover());
     if recovered {
         let _ = fs::remove_file(&aside);
         Ok(())
@@ -604,17 +628,19 @@ mod tests {
     fn write_set(files: &[PathBuf], text: &str, fail_at: Option<usize>) -> Result<()> {
         let set = OutputSet::begin(files)?;
         for (i, f) in files.iter().enumerate() {
-            crate::io::write_atomic(set.staged(f)?, |out| {
+            let staged = set.staged(f)?;
+            crate::io::write_atomic(staged, |out| {
                 out.write_all(format!("{text}{i}").as_bytes())
-                    .map_err(|e| Error::io(f, e))?;
+                    .map_err(|e| Error::io(staged, e))?;
                 if Some(i) == fail_at {
                     return Err(Error::io(
-                        f,
+                        staged,
                         std::io::Error::new(std::io::ErrorKind::StorageFull, "No space left"),
                     ));
                 }
                 Ok(())
-            })?;
+            })
+            .map_err(|e| set.final_names(e))?;
         }
         set.commit()
     }
@@ -635,6 +661,7 @@ mod tests {
         for fail_at in 0..files.len() {
             let e = write_set(&files, "new", Some(fail_at)).unwrap_err();
             assert!(e.to_string().contains("No space left"), "{e}");
+            assert!(!e.to_string().contains(".tmp-"), "{e}");
             assert_eq!(contents(&files), old, "failing at file {fail_at}");
             assert_eq!(names(&d), ["a.json", "a.png", "a_depth.npy", "a_mask.png"]);
         }
@@ -733,7 +760,7 @@ mod tests {
                 .collect();
             assert_eq!(contents(&files), expected, "{moved} moved");
             let mut left = names(&d);
-            left.retain(|n| n.ends_with(".lock") == false);
+            left.retain(|n| !n.ends_with(".lock"));
             assert_eq!(
                 left,
                 ["a.json", "a.png", "a_depth.npy", "a_mask.png"],

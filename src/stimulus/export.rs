@@ -115,7 +115,9 @@ pub fn write_output(
     }
     let sidecar = io::sibling(path, "", "json");
     // The set, the sidecar last: it is the commit record (see `io::OutputSet`).
+    // In the order they were always listed (companions, image, sidecar).
     let mut files = planned_files(path, output, options);
+    files.rotate_left(1);
     files.push(sidecar.clone());
     let set = io::OutputSet::begin(&files)?;
     // Every file this call will write is checked before the first is written: the image and
@@ -124,7 +126,8 @@ pub fn write_output(
     for target in &files {
         io::check_overwrite(target, &sidecar, options.force)?;
     }
-    write_all(name, request, output, path, &ext, &sidecar, options, &set)?;
+    write_all(name, request, output, path, &ext, &sidecar, options, &set)
+        .map_err(|e| set.final_names(e))?;
     set.commit()?;
     Ok(files)
 }
