@@ -31,12 +31,16 @@ fn spawn(dir: &Path, args: &[&str]) -> Child {
         .unwrap()
 }
 
-fn signal(child: &Child, sig: &str) {
-    // The process may have ended already; kill then fails, which is fine.
+/// Starts `args` in `dir`, sends it SIGINT after `ms` milliseconds and waits for it. (The
+/// process may have ended already; kill then fails, which is fine.)
+fn interrupt_after(dir: &Path, args: &[&str], ms: u64) -> Output {
+    let child = spawn(dir, args);
+    std::thread::sleep(Duration::from_millis(ms));
     let _ = Command::new("kill")
-        .args([sig, &child.id().to_string()])
+        .args(["-INT", &child.id().to_string()])
         .stderr(Stdio::null())
         .status();
+    child.wait_with_output().unwrap()
 }
 
 /// Every file under `dir` (relative path → bytes).
@@ -128,10 +132,7 @@ fn an_interrupted_gallery_leaves_the_old_folder_whole_and_never_exits_0() {
     assert!(whole.len() > 20, "{}", whole.len());
     let (mut interrupted, mut finished) = (0, 0);
     for trial in 0..TRIALS {
-        let child = spawn(&d, &args);
-        std::thread::sleep(Duration::from_millis(delay_ms(trial, 5, 700)));
-        signal(&child, "-INT");
-        let out = child.wait_with_output().unwrap();
+        let out = interrupt_after(&d, &args, delay_ms(trial, 5, 700));
         let what = format!("trial {trial}");
         assert_interrupted_or_done(&out, &what);
         if out.status.code() != Some(0) {
@@ -199,10 +200,7 @@ fn an_interrupted_render_leaves_the_old_set_or_the_new_set_whole() {
     for trial in 0..TRIALS {
         assert!(run_args(&out_dir, &old_args).status.success());
         let args: Vec<&str> = new_args.iter().map(String::as_str).collect();
-        let child = spawn(&out_dir, &args);
-        std::thread::sleep(Duration::from_millis(delay_ms(trial, 5, 300)));
-        signal(&child, "-INT");
-        let out = child.wait_with_output().unwrap();
+        let out = interrupt_after(&out_dir, &args, delay_ms(trial, 5, 300));
         let what = format!("trial {trial}");
         assert_interrupted_or_done(&out, &what);
         let now = tree(&out_dir);

@@ -601,14 +601,8 @@ fn rewrite(lock: &Path, text: &str) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::atomic::tests::scratch;
     use crate::io::write_text;
-
-    fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("shadelab-set-{name}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&d);
-        fs::create_dir_all(&d).unwrap();
-        d
-    }
 
     fn names(d: &Path) -> Vec<String> {
         let mut v: Vec<String> = fs::read_dir(d)
