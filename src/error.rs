@@ -51,6 +51,18 @@ pub enum Error {
     /// An image larger than the pixel limit in force (a front end may say how to raise it).
     #[error("{0}")]
     TooLarge(String),
+    /// The run was stopped on request ([`crate::cancel::request`], e.g. Ctrl-C) before its
+    /// outputs were committed: nothing new was written.
+    #[error("interrupted")]
+    Cancelled,
+    /// Another run is writing the same output (its lock file is held).
+    #[error("{}: {message}", path.display())]
+    Locked {
+        /// The output.
+        path: PathBuf,
+        /// Who holds it and what to do.
+        message: String,
+    },
 }
 
 impl Error {

@@ -258,6 +258,8 @@ pub fn build(
 }
 
 fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {
+    // Workers stop at a requested stop; the caller drops the unfinished folder.
+    crate::cancel::check()?;
     let spec = &preset.spec;
     let context = |e: Error| match e {
         Error::TooLarge(m) => Error::TooLarge(format!("{}: {m}", preset.source.display())),

@@ -46,6 +46,7 @@
 
 pub mod analysis;
 pub mod boundary;
+pub mod cancel;
 pub mod colormap;
 mod error;
 pub mod evaluation;

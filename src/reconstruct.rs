@@ -412,6 +412,8 @@ impl Reconstructor {
             },
         )?;
         progress.finish();
+        // The solver stops its sweeps early when a stop was requested: no shape then.
+        crate::cancel::check()?;
         Ok(Shape {
             solution,
             method: options.method,

@@ -22,7 +22,7 @@ fn to_py(e: Error) -> PyErr {
         Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
             PyFileNotFoundError::new_err(text)
         }
-        Error::Io { .. } | Error::NotOurs { .. } => PyOSError::new_err(text),
+        Error::Io { .. } | Error::NotOurs { .. } | Error::Locked { .. } => PyOSError::new_err(text),
         Error::Compute(_) => PyRuntimeError::new_err(text),
         _ => PyValueError::new_err(text),
     }

@@ -118,16 +118,17 @@ pub type CliResult = Result<(), CliError>;
 
 /// Parses the command line, runs the subcommand and turns the outcome into an exit code.
 pub fn main() -> ExitCode {
-    // Ctrl-C, SIGTERM or SIGHUP: remove the temporary files and folders of the outputs being
-    // written (a finished output is never touched) and stop, instead of leaving them behind.
+    // Ctrl-C, SIGTERM or SIGHUP: ask the library to stop (`shadelab::cancel`). Workers stop at
+    // the flag; the main thread gets `Error::Cancelled`, drops the temporaries of its unfinished
+    // outputs (their final names are never touched) and exits with 130. A second signal stops
+    // at once: what it leaves is hidden temporaries that the next run on the same output
+    // recognises (process id and start time in their names) and removes.
     let _ = ctrlc::set_handler(|| {
-        let removed = shadelab::io::remove_pending();
-        if removed > 0 {
-            eprintln!("error: interrupted; the unfinished output was removed");
-        } else {
-            eprintln!("error: interrupted");
+        if shadelab::cancel::requested() {
+            output::stderr_line("error: interrupted twice; stopped at once");
+            std::process::exit(130);
         }
-        std::process::exit(130);
+        shadelab::cancel::request();
     });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -162,18 +163,42 @@ pub fn main() -> ExitCode {
                     .collect();
                 first = format!("{} {}", first, names.join(", "));
             }
-            eprintln!("error: {first} (see shadelab --help)");
+            output::stderr_line(&format!("error: {first} (see shadelab --help)"));
             return ExitCode::from(2);
         }
     };
     let result = configure_threads(&cli.global).and_then(|_| run(cli.command, &cli.global));
+    let interrupted = shadelab::cancel::requested();
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) if !interrupted => ExitCode::SUCCESS,
+        // The signal came after the last output was committed: it is whole and in place, but a
+        // stopped run never reports success.
+        Ok(()) => {
+            output::stderr_line("error: interrupted after the output was complete");
+            ExitCode::from(INTERRUPTED)
+        }
+        Err(e) if interrupted || cancelled(&e.error) => {
+            output::stderr_line("error: interrupted; the unfinished output was removed");
+            ExitCode::from(INTERRUPTED)
+        }
         Err(e) => {
-            eprintln!("error: {}{}", one_line(&e.error), hint(&e.error));
+            output::stderr_line(&format!("error: {}{}", one_line(&e.error), hint(&e.error)));
             ExitCode::from(if e.usage { 2 } else { 1 })
         }
     }
+}
+
+/// The exit status of a run stopped by a signal (128 + SIGINT, as shells report it).
+const INTERRUPTED: u8 = 130;
+
+/// Whether the library stopped on request.
+fn cancelled(error: &anyhow::Error) -> bool {
+    error.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<shadelab::Error>(),
+            Some(shadelab::Error::Cancelled)
+        )
+    })
 }
 
 /// What the command line adds to a library error that a flag can remedy.

@@ -72,7 +72,7 @@ pub fn print_stdout(text: &str) -> CliResult {
 }
 
 /// Writes a line on stderr; a closed stderr is ignored (never a panic).
-fn stderr_line(line: &str) {
+pub fn stderr_line(line: &str) {
     let mut err = std::io::stderr().lock();
     let _ = writeln!(err, "{line}");
 }

@@ -1,58 +1,50 @@
 //! Atomic output: write to a temporary name beside the target, then rename.
 
+use super::output_set::OutputSet;
 use crate::error::{Error, Result};
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Mutex;
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// The temporary files and folders of the atomic writes under way, so that a run stopped by a
-/// signal can remove them ([`remove_pending`]) instead of leaving them beside the outputs.
-static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
-
-fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
-    // The list stays valid even if a thread panicked while holding the lock.
-    PENDING
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-fn register(path: &Path) {
-    pending().push(path.to_path_buf());
-}
-
-fn unregister(path: &Path) {
-    pending().retain(|p| p != path);
-}
-
-/// Removes the temporary file or folder of every atomic write under way and returns how many
-/// there were. For a signal handler that then ends the process: the writes it interrupts are
-/// never finished, so no output is replaced and nothing half-written is left behind.
-pub fn remove_pending() -> usize {
-    let paths = std::mem::take(&mut *pending());
-    // Files first: a folder's own files are registered after it.
-    for path in paths.iter().rev() {
-        if path.is_dir() {
-            let _ = fs::remove_dir_all(path);
-        } else {
-            let _ = fs::remove_file(path);
-        }
-    }
-    paths.len()
-}
 
 /// The longest file name part kept as written in a temporary's name; a longer name is cut and
 /// followed by a hash of the whole, so that any legal final name (up to 255 bytes) has a
 /// temporary name that is legal too.
 const TEMP_STEM_BYTES: usize = 100;
 
-/// A hidden temporary beside `target`: `.NAME.tmp-PID-N`, with NAME cut to
-/// [`TEMP_STEM_BYTES`] (at a character boundary) plus 12 hex digits of the whole name's MD5
-/// when longer.
-fn temp_name(target: &Path) -> Result<PathBuf> {
+/// What a name made beside an output is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Tag {
+    /// A file or folder being written: `.NAME.tmp-PID-START-N`.
+    Temporary,
+    /// An old version moved aside during a commit: `.NAME.old-PID-START-N`.
+    Backup,
+    /// The lock of an output: `.NAME.lock`.
+    Lock,
+    /// The lock of a run that is gone, moved aside to be recovered: `.NAME.stale-PID-START-N`.
+    Stale,
+}
+
+impl Tag {
+    /// The text before the owner in the name.
+    pub(crate) fn text(self) -> &'static str {
+        match self {
+            Tag::Temporary => ".tmp-",
+            Tag::Backup => ".old-",
+            Tag::Lock => ".lock",
+            Tag::Stale => ".stale-",
+        }
+    }
+}
+
+/// A hidden name beside `target` for `tag`: `.NAME.tmp-PID-START-N` (and the like, see
+/// [`Tag`]), with NAME cut to [`TEMP_STEM_BYTES`] (at a character boundary) plus 12 hex digits
+/// of the whole name's MD5 when longer. PID and START (the process's start time) name the run,
+/// so that a later run can tell a temporary of a run that is gone (see
+/// [`super::output_set::remove_dead_temporaries`]).
+pub(crate) fn temp_name(target: &Path, tag: Tag) -> Result<PathBuf> {
     let name = target
         .file_name()
         .ok_or_else(|| Error::invalid(format!("{}: not a file name", target.display())))?
@@ -72,11 +64,17 @@ fn temp_name(target: &Path) -> Result<PathBuf> {
             .collect();
         format!("{}~{hash}", &name[..cut])
     };
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    Ok(target.with_file_name(format!(".{stem}.tmp-{}-{n}", std::process::id())))
+    let name = if tag == Tag::Lock {
+        format!(".{stem}{}", tag.text())
+    } else {
+        let (pid, start) = super::output_set::identity();
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        format!(".{stem}{}{pid}-{start}-{n}", tag.text())
+    };
+    Ok(target.with_file_name(name))
 }
 
-fn parent_of(target: &Path) -> &Path {
+pub(crate) fn parent_of(target: &Path) -> &Path {
     match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -85,7 +83,8 @@ fn parent_of(target: &Path) -> &Path {
 
 /// Writes `target` atomically: `write` fills a temporary file in the same folder, which is
 /// renamed over `target` only when everything succeeded. On failure the temporary file is
-/// removed and `target` is untouched.
+/// removed and `target` is untouched. A stop requested meanwhile ([`crate::cancel`]) ends the
+/// write with [`Error::Cancelled`] at the next buffer written.
 pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     check_parent(target)?;
     if target.is_dir() {
@@ -94,23 +93,41 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
             "is a directory; expected a file name",
         ));
     }
-    let tmp = temp_name(target)?;
-    register(&tmp);
-    let result = (|| {
+    crate::cancel::check()?;
+    let tmp = temp_name(target, Tag::Temporary)?;
+    let mut result = (|| {
         let file = fs::File::create(&tmp).map_err(|e| Error::io(target, e))?;
-        let mut out = BufWriter::new(file);
+        let mut out = BufWriter::new(StopOnCancel(file));
         write(&mut out)?;
-        let file = out
+        let StopOnCancel(file) = out
             .into_inner()
             .map_err(|e| Error::io(target, e.into_error()))?;
         file.sync_all().map_err(|e| Error::io(target, e))?;
+        crate::cancel::check()?;
         fs::rename(&tmp, target).map_err(|e| Error::io(target, e))
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
+        if crate::cancel::requested() {
+            result = Err(Error::Cancelled);
+        }
     }
-    unregister(&tmp);
     result
+}
+
+/// A writer that fails once a stop is requested, so that a long write ends early.
+struct StopOnCancel<W>(W);
+
+impl<W: Write> Write for StopOnCancel<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if crate::cancel::requested() {
+            return Err(std::io::Error::other("interrupted"));
+        }
+        self.0.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
 }
 
 /// Writes `text` to `target` atomically (see [`write_atomic`]).
@@ -123,7 +140,7 @@ pub fn write_text(target: &Path, text: &str) -> Result<()> {
 
 /// The folder that will hold `target` must exist and be a folder; a path under a regular file
 /// gets its own message rather than "does not exist".
-fn check_parent(target: &Path) -> Result<()> {
+pub(crate) fn check_parent(target: &Path) -> Result<()> {
     let parent = parent_of(target);
     if parent.is_dir() {
         Ok(())
@@ -193,14 +210,18 @@ pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> 
     })
 }
 
-/// An output folder filled under a temporary name and renamed into place by
-/// [`AtomicDir::commit`]; dropped uncommitted, it removes itself.
+/// An output folder filled under a temporary name and moved into place by
+/// [`AtomicDir::commit`], which never leaves a moment without a folder under the final name
+/// (the old one is moved aside, the new one in, then the old one deleted: an
+/// [`OutputSet`] of one folder). The output is locked from [`AtomicDir::create`] on, so a second
+/// run writing the same folder fails with [`Error::Locked`]; dropped uncommitted, the temporary
+/// folder and the lock are removed.
 #[derive(Debug)]
 pub struct AtomicDir {
+    set: OutputSet,
     temp: PathBuf,
     target: PathBuf,
     marker: String,
-    committed: bool,
 }
 
 impl AtomicDir {
@@ -208,6 +229,8 @@ impl AtomicDir {
     /// identifies a folder shadelab wrote: an existing `target` is replaced only when it is
     /// empty or holds that file, or when `force` is set (and it is then still never a file).
     pub fn create(target: &Path, marker: &str, force: bool) -> Result<AtomicDir> {
+        check_parent(target)?;
+        let set = OutputSet::begin(&[target.to_path_buf()])?;
         if target.exists() {
             if !target.is_dir() {
                 return Err(Error::format(target, "exists and is not a folder"));
@@ -228,18 +251,13 @@ impl AtomicDir {
                 });
             }
         }
-        check_parent(target)?;
-        let temp = temp_name(target)?;
-        register(&temp);
-        if let Err(e) = fs::create_dir(&temp) {
-            unregister(&temp);
-            return Err(Error::io(target, e));
-        }
+        let temp = set.staged(target)?.to_path_buf();
+        fs::create_dir(&temp).map_err(|e| Error::io(target, e))?;
         Ok(AtomicDir {
+            set,
             temp,
             target: target.to_path_buf(),
             marker: marker.to_string(),
-            committed: false,
         })
     }
 
@@ -254,37 +272,25 @@ impl AtomicDir {
     }
 
     /// Moves the finished folder into place, replacing an earlier shadelab output there.
-    pub fn commit(mut self) -> Result<PathBuf> {
+    /// Fails with [`Error::Cancelled`], writing nothing, when a stop was requested.
+    pub fn commit(self) -> Result<PathBuf> {
         if !self.temp.join(&self.marker).exists() {
             return Err(Error::Compute(format!(
                 "internal: output folder lacks its {}",
                 self.marker
             )));
         }
-        if self.target.exists() {
-            fs::remove_dir_all(&self.target).map_err(|e| Error::io(&self.target, e))?;
-        }
-        fs::rename(&self.temp, &self.target).map_err(|e| Error::io(&self.target, e))?;
-        self.committed = true;
-        unregister(&self.temp);
-        Ok(self.target.clone())
-    }
-}
-
-impl Drop for AtomicDir {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.temp);
-            unregister(&self.temp);
-        }
+        self.set.commit()?;
+        Ok(self.target)
     }
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn scratch(name: &str) -> PathBuf {
+    /// A fresh scratch folder for one test of `io`.
+    pub(crate) fn scratch(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("shadelab-atomic-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).unwrap();
@@ -301,9 +307,9 @@ mod tests {
             let target = d.join(&name);
             write_text(&target, "x").unwrap();
             assert_eq!(fs::read_to_string(&target).unwrap(), "x", "{len}");
-            let temp = temp_name(&target).unwrap();
+            let temp = temp_name(&target, Tag::Temporary).unwrap();
             let temp_len = temp.file_name().unwrap().len();
-            assert!(temp_len <= 140, "{len}: {temp_len}");
+            assert!(temp_len <= 160, "{len}: {temp_len}");
         }
         // Two long names that share their first 100 bytes get different temporaries.
         let (a, b) = (
@@ -311,7 +317,7 @@ mod tests {
             d.join(format!("{}b.png", "x".repeat(150))),
         );
         let stem = |p: &Path| {
-            let n = temp_name(p)
+            let n = temp_name(p, Tag::Temporary)
                 .unwrap()
                 .file_name()
                 .unwrap()
@@ -322,7 +328,7 @@ mod tests {
         assert_ne!(stem(&a), stem(&b));
         // A multi-byte name is cut at a character boundary.
         let wide = d.join("é".repeat(120));
-        assert!(temp_name(&wide).is_ok());
+        assert!(temp_name(&wide, Tag::Temporary).is_ok());
         let _ = fs::remove_dir_all(&d);
     }
 
@@ -377,6 +383,56 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("holiday.jpg: is not a folder"), "{e}");
+    }
+
+    #[test]
+    fn a_folder_is_never_missing_while_it_is_replaced() {
+        let d = scratch("no-gap");
+        let target = d.join("result");
+        let commit = |n: usize| {
+            let a = AtomicDir::create(&target, "report.json", false).unwrap();
+            fs::write(a.path().join("report.json"), OURS).unwrap();
+            fs::write(a.path().join("n"), n.to_string()).unwrap();
+            a.commit().unwrap();
+        };
+        commit(0);
+        // A reader polls the final name while the folder is replaced 200 times: it must always
+        // find a whole folder (the old one or the new one).
+        let done = std::sync::atomic::AtomicBool::new(false);
+        let (looks, misses) = std::thread::scope(|s| {
+            let reader = s.spawn(|| {
+                let (mut looks, mut misses) = (0u64, 0u64);
+                while !done.load(Ordering::Relaxed) {
+                    looks += 1;
+                    if !target.join("report.json").exists() {
+                        misses += 1;
+                    }
+                }
+                (looks, misses)
+            });
+            for n in 1..=200 {
+                commit(n);
+            }
+            done.store(true, Ordering::Relaxed);
+            reader.join().unwrap()
+        });
+        assert!(looks > 200, "{looks}");
+        assert_eq!(misses, 0, "{misses} of {looks} looks found no folder");
+        assert_eq!(fs::read_to_string(target.join("n")).unwrap(), "200");
+        // Only the folder is left: no lock, no backup, no temporary.
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_folder_being_written_is_locked() {
+        let d = scratch("dir-lock");
+        let target = d.join("result");
+        let first = AtomicDir::create(&target, "report.json", false).unwrap();
+        let e = AtomicDir::create(&target, "report.json", false).unwrap_err();
+        assert!(matches!(e, Error::Locked { .. }), "{e}");
+        fs::write(first.path().join("report.json"), OURS).unwrap();
+        first.commit().unwrap();
+        assert!(target.join("report.json").exists());
     }
 
     #[test]

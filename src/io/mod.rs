@@ -1,22 +1,25 @@
 //! Reading and writing files: PNG (8/16-bit), float `.npy`, JSON sidecars, animated GIF, all written
 //! atomically (a temporary name in the same folder, then a rename), so that no half-written file
-//! is ever left where the user asked for one.
+//! is ever left where the user asked for one; outputs of several files (and folders) are
+//! committed as a set ([`OutputSet`]).
 
 mod atomic;
 mod csv;
 mod gif;
 mod npy;
+mod output_set;
 mod png;
 pub mod render_sidecar;
 mod sidecar;
 
-pub use atomic::{check_overwrite, remove_pending, write_atomic, write_text, AtomicDir};
+pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
 pub use csv::{csv_field, parse_csv};
 pub use gif::write_gif;
 pub use npy::{
     encode_f64, encode_npz, encode_text, read_array, read_array_from_bytes, read_image,
     read_image_from_bytes, read_normals, write_f32, write_image, write_normals, NpyArray,
 };
+pub use output_set::{remove_dead_temporaries, OutputSet};
 pub use png::{
     display_rgba8, read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes,
     read_rgb, write_gray, write_labels, write_mask, write_rgb, BitDepth, GrayInfo,

@@ -395,7 +395,8 @@ impl Solver {
         let mut last_update = 0.0;
         let mut converged = n_unknown == 0;
         let mut diverged = false;
-        while !converged && iterations < options.max_iter {
+        // A requested stop (crate::cancel) ends the sweeps; the caller turns it into an error.
+        while !converged && iterations < options.max_iter && !crate::cancel::requested() {
             last_update = self.sweep(n_unknown, reflectance, literal);
             std::mem::swap(&mut self.cur_f, &mut self.next_f);
             std::mem::swap(&mut self.cur_g, &mut self.next_g);

@@ -580,7 +580,7 @@ impl Multigrid {
                 stats.converged = true;
                 break;
             }
-            if stats.cycles >= options.max_iter {
+            if stats.cycles >= options.max_iter || crate::cancel::requested() {
                 break;
             }
             // A residual that grows means the linear coarse model overshoots (it leaves out the

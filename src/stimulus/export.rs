@@ -93,8 +93,9 @@ pub const MAT_VARIABLE: &str = "img";
 
 /// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
 /// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
-/// layers. Returns every file written. Files are written whole or not at all; when one fails,
-/// those already written by this call are removed.
+/// layers. Returns every file written. The files are committed as a set ([`io::OutputSet`]):
+/// whatever stops the write, the old set or the new set is there whole, never a mix; a second
+/// run writing the same output meanwhile fails with [`Error::Locked`].
 pub fn write_output(
     name: &str,
     request: &Request,
@@ -113,30 +114,22 @@ pub fn write_output(
         )));
     }
     let sidecar = io::sibling(path, "", "json");
+    // The set, the sidecar last: it is the commit record (see `io::OutputSet`).
+    // In the order they were always listed (companions, image, sidecar).
+    let mut files = planned_files(path, output, options);
+    files.rotate_left(1);
+    files.push(sidecar.clone());
+    let set = io::OutputSet::begin(&files)?;
     // Every file this call will write is checked before the first is written: the image and
     // its companions are replaced only when the sidecar beside them is shadelab's, and the
     // sidecar only when it is one.
-    for target in planned_files(path, output, options) {
-        io::check_overwrite(&target, &sidecar, options.force)?;
+    for target in &files {
+        io::check_overwrite(target, &sidecar, options.force)?;
     }
-    io::check_overwrite(&sidecar, &sidecar, options.force)?;
-    let mut written: Vec<PathBuf> = Vec::new();
-    let result = write_all(
-        name,
-        request,
-        output,
-        path,
-        &ext,
-        &sidecar,
-        options,
-        &mut written,
-    );
-    if result.is_err() {
-        for p in &written {
-            let _ = std::fs::remove_file(p);
-        }
-    }
-    result.map(|_| written)
+    write_all(name, request, output, path, &ext, &sidecar, options, &set)
+        .map_err(|e| set.final_names(e))?;
+    set.commit()?;
+    Ok(files)
 }
 
 /// The image and the companion files `write_all` writes beside it (not the sidecar).
@@ -167,10 +160,10 @@ fn write_all(
     ext: &str,
     sidecar: &Path,
     options: &ExportOptions,
-    written: &mut Vec<PathBuf>,
+    set: &io::OutputSet,
 ) -> Result<()> {
     let mut files = Map::new();
-    let mut record = |key: &str, p: PathBuf, written: &mut Vec<PathBuf>| {
+    let mut record = |key: &str, p: &Path| {
         files.insert(
             key.to_string(),
             Value::from(
@@ -179,30 +172,29 @@ fn write_all(
                     .unwrap_or_default(),
             ),
         );
-        written.push(p);
     };
     if let Some(t) = &output.targets {
         let p = io::sibling(path, "_mask", "png");
-        io::write_labels(&p, &t.labels)?;
-        record("target_mask", p, written);
+        io::write_labels(set.staged(&p)?, &t.labels)?;
+        record("target_mask", &p);
     }
     if options.layers {
         if let Some(s) = &output.surface {
             let p = io::sibling(path, "_depth", "npy");
-            io::write_image(&p, &s.depth)?;
-            record("depth", p, written);
+            io::write_image(set.staged(&p)?, &s.depth)?;
+            record("depth", &p);
             let p = io::sibling(path, "_normals", "npy");
-            io::write_normals(&p, &s.normals)?;
-            record("normals", p, written);
+            io::write_normals(set.staged(&p)?, &s.normals)?;
+            record("normals", &p);
             if let Some(a) = &s.albedo {
                 let p = io::sibling(path, "_albedo", "npy");
-                io::write_image(&p, a)?;
-                record("albedo", p, written);
+                io::write_image(set.staged(&p)?, a)?;
+                record("albedo", &p);
             }
             if let Some(sh) = &s.shading {
                 let p = io::sibling(path, "_shading", "npy");
-                io::write_image(&p, sh)?;
-                record("shading", p, written);
+                io::write_image(set.staged(&p)?, sh)?;
+                record("shading", &p);
             }
         }
     }
@@ -210,12 +202,13 @@ fn write_all(
         Range::Unit => v,
         Range::Psychopy => v * 2.0 - 1.0,
     };
+    let image = set.staged(path)?;
     match (ext, &output.pixels) {
-        ("png", Pixels::Gray(img)) => io::write_gray(path, img, options.bit_depth, options.gamma)?,
-        ("png", Pixels::Rgb(img)) => io::write_rgb(path, img, options.bit_depth, options.gamma)?,
-        ("npy", Pixels::Gray(img)) => io::write_image(path, &img.map(|&v| to_range(v)))?,
+        ("png", Pixels::Gray(img)) => io::write_gray(image, img, options.bit_depth, options.gamma)?,
+        ("png", Pixels::Rgb(img)) => io::write_rgb(image, img, options.bit_depth, options.gamma)?,
+        ("npy", Pixels::Gray(img)) => io::write_image(image, &img.map(|&v| to_range(v)))?,
         ("npy", Pixels::Rgb(img)) => io::write_f32(
-            path,
+            image,
             &[img.height(), img.width(), 3],
             img.data().iter().flat_map(|p| p.map(to_range)),
         )?,
@@ -226,13 +219,13 @@ fn write_all(
             } else {
                 super::bundle::to_npz(&fields)?
             };
-            io::write_atomic(path, |out| {
+            io::write_atomic(image, |out| {
                 out.write_all(&bytes).map_err(|e| Error::io(path, e))
             })?
         }
         ("svg", _) => {
             let text = output.svg.as_deref().unwrap_or_default();
-            io::write_atomic(path, |out| {
+            io::write_atomic(image, |out| {
                 out.write_all(text.as_bytes())
                     .and_then(|_| out.write_all(b"\n"))
                     .map_err(|e| Error::io(path, e))
@@ -240,11 +233,9 @@ fn write_all(
         }
         _ => return Err(Error::invalid(format!("unknown output format '.{ext}'"))),
     }
-    record("image", path.to_path_buf(), written);
+    record("image", path);
     let value = sidecar_json(name, request, output, ext, options, files);
-    io::write_json(sidecar, &value)?;
-    written.push(sidecar.to_path_buf());
-    Ok(())
+    io::write_json(set.staged(sidecar)?, &value)
 }
 
 /// The sidecar of a rendered stimulus: program, version, conventions, stimulus, every

@@ -30,6 +30,7 @@ impl Study {
                     let name = &self.spec.stimuli[p.entry].stimulus;
                     let at = format!("study point {} ({name}{sep}{params})", p.index);
                     match e {
+                        Error::Cancelled => Error::Cancelled,
                         Error::Invalid(m) => Error::Invalid(format!("{at}: {m}")),
                         Error::Compute(m) => Error::Compute(format!("{at}: {m}")),
                         other => Error::Compute(format!("{at}: {other}")),
