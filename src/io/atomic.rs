@@ -115,6 +115,9 @@ pub fn write_atomic(target: &Path, write: impl FnOnce(&mut dyn Write) -> Result<
 
 /// Writes `text` to `target` atomically (see [`write_atomic`]).
 pub fn write_text(target: &Path, text: &str) -> Result<()> {
+    if super::extension(target) == "csv" {
+        super::check_csv_finite(target, text)?;
+    }
     write_atomic(target, |out| {
         out.write_all(text.as_bytes())
             .map_err(|e| Error::io(target, e))
