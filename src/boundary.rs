@@ -631,7 +631,10 @@ mod tests {
         // Facing away from the viewer: refused, naming the pixel; in the image plane: the rim.
         let away = Boundary::Given(Grid::new(20, 20, Vector3::new(0.2, 0.1, -0.5)));
         let e = boundary_conditions(&mask, &away).unwrap_err().to_string();
-        assert!(e.contains("faces away from the viewer") && e.contains("column"), "{e}");
+        assert!(
+            e.contains("faces away from the viewer") && e.contains("column"),
+            "{e}"
+        );
         let rim = Boundary::Given(Grid::new(20, 20, Vector3::new(0.6, -0.8, 0.0)));
         let bc = boundary_conditions(&mask, &rim).unwrap();
         let [f, g] = bc.fixed_values()[0].1;

@@ -244,7 +244,11 @@ fn the_scan_finds_what_it_looks_for() {
         ("a.csv", b"a,b\n1,\"inf, or not\"\n2,-inf\n", true),
         ("a.csv", b"a,b\n1,2.5e-300\n", false),
         ("a.npy", &npy, true),
-        ("a.svg", b"<path d=\"M 0 NaN L 1 2\"/><text>Information</text>", true),
+        (
+            "a.svg",
+            b"<path d=\"M 0 NaN L 1 2\"/><text>Information</text>",
+            true,
+        ),
         ("a.svg", b"<text>Information, infinite</text>", false),
         ("a.json", b"{\"a\": NaN}", true),
         ("a.json", b"{\"a\": null}", false),

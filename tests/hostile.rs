@@ -447,7 +447,10 @@ const IMAGE_COMMANDS: &[&str] = &[
 /// Broken images and what the error says about them.
 const BAD_IMAGES: &[(&str, &str)] = &[
     ("in/trunc.png", "cannot decode"),
-    ("in/corrupt.png", "corrupt PNG: it does not begin with its header (IHDR) chunk"),
+    (
+        "in/corrupt.png",
+        "corrupt PNG: it does not begin with its header (IHDR) chunk",
+    ),
     ("in/empty.png", "not a PNG image"),
     ("in/dir.png", "is a directory"),
     ("in/zero.png", "image size 0x0 is empty"),
@@ -1341,7 +1344,9 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         let text = std::fs::read_to_string(p.join("results.csv")).unwrap();
         std::fs::write(p.join("results.csv"), edit(text)).unwrap()
     };
-    shard("s_cut", &|p| edit_results(p, &|t| t[..t.len() - 7].to_string()));
+    shard("s_cut", &|p| {
+        edit_results(p, &|t| t[..t.len() - 7].to_string())
+    });
     shard("s_extra_field", &|p| {
         edit_results(p, &|t| {
             let (head, rest) = t.split_once('\n').unwrap();
@@ -1490,7 +1495,10 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         ),
         (
             "study merge in/s0 in/s_nan --out o",
-            &["in/s_nan/results.csv: line 2:", "'NaN', not a finite number"],
+            &[
+                "in/s_nan/results.csv: line 2:",
+                "'NaN', not a finite number",
+            ],
         ),
         (
             "study merge in/s0 in/s_foreign --out o",
@@ -1501,7 +1509,10 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         ),
         (
             "study merge in/s0 in/s_beyond --out o",
-            &["in/s_beyond/results.csv: line ", "point 1001 is not in the study"],
+            &[
+                "in/s_beyond/results.csv: line ",
+                "point 1001 is not in the study",
+            ],
         ),
         (
             "study merge in/s0 in/s_lost_rows --out o",
@@ -1744,11 +1755,24 @@ fn inputs_are_read_only_as_far_as_needed() {
     let started = std::time::Instant::now();
     let out = run_within(
         &d,
-        &["--threads", "100000", "render", "sphere", "--size", "16", "--out", "t.png"],
+        &[
+            "--threads",
+            "100000",
+            "render",
+            "sphere",
+            "--size",
+            "16",
+            "--out",
+            "t.png",
+        ],
         std::time::Duration::from_secs(30),
     )
     .expect("--threads 100000 finishes");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(started.elapsed() < std::time::Duration::from_secs(10));
 }
 
@@ -1773,8 +1797,18 @@ fn picture_values_follow_one_rule() {
     put("u16.npy", &npy_of("<u2", codes().map(|c| c * 257)));
     put("i64.npy", &npy_of("<i8", (0..256).map(|k| k % 201)));
     put("i16.npy", &npy_of("<i2", codes()));
-    put("two.npy", &npy("<f8", "(16, 16)", &f64s((0..256).map(|k| k as f64 / 128.0))));
-    put("below.npy", &npy("<f8", "(16, 16)", &f64s((0..256).map(|k| 0.5 - (k % 3) as f64 / 3.0))));
+    put(
+        "two.npy",
+        &npy("<f8", "(16, 16)", &f64s((0..256).map(|k| k as f64 / 128.0))),
+    );
+    put(
+        "below.npy",
+        &npy(
+            "<f8",
+            "(16, 16)",
+            &f64s((0..256).map(|k| 0.5 - (k % 3) as f64 / 3.0)),
+        ),
+    );
     let away: Vec<f64> = (0..256).flat_map(|_| [0.3, 0.2, -0.9]).collect();
     put("normals_away.npy", &npy("<f8", "(16, 16, 3)", &f64s(away)));
     // uint8 and uint16: the codes of a PNG of that depth, exactly.
@@ -1785,7 +1819,10 @@ fn picture_values_follow_one_rule() {
         for (got, want) in image.data().iter().zip(&want) {
             assert!((got - want).abs() < 1e-15, "{file}: {got} vs {want}");
         }
-        assert!(info["conversion"].as_str().unwrap().contains("divided by"), "{info}");
+        assert!(
+            info["conversion"].as_str().unwrap().contains("divided by"),
+            "{info}"
+        );
     }
     // ... and said once on stderr where a command reads one.
     let out = run_os(
@@ -1794,7 +1831,11 @@ fn picture_values_follow_one_rule() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    assert_eq!(err.matches("uint8 values divided by 255").count(), 1, "{err}");
+    assert_eq!(
+        err.matches("uint8 values divided by 255").count(),
+        1,
+        "{err}"
+    );
     let table = cases(&[
         (
             "solve in/i64.npy --light above --out o",
@@ -1810,7 +1851,10 @@ fn picture_values_follow_one_rule() {
         ),
         (
             "analyze lightness in/below.npy --model retinex --out o",
-            &["in/below.npy: 85 of 256 values are outside 0..1 (from -0.1666", "to 0.5)"],
+            &[
+                "in/below.npy: 85 of 256 values are outside 0..1 (from -0.1666",
+                "to 0.5)",
+            ],
         ),
         (
             "solve in/ok.png --light above --boundary in/normals_away.npy --out o",

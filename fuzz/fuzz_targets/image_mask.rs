@@ -19,7 +19,8 @@ fuzz_target!(|data: &[u8]| {
     let split = (usize::from(data[1]) | usize::from(data[2]) << 8).min(data.len() - 3);
     let (image_bytes, mask_bytes) = data[3..].split_at(split);
     let image = if npy {
-        if let Ok(array) = io::read_array_from_bytes(image_bytes, Path::new("image.npy"), MAX_PIXELS)
+        if let Ok(array) =
+            io::read_array_from_bytes(image_bytes, Path::new("image.npy"), MAX_PIXELS)
         {
             // The rule for a picture's integers, and the range check every picture passes.
             if let Ok(Some(scale)) = io::npy_scale(&array.dtype) {

@@ -15,9 +15,9 @@ pub(crate) use csv::check_csv_finite;
 pub use csv::{csv_field, csv_record};
 pub use gif::write_gif;
 pub use npy::{
-    encode_f64, encode_npz, encode_text, npy_scale, read_array, read_array_from_bytes,
-    npy_file_scale, read_image, read_image_from_bytes, read_luminance_npy, read_normals, write_f32, write_image,
-    write_normals, IntegerScale, NpyArray,
+    encode_f64, encode_npz, encode_text, npy_file_scale, npy_scale, read_array,
+    read_array_from_bytes, read_image, read_image_from_bytes, read_luminance_npy, read_normals,
+    write_f32, write_image, write_normals, IntegerScale, NpyArray,
 };
 pub use png::{
     read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes, read_rgb,
@@ -84,10 +84,7 @@ pub fn read_luminance(path: &Path, max_pixels: usize) -> Result<(Image, serde_js
 /// );
 /// ```
 pub fn check_luminance_range(values: &[f64], source: &Path) -> Result<()> {
-    let outside = values
-        .iter()
-        .filter(|v| !(0.0..=1.0).contains(*v))
-        .count();
+    let outside = values.iter().filter(|v| !(0.0..=1.0).contains(*v)).count();
     if outside == 0 {
         return Ok(());
     }

@@ -109,11 +109,17 @@ fn read_npy_header(path: &Path, max_elements: usize) -> Result<(Vec<u8>, u64, st
     };
     read(&mut bytes, 12)?;
     let (start, length) = preamble(&bytes).map_err(|m| Error::format(path, m))?;
+    // At most one byte past the longest header accepted: enough to tell a file that ends
+    // inside its header (truncated) from one whose header is too long.
+    let wanted = start + length.min(MAX_HEADER_BYTES + 1);
+    let missing = wanted.saturating_sub(bytes.len());
+    read(&mut bytes, missing as u64)?;
+    if bytes.len() < wanted {
+        return Err(Error::format(path, "the .npy header is truncated"));
+    }
     if length > MAX_HEADER_BYTES {
         return Err(Error::format(path, header_too_long(length)));
     }
-    let missing = (start + length).saturating_sub(bytes.len());
-    read(&mut bytes, missing as u64)?;
     let count = precheck_header(&bytes, max_elements).map_err(|m| Error::format(path, m))?;
     Ok((bytes, count, file))
 }
@@ -637,6 +643,54 @@ mod tests {
                 "expected '{expected}' in: {e}"
             );
         }
+    }
+
+    #[test]
+    fn integer_pictures_follow_one_rule() {
+        let d = scratch("int");
+        let codes: Vec<u16> = (0..6).map(|k| k * 13_000).collect();
+        let u2: Vec<u8> = codes.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(d.join("u2.npy"), npy("<u2", "(2, 3)", &u2)).unwrap();
+        // As an array, the values as stored; as a picture, divided by 65535.
+        let array = read_array(&d.join("u2.npy"), 100).unwrap();
+        assert_eq!((array.dtype.as_str(), array.data[5]), ("<u2", 65000.0));
+        let (image, scale) = read_luminance_npy(&d.join("u2.npy"), 100).unwrap();
+        assert_eq!(scale.unwrap().max, 65535.0);
+        assert_eq!(image.data()[5], 65000.0 / 65535.0);
+        assert_eq!(npy_file_scale(&d.join("u2.npy")).unwrap().dtype, "uint16");
+        let u1: Vec<u8> = vec![0, 51, 102, 153, 204, 255];
+        std::fs::write(d.join("u1.npy"), npy("|u1", "(2, 3)", &u1)).unwrap();
+        let (image, _) = read_luminance_npy(&d.join("u1.npy"), 100).unwrap();
+        assert_eq!(image.data(), &[0.0, 0.2, 0.4, 0.6, 0.8, 1.0]);
+        let i1: Vec<u8> = vec![0, 1, 2, 3, 4, 5];
+        std::fs::write(d.join("i1.npy"), npy("|i1", "(2, 3)", &i1)).unwrap();
+        assert_eq!(read_array(&d.join("i1.npy"), 100).unwrap().data[5], 5.0);
+        let e = read_luminance_npy(&d.join("i1.npy"), 100)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("i1.npy: int8 pictures are refused"), "{e}");
+        // Floats: no scale, no note.
+        write_image(&d.join("f.npy"), &Grid::new(3, 2, 0.5)).unwrap();
+        assert_eq!(npy_file_scale(&d.join("f.npy")), None);
+    }
+
+    #[test]
+    fn only_the_declared_values_are_read() {
+        // A header declaring 2×3 float64 over a file of 48 bytes and a megabyte more: the
+        // reader stops after the 48 (the tail is never read, let alone held).
+        let d = scratch("tail");
+        let mut bytes = npy("<f8", "(2, 3)", &[0u8; 48]);
+        let declared = bytes.len();
+        bytes.resize(declared + (1 << 20), 0xff);
+        std::fs::write(d.join("t.npy"), &bytes).unwrap();
+        assert_eq!(
+            read_npy_file(&d.join("t.npy"), 100).unwrap().len(),
+            declared
+        );
+        // Not a .npy: refused after its first 12 bytes.
+        std::fs::write(d.join("z.npy"), vec![0u8; 1 << 20]).unwrap();
+        let e = read_array(&d.join("z.npy"), 100).unwrap_err().to_string();
+        assert!(e.contains("not a .npy file"), "{e}");
     }
 
     #[test]

@@ -44,7 +44,8 @@ fn decode(path: &Path, max_pixels: usize) -> Result<DynamicImage> {
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
     let (w, h) = declared_size(&bytes).map_err(|m| Error::format(path, m))?;
-    check_size(w as usize, h as usize, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
+    check_size(w as usize, h as usize, max_pixels)
+        .map_err(|e| Error::format(path, e.to_string()))?;
     let cap = max_image_file_bytes(w, h);
     file.take(cap.saturating_add(1).saturating_sub(bytes.len() as u64))
         .read_to_end(&mut bytes)

@@ -261,7 +261,12 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
         let mut rows: Vec<(usize, String)> = Vec::new();
         for (shard, dir) in &shards {
             let path = dir.join(file);
-            rows.extend(shard_rows(&io::read_bytes(&path)?, &path, *shard, point_count)?);
+            rows.extend(shard_rows(
+                &io::read_bytes(&path)?,
+                &path,
+                *shard,
+                point_count,
+            )?);
         }
         let missing: Vec<String> = (0..point_count)
             .filter(|p| !rows.iter().any(|(q, _)| q == p))
