@@ -348,10 +348,14 @@ fn rough_outward_normals(mask: &Mask) -> Vec<(usize, [f64; 2])> {
     rough
 }
 
+/// How far below 0 a given unit normal's z may be (rounding of an in-plane normal) before it
+/// is taken to face away from the viewer.
+const FACING_AWAY_TOLERANCE: f64 = 1e-9;
+
 /// The domain and fixed values that `boundary` gives on `mask`.
 ///
 /// Fails when the mask is empty, or when given normals have the wrong size or are not finite,
-/// non-zero vectors on the rim.
+/// non-zero vectors facing the viewer (n_z ≥ 0) on the rim.
 pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryConditions> {
     let (w, h) = (mask.width(), mask.height());
     if mask.count() == 0 {
@@ -399,6 +403,17 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
                         return Err(Error::invalid(format!(
                             "boundary normal at column {col}, row {row} is ({}, {}, {}): it must \
                              be a finite non-zero vector",
+                            n.x, n.y, n.z
+                        )));
+                    }
+                    // z points toward the viewer: a visible surface's normal has n_z ≥ 0, and
+                    // n_z = 0 is the occluding rim itself (what `occluding` fixes); a little
+                    // below 0 is taken for rounding.
+                    if n.z / len < -FACING_AWAY_TOLERANCE {
+                        return Err(Error::invalid(format!(
+                            "boundary normal at column {col}, row {row} is ({}, {}, {}): it faces \
+                             away from the viewer (n_z < 0, with z toward the viewer), so that \
+                             surface could not be seen",
                             n.x, n.y, n.z
                         )));
                     }
@@ -613,6 +628,17 @@ mod tests {
         assert!(boundary_conditions(&mask, &wrong).is_err());
         let nan = Boundary::Given(Grid::new(20, 20, Vector3::new(f64::NAN, 0.0, 1.0)));
         assert!(boundary_conditions(&mask, &nan).is_err());
+        // Facing away from the viewer: refused, naming the pixel; in the image plane: the rim.
+        let away = Boundary::Given(Grid::new(20, 20, Vector3::new(0.2, 0.1, -0.5)));
+        let e = boundary_conditions(&mask, &away).unwrap_err().to_string();
+        assert!(
+            e.contains("faces away from the viewer") && e.contains("column"),
+            "{e}"
+        );
+        let rim = Boundary::Given(Grid::new(20, 20, Vector3::new(0.6, -0.8, 0.0)));
+        let bc = boundary_conditions(&mask, &rim).unwrap();
+        let [f, g] = bc.fixed_values()[0].1;
+        assert!((f.hypot(g) - FG_RADIUS).abs() < 1e-12);
         let empty = Grid::new(20, 20, false);
         let e = boundary_conditions(&empty, &Boundary::Flat).unwrap_err();
         assert!(e.to_string().contains("empty"));

@@ -35,7 +35,9 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
 /// The largest grid shadelab makes unless told otherwise (about 64 megapixels).
 pub const DEFAULT_MAX_PIXELS: usize = 64 * 1024 * 1024;
 
-/// Checks that `width × height` is a usable, non-empty size below `max_pixels`.
+/// Checks that `width × height` is a usable, non-empty size below `max_pixels`, and that the
+/// memory of one buffer of that size can be had ([`check_memory`]): every image shadelab
+/// reads or makes passes here before its pixels are allocated.
 pub fn check_size(width: usize, height: usize, max_pixels: usize) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(Error::invalid(format!(
@@ -43,11 +45,42 @@ pub fn check_size(width: usize, height: usize, max_pixels: usize) -> Result<()> 
         )));
     }
     match width.checked_mul(height) {
-        Some(n) if n <= max_pixels => Ok(()),
+        Some(n) if n <= max_pixels => check_memory(width, height),
         _ => Err(Error::TooLarge(format!(
             "image size {width}x{height} exceeds the limit of {max_pixels} pixels"
         ))),
     }
+}
+
+/// The bytes per pixel of the largest single buffer a command makes (a normal map, three
+/// float64 a pixel, is 24), with a margin: what [`check_memory`] asks for.
+pub const PROBE_BYTES_PER_PIXEL: usize = 32;
+
+/// Checks, before a command allocates its buffers, that one buffer of
+/// [`PROBE_BYTES_PER_PIXEL`] bytes for each of `width × height` pixels can be allocated: the
+/// memory is reserved (not touched) and given back at once, so that a size the machine cannot
+/// hold is an error here rather than an abort half-way. Sizes under 256 MiB are not probed.
+///
+/// ```
+/// assert!(shadelab::grid::check_memory(4000, 3000).is_ok());
+/// let e = shadelab::grid::check_memory(usize::MAX / 2, 2).unwrap_err().to_string();
+/// assert!(e.contains("more memory than this machine can give"), "{e}");
+/// ```
+pub fn check_memory(width: usize, height: usize) -> Result<()> {
+    let bytes = width
+        .saturating_mul(height)
+        .saturating_mul(PROBE_BYTES_PER_PIXEL);
+    if bytes < 1 << 28 {
+        return Ok(());
+    }
+    let mut probe: Vec<u8> = Vec::new();
+    probe.try_reserve_exact(bytes).map_err(|_| {
+        Error::Compute(format!(
+            "image size {width}x{height} needs buffers of {} each, more memory than this \
+             machine can give",
+            crate::io::byte_size(bytes as u64)
+        ))
+    })
 }
 
 impl<T: Clone> Grid<T> {

@@ -200,6 +200,57 @@ fn from_bytes_readers_match_the_path_readers() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+// ---- csv_sidecar: selector byte % 3 (0 results.csv, 1 sweep.csv, 2 sidecar JSON), shape byte
+// (shard count (b & 7) + 1, shard index (b >> 3) mod count, study points (b >> 5) × 3) ----
+
+/// As the fuzz target: a shard's rows (with their points) or a sidecar's summary.
+fn run_csv_sidecar(data: &[u8]) -> Result<Vec<(usize, String)>> {
+    use shadelab::analysis::study::{merge::shard_rows, Shard, RESULTS, SWEEP};
+    let [selector, shape, rest @ ..] = data else {
+        panic!("input too short");
+    };
+    let count = usize::from(shape & 7) + 1;
+    let shard = Shard {
+        index: usize::from(shape >> 3) % count,
+        count,
+    };
+    let points = usize::from(shape >> 5) * 3;
+    match selector % 3 {
+        mode @ (0 | 1) => {
+            let file = if mode == 0 { RESULTS } else { SWEEP };
+            shard_rows(rest, &Path::new("shard").join(file), shard, points)
+        }
+        _ => {
+            let value: Value = serde_json::from_slice(rest)
+                .map_err(|e| shadelab::Error::invalid(format!("not JSON: {e}")))?;
+            let sidecar = io::RenderSidecar::from_value(Path::new("dir/image.json"), &value)?;
+            Ok(vec![(0, sidecar.summary())])
+        }
+    }
+}
+
+#[test]
+fn csv_sidecar_seeds_read_and_cut_rows_are_refused() {
+    for (name, data) in seeds("csv_sidecar") {
+        let rows = run_csv_sidecar(&data).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(!rows.is_empty(), "{name}");
+        if data[0] % 3 < 2 {
+            // Shard 1 of 2 runs the odd points only.
+            assert!(rows.iter().all(|(p, _)| p % 2 == 1), "{name}");
+            // Cut anywhere inside its last row, the table is refused, naming the line.
+            let lines = data.iter().filter(|&&b| b == b'\n').count();
+            let cut = &data[..data.len() - 5];
+            let e = run_csv_sidecar(cut).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("line {lines}: the row is truncated")),
+                "{name}: {e}"
+            );
+        } else {
+            assert!(rows[0].1.contains("ppd"), "{name}: {}", rows[0].1);
+        }
+    }
+}
+
 // ---- inputs the fuzzers found ----
 
 /// Every crash input of `target` with the words its error must contain; every file in

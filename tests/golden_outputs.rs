@@ -189,7 +189,18 @@ fn every_command_writes_what_it_wrote_before_the_refactor() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    let digests: BTreeMap<String, String> = outputs(&dir)
+    let files = outputs(&dir);
+    // No NaN or infinity in any file any command wrote (docs/reliability.md).
+    let found: Vec<String> = files
+        .iter()
+        .filter_map(|(name, bytes)| non_finite(name, bytes))
+        .collect();
+    assert!(found.is_empty(), "non-finite numbers written: {found:#?}");
+    assert!(
+        files.keys().any(|n| n.ends_with(".npy")) && files.keys().any(|n| n.ends_with(".csv")),
+        "the scan saw no .npy or .csv"
+    );
+    let digests: BTreeMap<String, String> = files
         .into_iter()
         .filter(|(name, _)| name != "study.json" && name != "responses.csv")
         .map(|(name, bytes)| (name, format!("{:x}", Md5::digest(&bytes))))
@@ -216,4 +227,69 @@ fn every_command_writes_what_it_wrote_before_the_refactor() {
         "outputs changed: {differing:?}; files not recorded: {new:?}"
     );
     assert!(recorded.len() >= 60, "{} files compared", recorded.len());
+}
+
+/// Where the file `name` holds a NaN or an infinity, in words (`None` when it holds none):
+/// a field of a CSV, a value of a `.npy`, a number in an SVG, HTML, Markdown or text file
+/// (any token that parses as a non-finite number: `NaN`, `inf`, `-inf`, `infinity`); JSON
+/// cannot hold one (serde writes `null` for it, which the reports document), so a JSON file
+/// that does not parse is reported.
+pub fn non_finite(name: &str, bytes: &[u8]) -> Option<String> {
+    let bad = |t: &str| t.trim().parse::<f64>().is_ok_and(|v| !v.is_finite());
+    let ext = name.rsplit('.').next().unwrap_or("");
+    match ext {
+        "csv" => {
+            let text = String::from_utf8_lossy(bytes);
+            text.lines().enumerate().find_map(|(n, line)| {
+                let fields = shadelab::io::csv_record(line).ok()?;
+                let field = fields.iter().find(|f| bad(f))?;
+                Some(format!("{name} line {}: '{field}'", n + 1))
+            })
+        }
+        "npy" => {
+            let array =
+                shadelab::io::read_array_from_bytes(bytes, std::path::Path::new(name), usize::MAX)
+                    .ok()?;
+            let at = array.data.iter().position(|v| !v.is_finite())?;
+            Some(format!("{name} value {at}: {}", array.data[at]))
+        }
+        "json" => serde_json::from_slice::<serde_json::Value>(bytes)
+            .err()
+            .map(|e| format!("{name}: not JSON ({e})")),
+        "svg" | "html" | "md" | "txt" => {
+            let text = String::from_utf8_lossy(bytes);
+            let token = text
+                .split(|c: char| !(c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '+'))
+                .find(|t| bad(t))?;
+            Some(format!("{name}: '{token}'"))
+        }
+        _ => None,
+    }
+}
+
+#[test]
+fn the_scan_finds_what_it_looks_for() {
+    let npy = shadelab::io::encode_f64(&[2], &[0.5, f64::NAN]).unwrap();
+    let cases: [(&str, &[u8], bool); 8] = [
+        ("a.csv", b"a,b\n1,NaN\n", true),
+        ("a.csv", b"a,b\n1,\"inf, or not\"\n2,-inf\n", true),
+        ("a.csv", b"a,b\n1,2.5e-300\n", false),
+        ("a.npy", &npy, true),
+        (
+            "a.svg",
+            b"<path d=\"M 0 NaN L 1 2\"/><text>Information</text>",
+            true,
+        ),
+        ("a.svg", b"<text>Information, infinite</text>", false),
+        ("a.json", b"{\"a\": NaN}", true),
+        ("a.json", b"{\"a\": null}", false),
+    ];
+    for (name, bytes, found) in cases {
+        assert_eq!(
+            non_finite(name, bytes).is_some(),
+            found,
+            "{name}: {}",
+            String::from_utf8_lossy(bytes)
+        );
+    }
 }

@@ -19,7 +19,15 @@ fuzz_target!(|data: &[u8]| {
     let split = (usize::from(data[1]) | usize::from(data[2]) << 8).min(data.len() - 3);
     let (image_bytes, mask_bytes) = data[3..].split_at(split);
     let image = if npy {
-        let _ = io::read_array_from_bytes(image_bytes, Path::new("image.npy"), MAX_PIXELS);
+        if let Ok(array) =
+            io::read_array_from_bytes(image_bytes, Path::new("image.npy"), MAX_PIXELS)
+        {
+            // The rule for a picture's integers, and the range check every picture passes.
+            if let Ok(Some(scale)) = io::npy_scale(&array.dtype) {
+                let scaled: Vec<f64> = array.data.iter().map(|v| v / scale.max).collect();
+                let _ = io::check_luminance_range(&scaled, Path::new("image.npy"));
+            }
+        }
         io::read_image_from_bytes(image_bytes, Path::new("image.npy"), MAX_PIXELS)
     } else {
         io::read_gray_from_bytes(image_bytes, Path::new("image.png"), MAX_PIXELS).map(|(i, _)| i)

@@ -104,10 +104,20 @@ def _params_json(params: Dict[str, Any]) -> str:
 
 def _float_image(image: Any, what: str, colour: bool) -> np.ndarray:
     """A float64 H×W (or, with `colour`, H×W×3) array from any real-valued array, read the
-    way the command line reads a ``.npy`` (integers and booleans keep their values)."""
+    way the command line reads a ``.npy`` picture (docs/conventions.md): uint8 and uint16
+    divided by 255 and 65535 (as a PNG's codes), other integer types refused, floats and
+    booleans as they are; the library then refuses values outside 0..1."""
     a = np.asarray(image)
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{what}: unsupported dtype {a.dtype} (need a real number type)")
+    if a.dtype.kind in "iu":
+        if a.dtype.kind != "u" or a.dtype.itemsize > 2:
+            raise ValueError(
+                f"{what}: {a.dtype.name} pictures are refused: only uint8 and uint16 integers "
+                "have a largest value that means white (save 8- or 16-bit codes as uint8 or "
+                "uint16, or luminance 0..1 as float)"
+            )
+        a = a.astype(np.float64) / float(np.iinfo(a.dtype).max)
     if a.ndim == 3 and a.shape[2] == 1:
         a = a[:, :, 0]
     if not (a.ndim == 2 or (colour and a.ndim == 3 and a.shape[2] == 3)):

@@ -68,11 +68,16 @@ def test_any_dtype_and_memory_order(sphere):
     assert angular_error_deg(as32.normals, base, inside) < 0.05
 
 
-def test_integer_image_keeps_its_values():
-    """Integers are read as the command line reads an integer .npy: values as they are."""
-    img = np.full((16, 16), 1, dtype=np.uint8)
-    r = shadelab.solve(img, light=(0, 0, 1))
-    np.testing.assert_allclose(r.normals[..., 2], 1.0, atol=1e-9)
+def test_integer_images_follow_the_command_lines_rule():
+    """Integers are read as the command line reads an integer .npy (docs/conventions.md):
+    uint8 / 255 and uint16 / 65535, other integer types refused; values outside 0..1 refused."""
+    for img in (np.full((16, 16), 255, dtype=np.uint8), np.full((16, 16), 65535, dtype=np.uint16)):
+        r = shadelab.solve(img, light=(0, 0, 1))
+        np.testing.assert_allclose(r.normals[..., 2], 1.0, atol=1e-9)
+    with pytest.raises(ValueError, match="int64 pictures are refused"):
+        shadelab.solve(np.full((16, 16), 1, dtype=np.int64), light=(0, 0, 1))
+    with pytest.raises(ValueError, match="outside 0..1"):
+        shadelab.solve(np.full((16, 16), 2.0), light=(0, 0, 1))
 
 
 def test_outputs_are_not_copied(sphere):

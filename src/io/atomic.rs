@@ -132,6 +132,9 @@ impl<W: Write> Write for StopOnCancel<W> {
 
 /// Writes `text` to `target` atomically (see [`write_atomic`]).
 pub fn write_text(target: &Path, text: &str) -> Result<()> {
+    if super::extension(target) == "csv" {
+        super::check_csv_finite(target, text)?;
+    }
     write_atomic(target, |out| {
         out.write_all(text.as_bytes())
             .map_err(|e| Error::io(target, e))

@@ -13,11 +13,13 @@ pub mod render_sidecar;
 mod sidecar;
 
 pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
-pub use csv::{csv_field, parse_csv};
+pub(crate) use csv::check_csv_finite;
+pub use csv::{csv_field, csv_record, parse_csv};
 pub use gif::write_gif;
 pub use npy::{
-    encode_f64, encode_npz, encode_text, read_array, read_array_from_bytes, read_image,
-    read_image_from_bytes, read_normals, write_f32, write_image, write_normals, NpyArray,
+    encode_f64, encode_npz, encode_text, npy_file_scale, npy_scale, read_array,
+    read_array_from_bytes, read_image, read_image_from_bytes, read_luminance_npy, read_normals,
+    write_f32, write_image, write_normals, IntegerScale, NpyArray,
 };
 pub use output_set::{remove_dead_temporaries, OutputSet};
 pub use png::{
@@ -32,32 +34,143 @@ use crate::error::{Error, Result};
 use crate::grid::Image;
 use std::path::Path;
 
-/// Reads a picture file as linear luminance: an 8/16-bit PNG ([`read_gray`]) or a float H×W
-/// `.npy` ([`read_image`]), with what was read (the PNG's [`GrayInfo`], or the `.npy` format)
-/// for reports. Any other extension is refused.
+/// Reads a picture file as linear luminance: an 8/16-bit PNG ([`read_gray`]) or an H×W `.npy`
+/// ([`read_luminance_npy`]: uint8 and uint16 divided by their largest value, other integers
+/// refused), with what was read (the PNG's [`GrayInfo`], or the `.npy` format and conversion)
+/// for reports. Any other extension is refused, and so is a picture with values outside 0..1
+/// ([`check_luminance_range`]).
 pub fn read_luminance(path: &Path, max_pixels: usize) -> Result<(Image, serde_json::Value)> {
-    match extension(path).as_str() {
+    let (image, info) = match extension(path).as_str() {
         "png" => {
             let (image, info) = read_gray(path, max_pixels)?;
-            Ok((image, serde_json::to_value(info).unwrap_or_default()))
+            (image, serde_json::to_value(info).unwrap_or_default())
         }
-        "npy" => Ok((
-            read_image(path, max_pixels)?,
-            serde_json::json!({ "format": "npy float" }),
-        )),
-        other => Err(Error::invalid(format!(
-            "{}: the image must be a .png or .npy file (got '.{other}')",
-            path.display()
-        ))),
-    }
+        "npy" => {
+            let (image, scale) = read_luminance_npy(path, max_pixels)?;
+            let info = match scale {
+                Some(scale) => serde_json::json!({
+                    "format": format!("npy {}", scale.dtype),
+                    "conversion": scale.note(),
+                }),
+                None => serde_json::json!({ "format": "npy float" }),
+            };
+            (image, info)
+        }
+        other => {
+            return Err(Error::invalid(format!(
+                "{}: the image must be a .png or .npy file (got '.{other}')",
+                path.display()
+            )))
+        }
+    };
+    check_luminance_range(image.data(), path)?;
+    Ok((image, info))
 }
 
-/// Reads a whole file, with the path in any error.
+/// Checks that every value of a picture (gray, or RGB channels in turn) is linear luminance
+/// in 0..1, refusing it otherwise with the count of values outside and the range found;
+/// `source` names it in the error.
+///
+/// Values outside are refused rather than clipped: the solver and the models read every value
+/// as light reflected by the surface, so clipping would turn highlights into plateaus without
+/// saying so; only the user knows how the values were scaled.
+///
+/// ```
+/// use std::path::Path;
+/// let mut values = vec![0.5; 8];
+/// assert!(shadelab::io::check_luminance_range(&values, Path::new("a.npy")).is_ok());
+/// values[1] = 200.0;
+/// let e = shadelab::io::check_luminance_range(&values, Path::new("a.npy")).unwrap_err();
+/// assert_eq!(
+///     e.to_string(),
+///     "a.npy: 1 of 8 values are outside 0..1 (from 0.5 to 200): a picture must be linear \
+///      luminance 0..1 (divide by its largest possible value)"
+/// );
+/// ```
+pub fn check_luminance_range(values: &[f64], source: &Path) -> Result<()> {
+    let outside = values.iter().filter(|v| !(0.0..=1.0).contains(*v)).count();
+    if outside == 0 {
+        return Ok(());
+    }
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Err(Error::format(
+        source,
+        format!(
+            "{outside} of {} values are outside 0..1 (from {lo} to {hi}): a picture must be \
+             linear luminance 0..1 (divide by its largest possible value)",
+            values.len()
+        ),
+    ))
+}
+
+/// The most bytes read from a text file (a spec, preset, sidecar, report, CSV or other JSON):
+/// 64 MiB, far above any file shadelab writes, far below what would exhaust memory.
+pub const MAX_TEXT_BYTES: u64 = 64 * 1024 * 1024;
+
+/// Reads a whole text file (a spec, sidecar, report or CSV), with the path in any error;
+/// refuses a file longer than [`MAX_TEXT_BYTES`] after reading no more than that.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    read_capped(path, MAX_TEXT_BYTES)
+}
+
+/// Reads a file through `Read::take(cap + 1)`: its bytes when it holds at most `cap`, else an
+/// error naming the file and the cap, so that a device or a huge file (a link to
+/// `/dev/urandom`) costs at most `cap + 1` bytes of memory.
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("shadelab-doc-capped-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// std::fs::write(dir.join("a.json"), b"{}")?;
+/// assert_eq!(shadelab::io::read_capped(&dir.join("a.json"), 2)?, b"{}");
+/// let e = shadelab::io::read_capped(&dir.join("a.json"), 1).unwrap_err().to_string();
+/// assert!(e.ends_with("a.json: is larger than 1 byte, the most shadelab reads from such a file"), "{e}");
+/// # std::fs::remove_dir_all(&dir)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let file = open_file(path)?;
+    let mut bytes = Vec::new();
+    file.take(cap.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > cap {
+        return Err(too_long(path, cap));
+    }
+    Ok(bytes)
+}
+
+/// Opens a file for reading, refusing a directory, with the path in any error.
+pub(crate) fn open_file(path: &Path) -> Result<std::fs::File> {
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not a file"));
     }
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    std::fs::File::open(path).map_err(|e| Error::io(path, e))
+}
+
+/// The error for a file longer than the `cap` bytes shadelab reads from it.
+pub(crate) fn too_long(path: &Path, cap: u64) -> Error {
+    Error::format(
+        path,
+        format!(
+            "is larger than {}, the most shadelab reads from such a file",
+            byte_size(cap)
+        ),
+    )
+}
+
+/// `bytes` in words: `1 byte`, `512 bytes`, `64 MiB`, `1.5 GiB`.
+pub(crate) fn byte_size(bytes: u64) -> String {
+    const UNITS: [(&str, u64); 3] = [("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)];
+    match UNITS.iter().find(|(_, size)| bytes >= *size) {
+        Some((unit, size)) => {
+            let value = bytes as f64 / *size as f64;
+            format!("{} {unit}", (value * 10.0).round() / 10.0)
+        }
+        None if bytes == 1 => "1 byte".to_string(),
+        None => format!("{bytes} bytes"),
+    }
 }
 
 /// The lower-case extension of `path` ("" when none).

@@ -11,15 +11,133 @@ use std::path::Path;
 pub struct NpyArray {
     /// The shape, outermost axis first (H, W[, C] for images).
     pub shape: Vec<usize>,
-    /// The values in C order.
+    /// The values in C order, as stored (integers keep their values; see [`npy_scale`] for
+    /// how a picture's integers become luminance).
     pub data: Vec<f64>,
+    /// The NumPy dtype as the header gives it (`<f8`, `|u1`, `<i8`, `|b1`, …).
+    pub dtype: String,
+}
+
+/// How the integers of a `.npy` picture become luminance 0..1: as the codes of a PNG of the
+/// same bit depth, uint8 divided by 255 and uint16 by 65535 (docs/conventions.md). Other
+/// integer types (signed, 32 or 64 bits) are refused as pictures ([`npy_scale`]): no bit depth
+/// says what their largest value means.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntegerScale {
+    /// The NumPy type name (`uint8` or `uint16`).
+    pub dtype: String,
+    /// The divisor: the type's largest value.
+    pub max: f64,
+}
+
+impl IntegerScale {
+    /// One line for a log and a report: what was done to the values.
+    pub fn note(&self) -> String {
+        format!(
+            "{} values divided by {} to give luminance 0..1, as a PNG's codes",
+            self.dtype, self.max
+        )
+    }
+}
+
+/// The scale of a NumPy dtype (`|u1`, `<u2`, …) read as a picture: `Ok(None)` for floats and
+/// booleans (read as they are), the [`IntegerScale`] of uint8 and uint16, and an error saying
+/// why for every other integer type.
+///
+/// ```
+/// let scale = shadelab::io::npy_scale("|u1").unwrap().unwrap();
+/// assert_eq!((scale.dtype.as_str(), scale.max), ("uint8", 255.0));
+/// assert_eq!(shadelab::io::npy_scale("<u2").unwrap().unwrap().max, 65535.0);
+/// assert_eq!(shadelab::io::npy_scale("<f4").unwrap(), None);
+/// assert_eq!(shadelab::io::npy_scale("|b1").unwrap(), None);
+/// assert!(shadelab::io::npy_scale("<i8").unwrap_err().starts_with("int64 pictures are refused"));
+/// ```
+pub fn npy_scale(descr: &str) -> std::result::Result<Option<IntegerScale>, String> {
+    let rest = descr.trim_start_matches(['<', '>', '|', '=']);
+    let Some((kind, bytes)) = rest.split_at_checked(1) else {
+        return Ok(None);
+    };
+    let bits = bytes.parse::<u32>().unwrap_or(0) * 8;
+    let name = match kind {
+        "u" => format!("uint{bits}"),
+        "i" => format!("int{bits}"),
+        _ => return Ok(None),
+    };
+    match (kind, bits) {
+        ("u", 8 | 16) => Ok(Some(IntegerScale {
+            max: 2f64.powi(bits as i32) - 1.0,
+            dtype: name,
+        })),
+        _ => Err(format!(
+            "{name} pictures are refused: only uint8 and uint16 integers have a largest value \
+             that means white (save 8- or 16-bit codes as uint8 or uint16, or luminance 0..1 \
+             as float)"
+        )),
+    }
 }
 
 /// Reads a `.npy` file of any float, integer or boolean dtype, either memory order, refusing
 /// arrays of more than `max_elements` values and files shorter than their header declares.
+/// The header is read and checked first: no more of the file is read than the values it
+/// declares (a file that is not a `.npy` costs 12 bytes).
 pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
-    read_array_from_bytes(&super::read_bytes(path)?, path, max_elements)
+    read_array_from_bytes(&read_npy_file(path, max_elements)?, path, max_elements)
 }
+
+/// The bytes of a `.npy` file that its checked header declares: the preamble and header are
+/// read and checked first, then at most 8 bytes for each value the header declares.
+fn read_npy_file(path: &Path, max_elements: usize) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let (mut bytes, count, file) = read_npy_header(path, max_elements)?;
+    file.take(count.saturating_mul(MAX_ITEM_BYTES as u64))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    Ok(bytes)
+}
+
+/// The preamble and header of the `.npy` file at `path`, checked, with the number of values
+/// they declare and the file positioned at the first value.
+fn read_npy_header(path: &Path, max_elements: usize) -> Result<(Vec<u8>, u64, std::fs::File)> {
+    use std::io::Read;
+    let mut file = super::open_file(path)?;
+    let mut bytes = Vec::new();
+    let mut read = |bytes: &mut Vec<u8>, n: u64| {
+        (&mut file)
+            .take(n)
+            .read_to_end(bytes)
+            .map_err(|e| Error::io(path, e))
+    };
+    read(&mut bytes, 12)?;
+    let (start, length) = preamble(&bytes).map_err(|m| Error::format(path, m))?;
+    // At most one byte past the longest header accepted: enough to tell a file that ends
+    // inside its header (truncated) from one whose header is too long.
+    let wanted = start + length.min(MAX_HEADER_BYTES + 1);
+    let missing = wanted.saturating_sub(bytes.len());
+    read(&mut bytes, missing as u64)?;
+    if bytes.len() < wanted {
+        return Err(Error::format(path, "the .npy header is truncated"));
+    }
+    if length > MAX_HEADER_BYTES {
+        return Err(Error::format(path, header_too_long(length)));
+    }
+    let count = precheck_header(&bytes, max_elements).map_err(|m| Error::format(path, m))?;
+    Ok((bytes, count, file))
+}
+
+/// The integer scale ([`npy_scale`]) of the `.npy` picture at `path`, from its header alone:
+/// `None` for a float or boolean dtype, and for a file whose header cannot be read (reading
+/// the picture says why).
+pub fn npy_file_scale(path: &Path) -> Option<IntegerScale> {
+    let (bytes, _, _) = read_npy_header(path, usize::MAX).ok()?;
+    let file = npyz::NpyFile::new(&bytes[..]).ok()?;
+    match file.dtype() {
+        npyz::DType::Plain(t) => npy_scale(&t.to_string()).ok().flatten(),
+        _ => None,
+    }
+}
+
+/// The largest value read: 8 bytes (float64, int64, uint64).
+const MAX_ITEM_BYTES: usize = 8;
 
 /// [`read_array`] of `.npy` bytes held in memory; `path` names them in errors.
 pub fn read_array_from_bytes(bytes: &[u8], path: &Path, max_elements: usize) -> Result<NpyArray> {
@@ -37,15 +155,17 @@ pub fn read_array_from_bytes(bytes: &[u8], path: &Path, max_elements: usize) -> 
                 format!("array shape {shape:?} exceeds the limit of {max_elements} values"),
             )
         })?;
+    // The type string alone (`<f8`), not the header's quoted literal.
+    let dtype = match file.dtype() {
+        npyz::DType::Plain(t) => t.to_string(),
+        other => other.descr(),
+    };
     let item = match file.dtype() {
         npyz::DType::Plain(t) => t.num_bytes().unwrap_or(0),
         _ => 0,
     };
-    if item == 0 {
-        return Err(Error::format(
-            path,
-            format!("unsupported dtype {}", file.dtype().descr()),
-        ));
+    if item == 0 || item > MAX_ITEM_BYTES {
+        return Err(Error::format(path, format!("unsupported dtype {dtype}")));
     }
     if bytes.len() < count.saturating_mul(item) {
         return Err(Error::format(
@@ -61,42 +181,38 @@ pub fn read_array_from_bytes(bytes: &[u8], path: &Path, max_elements: usize) -> 
             Error::format(path, format!("cannot read values ({e})"))
         }
     };
-    let data: Vec<f64> = match file.try_data::<f64>() {
-        Ok(r) => r.collect::<std::io::Result<_>>().map_err(io)?,
-        Err(file) => match file.try_data::<f32>() {
-            Ok(r) => r
-                .map(|v| v.map(f64::from))
-                .collect::<std::io::Result<_>>()
-                .map_err(io)?,
-            Err(file) => match file.try_data::<i64>() {
+    // Each real type npyz knows, tried in turn: the first whose dtype matches reads the values.
+    macro_rules! read_as {
+        ($file:ident; $($t:ty),*) => {'read: {
+            $(
+                let $file = match $file.try_data::<$t>() {
+                    Ok(r) => {
+                        break 'read r
+                            .map(|v| v.map(|v| v as f64))
+                            .collect::<std::io::Result<Vec<f64>>>()
+                            .map_err(io)?
+                    }
+                    Err(file) => file,
+                };
+            )*
+            match $file.try_data::<bool>() {
                 Ok(r) => r
-                    .map(|v| v.map(|v| v as f64))
-                    .collect::<std::io::Result<_>>()
+                    .map(|v| v.map(|b| if b { 1.0 } else { 0.0 }))
+                    .collect::<std::io::Result<Vec<f64>>>()
                     .map_err(io)?,
-                Err(file) => match file.try_data::<u64>() {
-                    Ok(r) => r
-                        .map(|v| v.map(|v| v as f64))
-                        .collect::<std::io::Result<_>>()
-                        .map_err(io)?,
-                    Err(file) => match file.try_data::<bool>() {
-                        Ok(r) => r
-                            .map(|v| v.map(|b| if b { 1.0 } else { 0.0 }))
-                            .collect::<std::io::Result<_>>()
-                            .map_err(io)?,
-                        Err(file) => {
-                            return Err(Error::format(
-                                path,
-                                format!(
-                                    "unsupported dtype {} (need a real number type)",
-                                    file.dtype().descr()
-                                ),
-                            ))
-                        }
-                    },
-                },
-            },
-        },
-    };
+                Err(file) => {
+                    return Err(Error::format(
+                        path,
+                        format!(
+                            "unsupported dtype {} (need a real number type)",
+                            file.dtype().descr()
+                        ),
+                    ))
+                }
+            }
+        }};
+    }
+    let data: Vec<f64> = read_as!(file; f64, f32, i64, u64, i32, u32, i16, u16, i8, u8);
     if data.len() != count {
         return Err(Error::format(
             path,
@@ -108,7 +224,7 @@ pub fn read_array_from_bytes(bytes: &[u8], path: &Path, max_elements: usize) -> 
     } else {
         data
     };
-    Ok(NpyArray { shape, data })
+    Ok(NpyArray { shape, data, dtype })
 }
 
 /// The longest `.npy` header accepted (NumPy's own reader refuses longer ones by default).
@@ -117,31 +233,41 @@ const MAX_HEADER_BYTES: usize = 10_000;
 /// The deepest bracket nesting accepted in a `.npy` header.
 const MAX_HEADER_NESTING: usize = 4;
 
-/// Checks the preamble and the header's shape by hand before npyz parses them, so that a
-/// corrupt or hostile header (a shape whose product overflows, a header longer than the file)
-/// is an error rather than an overflow or a huge allocation.
-fn precheck_header(bytes: &[u8], max_elements: usize) -> std::result::Result<(), String> {
+/// Where the `.npy` header starts and how long it says it is, from the magic and version.
+fn preamble(bytes: &[u8]) -> std::result::Result<(usize, usize), String> {
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err("not a .npy file (no \\x93NUMPY magic)".into());
     }
-    let (start, length): (usize, usize) = match bytes[6] {
-        1 => (10, u16::from_le_bytes([bytes[8], bytes[9]]) as usize),
-        2 | 3 if bytes.len() >= 12 => (
+    match bytes[6] {
+        1 => Ok((10, u16::from_le_bytes([bytes[8], bytes[9]]) as usize)),
+        2 | 3 if bytes.len() >= 12 => Ok((
             12,
             u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-        ),
-        2 | 3 => return Err("the .npy header is truncated".into()),
-        v => return Err(format!("unsupported .npy format version {v}")),
-    };
+        )),
+        2 | 3 => Err("the .npy header is truncated".into()),
+        v => Err(format!("unsupported .npy format version {v}")),
+    }
+}
+
+fn header_too_long(length: usize) -> String {
+    format!(
+        "the .npy header is {length} bytes long (more than {MAX_HEADER_BYTES}: not an array \
+         header)"
+    )
+}
+
+/// Checks the preamble and the header's shape by hand before npyz parses them, so that a
+/// corrupt or hostile header (a shape whose product overflows, a header longer than the file)
+/// is an error rather than an overflow or a huge allocation; gives the number of values the
+/// header declares.
+fn precheck_header(bytes: &[u8], max_elements: usize) -> std::result::Result<u64, String> {
+    let (start, length) = preamble(bytes)?;
     // A header longer than the file is reported as truncated (the more precise of the two).
     let text = bytes
         .get(start..start.saturating_add(length))
         .ok_or("the .npy header is truncated")?;
     if length > MAX_HEADER_BYTES {
-        return Err(format!(
-            "the .npy header is {length} bytes long (more than {MAX_HEADER_BYTES}: not an array \
-             header)"
-        ));
+        return Err(header_too_long(length));
     }
     // npyz parses the header with a backtracking grammar whose time grows exponentially with
     // the nesting of brackets; a plain array's header nests two deep ({'shape': (H, W)}).
@@ -181,7 +307,7 @@ fn precheck_header(bytes: &[u8], max_elements: usize) -> std::result::Result<(),
         .map_err(|_| format!("the .npy shape ({tuple}) is not a tuple of sizes"))?;
     match dims.iter().try_fold(1u64, |acc, &d| acc.checked_mul(d)) {
         Some(0) => Err(format!("the array is empty (shape ({tuple}))")),
-        Some(n) if n <= max_elements as u64 => Ok(()),
+        Some(n) if n <= max_elements as u64 => Ok(n),
         _ => Err(format!(
             "array shape ({tuple}) exceeds the limit of {max_elements} values"
         )),
@@ -242,6 +368,20 @@ pub fn read_image_from_bytes(bytes: &[u8], path: &Path, max_pixels: usize) -> Re
         path,
         max_pixels,
     )
+}
+
+/// Reads an H×W `.npy` picture as luminance: floats and booleans as they are, uint8 and uint16
+/// divided by the largest value of their type, other integers refused ([`npy_scale`]; the
+/// scale is given back). The range is not checked
+/// here: [`read_luminance`](super::read_luminance) does it for every picture.
+pub fn read_luminance_npy(path: &Path, max_pixels: usize) -> Result<(Image, Option<IntegerScale>)> {
+    let array = read_array(path, max_pixels)?;
+    let scale = npy_scale(&array.dtype).map_err(|why| Error::format(path, why))?;
+    let mut image = image_from(array, path, max_pixels)?;
+    if let Some(scale) = &scale {
+        image.data_mut().iter_mut().for_each(|v| *v /= scale.max);
+    }
+    Ok((image, scale))
 }
 
 fn image_from(a: NpyArray, path: &Path, max_pixels: usize) -> Result<Image> {
@@ -503,6 +643,54 @@ mod tests {
                 "expected '{expected}' in: {e}"
             );
         }
+    }
+
+    #[test]
+    fn integer_pictures_follow_one_rule() {
+        let d = scratch("int");
+        let codes: Vec<u16> = (0..6).map(|k| k * 13_000).collect();
+        let u2: Vec<u8> = codes.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(d.join("u2.npy"), npy("<u2", "(2, 3)", &u2)).unwrap();
+        // As an array, the values as stored; as a picture, divided by 65535.
+        let array = read_array(&d.join("u2.npy"), 100).unwrap();
+        assert_eq!((array.dtype.as_str(), array.data[5]), ("<u2", 65000.0));
+        let (image, scale) = read_luminance_npy(&d.join("u2.npy"), 100).unwrap();
+        assert_eq!(scale.unwrap().max, 65535.0);
+        assert_eq!(image.data()[5], 65000.0 / 65535.0);
+        assert_eq!(npy_file_scale(&d.join("u2.npy")).unwrap().dtype, "uint16");
+        let u1: Vec<u8> = vec![0, 51, 102, 153, 204, 255];
+        std::fs::write(d.join("u1.npy"), npy("|u1", "(2, 3)", &u1)).unwrap();
+        let (image, _) = read_luminance_npy(&d.join("u1.npy"), 100).unwrap();
+        assert_eq!(image.data(), &[0.0, 0.2, 0.4, 0.6, 0.8, 1.0]);
+        let i1: Vec<u8> = vec![0, 1, 2, 3, 4, 5];
+        std::fs::write(d.join("i1.npy"), npy("|i1", "(2, 3)", &i1)).unwrap();
+        assert_eq!(read_array(&d.join("i1.npy"), 100).unwrap().data[5], 5.0);
+        let e = read_luminance_npy(&d.join("i1.npy"), 100)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("i1.npy: int8 pictures are refused"), "{e}");
+        // Floats: no scale, no note.
+        write_image(&d.join("f.npy"), &Grid::new(3, 2, 0.5)).unwrap();
+        assert_eq!(npy_file_scale(&d.join("f.npy")), None);
+    }
+
+    #[test]
+    fn only_the_declared_values_are_read() {
+        // A header declaring 2×3 float64 over a file of 48 bytes and a megabyte more: the
+        // reader stops after the 48 (the tail is never read, let alone held).
+        let d = scratch("tail");
+        let mut bytes = npy("<f8", "(2, 3)", &[0u8; 48]);
+        let declared = bytes.len();
+        bytes.resize(declared + (1 << 20), 0xff);
+        std::fs::write(d.join("t.npy"), &bytes).unwrap();
+        assert_eq!(
+            read_npy_file(&d.join("t.npy"), 100).unwrap().len(),
+            declared
+        );
+        // Not a .npy: refused after its first 12 bytes.
+        std::fs::write(d.join("z.npy"), vec![0u8; 1 << 20]).unwrap();
+        let e = read_array(&d.join("z.npy"), 100).unwrap_err().to_string();
+        assert!(e.contains("not a .npy file"), "{e}");
     }
 
     #[test]

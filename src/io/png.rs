@@ -31,17 +31,70 @@ pub struct GrayInfo {
     pub conversion: Option<String>,
 }
 
+/// Reads the image at `path`, its signature and declared size first: a file that is not a
+/// PNG or GIF is refused after 24 bytes, one declaring more than `max_pixels` before its body
+/// is read, and one longer than an image of its declared size can be
+/// ([`max_image_file_bytes`]) after that many bytes.
 fn decode(path: &Path, max_pixels: usize) -> Result<DynamicImage> {
-    if path.is_dir() {
-        return Err(Error::format(path, "is a directory, not an image"));
+    use std::io::Read;
+    let mut file = super::open_file(path)?;
+    let mut bytes = Vec::new();
+    (&mut file)
+        .take(HEAD_BYTES as u64)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    let (w, h) = declared_size(&bytes).map_err(|m| Error::format(path, m))?;
+    check_size(w as usize, h as usize, max_pixels)
+        .map_err(|e| Error::format(path, e.to_string()))?;
+    let cap = max_image_file_bytes(w, h);
+    file.take(cap.saturating_add(1).saturating_sub(bytes.len() as u64))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > cap {
+        return Err(super::too_long(path, cap));
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     decode_bytes(&bytes, path, max_pixels)
 }
 
-/// Decodes an image held in memory; `source` names it in errors. The declared size is checked
-/// against `max_pixels` before any pixel buffer is allocated.
+/// The bytes read before anything else: enough for the PNG signature and IHDR chunk's size
+/// (24), or the GIF signature and screen size (10).
+const HEAD_BYTES: usize = 24;
+
+/// The PNG signature.
+const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+/// The width and height a PNG (IHDR) or GIF (logical screen) declares in its first
+/// [`HEAD_BYTES`] bytes; an error for anything else.
+fn declared_size(head: &[u8]) -> std::result::Result<(u32, u32), String> {
+    let be = |at: usize| u32::from_be_bytes([head[at], head[at + 1], head[at + 2], head[at + 3]]);
+    if head.starts_with(PNG_SIGNATURE) {
+        if head.len() < HEAD_BYTES || &head[12..16] != b"IHDR" {
+            return Err("corrupt PNG: it does not begin with its header (IHDR) chunk".into());
+        }
+        Ok((be(16), be(20)))
+    } else if head.starts_with(b"GIF87a") || head.starts_with(b"GIF89a") {
+        if head.len() < 10 {
+            return Err("corrupt GIF: the file ends inside its header".into());
+        }
+        let le = |at: usize| u32::from(u16::from_le_bytes([head[at], head[at + 1]]));
+        Ok((le(6), le(8)))
+    } else {
+        Err("not a PNG image (the file does not start with the PNG signature)".into())
+    }
+}
+
+/// The most bytes a PNG or GIF of `w`×`h` pixels is read to: twice its largest raw size
+/// (RGBA at 16 bits and a filter byte a row; deflate at worst stores blocks with 5 bytes each)
+/// plus 16 MiB for other chunks (text, colour profiles).
+fn max_image_file_bytes(w: u32, h: u32) -> u64 {
+    let raw = u64::from(w) * u64::from(h) * 8 + u64::from(h);
+    raw.saturating_mul(2).saturating_add(16 << 20)
+}
+
+/// Decodes an image held in memory; `source` names it in errors. The signature and declared
+/// size are checked (against `max_pixels`) before any pixel buffer is allocated.
 fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<DynamicImage> {
+    declared_size(bytes).map_err(|m| Error::format(source, m))?;
     check_png_palette(bytes).map_err(|m| Error::format(source, m))?;
     let open = || -> Result<ImageReader<std::io::Cursor<&[u8]>>> {
         let mut reader = ImageReader::new(std::io::Cursor::new(bytes));
@@ -77,8 +130,7 @@ fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Dynami
 /// multiple of 3 up to 768: the `png` crate (0.18) panics expanding such a palette. Anything else
 /// wrong with the chunks is left to the decoder.
 fn check_png_palette(bytes: &[u8]) -> std::result::Result<(), String> {
-    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
-    let Some(mut rest) = bytes.strip_prefix(SIGNATURE) else {
+    let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
         return Ok(());
     };
     while rest.len() >= 8 {

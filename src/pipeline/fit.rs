@@ -29,9 +29,6 @@ use std::time::Instant;
 /// The report's file name, which marks an output folder as a fit's.
 pub const REPORT_FILE: &str = "fit.json";
 
-/// The largest responses file read, in bytes (64 MiB: about a million trials).
-pub const MAX_RESPONSES_BYTES: u64 = 64 << 20;
-
 /// What to fit, as plain values.
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -64,19 +61,8 @@ pub struct Responses {
     pub columns: Vec<String>,
 }
 
-/// Reads a responses CSV (at most [`MAX_RESPONSES_BYTES`]).
+/// Reads a responses CSV (at most [`io::MAX_TEXT_BYTES`], about a million trials).
 pub fn read_responses(path: &Path) -> Result<Responses> {
-    let size = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
-    if size > MAX_RESPONSES_BYTES {
-        return Err(Error::format(
-            path,
-            format!(
-                "{size} bytes is more than the {MAX_RESPONSES_BYTES} a responses file may have"
-            ),
-        ));
-    }
     let bytes = io::read_bytes(path)?;
     let text = String::from_utf8(bytes).map_err(|_| Error::format(path, "not UTF-8 text"))?;
     parse_responses(&text, path)

@@ -115,6 +115,11 @@ impl PictureSource {
     /// [`notes`](Self::notes) on a sidecar already read by [`beside`](Self::beside).
     pub fn notes_on(&self, beside: &Beside) -> Vec<String> {
         let mut lines = Vec::new();
+        // The one rule for integer pictures, said where it applies (docs/conventions.md).
+        let npy = self.image.as_deref().filter(|p| io::extension(p) == "npy");
+        if let Some((path, scale)) = npy.and_then(|p| Some((p, io::npy_file_scale(p)?))) {
+            lines.push(format!("{}: {}", path.display(), scale.note()));
+        }
         match beside {
             Beside::Nothing => {}
             Beside::Foreign(path) => lines.push(format!(
@@ -207,7 +212,7 @@ impl PictureSource {
                         Pixels::Rgb(i) => Pixels::Rgb(i.map(|p| p.map(|v| s.linearise(v)))),
                     };
                 }
-                check_pixels_finite(&pixels, &path.display().to_string())?;
+                check_pixel_values(&pixels, &path.display().to_string())?;
                 let mut origin = json!({ "image": path.display().to_string() });
                 let mut picture = Picture {
                     pixels,
@@ -304,7 +309,7 @@ impl PictureSource {
         };
         let (w, h) = pixels.size();
         crate::grid::check_size(w, h, self.max_pixels)?;
-        check_pixels_finite(pixels, IN_MEMORY)?;
+        check_pixel_values(pixels, IN_MEMORY)?;
         Ok(match pixels {
             Pixels::Rgb(_) if !colour => Pixels::Gray(pixels.luminance()),
             _ => pixels.clone(),
@@ -360,18 +365,20 @@ fn check_same_size(labels: &Labels, pixels: &Pixels, path: &std::path::Path) -> 
     Ok(())
 }
 
-/// Fails on the first NaN or infinity of `pixels`, naming its column and row.
-fn check_pixels_finite(pixels: &Pixels, what: &str) -> Result<()> {
+/// Fails on the first NaN or infinity of `pixels`, naming its column and row, and on values
+/// outside 0..1.
+fn check_pixel_values(pixels: &Pixels, what: &str) -> Result<()> {
     let (values, channels) = match pixels {
         Pixels::Gray(i) => (i.data(), 1),
         Pixels::Rgb(i) => (i.data().as_flattened(), 3),
     };
-    check_finite(values, channels, pixels.size().0, what)
+    check_values(values, channels, pixels.size().0, what)
 }
 
 /// Fails on the first NaN or infinity of a picture `width` pixels wide with `channels` values
-/// per pixel, naming its column and row.
-pub(crate) fn check_finite(
+/// per pixel, naming its column and row, and on values outside linear luminance 0..1
+/// ([`io::check_luminance_range`]).
+pub(crate) fn check_values(
     values: &[f64],
     channels: usize,
     width: usize,
@@ -386,5 +393,5 @@ pub(crate) fn check_finite(
             pixel / w
         )));
     }
-    Ok(())
+    io::check_luminance_range(values, std::path::Path::new(what))
 }
