@@ -131,7 +131,18 @@ shadelab analyze fading --stimulus fading-disk --ppd 12 --out fading
 keep fading/fading.gif fading-disk-animation.gif
 
 echo "== experiments.md: the worked example (Mamassian & Goutcher's design, simulated)"
-(cd "$root" && cargo run --quiet --release --example fit_recovery -- worked "$work/responses.csv")
+# The page's own pilot mode answers the trials (headless Chromium); without Chromium the same
+# model is simulated by the library (examples/fit_recovery.rs), with other random draws.
+shadelab experiment --out mg --repeats 20 >/dev/null
+if command -v chromium >/dev/null; then
+  chromium --headless --no-sandbox --disable-gpu --virtual-time-budget=10000 --dump-dom \
+    "file://$work/mg/index.html?simulate=tilt:26,kappa:2,convex:0.6,lapse:0.03,seed:1" 2>/dev/null |
+    python3 -c 'import html, re, sys; print(html.unescape(re.search(r"<pre id=\"results\">(.*?)</pre>", sys.stdin.read(), re.S).group(1)), end="")' \
+    >responses.csv
+else
+  echo "chromium not found: the worked example's responses come from the library instead" >&2
+  (cd "$root" && cargo run --quiet --release --example fit_recovery -- worked "$work/responses.csv")
+fi
 shadelab fit observer responses.csv --out mg-fit
 keep mg-fit/fit.png experiments-fit.png
 
