@@ -137,6 +137,11 @@ fn fixtures(dir: &Path) {
     std::fs::create_dir_all(&i).unwrap();
     let put = |name: &str, bytes: &[u8]| std::fs::write(i.join(name), bytes).unwrap();
     let dir_in = |name: &str| std::fs::create_dir_all(i.join(name)).unwrap();
+    // A mesh over the 1 GiB read limit (sparse: no disk used): refused by its length.
+    std::fs::File::create(i.join("huge.ply"))
+        .unwrap()
+        .set_len(shadelab::surface::MAX_MESH_BYTES + 1)
+        .unwrap();
 
     // Images.
     let ok = png(16, 16, 8, 0, None, &ramp_rows(1, 1));
@@ -792,6 +797,7 @@ fn render_refuses_broken_depth_maps_meshes_and_specs() {
         ("in/empty.ply", "empty"),
         ("in/empty.obj", "no vertices"),
         ("in/model.stl", "unknown mesh format"),
+        ("in/huge.ply", "is larger than 1 GiB"),
         ("in/dir.ply", "directory"),
         ("in/missing.ply", "No such file"),
     ] {

@@ -116,7 +116,8 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 
 /// Reads a file through `Read::take(cap + 1)`: its bytes when it holds at most `cap`, else an
 /// error naming the file and the cap, so that a device or a huge file (a link to
-/// `/dev/urandom`) costs at most `cap + 1` bytes of memory.
+/// `/dev/urandom`) costs at most `cap + 1` bytes of memory; a regular file longer than `cap`
+/// is refused by its length, before any read.
 ///
 /// ```
 /// let dir = std::env::temp_dir().join(format!("shadelab-doc-capped-{}", std::process::id()));
@@ -131,6 +132,10 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
     use std::io::Read;
     let file = open_file(path)?;
+    // A regular file says its length: one that is too long is refused before any read.
+    if file.metadata().is_ok_and(|m| m.is_file() && m.len() > cap) {
+        return Err(too_long(path, cap));
+    }
     let mut bytes = Vec::new();
     file.take(cap.saturating_add(1))
         .read_to_end(&mut bytes)

@@ -30,6 +30,11 @@ use crate::error::{Error, Result};
 use nalgebra::{Rotation3, Vector3};
 use std::path::Path;
 
+/// The largest mesh file read, in bytes (1 GiB: a scan of some 20 million faces in binary PLY,
+/// more than a rasterised stimulus can show; a bigger file, or a device, is refused before it
+/// is read whole).
+pub const MAX_MESH_BYTES: u64 = 1 << 30;
+
 /// A triangle mesh: vertex positions and triangles indexing them.
 ///
 /// The mask and depth do not depend on the winding; smooth normals need it consistent across
@@ -97,7 +102,7 @@ impl Mesh {
                 ))
             }
         };
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::io::read_capped(path, MAX_MESH_BYTES)?;
         parse(&bytes, path)
     }
 

@@ -8,7 +8,7 @@ mod mesh;
 mod npy_depth;
 mod shapes;
 
-pub use mesh::{view_rotation, Mesh, MeshShading, Projection, MAX_FILL};
+pub use mesh::{view_rotation, Mesh, MeshShading, Projection, MAX_FILL, MAX_MESH_BYTES};
 pub use npy_depth::{depth_surface, load_depth_surface, read_depth_npy, DepthDomain};
 pub use shapes::{ellipsoid, gaussian, sphere, vase, vase_profile};
 
