@@ -641,8 +641,46 @@ pub struct Figure {
     pub size: (u32, u32),
 }
 
-impl Figure {
-    #[cfg(feature = "plots")]
+#[cfg(feature = "plots")]
+/// A figure of several panels drawn into one picture, written by [`write_png_of`] and
+/// [`write_svg_of`].
+trait Drawn {
+    /// Size in pixels of the whole picture.
+    fn size(&self) -> (u32, u32);
+    /// Draws the figure on `root`, a backend's whole area.
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>)
+        -> Result<()>;
+}
+
+#[cfg(feature = "plots")]
+/// Draws `figure` into an RGB buffer and writes it as an 8-bit PNG, atomically.
+fn write_png_of(figure: &impl Drawn, path: &Path) -> Result<()> {
+    let (w, h) = figure.size();
+    let mut buf = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        figure.draw(root)?;
+    }
+    write_rgb_png(path, &buf, (w, h))
+}
+
+#[cfg(feature = "plots")]
+/// Draws `figure` as SVG text and writes it, atomically.
+fn write_svg_of(figure: &impl Drawn, path: &Path) -> Result<()> {
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, figure.size()).into_drawing_area();
+        figure.draw(root)?;
+    }
+    io::write_text(path, &text)
+}
+
+#[cfg(feature = "plots")]
+impl Drawn for Figure {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
@@ -653,28 +691,19 @@ impl Figure {
         }
         Ok(())
     }
+}
 
+impl Figure {
     #[cfg(feature = "plots")]
     /// Writes the figure as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let (w, h) = self.size;
-        let mut buf = vec![0u8; w as usize * h as usize * 3];
-        {
-            let root = BitMapBackend::with_buffer(&mut buf, self.size).into_drawing_area();
-            self.draw(root)?;
-        }
-        write_rgb_png(path, &buf, self.size)
+        write_png_of(self, path)
     }
 
     #[cfg(feature = "plots")]
     /// Writes the figure as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
-        let mut text = String::new();
-        {
-            let root = SVGBackend::with_string(&mut text, self.size).into_drawing_area();
-            self.draw(root)?;
-        }
-        io::write_text(path, &text)
+        write_svg_of(self, path)
     }
 }
 
@@ -851,7 +880,11 @@ impl PolarPlot {
 }
 
 #[cfg(feature = "plots")]
-impl LineAndPolar {
+impl Drawn for LineAndPolar {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
@@ -861,26 +894,18 @@ impl LineAndPolar {
         self.line.draw(left)?;
         self.polar.draw(right)
     }
+}
 
+#[cfg(feature = "plots")]
+impl LineAndPolar {
     /// Writes the figure as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let (w, h) = self.size;
-        let mut buf = vec![0u8; w as usize * h as usize * 3];
-        {
-            let root = BitMapBackend::with_buffer(&mut buf, self.size).into_drawing_area();
-            self.draw(root)?;
-        }
-        write_rgb_png(path, &buf, self.size)
+        write_png_of(self, path)
     }
 
     /// Writes the figure as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
-        let mut text = String::new();
-        {
-            let root = SVGBackend::with_string(&mut text, self.size).into_drawing_area();
-            self.draw(root)?;
-        }
-        io::write_text(path, &text)
+        write_svg_of(self, path)
     }
 }
 
