@@ -377,3 +377,54 @@ fn closed_or_full_stdout_and_stderr_never_panic() {
         Err(e) => eprintln!("skipped /dev/full: {e}"),
     }
 }
+
+#[test]
+fn a_set_replaced_by_a_smaller_one_takes_its_extra_files_with_it() {
+    let d = scratch("sets-shrink");
+    let render = |extra: &[&str]| {
+        let mut args = vec![
+            "--quiet", "render", "vase", "--size", "24", "--out", "v.png",
+        ];
+        args.extend_from_slice(extra);
+        let out = shadelab(&d, &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    render(&["--layers"]);
+    assert_eq!(
+        files_in(&d),
+        [
+            "v.json",
+            "v.png",
+            "v_depth.npy",
+            "v_mask.png",
+            "v_normals.npy",
+            "v_shading.npy"
+        ]
+    );
+    // Without layers, the old set's layers would lie beside a picture they do not belong to.
+    render(&[]);
+    assert_eq!(files_in(&d), ["v.json", "v.png", "v_mask.png"]);
+    // Only files the old sidecar listed go, and only names a render writes: a layer file of the
+    // user's, and whatever a hand-edited sidecar names, stay.
+    render(&["--layers"]);
+    let sidecar = d.join("v.json");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&sidecar).unwrap()).unwrap();
+    json["files"]["depth"] = "notes.txt".into();
+    json["files"]["extra"] = "../outside.txt".into();
+    std::fs::write(&sidecar, json.to_string()).unwrap();
+    std::fs::write(d.join("notes.txt"), "mine").unwrap();
+    std::fs::write(d.join("../outside.txt"), "mine").unwrap();
+    render(&[]);
+    assert_eq!(
+        files_in(&d),
+        ["notes.txt", "v.json", "v.png", "v_depth.npy", "v_mask.png"]
+    );
+    assert!(d.join("../outside.txt").exists());
+    let _ = std::fs::remove_file(d.join("../outside.txt"));
+    let _ = std::fs::remove_dir_all(&d);
+}

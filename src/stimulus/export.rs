@@ -6,6 +6,7 @@ use super::{Output, Pixels, Request};
 use crate::error::{Error, Result};
 use crate::io::{self, BitDepth};
 use serde_json::{json, Map, Value};
+use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The value range of float outputs.
@@ -126,10 +127,53 @@ pub fn write_output(
     for target in &files {
         io::check_overwrite(target, &sidecar, options.force)?;
     }
+    // Under the lock: the companions of the old set that the new one lacks (a render with
+    // `layers` replaced by one without), as the old sidecar lists them.
+    let stale = stale_companions(path, &sidecar, &files);
     write_all(name, request, output, path, &ext, &sidecar, options, &set)
         .map_err(|e| set.final_names(e))?;
     set.commit()?;
+    // The new sidecar no longer lists them: they go with the set they belonged to.
+    for file in stale {
+        fs::remove_file(&file).map_err(|e| Error::io(&file, e))?;
+    }
     Ok(files)
+}
+
+/// The companion files (mask, layers) beside `path` that the shadelab sidecar there lists and
+/// the new set (`files`) does not write. Only names a render can write are considered, so a
+/// sidecar edited by hand cannot make shadelab delete anything else.
+fn stale_companions(path: &Path, sidecar: &Path, files: &[PathBuf]) -> Vec<PathBuf> {
+    let Ok(bytes) = io::read_capped(sidecar, io::MAX_TEXT_BYTES) else {
+        return Vec::new();
+    };
+    let Ok(old) = serde_json::from_slice::<Value>(&bytes) else {
+        return Vec::new();
+    };
+    if old.get("program").and_then(Value::as_str) != Some("shadelab") {
+        return Vec::new();
+    }
+    let listed: Vec<&str> = old
+        .get("files")
+        .and_then(Value::as_object)
+        .map(|m| m.values().filter_map(Value::as_str).collect())
+        .unwrap_or_default();
+    [
+        ("_mask", "png"),
+        ("_depth", "npy"),
+        ("_normals", "npy"),
+        ("_albedo", "npy"),
+        ("_shading", "npy"),
+    ]
+    .iter()
+    .map(|(suffix, ext)| io::sibling(path, suffix, ext))
+    .filter(|p| !files.contains(p) && p.is_file())
+    .filter(|p| {
+        p.file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| listed.contains(&n))
+    })
+    .collect()
 }
 
 /// The image and the companion files `write_all` writes beside it (not the sidecar).
