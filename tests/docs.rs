@@ -173,7 +173,7 @@ fn the_readme_commands_run_as_written() {
     );
     for f in [
         "sphere.png",
-        "vase_depth.npy",
+        "vase_mask.png",
         "vase-sfs/report.json",
         "vase-estimated/report.json",
         "checker-odog/lightness.json",
@@ -181,6 +181,9 @@ fn the_readme_commands_run_as_written() {
     ] {
         assert!(d.join(f).exists(), "{f}");
     }
+    // The first vase was rendered with --layers, the second without: the second set replaced
+    // the first whole, its layers included.
+    assert!(!d.join("vase_depth.npy").exists());
 }
 
 #[test]
