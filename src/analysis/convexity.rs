@@ -108,34 +108,50 @@ impl Token {
     /// # Ok::<(), shadelab::Error>(())
     /// ```
     pub fn bright_side(&self, image: &Image) -> (f64, f64) {
-        let w = image.width();
-        let n = self.pixels.len().max(1) as f64;
-        let at = |p: usize| (p % w) as f64;
-        let up = |p: usize| -((p / w) as f64);
-        let (mx, my, mi) = self.pixels.iter().fold((0.0, 0.0, 0.0), |(x, y, i), &p| {
-            (x + at(p), y + up(p), i + image.data()[p])
-        });
-        let (mx, my, mi) = (mx / n, my / n, mi / n);
-        let (mut dx, mut dy, mut spread) = (0.0, 0.0, 0.0);
-        for &p in &self.pixels {
-            let weight = image.data()[p] - mi;
-            dx += weight * (at(p) - mx);
-            dy += weight * (up(p) - my);
-            spread += weight.abs();
-        }
+        let (dx, dy, spread) = luminance_moment(image, &self.pixels);
         let length = dx.hypot(dy);
         if length == 0.0 || !length.is_finite() {
             return (0.0, 0.0);
         }
-        // Tilt 0 is +y (up), +90 is −x (left).
-        let tilt = crate::analysis::wrap_360((-dx).atan2(dy).to_degrees());
-        (tilt, length / (spread * self.half_width.max(1.0)))
+        (
+            moment_tilt(dx, dy),
+            length / (spread * self.half_width.max(1.0)),
+        )
     }
 
     /// Whether every pixel of the token is set in `mask`.
     pub fn inside(&self, mask: &crate::grid::Mask) -> bool {
         self.pixels.iter().all(|&p| mask.data()[p])
     }
+}
+
+/// The luminance moment of `pixels` (row-major indices into `image`): Σ (v − v̄)·(x − x̄, y − ȳ)
+/// with x right and y up, and the spread Σ |v − v̄|. The moment points from the pixels' plain
+/// centroid toward their luminance-weighted one: the way their bright side faces
+/// ([`moment_tilt`]). The one home of that measure ([`Token::bright_side`], the experiment's
+/// images).
+pub(crate) fn luminance_moment(image: &Image, pixels: &[usize]) -> (f64, f64, f64) {
+    let w = image.width();
+    let n = pixels.len().max(1) as f64;
+    let at = |p: usize| (p % w) as f64;
+    let up = |p: usize| -((p / w) as f64);
+    let (mx, my, mi) = pixels.iter().fold((0.0, 0.0, 0.0), |(x, y, i), &p| {
+        (x + at(p), y + up(p), i + image.data()[p])
+    });
+    let (mx, my, mi) = (mx / n, my / n, mi / n);
+    let (mut dx, mut dy, mut spread) = (0.0, 0.0, 0.0);
+    for &p in pixels {
+        let weight = image.data()[p] - mi;
+        dx += weight * (at(p) - mx);
+        dy += weight * (up(p) - my);
+        spread += weight.abs();
+    }
+    (dx, dy, spread)
+}
+
+/// The tilt (0 = up, +90 = left, degrees in [0, 360)) of a moment (dx, dy) with y up.
+pub(crate) fn moment_tilt(dx: f64, dy: f64) -> f64 {
+    crate::analysis::wrap_360((-dx).atan2(dy).to_degrees())
 }
 
 /// The reading of a token's signed convexity: convex, concave, or flat when it is within

@@ -28,6 +28,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use crate::analysis::convexity;
 use crate::error::{Error, Result};
 use crate::io::{self, AtomicDir, BitDepth};
 use crate::parallel::prelude::*;
@@ -444,21 +445,12 @@ pub fn bright_side(
     image: &crate::grid::Image,
     inside: &dyn Fn(usize, usize) -> bool,
 ) -> Option<f64> {
-    let (w, h) = (image.width(), image.height());
-    let pixels: Vec<(f64, f64, f64)> = (0..h)
-        .flat_map(|r| (0..w).map(move |c| (c, r)))
-        .filter(|&(c, r)| inside(c, r))
-        .map(|(c, r)| (c as f64, -(r as f64), *image.get(c, r)))
+    let w = image.width();
+    let pixels: Vec<usize> = (0..image.height() * w)
+        .filter(|&p| inside(p % w, p / w))
         .collect();
-    let mean = pixels.iter().map(|p| p.2).sum::<f64>() / pixels.len().max(1) as f64;
-    let (dx, dy) = pixels.iter().fold((0.0, 0.0), |(sx, sy), &(x, y, v)| {
-        (sx + (v - mean) * x, sy + (v - mean) * y)
-    });
-    if dx.hypot(dy) < 1e-9 {
-        return None;
-    }
-    // Tilt: 0 = up (+y), +90 = left (−x).
-    Some((-dx).atan2(dy).to_degrees().rem_euclid(360.0))
+    let (dx, dy, _) = convexity::luminance_moment(image, &pixels);
+    (dx.hypot(dy) >= 1e-9).then(|| convexity::moment_tilt(dx, dy))
 }
 
 /// The signed difference a − b of two directions, in (−180, 180].
