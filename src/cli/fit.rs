@@ -14,7 +14,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Subcommand)]
 pub enum Command {
     /// Fit the observer model P(convex | θ) (von Mises light prior μ, κ; convexity prior π;
-    /// lapse λ) to a responses CSV by maximum likelihood, with bootstrap 95% intervals.
+    /// lapse λ) to a responses CSV by maximum likelihood, with profile-likelihood 95% intervals (and parametric-bootstrap ones beside them).
     Observer(ObserverArgs),
 }
 
@@ -28,7 +28,7 @@ pub struct ObserverArgs {
     /// Output folder (written whole or not at all): fit.json, fit.png, fit.svg, methods.md.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Parametric-bootstrap replicates for the 95% intervals (0: no intervals).
+    /// Parametric-bootstrap replicates for the percentile intervals given beside the profile-likelihood ones, and for the non-parametric prior's (0: none).
     #[arg(long, value_name = "N", default_value_t = FitOptions::default().bootstrap)]
     bootstrap: usize,
     /// The bootstrap's random seed.

@@ -226,7 +226,7 @@ pub struct Report {
 }
 
 /// The model as the report states it.
-pub const MODEL: &str = "P(convex | theta) = lapse/2 + (1 - lapse) * pi * vM(theta; mu, kappa) / (pi * vM(theta; mu, kappa) + (1 - pi) * vM(theta + 180; mu, kappa)); theta = direction of the bright side (0 = up, +90 = left); maximum likelihood, parametric-bootstrap 95% percentile intervals";
+pub const MODEL: &str = "P(convex | theta) = lapse/2 + (1 - lapse) * pi * vM(theta; mu, kappa) / (pi * vM(theta; mu, kappa) + (1 - pi) * vM(theta + 180; mu, kappa)); theta = direction of the bright side (0 = up, +90 = left); maximum likelihood, 95% profile-likelihood intervals (parametric-bootstrap percentile intervals beside them)";
 
 /// Reads the responses and fits them: pooled, and per participant when there are several
 /// (one progress step per fit). A participant whose data cannot identify the model is left
@@ -545,8 +545,9 @@ impl Report {
             weighs the two shapes, and {lapse}: P(convex | θ) = λ/2 + (1 − λ)·π·vM(θ; μ, κ) / \
             (π·vM(θ; μ, κ) + (1 − π)·vM(θ + 180°; μ, κ)) (after Mamassian & Goutcher, 2001; \
             Sun & Perona, 1998). Parameters were estimated by maximum likelihood (shadelab {}, \
-            `fit observer`), with 95% confidence intervals from a parametric bootstrap of {} \
-            simulated data sets (percentile intervals; seed {}).\n\n\
+            `fit observer`), with 95% profile-likelihood confidence intervals (the values whose \
+            likelihood, maximised over the other parameters, lies within χ²₁(0.95)/2 of the \
+            maximum){}.\n\n\
             **Results.** The light prior pointed at μ = {:.1}° ({}; positive = left of \
             vertical) with concentration κ = {:.2} ({}); the convexity prior was π = {:.3} ({}) \
             and the lapse rate λ = {:.3} ({}). The log-likelihood was {:.2}; against the model \
@@ -560,8 +561,15 @@ impl Report {
                 String::new()
             },
             io::PROGRAM_VERSION,
-            f.bootstrap,
-            self.settings.seed,
+            if f.bootstrap > 0 {
+                format!(
+                    "; parametric-bootstrap percentile intervals from {} simulated data sets \
+                    (seed {}) are given beside them in fit.json",
+                    f.bootstrap, self.settings.seed
+                )
+            } else {
+                String::new()
+            },
             f.prior_tilt_deg.value,
             interval(f.prior_tilt_deg.ci95, 1).replace(" to ", "° to ") + "°",
             f.prior_kappa.value,
