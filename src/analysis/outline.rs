@@ -215,7 +215,10 @@ pub fn outline_profile(token: &Token, width: usize, fit: &ProfileFit) -> Result<
     let first = span.iter().position(Option::is_some);
     let last = span.iter().rposition(Option::is_some);
     let (Some(first), Some(last)) = (first, last) else {
-        return Err(Error::invalid(format!("target '{}' has no pixels", token.name)));
+        return Err(Error::invalid(format!(
+            "target '{}' has no pixels",
+            token.name
+        )));
     };
     if last - first + 1 < 3 {
         return Err(Error::invalid(format!(
@@ -319,7 +322,7 @@ fn banded_cholesky_solve(band: &[[f64; 3]], v: &[f64]) -> Result<Vec<f64>> {
                 }
             }
             if i == j {
-                if !(sum > 0.0) {
+                if sum.is_nan() || sum <= 0.0 {
                     return Err(Error::Compute(
                         "the profile fit's system is not positive definite".into(),
                     ));

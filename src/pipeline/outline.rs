@@ -248,7 +248,10 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
     for t in &targets {
         outputs.insert(
             format!("{}-shape.png", t.stem),
-            format!("{}: the crease-preserving reconstruction's normal x-component", t.name),
+            format!(
+                "{}: the crease-preserving reconstruction's normal x-component",
+                t.name
+            ),
         );
         outputs.insert(
             format!("{}-shading.png", t.stem),
@@ -256,7 +259,10 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
         );
         outputs.insert(
             format!("{}-paint.png", t.stem),
-            format!("{}: the paint layer (mean luminance + what the shape leaves)", t.name),
+            format!(
+                "{}: the paint layer (mean luminance + what the shape leaves)",
+                t.name
+            ),
         );
     }
     let smoothness_epsilon = match config.crease.smoothness {
