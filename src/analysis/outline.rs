@@ -409,7 +409,7 @@ impl ShadingFit {
 /// profile's normals all lie in the x–z plane, where a light's y-component changes nothing; so
 /// the fitted light lies in that plane, from the left or the right at the slant that explains
 /// most (searched every 0.5° over −89.5..89.5°, then refined to 0.001°; ties go to the least
-/// slant). Fails for a light at or below the horizon or mismatched lengths.
+/// slant). Fails for a light not above the horizon (z ≤ 0) or mismatched lengths.
 pub fn fit_shading(values: &[f64], normals: &[Normal], light: Option<Light>) -> Result<ShadingFit> {
     if values.len() != normals.len() || values.is_empty() {
         return Err(Error::invalid(format!(
@@ -419,7 +419,7 @@ pub fn fit_shading(values: &[f64], normals: &[Normal], light: Option<Light>) -> 
         )));
     }
     if let Some(l) = light {
-        check_light(&l)?;
+        crate::reconstruct::check_light_in_front(&l)?;
         return Ok(fit_under(values, normals, l, false));
     }
     // θ > 0: from the left (tilt 90°), θ < 0: from the right.
@@ -454,20 +454,6 @@ pub fn fit_shading(values: &[f64], normals: &[Normal], light: Option<Light>) -> 
         step /= 10.0;
     }
     Ok(best)
-}
-
-/// Checks that `light` is above the horizon (z > 0): at or below it a surface facing the viewer
-/// is unlit and its shading says nothing.
-pub fn check_light(light: &Light) -> Result<()> {
-    if light.direction().z > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(format!(
-            "the light (tilt {:.1}°, slant {:.1}°) is at or below the horizon: a surface facing the viewer would be unlit",
-            light.tilt_deg(),
-            light.slant_deg()
-        )))
-    }
 }
 
 /// A shape whose shading's variance (per pixel) is below this is taken as uniform: rounding

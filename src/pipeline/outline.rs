@@ -35,8 +35,6 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-pub use crate::analysis::outline::check_light;
-
 /// The report's file name, which marks an output folder as an outline analysis's.
 pub const REPORT_FILE: &str = "outline.json";
 
@@ -93,7 +91,7 @@ impl OutlineConfig {
             }
         }
         if let Some(l) = &self.light {
-            check_light(l)?;
+            crate::reconstruct::check_light_in_front(l)?;
         }
         self.profile.validate()?;
         self.crease.validate()

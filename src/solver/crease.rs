@@ -149,8 +149,8 @@ pub struct CreaseSolution {
 /// Solves for (f, g) on `bc`'s domain from `image` under `reflectance` with a
 /// crease-preserving smoothness (see the module's documentation). Unknowns start at (0, 0).
 ///
-/// Fails on an image of another size than the domain, non-finite brightness, a light not in
-/// front of the surface, or bad options.
+/// Fails on an image of another size than the domain, a light not in front of the surface,
+/// bad options, or a value that is not a number (from a non-finite brightness).
 ///
 /// ```
 /// use shadelab::boundary::{boundary_conditions, Boundary};
@@ -189,21 +189,7 @@ pub fn solve(
             image.height()
         )));
     }
-    if let Some(i) = image.data().iter().position(|v| !v.is_finite()) {
-        return Err(Error::invalid(format!(
-            "image value at column {}, row {} is not a finite number",
-            i % w,
-            i / w
-        )));
-    }
-    let light = reflectance.light().direction();
-    if light.z <= 0.0 {
-        return Err(Error::invalid(format!(
-            "light ({:.4}, {:.4}, {:.4}) must have z > 0 (in front of the surface) for \
-             shape from shading",
-            light.x, light.y, light.z
-        )));
-    }
+    crate::reconstruct::check_light_in_front(&reflectance.light())?;
     let roles = bc.roles.data();
     let mut f = vec![0.0; w * h];
     let mut g = vec![0.0; w * h];

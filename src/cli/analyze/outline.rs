@@ -66,7 +66,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.profile.depth_scale = args.depth_scale;
     config.crease.lambda = args.lambda;
     if let Some(light) = &config.light {
-        outline::check_light(light).map_err(|e| usage("--light", e))?;
+        shadelab::reconstruct::check_light_in_front(light).map_err(|e| usage("--light", e))?;
     }
     config
         .profile
