@@ -79,6 +79,10 @@ show prior-boundary-strips --spec "$root/stimuli/boundary-strips.json" --ppd 24
 shadelab render boundary-strips --set boundary=sinusoidal,sawtooth --size 264x192 --ppd 24 --out strips2.png
 shadelab solve strips2.png --mask strips2_mask.png --light left --boundary occluding --out strips2-sfs
 keep strips2-sfs/normals.png prior-boundary-normals.png
+shadelab analyze outline --stimulus boundary-strips --out strips-outline
+for f in sinusoidal-strip-shape sinusoidal-strip-paint sawtooth-strip-shape sawtooth-strip-shading sawtooth-strip-paint; do
+  keep "strips-outline/$f.png" "outline-$f.png"
+done
 
 show prior-hollow-mask --spec "$root/stimuli/hollow-mask.json" --ppd 24
 show prior-hollow-mask-convex --spec "$root/stimuli/hollow-mask-convex.json" --ppd 24

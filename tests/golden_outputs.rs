@@ -1,6 +1,6 @@
 //! The library-first refactor (issue 13) must not change what any command writes: every file
 //! of a render, a solve, a prior sweep, an observer, a study, a lightness analysis, the fading
-//! analysis, an observer fit and the gallery is compared, by MD5 digest, with the digests
+//! analysis, the outline analysis, an observer fit and the gallery is compared, by MD5 digest, with the digests
 //! recorded before the refactor (`tests/data/golden-outputs.json`). JSON is compared without its timings and
 //! thread counts, as in the determinism test. `SHADELAB_BLESS=1` records the digests anew;
 //! do that only for a change that means to alter outputs, and say so in its commit.
@@ -136,6 +136,18 @@ const RUNS: &[&[&str]] = &[
         "2",
         "--out",
         "fading",
+    ],
+    &[
+        "analyze",
+        "outline",
+        "--stimulus",
+        "boundary-strips",
+        "--set",
+        "boundary=sinusoidal,sawtooth",
+        "--ppd",
+        "12",
+        "--out",
+        "outline",
     ],
     &["study", "run", "study.json", "--out", "study"],
     &[

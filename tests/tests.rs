@@ -17,6 +17,7 @@ mod hostile;
 mod interrupt;
 mod lightness;
 mod mesh;
+mod outline;
 mod output_sets;
 mod python;
 mod sidecar_input;

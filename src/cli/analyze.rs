@@ -5,6 +5,7 @@
 mod fading;
 mod lightness;
 mod observer;
+mod outline;
 mod perception;
 mod prior_sweep;
 
@@ -28,6 +29,9 @@ pub enum Command {
     /// A Bayesian observer (von Mises light prior, convexity prior, residual likelihood):
     /// P(convex) against the picture's rotation.
     Observer(observer::Args),
+    /// The outline decides (Knill & Kersten): per target strip, the shape its outline implies,
+    /// the shading that shape predicts, what it explains and what is left as paint.
+    Outline(outline::Args),
 }
 
 /// Runs `analyze`.
@@ -37,6 +41,7 @@ pub fn run(command: Command, global: &Global) -> CliResult {
         Command::Fading(a) => fading::run(a, global),
         Command::PriorSweep(a) => prior_sweep::run(a, global),
         Command::Observer(a) => observer::run(a, global),
+        Command::Outline(a) => outline::run(a, global),
     }
 }
 

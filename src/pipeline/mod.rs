@@ -11,6 +11,7 @@ pub mod fit;
 pub mod gallery;
 pub mod lightness;
 pub mod observer;
+pub mod outline;
 pub mod perception;
 pub mod prior_sweep;
 pub mod render;

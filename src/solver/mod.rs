@@ -663,6 +663,7 @@ fn sweep_nodes(
     largest
 }
 
+pub mod crease;
 mod multigrid;
 
 #[cfg(test)]

@@ -1,0 +1,98 @@
+//! `shadelab analyze outline`: for each target (a strip cut by an outline), the shape its
+//! outline implies, the shading that shape predicts, and the split of the picture into what
+//! the shape explains and what is left as paint (the work is [`shadelab::pipeline::outline`]).
+
+use super::{CliError, CliResult, Global, Source};
+use crate::cli::flags::usage;
+use crate::cli::output::Output;
+use crate::cli::progress::Bar;
+use shadelab::io::AtomicDir;
+use shadelab::light::Light;
+use shadelab::pipeline::outline::{self, OutlineConfig, REPORT_FILE};
+use shadelab::visual_size::parse_size;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `analyze outline`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    source: Source,
+    /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
+    #[arg(
+        long,
+        value_name = "N|WxH",
+        requires = "stimulus",
+        allow_hyphen_values = true
+    )]
+    size: Option<String>,
+    /// The light: x,y,z or tilt=T,slant=S or a name, with z > 0 (default: fitted per target
+    /// in the plane of its outline's profile).
+    #[arg(long, value_name = "L", allow_hyphen_values = true)]
+    light: Option<String>,
+    /// Depth per pixel of outline height: 1 reads the cut's profile at its own scale.
+    #[arg(
+        long,
+        value_name = "X",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
+    depth_scale: f64,
+    /// Weight λ of the brightness term in the reconstructions.
+    #[arg(
+        long,
+        value_name = "X",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
+    lambda: f64,
+    /// Output folder (written whole or not at all).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// Runs `analyze outline`.
+pub fn run(args: Args, global: &Global) -> CliResult {
+    let started = Instant::now();
+    let mut config = OutlineConfig::new(args.source.to_library(global)?);
+    config.size = match &args.size {
+        Some(text) => Some(parse_size(text, "--size").map_err(CliError::from)?),
+        None => None,
+    };
+    if let Some(text) = &args.light {
+        let light: Light = text.parse().map_err(|e| usage("--light", e))?;
+        config.light = Some(light);
+    }
+    config.profile.depth_scale = args.depth_scale;
+    config.crease.lambda = args.lambda;
+    if let Some(light) = &config.light {
+        shadelab::reconstruct::check_light_in_front(light).map_err(|e| usage("--light", e))?;
+    }
+    config
+        .profile
+        .validate()
+        .map_err(|e| usage("--depth-scale", e))?;
+    config.crease.validate().map_err(|e| usage("--lambda", e))?;
+    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let report = outline::run(&config, &Bar::new(global.quiet))?;
+    report.write(folder.path())?;
+    let target = folder.commit()?;
+    let out = Output::new(global);
+    out.wrote(&target, started.elapsed().as_secs_f64());
+    let mut text = String::new();
+    for t in &report.targets {
+        text += &format!(
+            "{}: shape explains {:.3} of the shading (light tilt {:.1}° slant {:.1}°), bend concentration {:.2} (Horn's smoothness: {:.2})\n",
+            t.name,
+            t.shape_explained,
+            t.light_tilt_deg,
+            t.light_slant_deg,
+            t.bend_concentration,
+            t.bend_concentration_quadratic
+        );
+        if !(t.converged && t.converged_quadratic) {
+            out.warn(format!("{}: a reconstruction did not converge", t.name));
+        }
+    }
+    out.results(&text, &report)
+}
