@@ -18,6 +18,7 @@ mod interrupt;
 mod lightness;
 mod mesh;
 mod output_sets;
+mod perception;
 mod python;
 mod sidecar_input;
 mod solve;
