@@ -57,6 +57,11 @@ pub enum EstimateMethod {
     /// the brightness moments.
     #[serde(rename = "moments")]
     Moments,
+    /// The limb's tilt with the moments' slant and albedo, where the limb leaves the slant
+    /// uncertain (a standard error above [`MAX_LIMB_SLANT_SE_DEG`]: one side of the object lit,
+    /// whose rim normals barely vary). The standard errors are the limb fit's.
+    #[serde(rename = "limb+moments")]
+    LimbAndMoments,
 }
 
 impl EstimateMethod {
@@ -65,6 +70,7 @@ impl EstimateMethod {
         match self {
             EstimateMethod::Limb => "limb",
             EstimateMethod::Moments => "moments",
+            EstimateMethod::LimbAndMoments => "limb+moments",
         }
     }
 }
@@ -109,6 +115,10 @@ pub struct LightEstimate {
 /// surface (shape from shading needs s_z > 0).
 pub const MAX_ESTIMATED_SLANT_DEG: f64 = 89.0;
 
+/// Above this standard error of the limb's slant, the slant and albedo come from the moments
+/// ([`EstimateMethod::LimbAndMoments`]).
+pub const MAX_LIMB_SLANT_SE_DEG: f64 = 3.0;
+
 /// The fewest lit limb pixels the limb fit uses; with fewer the moments run.
 pub const MIN_LIMB_PIXELS: usize = 16;
 
@@ -150,12 +160,23 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
 /// ```
 pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Result<LightEstimate> {
     check_inputs(image, mask)?;
+    let moments = moments_estimate(image, mask)?;
     if outline == Outline::Occluding {
         if let Some(e) = limb_estimate(image, mask)? {
+            if e.slant_se_deg.is_some_and(|se| se > MAX_LIMB_SLANT_SE_DEG) {
+                // The limb's tilt, the interior's slant and albedo.
+                return Ok(LightEstimate {
+                    light: Light::from_tilt_slant(e.tilt_deg, moments.slant_deg)?,
+                    slant_deg: moments.slant_deg,
+                    albedo: moments.albedo,
+                    method: EstimateMethod::LimbAndMoments,
+                    ..e
+                });
+            }
             return Ok(e);
         }
     }
-    moments_estimate(image, mask)
+    Ok(moments)
 }
 
 /// Fails on mismatched sizes or non-finite values.
