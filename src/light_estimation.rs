@@ -306,7 +306,8 @@ fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
 /// The rim pixels' centres lie inside the silhouette, where the normal has a small mean
 /// z component κ, so u = sin σ·√(1 − κ²) and v = κ·cos σ. Eliminating κ gives, for C = cos²σ,
 /// C² − C·(1 + v² − u²) + v² = 0; the larger root is the one with the smaller κ (the rim lies
-/// close to the limb). With v ≤ 0 (no light from the front on the rim) it is sin σ = u.
+/// close to the limb), and the true one while κ < cos σ (below about 78° for κ = 0.2).
+/// With v ≤ 0 (no light from the front on the rim) it is sin σ = u.
 fn limb_slant(u: f64, v: f64) -> f64 {
     let u = u.clamp(0.0, 1.0);
     if v <= 0.0 {
@@ -316,7 +317,7 @@ fn limb_slant(u: f64, v: f64) -> f64 {
     let disc = p * p - 4.0 * v * v;
     if disc < 0.0 {
         // No κ fits both (a noisy fit): the root of the nearest case.
-        return (0.5 * p).max(0.0).min(1.0).sqrt().acos();
+        return (0.5 * p).clamp(0.0, 1.0).sqrt().acos();
     }
     (0.5 * (p + disc.sqrt())).min(1.0).sqrt().acos()
 }
@@ -559,6 +560,20 @@ mod tests {
             "{}",
             est.tilt_deg
         );
+    }
+
+    #[test]
+    fn the_limb_slant_inverts_its_model() {
+        // Up to the slant where κ reaches cos σ (78° for κ = 0.2): beyond it the two roots
+        // trade places and the smaller-κ root is taken.
+        for slant in [0.0f64, 10.0, 30.0, 45.0, 60.0, 75.0] {
+            for kappa in [0.0f64, 0.1, 0.2] {
+                let s = slant.to_radians();
+                let (u, v) = (s.sin() * (1.0 - kappa * kappa).sqrt(), kappa * s.cos());
+                let got = limb_slant(u, v).to_degrees();
+                assert!((got - slant).abs() < 1e-6, "{slant} {kappa}: {got}");
+            }
+        }
     }
 
     #[test]
