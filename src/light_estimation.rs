@@ -1,5 +1,27 @@
 //! Estimating the light direction and albedo from a single image of a Lambertian surface.
 //!
+//! Two estimators, and [`estimate_light_with`] picks one by what the picture's outline is:
+//!
+//! **At the limb** ([`EstimateMethod::Limb`], where the mask's outline is an occluding contour,
+//! as for a rendered object against its background). On the limb the surface turns away from
+//! the viewer, so its normal is known: in the image plane, pointing out of the silhouette
+//! (n_z = 0, the direction of [`crate::boundary::occluding_normals`]). There the brightness is
+//! I = ρ·(n·s) = ρ·sin σ·(n_x·l_x + n_y·l_y), with l = (−sin τ, cos τ) the light's image-plane
+//! direction: a linear function of the known normal. A least-squares fit
+//! I = a·n_x + b·n_y + c over the lit limb pixels (I > 0; the unlit ones are the attached shadow,
+//! where the clamp makes the law non-linear) gives the tilt τ = atan2(−a, b) and ρ·sin σ =
+//! |(a, b)|. The constant c takes up the small part the light's z component adds: a rim pixel's
+//! centre lies about half a pixel inside the silhouette, where n_z is already ≈ 1/√R on a
+//! curvature radius of R pixels. The fit is trimmed (pixels more than 2.5 robust standard
+//! deviations off are left out and the fit repeated) so that the parts of the outline that are
+//! no limb (a vase's cut rim, a corner) do not pull it. The albedo is the brightest pixel in the
+//! mask, where the normal points at the light (I = ρ·(n·s) = ρ there), and sin σ = |(a, b)|/ρ.
+//! The standard errors are the fit's: the tilt's from the covariance of (a, b) across the light's
+//! direction, the slant's from its variance along it.
+//!
+//! **From the interior statistics** ([`EstimateMethod::Moments`], for pictures without an
+//! occluding outline: a relief on a plane, a region cut out of a surface):
+//!
 //! - Tilt (Lee & Rosenfeld 1985; Zheng & Chellappa 1991): on a surface whose orientations are
 //!   spread evenly, brightness grows on average toward the light, so the mean of the unit image
 //!   gradients points along the light's image-plane direction.
@@ -11,13 +33,58 @@
 //! The moment model is only an approximation for a real object: the image of a sphere is not
 //! an even spread of normals over the hemisphere (it over-weights normals facing the viewer),
 //! so the slant comes out biased, by about 10° or less for slants from 30° to 60°, more near
-//! frontal (≈ 22° too oblique at 0°) and grazing light. Use it when the light is unknown, not
-//! as a measurement.
+//! frontal (≈ 22° too oblique at 0°) and grazing light; the tilt is biased on objects whose
+//! normals are not spread evenly (30° on a vase). Its tilt standard error is the sampling error
+//! of the mean unit gradient; it gives no slant error, since the model's bias is larger than
+//! any sampling error. Use it when the light is unknown and there is no limb, not as a
+//! measurement.
 
+use crate::boundary::occluding_normals;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask};
 use crate::light::Light;
+use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
+
+/// Which estimator produced a [`LightEstimate`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum EstimateMethod {
+    /// The limb fit: tilt and ρ·sin σ from the brightness on the occluding contour, the albedo
+    /// from the brightest pixel.
+    #[serde(rename = "limb")]
+    Limb,
+    /// Zheng & Chellappa (1991): tilt from the mean unit image gradient, slant and albedo from
+    /// the brightness moments.
+    #[serde(rename = "moments")]
+    Moments,
+    /// The limb's tilt with the moments' slant and albedo, where the limb leaves the slant
+    /// uncertain (a standard error above [`MAX_LIMB_SLANT_SE_DEG`]: one side of the object lit,
+    /// whose rim normals barely vary). The standard errors are the limb fit's.
+    #[serde(rename = "limb+moments")]
+    LimbAndMoments,
+}
+
+impl EstimateMethod {
+    /// The estimator's name, as reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimateMethod::Limb => "limb",
+            EstimateMethod::Moments => "moments",
+            EstimateMethod::LimbAndMoments => "limb+moments",
+        }
+    }
+}
+
+/// What the outline of the mask is, for [`estimate_light_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outline {
+    /// The mask's outline (where it does not touch the image frame) is an occluding contour:
+    /// use the limb where there is enough of it, the moments otherwise.
+    Occluding,
+    /// Nothing is known of the outline (a relief on a plane, a region of a surface): the
+    /// moments.
+    Unknown,
+}
 
 /// An estimated light and albedo.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -33,19 +100,87 @@ pub struct LightEstimate {
     /// Length of the mean unit gradient (0..1): how consistently the image brightens toward
     /// one side; near 0 the tilt is meaningless (frontal light, or a featureless image).
     pub tilt_confidence: f64,
+    /// The estimator that ran.
+    pub method: EstimateMethod,
+    /// Standard error of the tilt, degrees (capped at 180: no information on the tilt).
+    pub tilt_se_deg: f64,
+    /// Standard error of the slant, degrees (capped at 90); `None` for the moments, whose
+    /// model bias (up to ≈ 22°) exceeds any sampling error.
+    pub slant_se_deg: Option<f64>,
+    /// Limb pixels the fit kept (0 for the moments).
+    pub limb_pixels: usize,
 }
 
 /// The largest slant the estimate returns, so that the light stays strictly in front of the
 /// surface (shape from shading needs s_z > 0).
 pub const MAX_ESTIMATED_SLANT_DEG: f64 = 89.0;
 
-/// Estimates the light and albedo from `image` on `mask`.
+/// Above this standard error of the limb's slant, the slant and albedo come from the moments
+/// ([`EstimateMethod::LimbAndMoments`]).
+pub const MAX_LIMB_SLANT_SE_DEG: f64 = 3.0;
+
+/// The fewest lit limb pixels the limb fit uses; with fewer the moments run.
+pub const MIN_LIMB_PIXELS: usize = 16;
+
+/// Limb pixels no brighter than this fraction of the brightest pixel count as unlit.
+const LIT_FRACTION: f64 = 0.02;
+
+/// The trimmed fit drops residuals beyond this many robust standard deviations.
+const TRIM_SIGMAS: f64 = 2.5;
+
+/// Estimates the light and albedo from `image` on `mask` with the interior statistics
+/// ([`EstimateMethod::Moments`]): `estimate_light_with(image, mask, Outline::Unknown)`.
 ///
 /// The tilt uses the central-difference gradients of pixels whose four neighbours are inside
 /// the mask (gradients across the silhouette measure the background, not the shading); the
 /// moments use every masked pixel. Fails on mismatched sizes, non-finite values, an empty mask
 /// or an image that is black in the mask.
 pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
+    estimate_light_with(image, mask, Outline::Unknown)
+}
+
+/// Estimates the light and albedo from `image` on `mask`, by the limb where `outline` says the
+/// mask's outline is occluding and at least [`MIN_LIMB_PIXELS`] limb pixels are lit with
+/// normals in more than one direction, else by the moments (see the module documentation).
+///
+/// ```
+/// use shadelab::light::Light;
+/// use shadelab::light_estimation::{estimate_light_with, EstimateMethod, Outline};
+/// use shadelab::reflectance::Lambertian;
+/// use shadelab::render::{render, RenderOptions};
+/// use shadelab::surface::sphere;
+///
+/// let s = sphere(64, 64, 28.0).unwrap();
+/// let light = Light::from_tilt_slant(30.0, 35.0).unwrap();
+/// let map = Lambertian { light, albedo: 0.8, ambient: 0.0 };
+/// let image = render(&s, &map, &RenderOptions::default()).image;
+/// let e = estimate_light_with(&image, &s.mask, Outline::Occluding).unwrap();
+/// assert_eq!(e.method, EstimateMethod::Limb);
+/// assert!((e.tilt_deg - 30.0).abs() < 3.0 && (e.slant_deg - 35.0).abs() < 3.0);
+/// ```
+pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Result<LightEstimate> {
+    check_inputs(image, mask)?;
+    let moments = moments_estimate(image, mask)?;
+    if outline == Outline::Occluding {
+        if let Some(e) = limb_estimate(image, mask)? {
+            if e.slant_se_deg.is_some_and(|se| se > MAX_LIMB_SLANT_SE_DEG) {
+                // The limb's tilt, the interior's slant and albedo.
+                return Ok(LightEstimate {
+                    light: Light::from_tilt_slant(e.tilt_deg, moments.slant_deg)?,
+                    slant_deg: moments.slant_deg,
+                    albedo: moments.albedo,
+                    method: EstimateMethod::LimbAndMoments,
+                    ..e
+                });
+            }
+            return Ok(e);
+        }
+    }
+    Ok(moments)
+}
+
+/// Fails on mismatched sizes or non-finite values.
+fn check_inputs(image: &Image, mask: &Mask) -> Result<()> {
     if !image.same_size(mask) {
         return Err(Error::invalid(format!(
             "image is {}x{} but the mask is {}x{}",
@@ -58,8 +193,214 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
     if image.data().iter().any(|v| !v.is_finite()) {
         return Err(Error::invalid("image holds NaN or infinite values"));
     }
+    Ok(())
+}
+
+/// The brightest value in the mask; fails on an empty mask or one that is black.
+fn brightest(image: &Image, mask: &Mask) -> Result<f64> {
+    let mut max = f64::NEG_INFINITY;
+    for (v, &m) in image.data().iter().zip(mask.data()) {
+        if m {
+            max = max.max(*v);
+        }
+    }
+    if max == f64::NEG_INFINITY {
+        return Err(Error::invalid(
+            "the mask is empty: the light cannot be estimated",
+        ));
+    }
+    if max <= 0.0 {
+        return Err(Error::invalid(
+            "the image is black (or negative) inside the mask: the light cannot be estimated",
+        ));
+    }
+    Ok(max)
+}
+
+/// The limb fit, or `None` where the limb is too short or too straight for it.
+fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
+    let rho = brightest(image, mask)?;
+    let normals = occluding_normals(mask);
+    // (n_x, n_y, I) of the lit limb pixels.
+    let samples: Vec<[f64; 3]> = normals
+        .data()
+        .iter()
+        .zip(image.data())
+        .filter_map(|(n, &v)| n.map(|n| [n.x, n.y, v]))
+        .filter(|s| s[2] > LIT_FRACTION * rho)
+        .collect();
+    if samples.len() < MIN_LIMB_PIXELS || !spans_two_directions(&samples) {
+        return Ok(None);
+    }
+    let mut keep = vec![true; samples.len()];
+    let mut fit = None;
+    for _ in 0..6 {
+        let Some(f) = fit_limb(&samples, &keep) else {
+            return Ok(None);
+        };
+        let residuals: Vec<f64> = samples.iter().map(|s| s[2] - f.predict(s)).collect();
+        let mut abs: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let scale = (1.4826 * abs[abs.len() / 2]).max(1e-3 * rho);
+        let next: Vec<bool> = residuals
+            .iter()
+            .map(|r| r.abs() <= TRIM_SIGMAS * scale)
+            .collect();
+        let settled = next == keep;
+        fit = Some(f);
+        if settled || next.iter().filter(|&&k| k).count() < MIN_LIMB_PIXELS {
+            break;
+        }
+        keep = next;
+    }
+    let Some(f) = fit else {
+        return Ok(None);
+    };
+    let (a, b) = (f.coef[0], f.coef[1]);
+    let amplitude = a.hypot(b);
+    let tilt_deg = if amplitude > 0.0 {
+        (-a).atan2(b).to_degrees()
+    } else {
+        0.0
+    };
+    let slant_deg = limb_slant(amplitude / rho, f.coef[2] / rho)
+        .to_degrees()
+        .min(MAX_ESTIMATED_SLANT_DEG);
+    // Variances of (a, b) across and along the light's image-plane direction.
+    let (ua, ub) = if amplitude > 0.0 {
+        (a / amplitude, b / amplitude)
+    } else {
+        (0.0, 1.0)
+    };
+    let quad = |x: f64, y: f64| {
+        x * x * f.cov[(0, 0)] + 2.0 * x * y * f.cov[(0, 1)] + y * y * f.cov[(1, 1)]
+    };
+    let across = quad(-ub, ua).max(0.0).sqrt();
+    let along = quad(ua, ub).max(0.0).sqrt();
+    let tilt_se_deg = if amplitude > 0.0 {
+        (across / amplitude).atan().to_degrees()
+    } else {
+        180.0
+    };
+    let cos_slant = slant_deg.to_radians().cos();
+    let slant_se_deg = if cos_slant * rho > along {
+        (along / (rho * cos_slant)).to_degrees().min(90.0)
+    } else {
+        90.0
+    };
+    Ok(Some(LightEstimate {
+        light: Light::from_tilt_slant(tilt_deg, slant_deg)?,
+        tilt_deg,
+        slant_deg,
+        albedo: rho,
+        tilt_confidence: mean_unit_gradient(image, mask).length(),
+        method: EstimateMethod::Limb,
+        tilt_se_deg,
+        slant_se_deg: Some(slant_se_deg),
+        limb_pixels: keep.iter().filter(|&&k| k).count(),
+    }))
+}
+
+/// The slant σ (radians) from the limb fit's amplitude u = |(a, b)|/ρ and constant v = c/ρ.
+///
+/// The rim pixels' centres lie inside the silhouette, where the normal has a small mean
+/// z component κ, so u = sin σ·√(1 − κ²) and v = κ·cos σ. Eliminating κ gives, for C = cos²σ,
+/// C² − C·(1 + v² − u²) + v² = 0; the larger root is the one with the smaller κ (the rim lies
+/// close to the limb), and the true one while κ < cos σ (below about 78° for κ = 0.2).
+/// With v ≤ 0 (no light from the front on the rim) it is sin σ = u.
+fn limb_slant(u: f64, v: f64) -> f64 {
+    let u = u.clamp(0.0, 1.0);
+    if v <= 0.0 {
+        return u.asin();
+    }
+    let p = 1.0 + v * v - u * u;
+    let disc = p * p - 4.0 * v * v;
+    if disc < 0.0 {
+        // No κ fits both (a noisy fit): the root of the nearest case.
+        return (0.5 * p).clamp(0.0, 1.0).sqrt().acos();
+    }
+    (0.5 * (p + disc.sqrt())).min(1.0).sqrt().acos()
+}
+
+/// Whether the limb normals point in more than one direction (the 2 × 2 covariance of the
+/// normals has a smaller eigenvalue of at least 0.02, as an arc of about 30° gives).
+fn spans_two_directions(samples: &[[f64; 3]]) -> bool {
+    let n = samples.len() as f64;
+    let (mx, my) = samples
+        .iter()
+        .fold((0.0, 0.0), |(x, y), s| (x + s[0] / n, y + s[1] / n));
+    let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
+    for s in samples {
+        let (dx, dy) = (s[0] - mx, s[1] - my);
+        xx += dx * dx / n;
+        xy += dx * dy / n;
+        yy += dy * dy / n;
+    }
+    let half_trace = 0.5 * (xx + yy);
+    let smaller = half_trace - (0.25 * (xx - yy).powi(2) + xy * xy).sqrt();
+    smaller >= 1e-4
+}
+
+/// A least-squares fit I = a·n_x + b·n_y + c.
+struct LimbFit {
+    /// (a, b, c).
+    coef: Vector3<f64>,
+    /// Their covariance.
+    cov: Matrix3<f64>,
+}
+
+impl LimbFit {
+    fn predict(&self, s: &[f64; 3]) -> f64 {
+        self.coef[0] * s[0] + self.coef[1] * s[1] + self.coef[2]
+    }
+}
+
+/// Fits the kept samples; `None` when they leave the fit undetermined.
+fn fit_limb(samples: &[[f64; 3]], keep: &[bool]) -> Option<LimbFit> {
+    let mut ata = Matrix3::zeros();
+    let mut atb = Vector3::zeros();
+    let mut count = 0usize;
+    for (s, _) in samples.iter().zip(keep).filter(|(_, &k)| k) {
+        let x = Vector3::new(s[0], s[1], 1.0);
+        ata += x * x.transpose();
+        atb += x * s[2];
+        count += 1;
+    }
+    let inverse = ata.try_inverse()?;
+    let coef = inverse * atb;
+    let rss: f64 = samples
+        .iter()
+        .zip(keep)
+        .filter(|(_, &k)| k)
+        .map(|(s, _)| (s[2] - coef[0] * s[0] - coef[1] * s[1] - coef[2]).powi(2))
+        .sum();
+    let variance = rss / (count.saturating_sub(3).max(1)) as f64;
+    Some(LimbFit {
+        coef,
+        cov: inverse * variance,
+    })
+}
+
+/// The mean of the unit image gradients.
+struct MeanGradient {
+    /// Its world x and y components (x right, y up).
+    x: f64,
+    y: f64,
+    /// The sampling standard error of its direction, radians (π with no gradients).
+    direction_se: f64,
+}
+
+impl MeanGradient {
+    /// Its length, 0..1.
+    fn length(&self) -> f64 {
+        self.x.hypot(self.y)
+    }
+}
+
+/// The mean unit image gradient over the pixels whose four neighbours are in the mask.
+fn mean_unit_gradient(image: &Image, mask: &Mask) -> MeanGradient {
     let (w, h) = (image.width(), image.height());
-    let (mut sx, mut sy, mut count) = (0.0, 0.0, 0usize);
+    let mut units = Vec::new();
     let inside = |c: isize, r: isize| mask.checked(c, r).copied().unwrap_or(false);
     for row in 0..h {
         for col in 0..w {
@@ -77,12 +418,38 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
             let dy = 0.5 * (image.get(col, row - 1) - image.get(col, row + 1));
             let len = dx.hypot(dy);
             if len > 1e-12 {
-                sx += dx / len;
-                sy += dy / len;
-                count += 1;
+                units.push((dx / len, dy / len));
             }
         }
     }
+    if units.is_empty() {
+        return MeanGradient {
+            x: 0.0,
+            y: 0.0,
+            direction_se: std::f64::consts::PI,
+        };
+    }
+    let n = units.len() as f64;
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for u in &units {
+        sx += u.0;
+        sy += u.1;
+    }
+    let (x, y) = (sx / n, sy / n);
+    let length = x.hypot(y);
+    // The spread across the mean direction over √n, relative to the mean's length.
+    let direction_se = if length > 1e-12 {
+        let (px, py) = (-y / length, x / length);
+        let across: f64 = units.iter().map(|u| (u.0 * px + u.1 * py).powi(2)).sum();
+        ((across / n).sqrt() / (n.sqrt() * length)).atan()
+    } else {
+        std::f64::consts::PI
+    };
+    MeanGradient { x, y, direction_se }
+}
+
+/// The Zheng–Chellappa estimate (see the module documentation).
+fn moments_estimate(image: &Image, mask: &Mask) -> Result<LightEstimate> {
     let (mut mu1, mut mu2, mut n) = (0.0, 0.0, 0usize);
     for (v, &m) in image.data().iter().zip(mask.data()) {
         if m {
@@ -102,15 +469,11 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
             "the image is black (or negative) inside the mask: the light cannot be estimated",
         ));
     }
-    let (mx, my) = if count > 0 {
-        (sx / count as f64, sy / count as f64)
-    } else {
-        (0.0, 0.0)
-    };
-    let tilt_confidence = mx.hypot(my);
+    let g = mean_unit_gradient(image, mask);
+    let tilt_confidence = g.length();
     // The light's image-plane direction is (−sin τ, cos τ): brightening toward (mx, my).
     let tilt_deg = if tilt_confidence > 1e-12 {
-        (-mx).atan2(my).to_degrees()
+        (-g.x).atan2(g.y).to_degrees()
     } else {
         0.0
     };
@@ -131,6 +494,10 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
         slant_deg,
         albedo,
         tilt_confidence,
+        method: EstimateMethod::Moments,
+        tilt_se_deg: g.direction_se.to_degrees().min(180.0),
+        slant_se_deg: None,
+        limb_pixels: 0,
     })
 }
 
@@ -193,6 +560,20 @@ mod tests {
             "{}",
             est.tilt_deg
         );
+    }
+
+    #[test]
+    fn the_limb_slant_inverts_its_model() {
+        // Up to the slant where κ reaches cos σ (78° for κ = 0.2): beyond it the two roots
+        // trade places and the smaller-κ root is taken.
+        for slant in [0.0f64, 10.0, 30.0, 45.0, 60.0, 75.0] {
+            for kappa in [0.0f64, 0.1, 0.2] {
+                let s = slant.to_radians();
+                let (u, v) = (s.sin() * (1.0 - kappa * kappa).sqrt(), kappa * s.cos());
+                let got = limb_slant(u, v).to_degrees();
+                assert!((got - slant).abs() < 1e-6, "{slant} {kappa}: {got}");
+            }
+        }
     }
 
     #[test]

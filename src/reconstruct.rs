@@ -43,7 +43,7 @@ use crate::integrate::{
     DEFAULT_MIN_NZ,
 };
 use crate::light::Light;
-use crate::light_estimation::{estimate_light, LightEstimate};
+use crate::light_estimation::{estimate_light_with, LightEstimate, Outline};
 use crate::progress::Progress;
 use crate::reflectance::ReflectanceMap;
 use crate::solver::{Method, Solution, SolveOptions, Solver};
@@ -185,7 +185,10 @@ pub struct Lighting {
 
 impl Lighting {
     /// The light `given`, or (with `None`) the one estimated from `image` on `mask`; the albedo
-    /// `albedo`, or the estimate's when the light is estimated, or 1.
+    /// `albedo`, or the estimate's when the light is estimated, or 1. With the occluding
+    /// `boundary` the mask's outline is taken as the limb and the estimate fits the brightness
+    /// there ([`crate::light_estimation::EstimateMethod::Limb`], where the outline is long
+    /// enough); with any other, the interior statistics.
     ///
     /// Fails when the light is not strictly in front of the surface (z ≤ 0: a grazing or rear
     /// light leaves the shading without an answer) or the albedo is not a positive number.
@@ -194,13 +197,18 @@ impl Lighting {
         albedo: Option<f64>,
         image: &Image,
         mask: &Mask,
+        boundary: &Boundary,
     ) -> Result<Lighting> {
         if let Some(a) = albedo {
             check_albedo(a)?;
         }
+        let outline = match boundary {
+            Boundary::Occluding => Outline::Occluding,
+            _ => Outline::Unknown,
+        };
         let estimate = match given {
             Some(_) => None,
-            None => Some(estimate_light(image, mask)?),
+            None => Some(estimate_light_with(image, mask, outline)?),
         };
         let light = match (given, &estimate) {
             (Some(l), _) => l,

@@ -18,7 +18,7 @@ use shadelab::visual_size::SizeRequest;
 use std::path::Path;
 
 /// Renders `name` at `w`×`h` pixels and `ppd` with `pairs` as parameters.
-fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Picture {
+pub(crate) fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Picture {
     let given: Map<String, Value> = shadelab::params::Params::parse_pairs(pairs).unwrap();
     let size = SizeRequest {
         visual_size: Some((h as f64 / ppd, w as f64 / ppd)),
@@ -33,7 +33,7 @@ fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Pict
 
 /// The picture's interpretations under each tilt (flat boundary, whole-picture domain unless
 /// `domain` says otherwise, slant 45°).
-fn interpretations(p: &Picture, domain: Domain, tilts: &[f64]) -> (Sweep, Lighting) {
+pub(crate) fn interpretations(p: &Picture, domain: Domain, tilts: &[f64]) -> (Sweep, Lighting) {
     let mask = p.domain(domain);
     let lighting = p.lighting(&mask, 45.0, None, None).unwrap();
     let scene = Scene {

@@ -19,6 +19,7 @@ mod lightness;
 mod mesh;
 mod outline;
 mod output_sets;
+mod perception;
 mod python;
 mod sidecar_input;
 mod solve;

@@ -100,6 +100,15 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         light.slant_deg,
         if light.estimated { " (estimated)" } else { "" },
     );
+    if let Some(e) = &light.estimate {
+        text += &format!(
+            "estimated by {}: tilt ± {:.1}°, slant {}\n",
+            e.method.name(),
+            e.tilt_se_deg,
+            e.slant_se_deg
+                .map_or("error not given".to_string(), |s| format!("± {s:.1}°"))
+        );
+    }
     if let Some(t) = &light.true_light {
         text += &format!(
             "true light (sidecar): tilt {:.1}° slant {:.1}°\n",

@@ -366,7 +366,7 @@ fn solve_loaded(
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,
     };
-    let lighting = Lighting::resolve(given, albedo, &image, &mask)?;
+    let lighting = Lighting::resolve(given, albedo, &image, &mask, &boundary)?;
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
     let reflectance = brdf.build(lighting.light)?;
