@@ -37,6 +37,9 @@
 //! the cycles' test, or after `max_iter` steps. Each step's energy is reported
 //! ([`Solution::energy_history`], and [`Progress::energy`] after each step).
 
+// The loops below walk several arrays indexed by the unknown's slot together.
+#![allow(clippy::needless_range_loop)]
+
 use super::{Progress, Solution, SolveOptions, SolveStats, Solver};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::grid::Image;
@@ -92,7 +95,7 @@ impl StallWatch {
         let least = |range: &[f64]| range.iter().copied().fold(f64::INFINITY, f64::min);
         let before = least(&self.residuals[n - STALL_WINDOW..n - half]);
         let recent = least(&self.residuals[n - half..]);
-        !(recent < 0.5 * before)
+        recent.is_nan() || recent >= 0.5 * before
     }
 }
 
@@ -173,7 +176,7 @@ impl Solver {
                 .zip(&delta)
                 .map(|(g, d)| 0.5 * (g[0] * d[0] + g[1] * d[1]))
                 .sum();
-            if !(slope < 0.0) {
+            if slope.is_nan() || slope >= 0.0 {
                 // Not a descent direction (rounding at a stationary point): nothing to gain.
                 break;
             }
@@ -336,7 +339,7 @@ impl Solver {
         for _ in 0..CG_MAX {
             self.apply(n, &blocks, &s.p, &mut s.q);
             let pq = dot(&s.p, &s.q);
-            if !(pq > 0.0) {
+            if pq.is_nan() || pq <= 0.0 {
                 break;
             }
             let alpha = rz / pq;
