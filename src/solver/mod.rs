@@ -385,7 +385,9 @@ impl Solver {
                 .multigrid
                 .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
             let (f, g, stats) = mg.solve(image, bc, reflectance, options, progress);
-            if !stats.converged && !crate::cancel::requested() {
+            // Stalled or blown up (not stopped by the caller's cap or a cancel): globalise.
+            let stalled = stats.cycles < options.max_iter;
+            if !stats.converged && (stats.diverged || stalled) && !crate::cancel::requested() {
                 return Ok(self.globalise(
                     image,
                     bc,
