@@ -357,7 +357,7 @@ fn boundary_normals_can_come_from_a_file() {
 }
 
 /// `--albedo estimate`: the same sphere scaled by 0.5 or 0.8, with a few saturated highlight
-/// pixels, gives the albedo within 2 % of the scale and the same normals within 0.5°; and the
+/// pixels, gives the same albedo in units of the scale and the same normals within 0.5°; and the
 /// library says why an albedo and its estimate together are refused.
 #[test]
 fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
@@ -389,8 +389,12 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
     let reference = runs[0].shape.solution.normals();
     for (run, scale) in runs.iter().zip([1.0, 0.8, 0.5]) {
         let estimate = run.report.parameters.albedo_estimate.unwrap();
+        // The rule scales with the image exactly; on a matte sphere it reads 2.5–3 % low (the
+        // 95th percentile of a disc faces the light within about 14°: src/albedo.rs).
         let ratio = estimate.value / scale;
-        assert!((ratio - 1.0).abs() < 0.02, "scale {scale}: albedo {}", estimate.value);
+        assert!(ratio < 1.0 && ratio > 0.965, "scale {scale}: albedo {}", estimate.value);
+        let first = runs[0].report.parameters.albedo_estimate.unwrap().value;
+        assert!((ratio - first).abs() < 1e-9, "scale {scale}: {ratio} against {first}");
         assert_eq!(run.report.parameters.albedo, estimate.value);
         let normals = run.shape.solution.normals();
         let (mut sum, mut n) = (0.0, 0);
