@@ -374,7 +374,10 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
             .filter(|&i| s.mask.data()[i])
             .collect();
         order.sort_by(|&a, &b| {
-            let (na, nb) = (s.normals.data()[a].dot(&s_dir), s.normals.data()[b].dot(&s_dir));
+            let (na, nb) = (
+                s.normals.data()[a].dot(&s_dir),
+                s.normals.data()[b].dot(&s_dir),
+            );
             nb.total_cmp(&na)
         });
         for &i in &order[..12] {
@@ -392,9 +395,16 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
         // The rule scales with the image exactly; on a matte sphere it reads 2.5–3 % low (the
         // 95th percentile of a disc faces the light within about 14°: src/albedo.rs).
         let ratio = estimate.value / scale;
-        assert!(ratio < 1.0 && ratio > 0.965, "scale {scale}: albedo {}", estimate.value);
+        assert!(
+            ratio < 1.0 && ratio > 0.965,
+            "scale {scale}: albedo {}",
+            estimate.value
+        );
         let first = runs[0].report.parameters.albedo_estimate.unwrap().value;
-        assert!((ratio - first).abs() < 1e-9, "scale {scale}: {ratio} against {first}");
+        assert!(
+            (ratio - first).abs() < 1e-9,
+            "scale {scale}: {ratio} against {first}"
+        );
         assert_eq!(run.report.parameters.albedo, estimate.value);
         let normals = run.shape.solution.normals();
         let (mut sum, mut n) = (0.0, 0);
@@ -422,11 +432,24 @@ fn solve_converges_at_lambda_30_and_reports_the_energy() {
     let run = shadelab(
         &dir,
         &[
-            "solve", "--quiet", "image.npy", "--light", "tilt=0,slant=45", "--lambda", "30",
-            "--mask", "mask.png", "--out", "out",
+            "solve",
+            "--quiet",
+            "image.npy",
+            "--light",
+            "tilt=0,slant=45",
+            "--lambda",
+            "30",
+            "--mask",
+            "mask.png",
+            "--out",
+            "out",
         ],
     );
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let out = dir.join("out");
     let r = report(&out);
     let solver = &r["solver"];
