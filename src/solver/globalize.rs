@@ -48,7 +48,7 @@ use crate::reflectance::ReflectanceMap;
 /// The multigrid cycles give up when the best residual of the last half of this many cycles
 /// is not half the best of the half before: a solve that converges halves it every few cycles
 /// (a slow one within tens).
-pub const STALL_WINDOW: usize = 100;
+pub const STALL_WINDOW: usize = 300;
 
 /// Conjugate-gradient iterations at most per Gauss–Newton step.
 const CG_MAX: usize = 400;
