@@ -44,6 +44,7 @@
 #![deny(missing_docs)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod albedo;
 pub mod analysis;
 pub mod boundary;
 pub mod cancel;

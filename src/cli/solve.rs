@@ -35,9 +35,11 @@ pub struct Args {
     /// The reflectance model (lambertian, blinn-phong, oren-nayar).
     #[arg(long, value_name = "NAME", default_value = "lambertian")]
     pub brdf: String,
-    /// Surface albedo (default 1, or the estimate with --light estimate).
-    #[arg(long, value_name = "A", allow_hyphen_values = true)]
-    pub albedo: Option<f64>,
+    /// Surface albedo (default 1, or the estimate with --light estimate); or `estimate`: the
+    /// 95th percentile of the brightness on the mask, the image divided by it and capped at 1
+    /// (the same shape however the image was scaled).
+    #[arg(long, value_name = "A|estimate", allow_hyphen_values = true)]
+    pub albedo: Option<String>,
     /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow) or literal
     /// (R at the current value; unstable, for study).
     #[arg(
@@ -134,9 +136,19 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
     options
         .validate()
         .map_err(|e| CliError::usage(e.to_string()))?;
-    if let Some(a) = args.albedo {
-        check_albedo(a).map_err(|e| usage("--albedo", e))?;
-    }
+    let (albedo, albedo_estimate) = match args.albedo.as_deref() {
+        None => (None, false),
+        Some("estimate") => (None, true),
+        Some(text) => {
+            let a: f64 = text.parse().map_err(|_| {
+                CliError::usage(format!(
+                    "--albedo: {text:?} is neither a number nor `estimate`"
+                ))
+            })?;
+            check_albedo(a).map_err(|e| usage("--albedo", e))?;
+            (Some(a), false)
+        }
+    };
     let light: LightChoice = args.light.parse()?;
     if let LightChoice::Given(l) = &light {
         check_light_in_front(l).map_err(|e| usage("--light", e))?;
@@ -148,7 +160,8 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
         light,
         boundary,
         brdf: BrdfSpec::named(&args.brdf)?,
-        albedo: args.albedo,
+        albedo,
+        albedo_estimate,
         options,
         max_pixels: global.max_pixels,
         record: SolveRecord {

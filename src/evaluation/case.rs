@@ -97,6 +97,11 @@ pub struct CaseResult {
     pub height: usize,
     /// Pixels in the domain.
     pub domain_pixels: usize,
+    /// The solver method (`multigrid`, `jacobi`), as `solve --method` names it.
+    pub method: String,
+    /// Whether the multigrid cycles stalled or blew up and the energy descent finished the
+    /// solve ([`crate::solver::Solution::globalised`]).
+    pub globalised: bool,
     /// Multigrid cycles (or sweeps) done.
     pub iterations: usize,
     /// Whether the solve met its tolerance.
@@ -182,6 +187,8 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             width: w,
             height: h,
             domain_pixels: case.domain.count(),
+            method: options.method.to_string(),
+            globalised: solution.globalised,
             iterations: solution.iterations,
             converged: solution.converged,
             seconds,

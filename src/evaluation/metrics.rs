@@ -66,18 +66,7 @@ pub fn angular_error(
     })
 }
 
-/// The `q`-quantile (0..1) of sorted, non-empty `values`, linearly interpolated between the
-/// two nearest ranks (the median of an even count is the mean of the middle two).
-pub fn quantile_sorted(values: &[f64], q: f64) -> f64 {
-    match values.len() {
-        0 => f64::NAN,
-        n => {
-            let at = q.clamp(0.0, 1.0) * (n - 1) as f64;
-            let (lo, hi) = (at.floor() as usize, at.ceil() as usize);
-            values[lo] + (at - lo as f64) * (values[hi] - values[lo])
-        }
-    }
-}
+pub use crate::albedo::quantile_sorted;
 
 /// The depth error of a reconstruction once its unknown scale and offset are fitted away.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -190,14 +179,6 @@ mod tests {
         assert!((e.median_deg - 20.0).abs() < 1e-9);
         assert!(angular_error(&est, &truth, &Grid::new(4, 1, false)).is_err());
         assert!(angular_error(&est, &Grid::new(3, 1, z), &mask).is_err());
-    }
-
-    #[test]
-    fn quantiles_interpolate_between_ranks() {
-        assert_eq!(quantile_sorted(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.5);
-        assert_eq!(quantile_sorted(&[5.0], 0.9), 5.0);
-        assert_eq!(quantile_sorted(&[0.0, 10.0], 0.9), 9.0);
-        assert!(quantile_sorted(&[], 0.5).is_nan());
     }
 
     #[test]

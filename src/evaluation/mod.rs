@@ -487,12 +487,11 @@ fn photo_case(
     albedo: Albedo,
     truth_normals: Option<Grid<Normal>>,
 ) -> Case {
-    let scale = 1.0 / albedo.value;
     Case {
         set,
         object: object.into(),
         light_label: format!("{name} (slant {:.0}°)", light.slant_deg()),
-        image: image.map(|v| (v * scale).min(1.0)),
+        image: crate::albedo::normalise(image, albedo.value),
         domain: mask.clone(),
         scored: mask.clone(),
         light,

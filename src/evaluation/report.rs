@@ -62,7 +62,11 @@ pub fn markdown_table(results: &[CaseResult]) -> String {
             Some(d) => format!("{:.2} px ({:.1} %)", d.rms_px, d.rms_percent_of_range),
             None => "—".into(),
         };
-        let flag = if r.converged { "" } else { " (not converged)" };
+        let flag = match (r.converged, r.globalised) {
+            (false, _) => " (not converged)",
+            (true, true) => " (energy descent)",
+            (true, false) => "",
+        };
         text.push_str(&format!(
             "| {} | {} | {} | {} | {mean} | {median} | {depth} | {:.3} | {:.2}{flag} |\n",
             r.set, r.object, r.light_label, r.boundary, r.residual, r.seconds
@@ -94,6 +98,8 @@ mod tests {
             width: 10,
             height: 10,
             domain_pixels: 50,
+            method: "multigrid".into(),
+            globalised: false,
             iterations: 3,
             converged: true,
             seconds: 0.5,

@@ -6,6 +6,7 @@
 //! `depth.png`, `surface.obj`, `convergence.csv` (and `convergence.png` with the `plots`
 //! feature) and `report.json`.
 
+use crate::albedo::AlbedoEstimate;
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
@@ -106,6 +107,10 @@ pub struct SolveConfig {
     pub brdf: BrdfSpec,
     /// The albedo; `None` is 1, or the estimate when the light is estimated.
     pub albedo: Option<f64>,
+    /// Estimate the albedo from the image by the library's rule ([`crate::albedo::estimate`])
+    /// instead: the image is divided by it and capped at 1, and solved with albedo 1, so the
+    /// shape does not depend on how the image was scaled. Not with [`SolveConfig::albedo`].
+    pub albedo_estimate: bool,
     /// The reconstruction's policy (method, λ, tolerance, cap, non-convergence, integration).
     pub options: ReconstructOptions,
     /// The largest image accepted, in pixels.
@@ -137,6 +142,7 @@ impl SolveConfig {
             boundary: BoundarySource::Named(Boundary::Occluding),
             brdf: BrdfSpec::default(),
             albedo: None,
+            albedo_estimate: false,
             options: ReconstructOptions::default(),
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             record: SolveRecord::default(),
@@ -148,6 +154,11 @@ impl SolveConfig {
         self.options.validate()?;
         if let Some(a) = self.albedo {
             crate::reconstruct::check_albedo(a)?;
+        }
+        if self.albedo_estimate && self.albedo.is_some() {
+            return Err(Error::invalid(
+                "give the albedo or ask for its estimate, not both",
+            ));
         }
         if let LightChoice::Given(light) = &self.light {
             crate::reconstruct::check_light_in_front(light)?;
@@ -216,8 +227,10 @@ pub struct SolveParameters {
     pub boundary: String,
     /// The reflectance model.
     pub brdf: BrdfSpec,
-    /// The albedo used.
+    /// The albedo used (the estimate's value when it was estimated).
     pub albedo: f64,
+    /// The albedo's estimate from the image, when asked for ([`SolveConfig::albedo_estimate`]).
+    pub albedo_estimate: Option<AlbedoEstimate>,
     /// λ.
     pub lambda: f64,
     /// The method.
@@ -278,6 +291,12 @@ pub struct SolverReport {
     pub smoothness_energy: f64,
     /// e_R at the end.
     pub brightness_energy: f64,
+    /// Whether the multigrid cycles stalled or blew up and the energy descent finished the
+    /// solve (`solver::Solution::globalised`).
+    pub globalised: bool,
+    /// e_S + λ·e_R after each step of the energy descent (empty when the cycles converged
+    /// alone); never increasing.
+    pub energy_per_step: Vec<f64>,
     /// Seconds of solving.
     pub seconds: f64,
 }
@@ -323,6 +342,7 @@ struct Solved {
     boundary_kind: &'static str,
     solve_seconds: f64,
     sidecar: Option<RenderSidecar>,
+    albedo_estimate: Option<AlbedoEstimate>,
 }
 
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
@@ -360,7 +380,18 @@ fn solve_loaded(
     progress: &dyn Progress,
 ) -> Result<Solved> {
     let (w, h) = (image.width(), image.height());
-    let albedo = config.albedo.or(sidecar.as_ref().and_then(|s| s.albedo));
+    let albedo_estimate = if config.albedo_estimate {
+        Some(crate::albedo::estimate(&image, &mask)?)
+    } else {
+        None
+    };
+    let (image, albedo) = match &albedo_estimate {
+        Some(e) => (crate::albedo::normalise(&image, e.value), Some(1.0)),
+        None => (
+            image,
+            config.albedo.or(sidecar.as_ref().and_then(|s| s.albedo)),
+        ),
+    };
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
@@ -392,6 +423,7 @@ fn solve_loaded(
         boundary_kind: boundary.name(),
         solve_seconds: started.elapsed().as_secs_f64(),
         sidecar,
+        albedo_estimate,
     })
 }
 
@@ -594,7 +626,8 @@ fn report(
             ),
             boundary: or(&record.boundary, boundary_kind.to_string()),
             brdf: brdf.clone(),
-            albedo: brdf.albedo,
+            albedo: solved.albedo_estimate.map_or(brdf.albedo, |e| e.value),
+            albedo_estimate: solved.albedo_estimate,
             lambda: config.options.lambda,
             method: config.options.method.to_string(),
             tol: config.options.tol,
@@ -623,6 +656,8 @@ fn report(
             unknowns: s.unknowns,
             smoothness_energy: s.smoothness_energy,
             brightness_energy: s.brightness_energy,
+            globalised: s.globalised,
+            energy_per_step: s.energy_history.clone(),
             seconds: solved.solve_seconds,
         },
         integration: IntegrationSummary {

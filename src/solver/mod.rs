@@ -169,6 +169,9 @@ pub struct Progress {
     /// The largest change of f or g in the last sweep (for multigrid: that the next Jacobi
     /// sweep would make).
     pub last_update: f64,
+    /// The energy e_S + λ·e_R after the step, where it is computed: after each step of the
+    /// globalisation (`globalize.rs`), not after multigrid cycles or sweeps.
+    pub energy: Option<f64>,
 }
 
 /// The result of a solve.
@@ -194,6 +197,14 @@ pub struct Solution {
     pub last_update: f64,
     /// The number of unknown pixels.
     pub unknowns: usize,
+    /// Whether the multigrid cycles stalled or blew up and the energy descent of
+    /// `globalize.rs` finished the solve: the answer is then the energy's stationary point
+    /// (R read at the pixel), not Jacobi's fixed point, and `converged` and `last_update`
+    /// are the descent's.
+    pub globalised: bool,
+    /// The energy e_S + λ·e_R after each step of the energy descent (empty when the cycles
+    /// converged alone); never increasing.
+    pub energy_history: Vec<f64>,
 }
 
 impl Solution {
@@ -374,6 +385,19 @@ impl Solver {
                 .multigrid
                 .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
             let (f, g, stats) = mg.solve(image, bc, reflectance, options, progress);
+            // Stalled or blown up (not stopped by the caller's cap or a cancel): globalise.
+            let stalled = stats.cycles < options.max_iter;
+            if !stats.converged && (stats.diverged || stalled) && !crate::cancel::requested() {
+                return Ok(self.globalise(
+                    image,
+                    bc,
+                    reflectance,
+                    options,
+                    (f, g),
+                    &stats,
+                    progress,
+                ));
+            }
             return Ok(finish(
                 f,
                 g,
@@ -405,6 +429,7 @@ impl Solver {
                 iteration: iterations,
                 max_iter: options.max_iter,
                 last_update,
+                energy: None,
             });
             if last_update.is_nan() || last_update > DIVERGENCE_UPDATE {
                 diverged = true;
@@ -424,6 +449,45 @@ impl Solver {
                 unknowns: n_unknown,
             },
         ))
+    }
+
+    /// The globalisation (`globalize.rs`) of a multigrid solve that stalled or blew up: the
+    /// energy descent from the multigrid solution at λ = 1 when λ is larger (λ continuation),
+    /// else from the cycles' last values.
+    #[allow(clippy::too_many_arguments)]
+    fn globalise(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        values: (Image, Image),
+        stats: &multigrid::MultigridStats,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Solution {
+        let (mut f, mut g) = values;
+        if globalize::needs_continuation(options.lambda) {
+            let gentle = globalize::continuation_options(options);
+            let (w, h) = (self.width, self.height);
+            let mg = self
+                .multigrid
+                .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
+            let (cf, cg, start) = mg.solve(image, bc, reflectance, &gentle, &mut |_| {});
+            (f, g) = if start.diverged {
+                (Grid::new(w, h, 0.0), Grid::new(w, h, 0.0))
+            } else {
+                (cf, cg)
+            };
+        }
+        self.descend(
+            image,
+            bc,
+            reflectance,
+            options,
+            (&f, &g),
+            stats.cycles,
+            progress,
+        )
     }
 
     /// Lays out the value slots and the nodes for `bc`; returns the number of unknowns.
@@ -606,6 +670,8 @@ fn finish(
         brightness_energy: brightness,
         last_update: stats.last_update,
         unknowns: stats.unknowns,
+        globalised: false,
+        energy_history: Vec::new(),
     }
 }
 
@@ -664,7 +730,10 @@ fn sweep_nodes(
 }
 
 pub mod crease;
+mod globalize;
 mod multigrid;
+
+pub use globalize::STALL_WINDOW;
 
 #[cfg(test)]
 mod tests;

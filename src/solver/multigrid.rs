@@ -560,6 +560,8 @@ impl Multigrid {
         };
         let mut best = f64::INFINITY;
         let mut damping = 1.0;
+        // Globalisation hook (see globalize.rs): the cycles stop once they stall.
+        let mut watch = super::globalize::StallWatch::new();
         while !stats.converged {
             for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(0, &ctx);
@@ -571,6 +573,7 @@ impl Multigrid {
                 iteration: stats.cycles,
                 max_iter: options.max_iter,
                 last_update: residual,
+                energy: None,
             });
             if residual.is_nan() || residual > DIVERGENCE_UPDATE {
                 stats.diverged = true;
@@ -581,6 +584,10 @@ impl Multigrid {
                 break;
             }
             if stats.cycles >= options.max_iter || crate::cancel::requested() {
+                break;
+            }
+            // Globalisation hook (see globalize.rs): a stalled solve is finished there.
+            if watch.stalled(residual) {
                 break;
             }
             // A residual that grows means the linear coarse model overshoots (it leaves out the
