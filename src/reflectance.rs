@@ -244,7 +244,14 @@ impl Lambertian {
     /// cos i·D = N twice, ∂²cos i/∂f² = (−2s_z − 4f·∂cos i/∂f − 2 cos i)/D,
     /// ∂²cos i/∂f∂g = −(2g·∂cos i/∂f + 2f·∂cos i/∂g)/D, and likewise in g; zero in shadow.
     #[inline(always)]
-    fn hessian_closed_form(&self, f: f64, g: f64, sample: &Sample, cos: f64, inv_d: f64) -> Hessian {
+    fn hessian_closed_form(
+        &self,
+        f: f64,
+        g: f64,
+        sample: &Sample,
+        cos: f64,
+        inv_d: f64,
+    ) -> Hessian {
         if cos <= 0.0 || self.albedo == 0.0 {
             return [0.0; 3];
         }

@@ -1095,7 +1095,11 @@ fn coarse_row<const TRACK: bool>(
         }
         let s = neighbour_sum(other, hw, r, c, j);
         let b = rhs_row[c];
-        let new = solve2((kd & K_BITS) as f64, reaction_row[c], [b[0] + s[0], b[1] + s[1]]);
+        let new = solve2(
+            (kd & K_BITS) as f64,
+            reaction_row[c],
+            [b[0] + s[0], b[1] + s[1]],
+        );
         if TRACK {
             worst = track(worst, row[j], new);
         }
