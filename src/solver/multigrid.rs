@@ -210,10 +210,10 @@ impl Level {
             for colour in 0..2 {
                 let start = (r + colour) & 1;
                 let row = &self.kind[r * wp..(r + 1) * wp];
-                let unknown_j = (0..self.hw)
+                let mut unknown_j = (0..self.hw)
                     .filter(|&j| 2 * j + start < wp && row[2 * j + start] & UNKNOWN != 0);
-                let first = unknown_j.clone().next();
-                self.spans[colour][r] = match (first, unknown_j.last()) {
+                let first = unknown_j.next();
+                self.spans[colour][r] = match (first, unknown_j.next_back().or(first)) {
                     (Some(a), Some(b)) => (a as u32, b as u32 + 1),
                     _ => (0, 0),
                 };
@@ -480,14 +480,14 @@ impl Context<'_> {
             let u = Averages::of(self, kind_row, other, hw, r, start, j0, n);
             self.reflectance
                 .fg_batch(&u.f[..n], &u.g[..n], &mut samples[..n]);
-            for i in 0..n {
+            for (i, sample) in samples.iter().enumerate().take(n) {
                 let j = j0 + i;
                 let c = 2 * j + start;
                 let kd = kind_row[c];
                 if kd & UNKNOWN == 0 {
                     continue;
                 }
-                let new = self.fine_update(kd, [u.f[i], u.g[i]], image_row[c - 1], &samples[i]);
+                let new = self.fine_update(kd, [u.f[i], u.g[i]], image_row[c - 1], sample);
                 if TRACK {
                     worst = track(worst, row[j], new);
                 }
@@ -1087,7 +1087,7 @@ fn coarse_row<const TRACK: bool>(
     row: &mut [Pair],
 ) -> f64 {
     let mut worst = 0.0;
-    for j in span.0..span.1 {
+    for (j, slot) in row.iter_mut().enumerate().take(span.1).skip(span.0) {
         let c = 2 * j + start;
         let kd = kind_row[c];
         if kd & UNKNOWN == 0 {
@@ -1101,9 +1101,9 @@ fn coarse_row<const TRACK: bool>(
             [b[0] + s[0], b[1] + s[1]],
         );
         if TRACK {
-            worst = track(worst, row[j], new);
+            worst = track(worst, *slot, new);
         }
-        row[j] = new;
+        *slot = new;
     }
     worst
 }
