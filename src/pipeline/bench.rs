@@ -153,6 +153,9 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         let planner = |method: Method| {
             let options = ReconstructOptions {
                 method,
+                // The method's own cap: the default options carry multigrid's 1,000, which
+                // would stop Jacobi long before it converges.
+                max_iter: None,
                 non_convergence: NonConvergence::Report,
                 ..ReconstructOptions::default()
             };

@@ -84,7 +84,7 @@ use super::{Progress, SolveOptions, DIVERGENCE_UPDATE};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::grid::{Grid, Image};
 use crate::parallel::prelude::*;
-use crate::reflectance::ReflectanceMap;
+use crate::reflectance::{Hessian, ReflectanceMap, Sample};
 
 /// The number of domain neighbours k (0–4) of an unknown cell.
 const K_BITS: u8 = 0b111;
@@ -177,6 +177,10 @@ struct Level {
     reaction: Vec<Sym>,
     /// Unknown cells on this level in the current problem.
     unknowns: usize,
+    /// For each colour and padded row, the half-open range of j (index in the colour's row)
+    /// that holds every unknown of that colour in the row (empty: (0, 0)): the sweeps skip the
+    /// rest of the row.
+    spans: [Vec<(u32, u32)>; 2],
 }
 
 impl Level {
@@ -195,7 +199,33 @@ impl Level {
             rhs: vec![[0.0; 2]; cells],
             reaction: vec![[0.0; 3]; cells],
             unknowns: 0,
+            spans: [vec![(0, 0); hp], vec![(0, 0); hp]],
         }
+    }
+
+    /// Finds the spans of unknowns of every colour and row from `kind`.
+    fn find_spans(&mut self) {
+        let wp = self.wp;
+        for r in 0..self.hp {
+            for colour in 0..2 {
+                let start = (r + colour) & 1;
+                let row = &self.kind[r * wp..(r + 1) * wp];
+                let mut unknown_j = (0..self.hw)
+                    .filter(|&j| 2 * j + start < wp && row[2 * j + start] & UNKNOWN != 0);
+                let first = unknown_j.next();
+                self.spans[colour][r] = match (first, unknown_j.next_back().or(first)) {
+                    (Some(a), Some(b)) => (a as u32, b as u32 + 1),
+                    _ => (0, 0),
+                };
+            }
+        }
+    }
+
+    /// The span of colour `colour` in padded row `r`, as a range of j.
+    #[inline]
+    fn span(&self, colour: usize, r: usize) -> (usize, usize) {
+        let (a, b) = self.spans[colour][r];
+        (a as usize, b as usize)
     }
 
     /// The value at padded (r, c).
@@ -297,32 +327,35 @@ where
 #[inline]
 fn solve2(k: f64, a: Sym, b: Pair) -> Pair {
     let (m11, m12, m22) = (k + a[0], a[1], k + a[2]);
-    let det = m11 * m22 - m12 * m12;
+    let inv_det = 1.0 / (m11 * m22 - m12 * m12);
     [
-        (m22 * b[0] - m12 * b[1]) / det,
-        (m11 * b[1] - m12 * b[0]) / det,
+        (m22 * b[0] - m12 * b[1]) * inv_det,
+        (m11 * b[1] - m12 * b[0]) * inv_det,
     ]
 }
 
-/// The step of the central differences that give ∇²R (in f and g).
-const CURVATURE_STEP: f64 = 1e-4;
-
 /// The positive semidefinite part of a symmetric 2 × 2 matrix: its negative eigenvalues set to 0.
+#[inline]
 fn positive_part(m: Sym) -> Sym {
     let (a, b, c) = (m[0], m[1], m[2]);
-    let mid = 0.5 * (a + c);
-    let radius = (0.5 * (a - c)).hypot(b);
-    let (high, low) = (mid + radius, mid - radius);
-    if low >= 0.0 {
-        m
-    } else if high <= 0.0 {
-        [0.0; 3]
-    } else {
-        // M = high·P + low·(I − P) with P = (M − low·I)/(high − low); keep high·P.
-        let s = high / (high - low);
-        [s * (a - low), s * b, s * (c - low)]
+    let det = a * c - b * b;
+    // Both eigenvalues of one sign (or zero) when the determinant is not negative: the
+    // matrix is kept or dropped whole, without the eigenvalues' square root.
+    if det >= 0.0 {
+        return if a >= 0.0 && c >= 0.0 { m } else { [0.0; 3] };
     }
+    let mid = 0.5 * (a + c);
+    let half = 0.5 * (a - c);
+    let radius = (half * half + b * b).sqrt();
+    let (high, low) = (mid + radius, mid - radius);
+    // M = high·P + low·(I − P) with P = (M − low·I)/(high − low); keep high·P.
+    let s = high / (high - low);
+    [s * (a - low), s * b, s * (c - low)]
 }
+
+/// Points of the finest level evaluated together: one call of the reflectance map's batch per
+/// block, on the stack (no allocation, and the same in WebAssembly).
+const BLOCK: usize = 64;
 
 /// What the finest level's sweeps need to know about the problem.
 struct Context<'a> {
@@ -337,9 +370,49 @@ struct Context<'a> {
     data: f64,
 }
 
+/// The neighbour averages ū of a block of cells of one colour in one padded row of the finest
+/// level, as structure of arrays for the reflectance map's batch.
+struct Averages {
+    f: [f64; BLOCK],
+    g: [f64; BLOCK],
+}
+
+impl Averages {
+    /// ū of the cells j0..j0 + n of colour-row `r` (cells c = 2j + start), read from `other`
+    /// (the other colour); cells outside the domain get (0, 0) (their k is 0).
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn of(
+        ctx: &Context,
+        kind_row: &[u8],
+        other: &[Pair],
+        hw: usize,
+        r: usize,
+        start: usize,
+        j0: usize,
+        n: usize,
+    ) -> Averages {
+        let mut u = Averages {
+            f: [0.0; BLOCK],
+            g: [0.0; BLOCK],
+        };
+        for i in 0..n {
+            let j = j0 + i;
+            let c = 2 * j + start;
+            let inv_k = ctx.inv_k[(kind_row[c] & K_BITS) as usize];
+            let s = neighbour_sum(other, hw, r, c, j);
+            u.f[i] = s[0] * inv_k;
+            u.g[i] = s[1] * inv_k;
+        }
+        u
+    }
+}
+
 impl Context<'_> {
-    /// The coarse model's reaction `a` (Gauss–Newton, 4λ·∇R·∇Rᵀ) of a fine unknown, plus the
-    /// positive part of the curvature term −4λ·(I − R)·∇²R that Gauss–Newton leaves out.
+    /// The coarse model's reaction `a` (Gauss–Newton, 4λ·∇R·∇Rᵀ) of a lit fine unknown, plus
+    /// the positive part of the curvature term −4λ·(I − R)·∇²R that Gauss–Newton leaves out,
+    /// from the map's [`ReflectanceMap::fg_hessian`] at the neighbour average, where
+    /// `brightness_error` is I − R.
     ///
     /// Where the picture is brighter than the assumed light lets the surface be (I > R near
     /// the map's peak, where ∇²R is negative definite, as under a mismatched light), that term
@@ -347,61 +420,82 @@ impl Context<'_> {
     /// and by more than a factor 2 it grows a mode from cycle to cycle (seen on the strips at
     /// oblique assumed tilts: the residual fell to 1e-6, then rose ×10 per cycle). Its
     /// negative part (a softer true operator) only slows the correction, and would make the
-    /// coarse problem indefinite, so it is left out. ∇²R is taken by central differences of
-    /// ∇R, only here (once per cycle), not in the sweeps.
+    /// coarse problem indefinite, so it is left out. ∇²R is evaluated only here (once per
+    /// cycle), not in the sweeps.
     #[inline]
-    fn with_curvature(&self, kind: u8, s: Pair, pixel: usize, a: Sym) -> Sym {
-        if kind & LIT == 0 {
-            return a;
-        }
-        let k = (kind & K_BITS) as usize;
-        let u = [s[0] * self.inv_k[k], s[1] * self.inv_k[k]];
-        let r = self.reflectance;
-        let e = self.image[pixel] - r.fg(u[0], u[1]).value;
-        let (fp, fm) = (
-            r.fg(u[0] + CURVATURE_STEP, u[1]),
-            r.fg(u[0] - CURVATURE_STEP, u[1]),
-        );
-        let (gp, gm) = (
-            r.fg(u[0], u[1] + CURVATURE_STEP),
-            r.fg(u[0], u[1] - CURVATURE_STEP),
-        );
-        let h = 0.5 / CURVATURE_STEP;
-        let hessian = [
-            (fp.d1 - fm.d1) * h,
-            0.5 * ((fp.d2 - fm.d2) + (gp.d1 - gm.d1)) * h,
-            (gp.d2 - gm.d2) * h,
-        ];
-        let extra = positive_part([
-            -self.data * e * hessian[0],
-            -self.data * e * hessian[1],
-            -self.data * e * hessian[2],
-        ]);
+    fn with_curvature(&self, brightness_error: f64, hessian: &Hessian, a: Sym) -> Sym {
+        let w = -self.data * brightness_error;
+        let extra = positive_part([w * hessian[0], w * hessian[1], w * hessian[2]]);
         if extra.iter().any(|v| !v.is_finite()) {
             return a;
         }
         [a[0] + extra[0], a[1] + extra[1], a[2] + extra[2]]
     }
 
-    /// The Jacobi update ū + (4λ/k)·w·(I − R(ū))·∇R(ū) of a fine unknown with flags `kind` and
-    /// neighbour sum `s` at image index `pixel`, and the reaction matrix 4λ·w·∇R·∇Rᵀ there.
+    /// The Jacobi update ū + (4λ/k)·w·(I − R(ū))·∇R(ū) of a fine unknown with flags `kind`,
+    /// neighbour average `u` = ū and brightness `intensity`, given the map's sample at ū.
     #[inline]
-    fn fine_target(&self, kind: u8, s: Pair, pixel: usize) -> (Pair, Sym) {
-        let k = (kind & K_BITS) as usize;
-        let mut u = [s[0] * self.inv_k[k], s[1] * self.inv_k[k]];
-        let mut a = [0.0; 3];
-        if kind & LIT != 0 {
-            let sample = self.reflectance.fg(u[0], u[1]);
-            let e = self.data_k[k] * (self.image[pixel] - sample.value);
-            u[0] += e * sample.d1;
-            u[1] += e * sample.d2;
-            a = [
-                self.data * sample.d1 * sample.d1,
-                self.data * sample.d1 * sample.d2,
-                self.data * sample.d2 * sample.d2,
-            ];
+    fn fine_update(&self, kind: u8, u: Pair, intensity: f64, sample: &Sample) -> Pair {
+        if kind & LIT == 0 {
+            return u;
         }
-        (u, a)
+        let e = self.data_k[(kind & K_BITS) as usize] * (intensity - sample.value);
+        [u[0] + e * sample.d1, u[1] + e * sample.d2]
+    }
+
+    /// The Jacobi update of one fine unknown with flags `kind` and neighbour sum `s` at image
+    /// index `pixel` (one evaluation of the map: for the single-level residual).
+    fn fine_target(&self, kind: u8, s: Pair, pixel: usize) -> Pair {
+        let k = (kind & K_BITS) as usize;
+        let u = [s[0] * self.inv_k[k], s[1] * self.inv_k[k]];
+        let sample = if kind & LIT != 0 {
+            self.reflectance.fg(u[0], u[1])
+        } else {
+            Sample::ZERO
+        };
+        self.fine_update(kind, u, self.image[pixel], &sample)
+    }
+
+    /// One half-sweep of padded row `r` of the finest level: the cells of one colour
+    /// (c = 2j + `start`, j in `span`) in `row`, moved to their Jacobi targets from the other
+    /// colour's values `other`. Returns the largest change.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn fine_row<const TRACK: bool>(
+        &self,
+        kind_row: &[u8],
+        image_row: &[f64],
+        other: &[Pair],
+        hw: usize,
+        r: usize,
+        start: usize,
+        span: (usize, usize),
+        row: &mut [Pair],
+    ) -> f64 {
+        let mut worst = 0.0;
+        let mut samples = [Sample::ZERO; BLOCK];
+        let mut j0 = span.0;
+        while j0 < span.1 {
+            let n = BLOCK.min(span.1 - j0);
+            let u = Averages::of(self, kind_row, other, hw, r, start, j0, n);
+            self.reflectance
+                .fg_batch(&u.f[..n], &u.g[..n], &mut samples[..n]);
+            for (i, sample) in samples.iter().enumerate().take(n) {
+                let j = j0 + i;
+                let c = 2 * j + start;
+                let kd = kind_row[c];
+                if kd & UNKNOWN == 0 {
+                    continue;
+                }
+                let new = self.fine_update(kd, [u.f[i], u.g[i]], image_row[c - 1], sample);
+                if TRACK {
+                    worst = track(worst, row[j], new);
+                }
+                row[j] = new;
+            }
+            j0 += n;
+        }
+        worst
     }
 }
 
@@ -660,6 +754,7 @@ impl Multigrid {
             }
         }
         fine.unknowns = unknowns;
+        fine.find_spans();
         self.used = 1;
         while self.used < self.levels.len().min(self.max_levels)
             && self.levels[self.used - 1].unknowns > COARSEST_UNKNOWNS
@@ -680,7 +775,7 @@ impl Multigrid {
         if l + 1 == self.used {
             let mut first = 0.0;
             for sweep in 0..COARSEST_SWEEPS {
-                let change = self.smooth(l, ctx);
+                let change = self.smooth_tracked(l, ctx);
                 if sweep == 0 {
                     first = change;
                 }
@@ -710,20 +805,30 @@ impl Multigrid {
         }
     }
 
-    /// One red-black Gauss–Seidel sweep on level `l`; returns the largest change.
-    fn smooth(&mut self, l: usize, ctx: &Context) -> f64 {
+    /// One red-black Gauss–Seidel sweep on level `l`.
+    fn smooth(&mut self, l: usize, ctx: &Context) {
         self.work += 0.25f64.powi(l as i32);
-        let a = self.half_sweep(l, 0, ctx);
-        let b = self.half_sweep(l, 1, ctx);
+        self.half_sweep::<false>(l, 0, ctx);
+        self.half_sweep::<false>(l, 1, ctx);
+    }
+
+    /// [`Multigrid::smooth`], returning the largest change (NaN counts as infinite): the
+    /// coarsest level's relaxation stops on it; elsewhere it is not needed and not tracked.
+    fn smooth_tracked(&mut self, l: usize, ctx: &Context) -> f64 {
+        self.work += 0.25f64.powi(l as i32);
+        let a = self.half_sweep::<true>(l, 0, ctx);
+        let b = self.half_sweep::<true>(l, 1, ctx);
         worst_of(a, b)
     }
 
-    /// Updates the cells of colour `colour` on level `l`.
-    fn half_sweep(&mut self, l: usize, colour: usize, ctx: &Context) -> f64 {
+    /// Updates the cells of colour `colour` on level `l`; returns the largest change if `TRACK`
+    /// (else 0).
+    fn half_sweep<const TRACK: bool>(&mut self, l: usize, colour: usize, ctx: &Context) -> f64 {
         let level = &mut self.levels[l];
         let parallel = level.parallel();
         let (wp, hp, hw, w) = (level.wp, level.hp, level.hw, level.w);
         let kind = &level.kind[..];
+        let spans = &level.spans[colour][..];
         let (rhs, reaction) = (&level.rhs[..], &level.reaction[..]);
         let [red, black] = &mut level.val;
         let (out, other): (&mut [Pair], &[Pair]) = if colour == 0 {
@@ -732,36 +837,29 @@ impl Multigrid {
             (black, red)
         };
         over_rows(out, hw, parallel, |r, row| {
-            if r == 0 || r + 1 >= hp {
+            let (lo, hi) = spans[r];
+            if lo >= hi || r == 0 || r + 1 >= hp {
                 return 0.0;
             }
+            let span = (lo as usize, hi as usize);
             let start = (r + colour) & 1;
-            let mut worst = 0.0;
-            for (j, slot) in row.iter_mut().enumerate() {
-                let c = 2 * j + start;
-                if c == 0 || c + 1 >= wp {
-                    continue;
-                }
-                let at = r * wp + c;
-                let kd = kind[at];
-                if kd & UNKNOWN == 0 {
-                    continue;
-                }
-                let s = neighbour_sum(other, hw, r, c, j);
-                let new = if l == 0 {
-                    ctx.fine_target(kd, s, (r - 1) * w + c - 1).0
-                } else {
-                    let b = rhs[at];
-                    solve2(
-                        (kd & K_BITS) as f64,
-                        reaction[at],
-                        [b[0] + s[0], b[1] + s[1]],
-                    )
-                };
-                worst = track(worst, *slot, new);
-                *slot = new;
+            let kind_row = &kind[r * wp..(r + 1) * wp];
+            if l == 0 {
+                let image_row = &ctx.image[(r - 1) * w..r * w];
+                return ctx.fine_row::<TRACK>(kind_row, image_row, other, hw, r, start, span, row);
             }
-            worst
+            let at = r * wp..(r + 1) * wp;
+            coarse_row::<TRACK>(
+                kind_row,
+                &rhs[at.clone()],
+                &reaction[at],
+                other,
+                hw,
+                r,
+                start,
+                span,
+                row,
+            )
         })
     }
 
@@ -787,27 +885,21 @@ impl Multigrid {
             if r == 0 || r + 1 >= chp {
                 return 0.0;
             }
+            if l == 0 {
+                let ckind_row = &ckind[r * cwp..(r + 1) * cwp];
+                return restrict_fine_row(ctx, fine, ckind_row, r, rhs_row, reaction_row);
+            }
             let mut worst = 0.0;
             for c in 1..cwp - 1 {
                 let coarse_unknown = ckind[r * cwp + c] & UNKNOWN != 0;
                 let mut res = [0.0; 2];
                 let mut react = [0.0; 3];
-                let (mut unknown, mut evaluated) = (0.0, 0.0);
                 for (fr, fc) in children(fine, r, c) {
                     let fk = fine.kind[fr * fine.wp + fc];
                     if fk & UNKNOWN == 0 {
                         continue;
                     }
-                    unknown += 1.0;
-                    // The last thing done on the finest level is a full red-black sweep, which
-                    // leaves every black cell exactly at its Jacobi target (the same function
-                    // of the same red values): its residual is zero, bit for bit, and is not
-                    // evaluated. Its reaction matrix is taken as its red neighbours'.
-                    if l == 0 && (fr + fc) & 1 == 1 {
-                        continue;
-                    }
-                    evaluated += 1.0;
-                    let (d, a) = residual_at(fine, l, fr, fc, fk, ctx);
+                    let (d, a) = residual_at(fine, fr, fc, fk);
                     let k = (fk & K_BITS) as f64;
                     worst = track(worst, [0.0; 2], [d[0] / k, d[1] / k]);
                     if coarse_unknown {
@@ -817,10 +909,6 @@ impl Multigrid {
                         react[1] += a[1];
                         react[2] += a[2];
                     }
-                }
-                if evaluated > 0.0 && evaluated < unknown {
-                    let scale = unknown / evaluated;
-                    react = [react[0] * scale, react[1] * scale, react[2] * scale];
                 }
                 rhs_row[c] = res;
                 reaction_row[c] = react;
@@ -858,9 +946,8 @@ impl Multigrid {
             for c in 1..level.wp - 1 {
                 let kd = level.kind[r * level.wp + c];
                 if kd & UNKNOWN != 0 {
-                    let (d, _) = residual_at(level, 0, r, c, kd, ctx);
-                    let k = (kd & K_BITS) as f64;
-                    worst = track(worst, [0.0; 2], [d[0] / k, d[1] / k]);
+                    let t = ctx.fine_target(kd, level.neighbours(r, c), (r - 1) * level.w + c - 1);
+                    worst = track(worst, level.value(r, c), t);
                 }
             }
         }
@@ -880,17 +967,25 @@ impl Multigrid {
         let cwp = coarse.wp;
         let ckind = &coarse.kind[..];
         for colour in 0..2 {
+            let spans = &fine.spans[colour][..];
             over_rows(&mut fine.val[colour], hw, parallel, |r, row| {
-                if r == 0 || r + 1 >= hp {
+                let (lo, hi) = spans[r];
+                if lo >= hi || r == 0 || r + 1 >= hp {
                     return 0.0;
                 }
                 let start = (r + colour) & 1;
                 // The parent row, and the coarse row on this fine row's side of it.
                 let pr = ((r - 1) >> 1) + 1;
                 let nr = if (r - 1) & 1 == 0 { pr - 1 } else { pr + 1 };
-                for (j, slot) in row.iter_mut().enumerate() {
+                let kind_row = &kind[r * wp..(r + 1) * wp];
+                for (j, slot) in row
+                    .iter_mut()
+                    .enumerate()
+                    .take(hi as usize)
+                    .skip(lo as usize)
+                {
                     let c = 2 * j + start;
-                    if c == 0 || c + 1 >= wp || kind[r * wp + c] & UNKNOWN == 0 {
+                    if kind_row[c] & UNKNOWN == 0 {
                         continue;
                     }
                     let pc = ((c - 1) >> 1) + 1;
@@ -904,8 +999,9 @@ impl Multigrid {
                         }
                     };
                     let (x, y, d) = (get(pr, nc), get(nr, pc), get(nr, nc));
-                    slot[0] += scale * (9.0 * p[0] + 3.0 * (x[0] + y[0]) + d[0]) / 16.0;
-                    slot[1] += scale * (9.0 * p[1] + 3.0 * (x[1] + y[1]) + d[1]) / 16.0;
+                    // × 1/16 is exact, as the division by 16 was.
+                    slot[0] += scale * (9.0 * p[0] + 3.0 * (x[0] + y[0]) + d[0]) * 0.0625;
+                    slot[1] += scale * (9.0 * p[1] + 3.0 * (x[1] + y[1]) + d[1]) * 0.0625;
                 }
                 0.0
             });
@@ -964,26 +1060,161 @@ fn half_size_problem(image: &Image, bc: &BoundaryConditions) -> (Image, Boundary
     (coarse_image, BoundaryConditions::from_parts(roles, fixed))
 }
 
-/// The residual (k-scaled) of unknown cell (r, c) on level `l`, and its reaction matrix.
+/// The residual (k-scaled) of unknown cell (r, c) on coarse level `level`, and its reaction
+/// matrix.
 #[inline]
-fn residual_at(level: &Level, l: usize, r: usize, c: usize, kd: u8, ctx: &Context) -> (Pair, Sym) {
+fn residual_at(level: &Level, r: usize, c: usize, kd: u8) -> (Pair, Sym) {
     let s = level.neighbours(r, c);
     let u = level.value(r, c);
     let k = (kd & K_BITS) as f64;
-    if l == 0 {
-        let pixel = (r - 1) * level.w + c - 1;
-        let (t, a) = ctx.fine_target(kd, s, pixel);
-        let a = ctx.with_curvature(kd, s, pixel, a);
-        ([k * (t[0] - u[0]), k * (t[1] - u[1])], a)
-    } else {
-        let at = r * level.wp + c;
-        let (b, a) = (level.rhs[at], level.reaction[at]);
-        let res = [
-            b[0] + s[0] - (k + a[0]) * u[0] - a[1] * u[1],
-            b[1] + s[1] - a[1] * u[0] - (k + a[2]) * u[1],
-        ];
-        (res, a)
+    let at = r * level.wp + c;
+    let (b, a) = (level.rhs[at], level.reaction[at]);
+    let res = [
+        b[0] + s[0] - (k + a[0]) * u[0] - a[1] * u[1],
+        b[1] + s[1] - a[1] * u[0] - (k + a[2]) * u[1],
+    ];
+    (res, a)
+}
+
+/// One half-sweep of padded row `r` of a coarse level (kinds `kind_row`, right-hand sides
+/// `rhs_row`, reaction matrices `reaction_row`): the cells of one colour (c = 2j + `start`, j in
+/// `span`) in `row` solved pointwise from the other colour's values `other`. Returns the largest
+/// change.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn coarse_row<const TRACK: bool>(
+    kind_row: &[u8],
+    rhs_row: &[Pair],
+    reaction_row: &[Sym],
+    other: &[Pair],
+    hw: usize,
+    r: usize,
+    start: usize,
+    span: (usize, usize),
+    row: &mut [Pair],
+) -> f64 {
+    let mut worst = 0.0;
+    for (j, slot) in row.iter_mut().enumerate().take(span.1).skip(span.0) {
+        let c = 2 * j + start;
+        let kd = kind_row[c];
+        if kd & UNKNOWN == 0 {
+            continue;
+        }
+        let s = neighbour_sum(other, hw, r, c, j);
+        let b = rhs_row[c];
+        let new = solve2(
+            (kd & K_BITS) as f64,
+            reaction_row[c],
+            [b[0] + s[0], b[1] + s[1]],
+        );
+        if TRACK {
+            worst = track(worst, *slot, new);
+        }
+        *slot = new;
     }
+    worst
+}
+
+/// The finest level's part of `Multigrid::restrict` for coarse padded row `r` (kinds
+/// `ckind_row`): the residuals and reaction matrices of the fine unknowns summed into
+/// `rhs_row` and `reaction_row` over the children of each coarse unknown; returns the largest
+/// Jacobi residual of the fine row pair.
+///
+/// The last thing done on the finest level is a full red-black sweep, which leaves every black
+/// cell exactly at its Jacobi target (the same function of the same red values): its residual
+/// is zero, bit for bit, and is not evaluated. Its reaction matrix is taken as its red
+/// neighbours' (the red children's sum scaled by unknown children / red unknown children). The
+/// map is evaluated a block of red cells at a time, with its Hessian for the curvature term.
+fn restrict_fine_row(
+    ctx: &Context,
+    fine: &Level,
+    ckind_row: &[u8],
+    r: usize,
+    rhs_row: &mut [Pair],
+    reaction_row: &mut [Sym],
+) -> f64 {
+    let (fwp, hw, w) = (fine.wp, fine.hw, fine.w);
+    let cwp = ckind_row.len();
+    let mut worst = 0.0;
+    let mut samples = [Sample::ZERO; BLOCK];
+    let mut hessians: [Hessian; BLOCK] = [[0.0; 3]; BLOCK];
+    let mut c0 = 1;
+    while c0 + 1 < cwp {
+        let n = BLOCK.min(cwp - 1 - c0);
+        let mut res = [[0.0; 2]; BLOCK];
+        let mut react = [[0.0; 3]; BLOCK];
+        let mut evaluated = [0u8; BLOCK];
+        for fr in [2 * r - 1, 2 * r] {
+            if fr > fine.h {
+                continue;
+            }
+            // Red cells have (fr + fc) even: the red child of coarse column c is fine column
+            // 2c − odd, index j = c − odd in the red row.
+            let odd = fr & 1;
+            let j0 = c0 - odd;
+            let (lo, hi) = fine.span(0, fr);
+            if hi <= j0 || j0 + n <= lo {
+                continue;
+            }
+            let kind_row = &fine.kind[fr * fwp..(fr + 1) * fwp];
+            let u = Averages::of(ctx, kind_row, &fine.val[1], hw, fr, odd, j0, n);
+            ctx.reflectance.fg_hessian_batch(
+                &u.f[..n],
+                &u.g[..n],
+                &mut samples[..n],
+                &mut hessians[..n],
+            );
+            let image_row = &ctx.image[(fr - 1) * w..fr * w];
+            let values = &fine.val[0][fr * hw..(fr + 1) * hw];
+            for i in 0..n {
+                let j = j0 + i;
+                let fc = 2 * j + odd;
+                let kd = kind_row[fc];
+                if kd & UNKNOWN == 0 {
+                    continue;
+                }
+                let intensity = image_row[fc - 1];
+                let sample = &samples[i];
+                let t = ctx.fine_update(kd, [u.f[i], u.g[i]], intensity, sample);
+                let v = values[j];
+                worst = track(worst, v, t);
+                let k = (kd & K_BITS) as f64;
+                let d = [k * (t[0] - v[0]), k * (t[1] - v[1])];
+                let a = if kd & LIT != 0 {
+                    let (d1, d2) = (sample.d1, sample.d2);
+                    let gauss_newton = [ctx.data * d1 * d1, ctx.data * d1 * d2, ctx.data * d2 * d2];
+                    ctx.with_curvature(intensity - sample.value, &hessians[i], gauss_newton)
+                } else {
+                    [0.0; 3]
+                };
+                res[i] = [res[i][0] + d[0], res[i][1] + d[1]];
+                react[i] = [react[i][0] + a[0], react[i][1] + a[1], react[i][2] + a[2]];
+                evaluated[i] += 1;
+            }
+        }
+        for i in 0..n {
+            let c = c0 + i;
+            if ckind_row[c] & UNKNOWN == 0 {
+                rhs_row[c] = [0.0; 2];
+                reaction_row[c] = [0.0; 3];
+                continue;
+            }
+            let unknown = [2 * r - 1, 2 * r]
+                .iter()
+                .flat_map(|&fr| [fr * fwp + 2 * c - 1, fr * fwp + 2 * c])
+                .filter(|&at| fine.kind[at] & UNKNOWN != 0)
+                .count();
+            let mut a = react[i];
+            if evaluated[i] > 0 && usize::from(evaluated[i]) < unknown {
+                let scale = unknown as f64 / f64::from(evaluated[i]);
+                a = [a[0] * scale, a[1] * scale, a[2] * scale];
+            }
+            rhs_row[c] = res[i];
+            reaction_row[c] = a;
+        }
+        c0 += n;
+    }
+    worst
 }
 
 /// Lays out `coarse` from `fine`: fixed where any child is fixed, unknown where any child is
@@ -1025,6 +1256,7 @@ fn coarsen(fine: &Level, coarse: &mut Level) {
         }
     }
     coarse.unknowns = unknowns;
+    coarse.find_spans();
 }
 
 #[cfg(test)]
