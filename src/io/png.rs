@@ -344,6 +344,22 @@ pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f
     write_encoded(path, image, depth, gamma, colors)
 }
 
+/// [`write_rgb`] of the `width` × `height` picture whose pixel at (column, row) is
+/// `pixel(column, row)`, without building it: the same bytes as `write_rgb` of
+/// `Grid::from_fn(width, height, pixel)`.
+pub fn write_rgb_fn(
+    path: &Path,
+    (width, height): (usize, usize),
+    depth: BitDepth,
+    gamma: Option<f64>,
+    pixel: impl Fn(usize, usize) -> [f64; 3],
+) -> Result<()> {
+    let pixel = &pixel;
+    let values = (0..height).flat_map(|r| (0..width).flat_map(move |c| pixel(c, r)));
+    let colors = (ExtendedColorType::Rgb8, ExtendedColorType::Rgb16);
+    write_values(path, (width, height), values, depth, gamma, colors)
+}
+
 /// A pixel of linear values: one channel (gray) or three (RGB).
 trait Channels {
     /// The pixel's channels, in PNG order.
@@ -369,23 +385,38 @@ fn write_encoded<P: Channels>(
     image: &Grid<P>,
     depth: BitDepth,
     gamma: Option<f64>,
+    colors: (ExtendedColorType, ExtendedColorType),
+) -> Result<()> {
+    let values = image.data().iter().flat_map(Channels::channels).copied();
+    let size = (image.width(), image.height());
+    write_values(path, size, values, depth, gamma, colors)
+}
+
+/// Encodes `values` (channels interleaved, row-major, of a picture of `size` (width, height))
+/// at `depth`, optionally display-encoded with v^(1/gamma), and writes them as a PNG of
+/// `colors.0` (8-bit) or `colors.1` (16-bit).
+fn write_values(
+    path: &Path,
+    (width, height): (usize, usize),
+    values: impl Iterator<Item = f64>,
+    depth: BitDepth,
+    gamma: Option<f64>,
     (eight, sixteen): (ExtendedColorType, ExtendedColorType),
 ) -> Result<()> {
     check_gamma(gamma)?;
-    let values = image.data().iter().flat_map(Channels::channels);
     let (bytes, color): (Vec<u8>, _) = match depth {
         BitDepth::Eight => (
-            values.map(|&v| encode(v, gamma, 255.0) as u8).collect(),
+            values.map(|v| encode(v, gamma, 255.0) as u8).collect(),
             eight,
         ),
         BitDepth::Sixteen => (
             values
-                .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                .flat_map(|v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
                 .collect(),
             sixteen,
         ),
     };
-    write_png(path, image.width(), image.height(), &bytes, color)
+    write_png(path, width, height, &bytes, color)
 }
 
 /// Writes a label map: 8-bit when every label fits, else 16-bit; the codes are the labels.

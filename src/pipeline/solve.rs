@@ -8,6 +8,7 @@
 
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
+use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
 use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::Light;
@@ -491,8 +492,11 @@ pub fn run_image(
 pub fn run_into(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
     let started = Instant::now();
     let mut solved = solve_stage(config, progress)?;
-    write_normals(dir, &solved.shape.solution)?;
-    write_convergence(dir, &solved.shape, config.options.tol)?;
+    let (normals, convergence) = crate::parallel::join(
+        || write_normals(dir, &solved.shape.solution),
+        || write_convergence(dir, &solved.shape, config.options.tol),
+    );
+    normals.and(convergence)?;
     // (f, g) move into the integration; the empty grids left behind are never read again.
     let f = std::mem::replace(&mut solved.shape.solution.f, Grid::new(0, 0, 0.0));
     let g = std::mem::replace(&mut solved.shape.solution.g, Grid::new(0, 0, 0.0));
@@ -651,28 +655,55 @@ impl SolveRun {
     }
 }
 
-/// `normals.npy` and `normals.png`.
+/// `normals.npy` and `normals.png`, written side by side from (f, g) without a grid of
+/// normals.
 fn write_normals(dir: &Path, s: &crate::solver::Solution) -> Result<()> {
     let (w, h) = (s.f.width(), s.f.height());
-    io::write_normals(&dir.join("normals.npy"), &s.normals())?;
-    let picture = Grid::from_fn(w, h, |c, r| {
-        let n = s.normal(c, r);
-        [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
-    });
-    io::write_rgb(&dir.join("normals.png"), &picture, BitDepth::Eight, None)
+    let normals = || {
+        s.f.data()
+            .iter()
+            .zip(s.g.data())
+            .map(|(&f, &g)| normal_from_fg(f, g))
+    };
+    let (npy, png) = crate::parallel::join(
+        || {
+            let values = normals().flat_map(|n| [n.x, n.y, n.z]);
+            io::write_f32(&dir.join("normals.npy"), &[h, w, 3], values)
+        },
+        || {
+            io::write_rgb_fn(
+                &dir.join("normals.png"),
+                (w, h),
+                BitDepth::Eight,
+                None,
+                |c, r| {
+                    let n = s.normal(c, r);
+                    [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
+                },
+            )
+        },
+    );
+    npy.and(png)
 }
 
-/// `depth.npy`, `depth.png` (scaled by the range) and `surface.obj`.
+/// `depth.npy`, `depth.png` (scaled by the range) and `surface.obj`, the OBJ beside the two
+/// others.
 fn write_depth(dir: &Path, depth: &Depth, mask: &Mask) -> Result<()> {
     let (z, highest) = (&depth.depth, depth.range);
-    io::write_image(&dir.join("depth.npy"), z)?;
-    let picture = z.map(|v| if highest > 0.0 { v / highest } else { 0.0 });
-    io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)?;
-    drop(picture);
     let obj = dir.join("surface.obj");
-    io::write_atomic(&obj, |out| {
-        crate::integrate::write_mesh_obj(z, mask, out, &obj)
-    })
+    let (pictures, mesh) = crate::parallel::join(
+        || {
+            io::write_image(&dir.join("depth.npy"), z)?;
+            let picture = z.map(|v| if highest > 0.0 { v / highest } else { 0.0 });
+            io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)
+        },
+        || {
+            io::write_atomic(&obj, |out| {
+                crate::integrate::write_mesh_obj(z, mask, out, &obj)
+            })
+        },
+    );
+    pictures.and(mesh)
 }
 
 /// `report.json`.
