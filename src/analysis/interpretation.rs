@@ -251,8 +251,10 @@ impl Interpreter {
     /// under tilt `solved_tilt_deg` ([`Interpreter::solve`]), turned by the difference
     /// ([`turned`]) instead of solved again. Only for a scene where
     /// [`Interpreter::turns_with_light`] holds; there it is the same fixed point as the solve
-    /// under `tilt_deg` (the sweep's energies agree to rounding, about 1e-15 relative), at
-    /// the cost of an integration.
+    /// under `tilt_deg`, at the cost of an integration. A separate solve stops where its own
+    /// largest update of f or g falls below the tolerance, and that maximum changes as (f, g)
+    /// turn: the two agree to the solver's tolerance (about 1e-6 relative in the readings),
+    /// and to rounding (about 1e-12) when the separate solve stops after the same cycle.
     pub fn interpret_turned(
         &mut self,
         scene: &Scene,
@@ -599,7 +601,11 @@ mod tests {
                 let turned = it
                     .interpret_turned(&scene, &shape, 10.0, tilt, &lighting)
                     .unwrap();
-                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1e-6);
+                // Separate solves stop where their own largest update (a maximum over f and
+                // g, which turning changes) falls below the tolerance 1e-6: they agree with
+                // the turned one to that tolerance, and to rounding where they stop after the
+                // same cycle.
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-5 * a.abs().max(1e-6);
                 let (d, t) = (direct.tokens[0], turned.tokens[0]);
                 assert!(close(d.convexity, t.convexity), "{tilt}: {d:?} {t:?}");
                 assert!(close(d.residual, t.residual), "{tilt}: {d:?} {t:?}");

@@ -210,8 +210,8 @@ pub fn sweep(
     let plan = || Interpreter::new(scene, options);
     let planned = |e: &Error| Error::Compute(format!("cannot plan the solve: {e}"));
     let interpretations = if Interpreter::turns_with_light(scene) {
-        // One solve serves every tilt: turned, it is the solve under each of them (the
-        // energies of separate solves agreed to rounding; see `Interpreter::turns_with_light`).
+        // One solve serves every tilt: turned, it is the solve under each of them, to the
+        // solver's tolerance (see `Interpreter::turns_with_light` and `interpret_turned`).
         // What is left per tilt, the integration and the readings, runs in parallel.
         let shape = first.solve(scene, tilts[0], lighting)?;
         drop(first);
