@@ -46,25 +46,6 @@ pub mod prelude {
     pub use super::sequential::{IteratorStandIns, SliceStandIns};
 }
 
-/// Runs `a` and `b`, on two worker threads when there are (rayon's `join`), else one after
-/// the other; returns both results.
-pub fn join<A, B, RA, RB>(a: A, b: B) -> (RA, RB)
-where
-    A: FnOnce() -> RA + Send,
-    B: FnOnce() -> RB + Send,
-    RA: Send,
-    RB: Send,
-{
-    #[cfg(feature = "parallel")]
-    {
-        rayon::join(a, b)
-    }
-    #[cfg(not(feature = "parallel"))]
-    {
-        (a(), b())
-    }
-}
-
 /// Combines the items of a (parallel) iterator with an associative `op` whose identity is
 /// `identity`: rayon's `reduce` with the `parallel` feature, a left fold without it. For ops
 /// like `max`, whose result does not depend on the grouping, both give the same bits.

@@ -477,7 +477,10 @@ fn read_token(
     let mut smoothness = 0.0;
     let mut surface_residual = 0.0;
     let members = token.pixels();
-    for &p in members {
+    // The member one row below p, found by a pointer that only moves forward (members are in
+    // row-major order, so p + w grows with p).
+    let mut below = 0;
+    for (k, &p) in members.iter().enumerate() {
         surface_residual += misfit.data()[p];
         let i = image.data()[p];
         if roles.data()[p] == Role::Unknown && i > ambient {
@@ -486,17 +489,17 @@ fn read_token(
         }
         // Pairs to the right and below, both in the token (members are in row-major order).
         let (col, row) = (p % w, p / w);
-        for q in [
-            (col + 1 < w).then_some(p + 1),
-            (row + 1 < image.height()).then_some(p + w),
-        ]
-        .into_iter()
-        .flatten()
+        while below < members.len() && members[below] < p + w {
+            below += 1;
+        }
+        let right = col + 1 < w && members.get(k + 1) == Some(&(p + 1));
+        let down = row + 1 < image.height() && members.get(below) == Some(&(p + w));
+        for q in [right.then_some(p + 1), down.then_some(p + w)]
+            .into_iter()
+            .flatten()
         {
-            if members.binary_search(&q).is_ok() {
-                let (df, dg) = (f.data()[q] - f.data()[p], g.data()[q] - g.data()[p]);
-                smoothness += 0.25 * (df * df + dg * dg);
-            }
+            let (df, dg) = (f.data()[q] - f.data()[p], g.data()[q] - g.data()[p]);
+            smoothness += 0.25 * (df * df + dg * dg);
         }
     }
     TokenReading {

@@ -360,6 +360,22 @@ pub fn write_rgb_fn(
     write_values(path, (width, height), values, depth, gamma, colors)
 }
 
+/// [`write_gray`] of the `width` × `height` picture whose value at (column, row) is
+/// `value(column, row)`, without building it: the same bytes as `write_gray` of
+/// `Grid::from_fn(width, height, value)`.
+pub fn write_gray_fn(
+    path: &Path,
+    (width, height): (usize, usize),
+    depth: BitDepth,
+    gamma: Option<f64>,
+    value: impl Fn(usize, usize) -> f64,
+) -> Result<()> {
+    let value = &value;
+    let values = (0..height).flat_map(|r| (0..width).map(move |c| value(c, r)));
+    let colors = (ExtendedColorType::L8, ExtendedColorType::L16);
+    write_values(path, (width, height), values, depth, gamma, colors)
+}
+
 /// A pixel of linear values: one channel (gray) or three (RGB).
 trait Channels {
     /// The pixel's channels, in PNG order.
@@ -490,6 +506,28 @@ mod tests {
         let (y, info) = read_gray(&d.join("c.png"), DEFAULT_MAX_PIXELS).unwrap();
         assert!((y.get(0, 0) - 0.2126).abs() < 1e-6);
         assert!(info.conversion.unwrap().contains("0.2126"));
+    }
+
+    #[test]
+    fn the_writers_from_a_function_write_the_grids_bytes() {
+        let d = scratch("fn");
+        let gray = |c: usize, r: usize| (c * 7 + r * 3) as f64 / 40.0 - 0.1;
+        let rgb = |c: usize, r: usize| [gray(c, r), 0.5, 1.0 - gray(c, r)];
+        for depth in [BitDepth::Eight, BitDepth::Sixteen] {
+            write_gray(
+                &d.join("g.png"),
+                &Grid::from_fn(5, 3, gray),
+                depth,
+                Some(2.2),
+            )
+            .unwrap();
+            write_gray_fn(&d.join("gf.png"), (5, 3), depth, Some(2.2), gray).unwrap();
+            write_rgb(&d.join("c.png"), &Grid::from_fn(5, 3, rgb), depth, None).unwrap();
+            write_rgb_fn(&d.join("cf.png"), (5, 3), depth, None, rgb).unwrap();
+            let bytes = |n: &str| std::fs::read(d.join(n)).unwrap();
+            assert_eq!(bytes("g.png"), bytes("gf.png"));
+            assert_eq!(bytes("c.png"), bytes("cf.png"));
+        }
     }
 
     #[test]

@@ -492,11 +492,8 @@ pub fn run_image(
 pub fn run_into(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
     let started = Instant::now();
     let mut solved = solve_stage(config, progress)?;
-    let (normals, convergence) = crate::parallel::join(
-        || write_normals(dir, &solved.shape.solution),
-        || write_convergence(dir, &solved.shape, config.options.tol),
-    );
-    normals.and(convergence)?;
+    write_normals(dir, &solved.shape.solution)?;
+    write_convergence(dir, &solved.shape, config.options.tol)?;
     // (f, g) move into the integration; the empty grids left behind are never read again.
     let f = std::mem::replace(&mut solved.shape.solution.f, Grid::new(0, 0, 0.0));
     let g = std::mem::replace(&mut solved.shape.solution.g, Grid::new(0, 0, 0.0));
@@ -655,55 +652,56 @@ impl SolveRun {
     }
 }
 
-/// `normals.npy` and `normals.png`, written side by side from (f, g) without a grid of
-/// normals.
+/// `normals.npy` and `normals.png`, written from (f, g) without a grid of normals.
+///
+/// The files are written one after the other on the calling thread: written on worker
+/// threads, their buffers stayed in those threads' allocator arenas and raised the command's
+/// peak memory by a few megabytes (`docs/performance.md`).
 fn write_normals(dir: &Path, s: &crate::solver::Solution) -> Result<()> {
     let (w, h) = (s.f.width(), s.f.height());
-    let normals = || {
+    let normals =
         s.f.data()
             .iter()
             .zip(s.g.data())
-            .map(|(&f, &g)| normal_from_fg(f, g))
-    };
-    let (npy, png) = crate::parallel::join(
-        || {
-            let values = normals().flat_map(|n| [n.x, n.y, n.z]);
-            io::write_f32(&dir.join("normals.npy"), &[h, w, 3], values)
+            .map(|(&f, &g)| normal_from_fg(f, g));
+    let values = normals.flat_map(|n| [n.x, n.y, n.z]);
+    io::write_f32(&dir.join("normals.npy"), &[h, w, 3], values)?;
+    io::write_rgb_fn(
+        &dir.join("normals.png"),
+        (w, h),
+        BitDepth::Eight,
+        None,
+        |c, r| {
+            let n = s.normal(c, r);
+            [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
         },
-        || {
-            io::write_rgb_fn(
-                &dir.join("normals.png"),
-                (w, h),
-                BitDepth::Eight,
-                None,
-                |c, r| {
-                    let n = s.normal(c, r);
-                    [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
-                },
-            )
-        },
-    );
-    npy.and(png)
+    )
 }
 
-/// `depth.npy`, `depth.png` (scaled by the range) and `surface.obj`, the OBJ beside the two
-/// others.
+/// `depth.npy`, `depth.png` (scaled by the range, without a grid of the scaled values) and
+/// `surface.obj` (its text formatted on the worker threads, [`crate::integrate::write_mesh_obj`]).
 fn write_depth(dir: &Path, depth: &Depth, mask: &Mask) -> Result<()> {
     let (z, highest) = (&depth.depth, depth.range);
+    io::write_image(&dir.join("depth.npy"), z)?;
+    let size = (z.width(), z.height());
+    io::write_gray_fn(
+        &dir.join("depth.png"),
+        size,
+        BitDepth::Sixteen,
+        None,
+        |c, r| {
+            let v = *z.get(c, r);
+            if highest > 0.0 {
+                v / highest
+            } else {
+                0.0
+            }
+        },
+    )?;
     let obj = dir.join("surface.obj");
-    let (pictures, mesh) = crate::parallel::join(
-        || {
-            io::write_image(&dir.join("depth.npy"), z)?;
-            let picture = z.map(|v| if highest > 0.0 { v / highest } else { 0.0 });
-            io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)
-        },
-        || {
-            io::write_atomic(&obj, |out| {
-                crate::integrate::write_mesh_obj(z, mask, out, &obj)
-            })
-        },
-    );
-    pictures.and(mesh)
+    io::write_atomic(&obj, |out| {
+        crate::integrate::write_mesh_obj(z, mask, out, &obj)
+    })
 }
 
 /// `report.json`.
