@@ -1,8 +1,11 @@
 //! The prior sweep: one picture interpreted under each of a range of assumed light tilts.
 //!
-//! Every tilt is an independent solve, so the sweep runs them in parallel (rayon), each worker
-//! with its own [`Interpreter`], and collects the results in tilt order: the output does not
-//! depend on the number of threads. For each token the sweep reports where its convexity
+//! Under a flat or free boundary one solve serves every tilt: turning the light about the line
+//! of sight turns the solution with it ([`Interpreter::turns_with_light`]), so the sweep solves
+//! under the first tilt and turns that solution to each of the others; otherwise every tilt is
+//! an independent solve. Either way the per-tilt work runs in parallel (rayon), each worker
+//! with its own [`Interpreter`], and the results are collected in tilt order: the output does
+//! not depend on the number of threads. For each token the sweep reports where its convexity
 //! changes sign: the assumed tilts at which a bump becomes a dimple.
 
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
@@ -202,23 +205,41 @@ pub fn sweep(
     }
     lighting.validate()?;
     check_scene(scene)?;
-    // Plan once here so that a bad scene fails before any work, then clone per worker.
-    let first = Interpreter::new(scene, options)?;
-    drop(first);
-    let interpretations = tilts
-        .par_iter()
-        .map_init(
-            || Interpreter::new(scene, options),
-            |interpreter, &tilt| {
+    // Plan once here so that a bad scene fails before any work, then one per worker.
+    let mut first = Interpreter::new(scene, options)?;
+    let plan = || Interpreter::new(scene, options);
+    let planned = |e: &Error| Error::Compute(format!("cannot plan the solve: {e}"));
+    let interpretations = if Interpreter::turns_with_light(scene) {
+        // One solve serves every tilt: turned, it is the solve under each of them, to the
+        // solver's tolerance (see `Interpreter::turns_with_light` and `interpret_turned`).
+        // What is left per tilt, the integration and the readings, runs in parallel.
+        let shape = first.solve(scene, tilts[0], lighting)?;
+        drop(first);
+        tilts
+            .par_iter()
+            .map_init(plan, |interpreter, &tilt| {
                 let result = match interpreter {
-                    Ok(it) => it.interpret(scene, tilt, lighting),
-                    Err(e) => Err(Error::Compute(format!("cannot plan the solve: {e}"))),
+                    Ok(it) => it.interpret_turned(scene, &shape, tilts[0], tilt, lighting),
+                    Err(e) => Err(planned(e)),
                 };
                 progress();
                 result
-            },
-        )
-        .collect::<Result<Vec<_>>>()?;
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        drop(first);
+        tilts
+            .par_iter()
+            .map_init(plan, |interpreter, &tilt| {
+                let result = match interpreter {
+                    Ok(it) => it.interpret(scene, tilt, lighting),
+                    Err(e) => Err(planned(e)),
+                };
+                progress();
+                result
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
     Ok(Sweep {
         lighting: *lighting,
         tokens: scene

@@ -455,13 +455,27 @@ fn npy_header(descr: &str, shape: &[usize]) -> Result<Vec<u8>> {
 /// Writes float32 values of `shape` (C order) as a `.npy` file, atomically.
 pub fn write_f32(path: &Path, shape: &[usize], data: impl Iterator<Item = f64>) -> Result<()> {
     let header = npy_header("<f4", shape)?;
-    let values: Vec<u8> = data.flat_map(|v| (v as f32).to_le_bytes()).collect();
+    // Streamed through a small buffer: no copy of the whole array in memory.
     super::write_atomic(path, |out| {
         let io = |e| Error::io(path, e);
         out.write_all(&header).map_err(io)?;
-        out.write_all(&values).map_err(io)
+        let mut data = data.peekable();
+        let mut buffer = Vec::with_capacity(STREAM_BYTES);
+        while data.peek().is_some() {
+            buffer.clear();
+            buffer.extend(
+                data.by_ref()
+                    .take(STREAM_BYTES / 4)
+                    .flat_map(|v| (v as f32).to_le_bytes()),
+            );
+            out.write_all(&buffer).map_err(io)?;
+        }
+        Ok(())
     })
 }
+
+/// Bytes of values [`write_f32`] converts before handing them to the file.
+const STREAM_BYTES: usize = 1 << 16;
 
 /// The bytes of a float64 `.npy` array of `shape` (C order; `[]` for a scalar).
 pub fn encode_f64(shape: &[usize], data: &[f64]) -> Result<Vec<u8>> {

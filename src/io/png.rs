@@ -344,6 +344,38 @@ pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f
     write_encoded(path, image, depth, gamma, colors)
 }
 
+/// [`write_rgb`] of the `width` × `height` picture whose pixel at (column, row) is
+/// `pixel(column, row)`, without building it: the same bytes as `write_rgb` of
+/// `Grid::from_fn(width, height, pixel)`.
+pub fn write_rgb_fn(
+    path: &Path,
+    (width, height): (usize, usize),
+    depth: BitDepth,
+    gamma: Option<f64>,
+    pixel: impl Fn(usize, usize) -> [f64; 3],
+) -> Result<()> {
+    let pixel = &pixel;
+    let values = (0..height).flat_map(|r| (0..width).flat_map(move |c| pixel(c, r)));
+    let colors = (ExtendedColorType::Rgb8, ExtendedColorType::Rgb16);
+    write_values(path, (width, height), values, depth, gamma, colors)
+}
+
+/// [`write_gray`] of the `width` × `height` picture whose value at (column, row) is
+/// `value(column, row)`, without building it: the same bytes as `write_gray` of
+/// `Grid::from_fn(width, height, value)`.
+pub fn write_gray_fn(
+    path: &Path,
+    (width, height): (usize, usize),
+    depth: BitDepth,
+    gamma: Option<f64>,
+    value: impl Fn(usize, usize) -> f64,
+) -> Result<()> {
+    let value = &value;
+    let values = (0..height).flat_map(|r| (0..width).map(move |c| value(c, r)));
+    let colors = (ExtendedColorType::L8, ExtendedColorType::L16);
+    write_values(path, (width, height), values, depth, gamma, colors)
+}
+
 /// A pixel of linear values: one channel (gray) or three (RGB).
 trait Channels {
     /// The pixel's channels, in PNG order.
@@ -369,23 +401,38 @@ fn write_encoded<P: Channels>(
     image: &Grid<P>,
     depth: BitDepth,
     gamma: Option<f64>,
+    colors: (ExtendedColorType, ExtendedColorType),
+) -> Result<()> {
+    let values = image.data().iter().flat_map(Channels::channels).copied();
+    let size = (image.width(), image.height());
+    write_values(path, size, values, depth, gamma, colors)
+}
+
+/// Encodes `values` (channels interleaved, row-major, of a picture of `size` (width, height))
+/// at `depth`, optionally display-encoded with v^(1/gamma), and writes them as a PNG of
+/// `colors.0` (8-bit) or `colors.1` (16-bit).
+fn write_values(
+    path: &Path,
+    (width, height): (usize, usize),
+    values: impl Iterator<Item = f64>,
+    depth: BitDepth,
+    gamma: Option<f64>,
     (eight, sixteen): (ExtendedColorType, ExtendedColorType),
 ) -> Result<()> {
     check_gamma(gamma)?;
-    let values = image.data().iter().flat_map(Channels::channels);
     let (bytes, color): (Vec<u8>, _) = match depth {
         BitDepth::Eight => (
-            values.map(|&v| encode(v, gamma, 255.0) as u8).collect(),
+            values.map(|v| encode(v, gamma, 255.0) as u8).collect(),
             eight,
         ),
         BitDepth::Sixteen => (
             values
-                .flat_map(|&v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                .flat_map(|v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
                 .collect(),
             sixteen,
         ),
     };
-    write_png(path, image.width(), image.height(), &bytes, color)
+    write_png(path, width, height, &bytes, color)
 }
 
 /// Writes a label map: 8-bit when every label fits, else 16-bit; the codes are the labels.
@@ -459,6 +506,28 @@ mod tests {
         let (y, info) = read_gray(&d.join("c.png"), DEFAULT_MAX_PIXELS).unwrap();
         assert!((y.get(0, 0) - 0.2126).abs() < 1e-6);
         assert!(info.conversion.unwrap().contains("0.2126"));
+    }
+
+    #[test]
+    fn the_writers_from_a_function_write_the_grids_bytes() {
+        let d = scratch("fn");
+        let gray = |c: usize, r: usize| (c * 7 + r * 3) as f64 / 40.0 - 0.1;
+        let rgb = |c: usize, r: usize| [gray(c, r), 0.5, 1.0 - gray(c, r)];
+        for depth in [BitDepth::Eight, BitDepth::Sixteen] {
+            write_gray(
+                &d.join("g.png"),
+                &Grid::from_fn(5, 3, gray),
+                depth,
+                Some(2.2),
+            )
+            .unwrap();
+            write_gray_fn(&d.join("gf.png"), (5, 3), depth, Some(2.2), gray).unwrap();
+            write_rgb(&d.join("c.png"), &Grid::from_fn(5, 3, rgb), depth, None).unwrap();
+            write_rgb_fn(&d.join("cf.png"), (5, 3), depth, None, rgb).unwrap();
+            let bytes = |n: &str| std::fs::read(d.join(n)).unwrap();
+            assert_eq!(bytes("g.png"), bytes("gf.png"));
+            assert_eq!(bytes("c.png"), bytes("cf.png"));
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@
 use crate::albedo::AlbedoEstimate;
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
+use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
 use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::Light;
@@ -686,24 +687,52 @@ impl SolveRun {
     }
 }
 
-/// `normals.npy` and `normals.png`.
+/// `normals.npy` and `normals.png`, written from (f, g) without a grid of normals.
+///
+/// The files are written one after the other on the calling thread: written on worker
+/// threads, their buffers stayed in those threads' allocator arenas and raised the command's
+/// peak memory by a few megabytes (`docs/performance.md`).
 fn write_normals(dir: &Path, s: &crate::solver::Solution) -> Result<()> {
     let (w, h) = (s.f.width(), s.f.height());
-    io::write_normals(&dir.join("normals.npy"), &s.normals())?;
-    let picture = Grid::from_fn(w, h, |c, r| {
-        let n = s.normal(c, r);
-        [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
-    });
-    io::write_rgb(&dir.join("normals.png"), &picture, BitDepth::Eight, None)
+    let normals =
+        s.f.data()
+            .iter()
+            .zip(s.g.data())
+            .map(|(&f, &g)| normal_from_fg(f, g));
+    let values = normals.flat_map(|n| [n.x, n.y, n.z]);
+    io::write_f32(&dir.join("normals.npy"), &[h, w, 3], values)?;
+    io::write_rgb_fn(
+        &dir.join("normals.png"),
+        (w, h),
+        BitDepth::Eight,
+        None,
+        |c, r| {
+            let n = s.normal(c, r);
+            [0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5]
+        },
+    )
 }
 
-/// `depth.npy`, `depth.png` (scaled by the range) and `surface.obj`.
+/// `depth.npy`, `depth.png` (scaled by the range, without a grid of the scaled values) and
+/// `surface.obj` (its text formatted on the worker threads, [`crate::integrate::write_mesh_obj`]).
 fn write_depth(dir: &Path, depth: &Depth, mask: &Mask) -> Result<()> {
     let (z, highest) = (&depth.depth, depth.range);
     io::write_image(&dir.join("depth.npy"), z)?;
-    let picture = z.map(|v| if highest > 0.0 { v / highest } else { 0.0 });
-    io::write_gray(&dir.join("depth.png"), &picture, BitDepth::Sixteen, None)?;
-    drop(picture);
+    let size = (z.width(), z.height());
+    io::write_gray_fn(
+        &dir.join("depth.png"),
+        size,
+        BitDepth::Sixteen,
+        None,
+        |c, r| {
+            let v = *z.get(c, r);
+            if highest > 0.0 {
+                v / highest
+            } else {
+                0.0
+            }
+        },
+    )?;
     let obj = dir.join("surface.obj");
     io::write_atomic(&obj, |out| {
         crate::integrate::write_mesh_obj(z, mask, out, &obj)
