@@ -356,6 +356,8 @@ fn lambertian(tilt_deg: f64, lighting: &Lighting) -> Result<Lambertian> {
 ///     brightness_energy: 0.0,
 ///     last_update: 0.0,
 ///     unknowns: 2,
+///     globalised: false,
+///     energy_history: vec![],
 /// };
 /// let shape = Shape { solution, method: Method::Multigrid, fell_back: false, history: vec![], max_iter: 40 };
 /// let quarter = turned(&shape, 90.0); // (1, 0) turns to (0, 1)
@@ -380,6 +382,8 @@ pub fn turned(shape: &Shape, degrees: f64) -> Shape {
             brightness_energy: s.brightness_energy,
             last_update: s.last_update,
             unknowns: s.unknowns,
+            globalised: s.globalised,
+            energy_history: s.energy_history.clone(),
         },
         method: shape.method,
         fell_back: shape.fell_back,
