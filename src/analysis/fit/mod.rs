@@ -874,7 +874,8 @@ pub fn simulate(model: &ModelParams, rotations: &[f64], repeats: usize, seed: u6
 mod tests {
     use super::*;
 
-    fn design() -> Vec<f64> {
+    /// 24 rotations every 15°, the default design (shared with `profile`'s tests).
+    pub(super) fn design() -> Vec<f64> {
         (0..24).map(|i| 15.0 * i as f64).collect()
     }
 

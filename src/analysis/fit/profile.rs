@@ -212,12 +212,9 @@ pub(super) fn interval(
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::design;
     use super::super::{fit_point, simulate};
     use super::*;
-
-    fn design() -> Vec<f64> {
-        (0..24).map(|i| 15.0 * i as f64).collect()
-    }
 
     /// The deviance 2 (ℓ̂ − ℓₚ(v)) found by a many-start search over the other parameters,
     /// independent of the interval's warm-started walk.
