@@ -310,7 +310,7 @@ def solve(
     light: Any,
     mask: Any = None,
     boundary: str = "occluding",
-    albedo: Optional[float] = None,
+    albedo: Union[float, str, None] = None,
     lam: float = 1.0,
     method: str = "multigrid",
     tol: float = 1e-6,
@@ -322,7 +322,10 @@ def solve(
     ``"estimate"`` (estimated from the image with the albedo). ``mask``: nonzero = the object
     (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free`` or the path of
     an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
-    estimated. ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``), ``tol`` and
+    estimated; or ``"estimate"``: the library's albedo rule (the 95th percentile of the
+    brightness on the mask, as ``solve --albedo estimate`` and ``eval``), so the answer does not
+    depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives it.
+    ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``), ``tol`` and
     ``max_iter`` are the solver's settings.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
@@ -337,12 +340,16 @@ def solve(
         if m.ndim != 2:
             raise ValueError(f"mask: expected a 2-D H×W array, found shape {m.shape}")
         inside = m != 0
+    estimate = isinstance(albedo, str)
+    if estimate and albedo != "estimate":
+        raise ValueError(f"albedo: {albedo!r} is neither a number nor 'estimate'")
     normals, depth, f, g, report_json = _shadelab.solve(
         img,
         inside,
         _light_text(light),
         str(boundary),
-        None if albedo is None else float(albedo),
+        None if albedo is None or estimate else float(albedo),
+        estimate,
         float(lam),
         str(method),
         float(tol),

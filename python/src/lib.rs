@@ -222,7 +222,7 @@ fn render<'py>(
 
 /// Solves an image for shape: (normals, depth, f, g, report JSON).
 #[pyfunction]
-#[pyo3(signature = (image, mask, light, boundary, albedo, lam, method, tol, max_iter))]
+#[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn solve<'py>(
     py: Python<'py>,
@@ -231,6 +231,7 @@ fn solve<'py>(
     light: &str,
     boundary: &str,
     albedo: Option<f64>,
+    albedo_estimate: bool,
     lam: f64,
     method: &str,
     tol: f64,
@@ -256,6 +257,7 @@ fn solve<'py>(
         pl::solve::SolveConfig::new(shadelab::pipeline::source::IN_MEMORY, light_choice);
     config.boundary = boundary.parse().map_err(to_py)?;
     config.albedo = albedo;
+    config.albedo_estimate = albedo_estimate;
     config.options =
         shadelab::ReconstructOptions::from_solve(&options, shadelab::NonConvergence::Report);
     config.record = pl::solve::SolveRecord {
