@@ -36,6 +36,19 @@ pub(super) enum Parameter {
     Lapse,
 }
 
+impl Parameter {
+    /// The parameter's value in `p` on the scale its profile is searched on: degrees for μ,
+    /// logit π (within the search's bound) for π, κ and λ as they are.
+    fn searched(self, p: &ModelParams) -> f64 {
+        match self {
+            Parameter::Tilt => p.tilt_deg,
+            Parameter::Kappa => p.kappa,
+            Parameter::Convexity => logit(p.convexity_prior).clamp(-BIAS_MAX, BIAS_MAX),
+            Parameter::Lapse => p.lapse,
+        }
+    }
+}
+
 /// The von Mises model's negative log-likelihood as a function of the parameters other than
 /// one held fixed.
 struct Profile<'a> {
@@ -56,7 +69,7 @@ impl Profile<'_> {
     /// The free coordinates at `params` (the fixed parameter left out).
     fn free_of(&self, p: &ModelParams) -> Vec<f64> {
         let mu = p.tilt_deg.to_radians();
-        let b0 = logit(p.convexity_prior).clamp(-BIAS_MAX, BIAS_MAX);
+        let b0 = Parameter::Convexity.searched(p);
         let u = self
             .lapse
             .is_none()
@@ -139,24 +152,12 @@ pub(super) fn interval(
 ) -> [f64; 2] {
     let profile = Profile { data, lapse, which };
     // The parameter on the scale it is searched on, with its bounds.
-    let (centre, lo_bound, hi_bound, first_step) = match which {
-        Parameter::Tilt => (
-            fitted.tilt_deg,
-            fitted.tilt_deg - 180.0,
-            fitted.tilt_deg + 180.0,
-            5.0,
-        ),
-        Parameter::Kappa => (
-            fitted.kappa,
-            0.0,
-            KAPPA_MAX,
-            0.1_f64.max(0.1 * fitted.kappa),
-        ),
-        Parameter::Convexity => {
-            let b0 = logit(fitted.convexity_prior).clamp(-BIAS_MAX, BIAS_MAX);
-            (b0, -BIAS_MAX, BIAS_MAX, 0.1)
-        }
-        Parameter::Lapse => (fitted.lapse, 0.0, LAPSE_MAX, 0.01),
+    let centre = which.searched(fitted);
+    let (lo_bound, hi_bound, first_step) = match which {
+        Parameter::Tilt => (centre - 180.0, centre + 180.0, 5.0),
+        Parameter::Kappa => (0.0, KAPPA_MAX, 0.1_f64.max(0.1 * centre)),
+        Parameter::Convexity => (-BIAS_MAX, BIAS_MAX, 0.1),
+        Parameter::Lapse => (0.0, LAPSE_MAX, 0.01),
     };
     let start = profile.free_of(fitted);
     let (start, mut best) = profile.minimise(centre, &start);
@@ -225,15 +226,7 @@ mod tests {
             which,
         };
         let ll_hat = -profile
-            .minimise(
-                match which {
-                    Parameter::Tilt => fitted.tilt_deg,
-                    Parameter::Kappa => fitted.kappa,
-                    Parameter::Convexity => logit(fitted.convexity_prior),
-                    Parameter::Lapse => fitted.lapse,
-                },
-                &profile.free_of(fitted),
-            )
+            .minimise(which.searched(fitted), &profile.free_of(fitted))
             .1;
         let mut best = f64::INFINITY;
         for k in 0..8 {
