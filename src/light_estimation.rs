@@ -447,36 +447,18 @@ fn band_rays(image: &Image, mask: &Mask, rho: f64) -> Vec<Ray> {
     rays
 }
 
-/// A least-squares fit I = g·n over the kept rays' samples: g = ρ·s, its covariance, the
-/// root mean square residual and the number of samples.
-fn fit_band(rays: &[Ray], keep: &[bool]) -> Option<(Vector3<f64>, Matrix3<f64>, f64, usize)> {
-    let mut ata = Matrix3::zeros();
-    let mut atb = Vector3::zeros();
-    let mut count = 0usize;
-    for ray in rays.iter().zip(keep).filter(|(_, &k)| k).map(|(r, _)| r) {
-        for &(d, v) in &ray.samples {
-            let x = ray.normal_at(d, ray.radius);
-            ata += x * x.transpose();
-            atb += x * v;
-            count += 1;
-        }
-    }
-    let inverse = ata.try_inverse()?;
-    let g = inverse * atb;
-    let rss: f64 = rays
-        .iter()
-        .zip(keep)
-        .filter(|(_, &k)| k)
-        .flat_map(|(r, _)| r.samples.iter().map(move |&(d, v)| (r, d, v)))
-        .map(|(r, d, v)| (v - g.dot(&r.normal_at(d, r.radius))).powi(2))
-        .sum();
-    let variance = rss / (count.saturating_sub(3).max(1)) as f64;
-    Some((
-        g,
-        inverse * variance,
-        (rss / count.max(1) as f64).sqrt(),
-        count,
-    ))
+/// The least-squares fit I = g·n over the kept rays' samples (g = ρ·s).
+fn fit_band(rays: &[Ray], keep: &[bool]) -> Option<LinearFit> {
+    least_squares(
+        rays.iter()
+            .zip(keep)
+            .filter(|(_, &k)| k)
+            .flat_map(|(r, _)| {
+                r.samples
+                    .iter()
+                    .map(move |&(d, v)| (r.normal_at(d, r.radius), v))
+            }),
+    )
 }
 
 /// The limb band fit, or `None` where the limb is too short or too straight for it or the
@@ -508,7 +490,7 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
             }
             let mut best = (f64::INFINITY, ray.radius);
             for radius in BAND_RADII {
-                let e = ray.misfit(&f.0, radius);
+                let e = ray.misfit(&f.coef, radius);
                 if e < best.0 {
                     best = (e, radius);
                 }
@@ -529,9 +511,16 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
         keep = misfits.iter().map(|&e| e <= TRIM_SIGMAS * scale).collect();
         fit = Some(f);
     }
-    let Some((g, cov, rms, _)) = fit else {
+    let Some(LinearFit {
+        coef: g,
+        cov,
+        rss,
+        count,
+    }) = fit
+    else {
         return Ok(None);
     };
+    let rms = (rss / count.max(1) as f64).sqrt();
     let kept = rays
         .iter()
         .zip(&keep)
@@ -625,44 +614,56 @@ fn spans_two_directions(samples: &[[f64; 3]]) -> bool {
     smaller >= 1e-4
 }
 
-/// A least-squares fit I = a·n_x + b·n_y + c.
-struct LimbFit {
-    /// (a, b, c).
+/// A least-squares fit y = coef·x.
+struct LinearFit {
+    /// The coefficients: (a, b, c) of the rim fit, g = ρ·s of the band fit.
     coef: Vector3<f64>,
     /// Their covariance.
     cov: Matrix3<f64>,
+    /// The residual sum of squares.
+    rss: f64,
+    /// The rows fitted.
+    count: usize,
 }
 
-impl LimbFit {
+impl LinearFit {
     fn predict(&self, s: &[f64; 3]) -> f64 {
         self.coef[0] * s[0] + self.coef[1] * s[1] + self.coef[2]
     }
 }
 
-/// Fits the kept samples; `None` when they leave the fit undetermined.
-fn fit_limb(samples: &[[f64; 3]], keep: &[bool]) -> Option<LimbFit> {
+/// Least squares y = coef·x over the rows (x, y); `None` when they leave it undetermined.
+fn least_squares(rows: impl Iterator<Item = (Vector3<f64>, f64)> + Clone) -> Option<LinearFit> {
     let mut ata = Matrix3::zeros();
     let mut atb = Vector3::zeros();
     let mut count = 0usize;
-    for (s, _) in samples.iter().zip(keep).filter(|(_, &k)| k) {
-        let x = Vector3::new(s[0], s[1], 1.0);
+    for (x, y) in rows.clone() {
         ata += x * x.transpose();
-        atb += x * s[2];
+        atb += x * y;
         count += 1;
     }
     let inverse = ata.try_inverse()?;
     let coef = inverse * atb;
-    let rss: f64 = samples
-        .iter()
-        .zip(keep)
-        .filter(|(_, &k)| k)
-        .map(|(s, _)| (s[2] - coef[0] * s[0] - coef[1] * s[1] - coef[2]).powi(2))
-        .sum();
+    let rss: f64 = rows.map(|(x, y)| (y - coef.dot(&x)).powi(2)).sum();
     let variance = rss / (count.saturating_sub(3).max(1)) as f64;
-    Some(LimbFit {
+    Some(LinearFit {
         coef,
         cov: inverse * variance,
+        rss,
+        count,
     })
+}
+
+/// The rim fit I = a·n_x + b·n_y + c over the kept samples (n_x, n_y, I); `None` when they
+/// leave it undetermined.
+fn fit_limb(samples: &[[f64; 3]], keep: &[bool]) -> Option<LinearFit> {
+    least_squares(
+        samples
+            .iter()
+            .zip(keep)
+            .filter(|(_, &k)| k)
+            .map(|(s, _)| (Vector3::new(s[0], s[1], 1.0), s[2])),
+    )
 }
 
 /// The mean of the unit image gradients.
