@@ -278,3 +278,36 @@ fn the_hollow_mask_reads_the_same_in_the_default_7_by_9_degree_frame() {
 fn the_hollow_mask_reads_the_same_in_a_12_by_14_degree_frame() {
     hollow_mask_reads_the_same(12.0, 14.0);
 }
+
+/// The default domain is the targets only where they are objects on a backdrop: a rendered
+/// object (and the hollow mask, above), not a relief on a panel, whose targets are regions of
+/// one surface; targets given by the caller say nothing of a backdrop.
+#[test]
+fn the_default_domain_is_the_targets_of_an_object_on_a_backdrop_only() {
+    let load = |name: &str, labels: Option<shadelab::grid::Labels>| {
+        let source = PictureSource {
+            stimulus: Some(name.into()),
+            ppd: Some(8.0),
+            labels,
+            max_pixels: 1 << 24,
+            ..Default::default()
+        };
+        perception::Config::new(source).load().unwrap()
+    };
+    for (name, used) in [
+        ("sphere", "tokens"),
+        ("vase", "tokens"),
+        ("bumps", "image"),
+        ("crater", "image"),
+    ] {
+        let setup = load(name, None);
+        assert_eq!(setup.parameters.domain, used, "{name}");
+        let whole = setup.domain.data().iter().all(|&m| m);
+        assert_eq!(whole, used == "image", "{name}");
+    }
+    let sphere = load("sphere", None);
+    let (w, h) = (sphere.domain.width(), sphere.domain.height());
+    let given = load("sphere", Some(sphere.domain.map(|&m| u16::from(m))));
+    assert_eq!(given.parameters.domain, "image");
+    assert_eq!(given.domain.count(), w * h);
+}
