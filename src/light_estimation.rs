@@ -1,9 +1,30 @@
 //! Estimating the light direction and albedo from a single image of a Lambertian surface.
 //!
-//! Two estimators, and [`estimate_light_with`] picks one by what the picture's outline is:
+//! Three estimators, and [`estimate_light_with`] picks one by what the picture's outline is
+//! and how well each model explains the picture:
 //!
-//! **At the limb** ([`EstimateMethod::Limb`], where the mask's outline is an occluding contour,
-//! as for a rendered object against its background). On the limb the surface turns away from
+//! **In a band inside the limb** ([`EstimateMethod::LimbBand`], where the mask's outline is an
+//! occluding contour, as for a rendered object against its background). At the limb the normal
+//! is edge-on, in the image plane and pointing out of the silhouette; a few pixels inward it has
+//! turned toward the viewer by an amount that depends on how sharply the surface curves there.
+//! Each limb pixel casts a ray inward along its normal and samples the brightness at 0, 1, 2
+//! and 3 pixels (bilinear, inside the mask, lit pixels only); along the ray the surface is taken
+//! as a circular cross-section of radius R, so that at a distance d from the contour the normal
+//! is (q·n_x, q·n_y, √(1 − q²)) with q = 1 − d/R. The limb pixel's centre lies half a step
+//! inside the contour (d = ½·max(|n_x|, |n_y|) for the ray's first sample). The fit alternates:
+//! given every ray's R, a least-squares fit I = g·n over all samples gives g = ρ·s, the scaled
+//! light; given g, each ray takes the R (1.5 to 128 pixels) that fits its samples best. R starts
+//! at half the chord across the mask along the ray (exact for a sphere and a surface of
+//! revolution seen side-on). Rays that stay more than 2.5 robust standard deviations off are
+//! left out (a cut in the outline, not a limb). The tilt is atan2(−g_x, g_y), the slant
+//! atan2(|g_xy|, g_z): the band's z components carry the slant, with no constant to absorb it.
+//! The model is checked: where the root mean square residual exceeds [`MAX_BAND_RESIDUAL`] of
+//! the albedo (a coarse mesh whose interpolated normals are not edge-on at the silhouette, an
+//! outline that is mostly cuts), the rim fit runs instead. The albedo is the brightest pixel;
+//! the standard errors are the fit's.
+//!
+//! **At the limb** ([`EstimateMethod::Limb`], the rim fit, where the band's model fails). On
+//! the limb the surface turns away from
 //! the viewer, so its normal is known: in the image plane, pointing out of the silhouette
 //! (n_z = 0, the direction of [`crate::boundary::occluding_normals`]). There the brightness is
 //! I = ρ·(n·s) = ρ·sin σ·(n_x·l_x + n_y·l_y), with l = (−sin τ, cos τ) the light's image-plane
@@ -57,6 +78,11 @@ pub enum EstimateMethod {
     /// the brightness moments.
     #[serde(rename = "moments")]
     Moments,
+    /// The limb band fit: the light from the brightness in a band a few pixels wide inside the
+    /// occluding contour, with normals extrapolated inward from the limb (see the module
+    /// documentation); the albedo from the brightest pixel.
+    #[serde(rename = "limb-band")]
+    LimbBand,
     /// The limb's tilt with the moments' slant and albedo, where the limb leaves the slant
     /// uncertain (a standard error above [`MAX_LIMB_SLANT_SE_DEG`]: one side of the object lit,
     /// whose rim normals barely vary). The standard errors are the limb fit's.
@@ -69,6 +95,7 @@ impl EstimateMethod {
     pub fn name(self) -> &'static str {
         match self {
             EstimateMethod::Limb => "limb",
+            EstimateMethod::LimbBand => "limb-band",
             EstimateMethod::Moments => "moments",
             EstimateMethod::LimbAndMoments => "limb+moments",
         }
@@ -122,6 +149,23 @@ pub const MAX_LIMB_SLANT_SE_DEG: f64 = 3.0;
 /// The fewest lit limb pixels the limb fit uses; with fewer the moments run.
 pub const MIN_LIMB_PIXELS: usize = 16;
 
+/// The limb band fit is used where the root mean square of its residuals is at most this
+/// fraction of the albedo (its model, circular cross-sections edge-on at the contour, then
+/// explains the band); otherwise the rim fit ([`EstimateMethod::Limb`]) runs.
+pub const MAX_BAND_RESIDUAL: f64 = 0.03;
+
+/// The band's samples along each limb pixel's inward normal, pixels from the limb pixel.
+const BAND_STEPS: [f64; 4] = [0.0, 1.0, 2.0, 3.0];
+
+/// The cross-section radii (pixels) the band fit chooses from, per limb pixel.
+const BAND_RADII: [f64; 18] = [
+    1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 24.0, 32.0, 40.0, 48.0, 64.0, 96.0,
+    128.0,
+];
+
+/// Rounds of the band fit (the light given the radii, the radii given the light).
+const BAND_ROUNDS: usize = 6;
+
 /// Limb pixels no brighter than this fraction of the brightest pixel count as unlit.
 const LIT_FRACTION: f64 = 0.02;
 
@@ -139,9 +183,10 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
     estimate_light_with(image, mask, Outline::Unknown)
 }
 
-/// Estimates the light and albedo from `image` on `mask`, by the limb where `outline` says the
-/// mask's outline is occluding and at least [`MIN_LIMB_PIXELS`] limb pixels are lit with
-/// normals in more than one direction, else by the moments (see the module documentation).
+/// Estimates the light and albedo from `image` on `mask`: where `outline` says the mask's
+/// outline is occluding and at least [`MIN_LIMB_PIXELS`] limb pixels are lit with normals in
+/// more than one direction, by the limb band when its model explains the band, else by the rim
+/// fit; without such a limb, by the moments (see the module documentation).
 ///
 /// ```
 /// use shadelab::light::Light;
@@ -155,13 +200,16 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
 /// let map = Lambertian { light, albedo: 0.8, ambient: 0.0 };
 /// let image = render(&s, &map, &RenderOptions::default()).image;
 /// let e = estimate_light_with(&image, &s.mask, Outline::Occluding).unwrap();
-/// assert_eq!(e.method, EstimateMethod::Limb);
-/// assert!((e.tilt_deg - 30.0).abs() < 3.0 && (e.slant_deg - 35.0).abs() < 3.0);
+/// assert_eq!(e.method, EstimateMethod::LimbBand);
+/// assert!((e.tilt_deg - 30.0).abs() < 2.0 && (e.slant_deg - 35.0).abs() < 2.0);
 /// ```
 pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Result<LightEstimate> {
     check_inputs(image, mask)?;
     let moments = moments_estimate(image, mask)?;
     if outline == Outline::Occluding {
+        if let Some(e) = band_estimate(image, mask)? {
+            return Ok(e);
+        }
         if let Some(e) = limb_estimate(image, mask)? {
             if e.slant_se_deg.is_some_and(|se| se > MAX_LIMB_SLANT_SE_DEG) {
                 // The limb's tilt, the interior's slant and albedo.
@@ -301,6 +349,231 @@ fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     }))
 }
 
+/// One limb pixel's ray into the band.
+struct Ray {
+    /// The outward normal in the image plane (world x, y).
+    normal: [f64; 2],
+    /// The lit samples along the inward normal: (distance from the contour, brightness).
+    samples: Vec<(f64, f64)>,
+    /// The cross-section radius, pixels (first half the chord, then fitted).
+    radius: f64,
+}
+
+impl Ray {
+    /// The surface normal at `distance` inside the contour of a circular cross-section of
+    /// radius `radius`: edge-on at the contour, turning toward the viewer inward.
+    fn normal_at(&self, distance: f64, radius: f64) -> Vector3<f64> {
+        let q = (1.0 - distance / radius).clamp(0.0, 1.0);
+        Vector3::new(
+            q * self.normal[0],
+            q * self.normal[1],
+            (1.0 - q * q).max(0.0).sqrt(),
+        )
+    }
+
+    /// The mean squared residual of the samples under the scaled light `g` with `radius`.
+    fn misfit(&self, g: &Vector3<f64>, radius: f64) -> f64 {
+        let sum: f64 = self
+            .samples
+            .iter()
+            .map(|&(d, v)| (v - g.dot(&self.normal_at(d, radius))).powi(2))
+            .sum();
+        sum / self.samples.len().max(1) as f64
+    }
+}
+
+/// Bilinear interpolation of `image` at pixel coordinates (`col`, `row`), where the four
+/// pixels around it are in the mask.
+fn sample_inside(image: &Image, mask: &Mask, col: f64, row: f64) -> Option<f64> {
+    let (c0, r0) = (col.floor(), row.floor());
+    let (fc, fr) = (col - c0, row - r0);
+    let (c, r) = (c0 as isize, r0 as isize);
+    let mut value = 0.0;
+    for (dc, dr, weight) in [
+        (0, 0, (1.0 - fc) * (1.0 - fr)),
+        (1, 0, fc * (1.0 - fr)),
+        (0, 1, (1.0 - fc) * fr),
+        (1, 1, fc * fr),
+    ] {
+        if mask.checked(c + dc, r + dr) != Some(&true) {
+            return None;
+        }
+        value += weight * image.get((c + dc) as usize, (r + dr) as usize);
+    }
+    Some(value)
+}
+
+/// The rays of the band: for each limb pixel, its lit samples at [`BAND_STEPS`] along the
+/// inward normal, and half the chord across the mask along it.
+fn band_rays(image: &Image, mask: &Mask, rho: f64) -> Vec<Ray> {
+    let normals = occluding_normals(mask);
+    let w = mask.width();
+    let limit = (w + mask.height()) as f64;
+    let mut rays = Vec::new();
+    for (index, n) in normals.data().iter().enumerate() {
+        let Some(n) = n else { continue };
+        let (col, row) = ((index % w) as f64, (index / w) as f64);
+        // One step inward is (−n_x, +n_y) in (column, row): world y points up.
+        let at = |t: f64| (col - n.x * t, row + n.y * t);
+        let mut chord = 0.0;
+        while chord < limit {
+            let (c, r) = at(chord + 1.0);
+            if mask.checked(c.round() as isize, r.round() as isize) != Some(&true) {
+                break;
+            }
+            chord += 1.0;
+        }
+        // The pixel's centre lies inside the contour by half a step on average.
+        let offset = 0.5 * n.x.abs().max(n.y.abs());
+        let mut samples = Vec::new();
+        for t in BAND_STEPS {
+            let value = if t == 0.0 {
+                Some(image.data()[index])
+            } else {
+                let (c, r) = at(t);
+                sample_inside(image, mask, c, r)
+            };
+            let Some(v) = value else { break };
+            if v > LIT_FRACTION * rho {
+                samples.push((offset + t, v));
+            }
+        }
+        rays.push(Ray {
+            normal: [n.x, n.y],
+            samples,
+            radius: (0.5 * (chord + 1.0)).max(1.0),
+        });
+    }
+    rays
+}
+
+/// The least-squares fit I = g·n over the kept rays' samples (g = ρ·s).
+fn fit_band(rays: &[Ray], keep: &[bool]) -> Option<LinearFit> {
+    least_squares(
+        rays.iter()
+            .zip(keep)
+            .filter(|(_, &k)| k)
+            .flat_map(|(r, _)| {
+                r.samples
+                    .iter()
+                    .map(move |&(d, v)| (r.normal_at(d, r.radius), v))
+            }),
+    )
+}
+
+/// The limb band fit, or `None` where the limb is too short or too straight for it or the
+/// band's model does not explain the band (residuals above [`MAX_BAND_RESIDUAL`]).
+fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
+    let rho = brightest(image, mask)?;
+    let mut rays = band_rays(image, mask, rho);
+    let directions: Vec<[f64; 3]> = rays
+        .iter()
+        .filter(|r| !r.samples.is_empty())
+        .map(|r| [r.normal[0], r.normal[1], 0.0])
+        .collect();
+    if directions.len() < MIN_LIMB_PIXELS || !spans_two_directions(&directions) {
+        return Ok(None);
+    }
+    let mut keep = vec![true; rays.len()];
+    let mut fit = None;
+    for _ in 0..BAND_ROUNDS {
+        let Some(f) = fit_band(&rays, &keep) else {
+            return Ok(None);
+        };
+        // Each ray's radius given the light, and how well it then fits.
+        let mut misfits = Vec::with_capacity(rays.len());
+        for ray in &mut rays {
+            if ray.samples.is_empty() {
+                // In the attached shadow: nothing to fit.
+                misfits.push(0.0);
+                continue;
+            }
+            let mut best = (f64::INFINITY, ray.radius);
+            for radius in BAND_RADII {
+                let e = ray.misfit(&f.coef, radius);
+                if e < best.0 {
+                    best = (e, radius);
+                }
+            }
+            ray.radius = best.1;
+            misfits.push(best.0.sqrt());
+        }
+        // The scale from the rays that have samples.
+        let mut sorted: Vec<f64> = misfits
+            .iter()
+            .zip(&rays)
+            .filter(|(_, r)| !r.samples.is_empty())
+            .map(|(&e, _)| e)
+            .collect();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+        let scale = (1.4826 * median).max(1e-3 * rho);
+        keep = misfits.iter().map(|&e| e <= TRIM_SIGMAS * scale).collect();
+        fit = Some(f);
+    }
+    let Some(LinearFit {
+        coef: g,
+        cov,
+        rss,
+        count,
+    }) = fit
+    else {
+        return Ok(None);
+    };
+    let rms = (rss / count.max(1) as f64).sqrt();
+    let kept = rays
+        .iter()
+        .zip(&keep)
+        .filter(|(r, &k)| k && !r.samples.is_empty())
+        .count();
+    if rms > MAX_BAND_RESIDUAL * rho || kept < MIN_LIMB_PIXELS || g.norm() <= 0.0 {
+        return Ok(None);
+    }
+    let across_plane = g[0].hypot(g[1]);
+    let tilt_deg = if across_plane > 0.0 {
+        (-g[0]).atan2(g[1]).to_degrees()
+    } else {
+        0.0
+    };
+    let slant_deg = across_plane
+        .atan2(g[2])
+        .to_degrees()
+        .min(MAX_ESTIMATED_SLANT_DEG);
+    // Standard errors: the tilt's from the variance of g across the light's image-plane
+    // direction, the slant's from the variances of |g_xy| and g_z (linearised).
+    let (ua, ub) = if across_plane > 0.0 {
+        (g[0] / across_plane, g[1] / across_plane)
+    } else {
+        (0.0, 1.0)
+    };
+    let quad =
+        |x: f64, y: f64| x * x * cov[(0, 0)] + 2.0 * x * y * cov[(0, 1)] + y * y * cov[(1, 1)];
+    let tilt_se_deg = if across_plane > 0.0 {
+        (quad(-ub, ua).max(0.0).sqrt() / across_plane)
+            .atan()
+            .to_degrees()
+    } else {
+        180.0
+    };
+    let norm2 = g.norm_squared();
+    let (jh, jz) = (g[2] / norm2, -across_plane / norm2);
+    let var_h = quad(ua, ub);
+    let cov_hz = ua * cov[(0, 2)] + ub * cov[(1, 2)];
+    let slant_var = jh * jh * var_h + 2.0 * jh * jz * cov_hz + jz * jz * cov[(2, 2)];
+    let slant_se_deg = slant_var.max(0.0).sqrt().to_degrees().min(90.0);
+    Ok(Some(LightEstimate {
+        light: Light::from_tilt_slant(tilt_deg, slant_deg)?,
+        tilt_deg,
+        slant_deg,
+        albedo: rho,
+        tilt_confidence: mean_unit_gradient(image, mask).length(),
+        method: EstimateMethod::LimbBand,
+        tilt_se_deg,
+        slant_se_deg: Some(slant_se_deg),
+        limb_pixels: kept,
+    }))
+}
+
 /// The slant σ (radians) from the limb fit's amplitude u = |(a, b)|/ρ and constant v = c/ρ.
 ///
 /// The rim pixels' centres lie inside the silhouette, where the normal has a small mean
@@ -341,44 +614,56 @@ fn spans_two_directions(samples: &[[f64; 3]]) -> bool {
     smaller >= 1e-4
 }
 
-/// A least-squares fit I = a·n_x + b·n_y + c.
-struct LimbFit {
-    /// (a, b, c).
+/// A least-squares fit y = coef·x.
+struct LinearFit {
+    /// The coefficients: (a, b, c) of the rim fit, g = ρ·s of the band fit.
     coef: Vector3<f64>,
     /// Their covariance.
     cov: Matrix3<f64>,
+    /// The residual sum of squares.
+    rss: f64,
+    /// The rows fitted.
+    count: usize,
 }
 
-impl LimbFit {
+impl LinearFit {
     fn predict(&self, s: &[f64; 3]) -> f64 {
         self.coef[0] * s[0] + self.coef[1] * s[1] + self.coef[2]
     }
 }
 
-/// Fits the kept samples; `None` when they leave the fit undetermined.
-fn fit_limb(samples: &[[f64; 3]], keep: &[bool]) -> Option<LimbFit> {
+/// Least squares y = coef·x over the rows (x, y); `None` when they leave it undetermined.
+fn least_squares(rows: impl Iterator<Item = (Vector3<f64>, f64)> + Clone) -> Option<LinearFit> {
     let mut ata = Matrix3::zeros();
     let mut atb = Vector3::zeros();
     let mut count = 0usize;
-    for (s, _) in samples.iter().zip(keep).filter(|(_, &k)| k) {
-        let x = Vector3::new(s[0], s[1], 1.0);
+    for (x, y) in rows.clone() {
         ata += x * x.transpose();
-        atb += x * s[2];
+        atb += x * y;
         count += 1;
     }
     let inverse = ata.try_inverse()?;
     let coef = inverse * atb;
-    let rss: f64 = samples
-        .iter()
-        .zip(keep)
-        .filter(|(_, &k)| k)
-        .map(|(s, _)| (s[2] - coef[0] * s[0] - coef[1] * s[1] - coef[2]).powi(2))
-        .sum();
+    let rss: f64 = rows.map(|(x, y)| (y - coef.dot(&x)).powi(2)).sum();
     let variance = rss / (count.saturating_sub(3).max(1)) as f64;
-    Some(LimbFit {
+    Some(LinearFit {
         coef,
         cov: inverse * variance,
+        rss,
+        count,
     })
+}
+
+/// The rim fit I = a·n_x + b·n_y + c over the kept samples (n_x, n_y, I); `None` when they
+/// leave it undetermined.
+fn fit_limb(samples: &[[f64; 3]], keep: &[bool]) -> Option<LinearFit> {
+    least_squares(
+        samples
+            .iter()
+            .zip(keep)
+            .filter(|(_, &k)| k)
+            .map(|(s, _)| (Vector3::new(s[0], s[1], 1.0), s[2])),
+    )
 }
 
 /// The mean of the unit image gradients.
@@ -574,6 +859,29 @@ mod tests {
                 assert!((got - slant).abs() < 1e-6, "{slant} {kappa}: {got}");
             }
         }
+    }
+
+    #[test]
+    fn the_band_refuses_a_picture_its_model_cannot_explain() {
+        // A disc of one grey: no surface lit by one light turns edge-on at its outline and
+        // stays as bright there as inside (residuals ≈ 30 % of the albedo).
+        let s = sphere(64, 64, 28.0).unwrap();
+        let image = s.mask.map(|&m| if m { 0.6 } else { 0.0 });
+        assert!(band_estimate(&image, &s.mask).unwrap().is_none());
+        let e = estimate_light_with(&image, &s.mask, Outline::Occluding).unwrap();
+        assert_eq!(e.method, EstimateMethod::Limb);
+        // The same disc shaded as a sphere is explained.
+        let light = Light::from_tilt_slant(-60.0, 50.0).unwrap();
+        let map = Lambertian {
+            light,
+            albedo: 0.7,
+            ambient: 0.0,
+        };
+        let shaded = render(&s, &map, &RenderOptions::default()).image;
+        let e = band_estimate(&shaded, &s.mask).unwrap().unwrap();
+        assert!(tilt_difference(e.tilt_deg, -60.0) < 1.0, "{e:?}");
+        assert!((e.slant_deg - 50.0).abs() < 1.5, "{e:?}");
+        assert!((e.albedo - 0.7).abs() < 0.01, "{e:?}");
     }
 
     #[test]

@@ -187,8 +187,9 @@ impl Lighting {
     /// The light `given`, or (with `None`) the one estimated from `image` on `mask`; the albedo
     /// `albedo`, or the estimate's when the light is estimated, or 1. With the occluding
     /// `boundary` the mask's outline is taken as the limb and the estimate fits the brightness
-    /// there ([`crate::light_estimation::EstimateMethod::Limb`], where the outline is long
-    /// enough); with any other, the interior statistics.
+    /// there ([`crate::light_estimation::EstimateMethod::LimbBand`] or
+    /// [`crate::light_estimation::EstimateMethod::Limb`], where the outline is long enough);
+    /// with any other, the interior statistics.
     ///
     /// Fails when the light is not strictly in front of the surface (z ≤ 0: a grazing or rear
     /// light leaves the shading without an answer) or the albedo is not a positive number.

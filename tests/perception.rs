@@ -2,8 +2,12 @@
 //! and the hollow mask read the same at any framing.
 
 use serde_json::{Map, Value};
+use shadelab::analysis::Domain;
 use shadelab::grid::{Image, Mask};
 use shadelab::light_estimation::{estimate_light_with, EstimateMethod, LightEstimate, Outline};
+use shadelab::pipeline::perception::{self, DomainSpec};
+use shadelab::pipeline::source::PictureSource;
+use shadelab::progress::NoProgress;
 use shadelab::stimulus;
 use shadelab::visual_size::SizeRequest;
 
@@ -62,7 +66,9 @@ fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)>
 /// by the limb and by the moments, printing the table (`--nocapture`).
 fn grid_errors(object: &str) -> [(f64, f64); 2] {
     let mut worst = [(0.0f64, 0.0f64); 2];
-    println!("{object}: tilt error, slant error (degrees) by the limb [moments]; rows slant, columns tilt");
+    println!(
+        "{object}: tilt error, slant error (degrees), method [moments]; rows slant, columns tilt"
+    );
     for (k, (tilt, slant, e, m)) in grid_estimates(object).into_iter().enumerate() {
         for (w, x) in worst.iter_mut().zip([&e, &m]) {
             if slant >= 15.0 {
@@ -74,9 +80,10 @@ fn grid_errors(object: &str) -> [(f64, f64); 2] {
             print!("  slant {slant:>2}:");
         }
         print!(
-            " {tilt:>3}: {:5.1} {:+5.1} [{:5.1} {:+5.1}] |",
+            " {tilt:>3}: {:5.1} {:+5.1} {:<12} [{:5.1} {:+5.1}] |",
             tilt_error(e.tilt_deg, tilt),
             e.slant_deg - slant,
+            e.method.name(),
             tilt_error(m.tilt_deg, tilt),
             m.slant_deg - slant
         );
@@ -89,47 +96,48 @@ fn grid_errors(object: &str) -> [(f64, f64); 2] {
 }
 
 /// The sphere meets the goal everywhere (tilt within 5° where the slant is at least 15°, slant
-/// within 5°); in fact within 1.2°.
+/// within 5°), by the limb band fit; in fact within 1°.
 #[test]
 fn the_limb_estimate_is_unbiased_on_the_sphere() {
     let [limb, moments] = grid_errors("sphere");
-    assert!(limb.0 < 0.5 && limb.1 < 1.5, "{limb:?}");
+    assert!(limb.0 < 0.5 && limb.1 < 1.0, "{limb:?}");
     // The moments were 22° off in slant at frontal light.
     assert!(moments.1 > 15.0, "{moments:?}");
-}
-
-/// The vase: the tilt within 5° except with the light from the lower or upper side at
-/// slants of 45° and more (the vase's cut rim, not a limb, is then a large part of the lit
-/// outline); the slant within 7°. Where one side only is lit (light from the side) the limb's
-/// normals barely vary and the rim's own light (the fit's constant) cannot be told from the
-/// light's sideways part: the limb's slant error is then large and the moments give the
-/// slant.
-#[test]
-fn the_limb_estimate_on_the_vase() {
-    let [limb, _] = grid_errors("vase");
-    assert!(limb.1 < 7.0, "{limb:?}");
-    for (tilt, slant, e, _) in grid_estimates("vase") {
-        assert_ne!(e.method, EstimateMethod::Moments);
-        if slant >= 15.0 && (slant <= 30.0 || tilt % 90.0 == 0.0) {
-            assert!(
-                tilt_error(e.tilt_deg, tilt) < 5.0,
-                "tilt {tilt} slant {slant}: {e:?}"
-            );
-        }
-        if e.method == EstimateMethod::LimbAndMoments {
-            assert!(e.slant_se_deg.unwrap() > 3.0);
+    for (tilt, slant, e, _) in grid_estimates("sphere") {
+        assert_eq!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
+        assert!(e.slant_se_deg.unwrap() < 1.0, "{e:?}");
+        if slant >= 15.0 {
+            assert!(e.tilt_se_deg < 1.0, "{e:?}");
         }
     }
 }
 
-/// The bunny (a mesh with interpolated normals, whose silhouette normals are not quite in the
-/// image plane): tilt within 5° from a slant of 30°, within 9° at 15°; the slant comes out
-/// up to 11° low.
+/// The vase meets the goal everywhere too (within 3.8°): the band's per-pixel cross-section radius follows
+/// the vase's narrow neck and wide belly, where the rim fit's one constant could not (it
+/// missed the tilt by 13° lit from the lower left at 45°, and the slant by up to 30° lit from
+/// the side).
+#[test]
+fn the_limb_estimate_is_unbiased_on_the_vase() {
+    let [limb, _] = grid_errors("vase");
+    assert!(limb.0 < 5.0 && limb.1 < 5.0, "{limb:?}");
+    for (tilt, slant, e, _) in grid_estimates("vase") {
+        // At frontal light the band's residuals (3.1 % of the albedo) just miss the check and
+        // the rim fit runs, within 0.3°.
+        let band = slant >= 15.0;
+        assert_eq!(e.method == EstimateMethod::LimbBand, band, "{tilt} {slant}");
+    }
+}
+
+/// The bunny (a coarse mesh with interpolated normals, whose silhouette normals are not edge-on
+/// and whose outline is partly a cut) is not explained by the band's model (residuals above
+/// 3 % of the albedo), so the rim fit runs: tilt within 5° from a slant of 30°, within 9° at
+/// 15°; the slant comes out up to 11° low. The goal is not met on the bunny.
 #[test]
 fn the_limb_estimate_on_the_bunny() {
     let [limb, moments] = grid_errors("bunny");
     assert!(limb.0 < 9.0 && limb.1 < 12.0, "{limb:?}");
     for (tilt, slant, e, _) in grid_estimates("bunny") {
+        assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         if slant >= 30.0 {
             assert!(
                 tilt_error(e.tilt_deg, tilt) < 5.0,
@@ -158,24 +166,13 @@ fn without_a_limb_the_moments_run() {
     let e = estimate_light_with(&image, &whole, Outline::Occluding).unwrap();
     assert_eq!(e.method, EstimateMethod::Moments, "the frame is no limb");
     let e = estimate_light_with(&image, &mask, Outline::Occluding).unwrap();
-    assert_eq!(e.method, EstimateMethod::Limb);
+    assert_eq!(e.method, EstimateMethod::LimbBand);
     assert!(e.limb_pixels >= 16 && e.tilt_se_deg < 5.0, "{e:?}");
 }
 
 mod hollow {
     use shadelab::analysis::observer::{observe, LightPrior, ObserverOptions};
-    use shadelab::analysis::{Domain, Picture, Sweep};
-
-    /// The hollow mask with `pairs`, `w`×`h` pixels at `ppd`.
-    pub fn picture(pairs: &[&str], size: (usize, usize), ppd: f64) -> Picture {
-        crate::analysis::picture("hollow-mask", pairs, size, ppd)
-    }
-
-    /// The face's interpretations under tilts every 30° (flat boundary, slant 45°).
-    pub fn sweep_of(p: &Picture, domain: Domain) -> Sweep {
-        let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
-        crate::analysis::interpretations(p, domain, &tilts).0
-    }
+    use shadelab::analysis::Sweep;
 
     /// (P(convex), P(light from above), most probable tilt) upright, with convexity bias `bias`.
     pub fn percept(s: &Sweep, bias: f64) -> (f64, f64, f64) {
@@ -191,38 +188,64 @@ mod hollow {
     }
 }
 
-/// The hollow face lit from above, framed `w`×`h` degrees (10 ppd, the face 5° wide) on each
-/// background (black, the default 0.1, mid grey): solved on the face's region (the background
-/// is no part of the surface), it is seen hollow without a familiar-shape prior (P(convex)
-/// < 0.1, the light from above) and convex lit from below with it (B = 7: P(convex) > 0.9,
-/// the most probable light at 180°), with the same numbers for every framing and background;
-/// solved over the whole picture, the background a surface too, the reading keeps its sign but
-/// weakens where the background is one no facing plane under the declared light could give.
-fn hollow_mask_reads_the_same(w: f64, h: f64) {
-    use shadelab::analysis::Domain;
+/// The hollow mask with `background`, framed `w`×`h` degrees at 10 ppd, as the perception
+/// pipeline loads it with `domain` (the default: [`DomainSpec::Auto`]), slant 45°.
+fn hollow_setup(w: f64, h: f64, background: &str, domain: DomainSpec) -> perception::Setup {
     let ppd = 10.0;
+    let source = PictureSource {
+        stimulus: Some("hollow-mask".into()),
+        params: shadelab::params::Params::parse_pairs(&[&format!("background={background}")])
+            .unwrap(),
+        ppd: Some(ppd),
+        max_pixels: 1 << 24,
+        ..Default::default()
+    };
+    let mut config = perception::Config::new(source);
+    config.size = Some(((h * ppd) as usize, (w * ppd) as usize));
+    config.domain = domain;
+    config.load().unwrap()
+}
+
+/// The hollow face lit from above (light from tilt 0°, slant 45°), framed `w`×`h` degrees
+/// (10 ppd, the face 5° wide) on each background (black, the default 0.1, mid grey). By
+/// default the perception pipeline solves it on the face's region (the backdrop is no part of
+/// the surface): seen hollow without a familiar-shape prior (P(convex) < 0.1, the light from
+/// above, the most probable light the true one, 0°) and convex lit from below with it (B = 7:
+/// P(convex) > 0.9, the most probable light at 180°, the true light's mirror), with the same
+/// numbers for every framing and background. Solved over the whole picture (`domain image`),
+/// the backdrop a surface too, the reading keeps its sign, but the backdrop pulls the most
+/// probable light up to 60° off the true one.
+fn hollow_mask_reads_the_same(w: f64, h: f64) {
+    let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
     let mut face_readings = Vec::new();
     for bg in ["0", "0.1", "0.5"] {
-        let size = ((w * ppd) as usize, (h * ppd) as usize);
-        let p = hollow::picture(&[&format!("background={bg}")], size, ppd);
-        for domain in [Domain::Tokens, Domain::Image] {
-            let s = hollow::sweep_of(&p, domain);
+        for domain in [DomainSpec::Auto, DomainSpec::Named(Domain::Image)] {
+            let setup = hollow_setup(w, h, bg, domain.clone());
+            let on_face = domain == DomainSpec::Auto;
+            // The default is the face's region, and the report says so.
+            let face = setup.picture.domain(Domain::Tokens);
+            assert_eq!(setup.domain == face, on_face, "{bg} {domain}");
+            let used = if on_face { "tokens" } else { "image" };
+            assert_eq!(setup.parameters.domain, used);
+            let s = setup.sweep(&tilts, &NoProgress, "sweep").unwrap();
             let above = s.interpretations[0].tokens[0].convexity;
             let below = s.interpretations[6].tokens[0].convexity;
             let plain = hollow::percept(&s, 0.0);
             let familiar = hollow::percept(&s, 7.0);
             println!(
-                "{w}x{h}° background {bg} domain {domain}: c above {above:+.4}, below {below:+.4}; \
+                "{w}x{h}° background {bg} domain {used}: c above {above:+.4}, below {below:+.4}; \
                  B = 0: P(convex) {:.3}, P(above) {:.3}, MAP {}°; B = 7: {:.3}, {:.3}, {}°",
                 plain.0, plain.1, plain.2, familiar.0, familiar.1, familiar.2
             );
-            assert!(above < -0.004 && below > 0.004, "{bg} {domain}");
+            assert!(above < -0.004 && below > 0.004, "{bg} {used}");
             assert!(
                 familiar.0 > 0.9 && familiar.1 < 0.1,
-                "{bg} {domain}: {familiar:?}"
+                "{bg} {used}: {familiar:?}"
             );
-            if domain == Domain::Tokens {
+            if on_face {
                 assert!(above < -0.01, "{bg}");
+                // The most probable light is the true one (0°) without the prior and its
+                // mirror (180°) with it, to the sweep's step.
                 assert!(
                     plain.0 < 0.1 && plain.1 > 0.9 && plain.2 == 0.0,
                     "{bg}: {plain:?}"
@@ -231,6 +254,7 @@ fn hollow_mask_reads_the_same(w: f64, h: f64) {
                 face_readings.push((plain.0, familiar.0));
             } else {
                 assert!(plain.0 < 0.2 && plain.1 > 0.8, "{bg}: {plain:?}");
+                assert!(tilt_error(plain.2, 0.0) <= 60.0, "{bg}: {plain:?}");
             }
         }
     }
@@ -253,4 +277,37 @@ fn the_hollow_mask_reads_the_same_in_the_default_7_by_9_degree_frame() {
 #[test]
 fn the_hollow_mask_reads_the_same_in_a_12_by_14_degree_frame() {
     hollow_mask_reads_the_same(12.0, 14.0);
+}
+
+/// The default domain is the targets only where they are objects on a backdrop: a rendered
+/// object (and the hollow mask, above), not a relief on a panel, whose targets are regions of
+/// one surface; targets given by the caller say nothing of a backdrop.
+#[test]
+fn the_default_domain_is_the_targets_of_an_object_on_a_backdrop_only() {
+    let load = |name: &str, labels: Option<shadelab::grid::Labels>| {
+        let source = PictureSource {
+            stimulus: Some(name.into()),
+            ppd: Some(8.0),
+            labels,
+            max_pixels: 1 << 24,
+            ..Default::default()
+        };
+        perception::Config::new(source).load().unwrap()
+    };
+    for (name, used) in [
+        ("sphere", "tokens"),
+        ("vase", "tokens"),
+        ("bumps", "image"),
+        ("crater", "image"),
+    ] {
+        let setup = load(name, None);
+        assert_eq!(setup.parameters.domain, used, "{name}");
+        let whole = setup.domain.data().iter().all(|&m| m);
+        assert_eq!(whole, used == "image", "{name}");
+    }
+    let sphere = load("sphere", None);
+    let (w, h) = (sphere.domain.width(), sphere.domain.height());
+    let given = load("sphere", Some(sphere.domain.map(|&m| u16::from(m))));
+    assert_eq!(given.parameters.domain, "image");
+    assert_eq!(given.domain.count(), w * h);
 }

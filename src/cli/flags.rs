@@ -58,9 +58,11 @@ impl SolverFlags {
 /// What the analyses assume about the picture besides the light's tilt.
 #[derive(Debug, Clone, clap::Args)]
 pub struct AnalysisFlags {
-    /// Where the engine solves: image (the whole picture, a relief on a plane), tokens (only
-    /// the target regions), or a PNG mask (nonzero = inside).
-    #[arg(long, value_name = "image|tokens|PNG", default_value_t = DomainSpec::default().to_string())]
+    /// Where the engine solves: auto (the targets of an object on a backdrop, such as a
+    /// rendered object or the hollow mask's face; else the whole picture), image (the whole
+    /// picture, a relief on a plane), tokens (only the target regions), or a PNG mask
+    /// (nonzero = inside).
+    #[arg(long, value_name = "auto|image|tokens|PNG", default_value_t = DomainSpec::default().to_string())]
     pub domain: String,
     /// Boundary condition at the domain's rim: flat (the default: these stimuli lie on a
     /// plane), free, occluding, or an H×W×3 .npy of normals for the rim.

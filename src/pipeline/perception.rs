@@ -48,39 +48,44 @@ pub(crate) fn field(name: &'static str, result: Result<()>) -> Result<(), BadSet
     result.map_err(|error| BadSetting { field: name, error })
 }
 
-/// Where the engine solves: a named [`Domain`] or a mask file.
+/// Where the engine solves: chosen by the picture ([`DomainSpec::Auto`], the default), a named
+/// [`Domain`] or a mask file.
 ///
 /// ```
 /// use shadelab::pipeline::perception::DomainSpec;
 /// let d: DomainSpec = "tokens".parse().unwrap();
 /// assert_eq!(d.to_string(), "tokens");
+/// assert_eq!("auto".parse::<DomainSpec>().unwrap(), DomainSpec::default());
 /// assert!(matches!("mask.png".parse(), Ok(DomainSpec::Mask(_))));
 /// assert!("mask.npy".parse::<DomainSpec>().is_err());
 /// ```
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub enum DomainSpec {
+    /// The targets where the picture's maker says they are objects on a backdrop that is no
+    /// part of the surface (a rendered object, the hollow mask's face:
+    /// [`Picture::on_backdrop`](super::source::Picture::on_backdrop)); the whole picture
+    /// otherwise (a relief on a panel, a bare image).
+    #[default]
+    Auto,
     /// The whole picture or only its tokens.
     Named(Domain),
     /// A PNG mask of the picture's size, nonzero = inside.
     Mask(PathBuf),
 }
 
-impl Default for DomainSpec {
-    fn default() -> Self {
-        DomainSpec::Named(Domain::default())
-    }
-}
-
 impl FromStr for DomainSpec {
     type Err = Error;
     fn from_str(text: &str) -> Result<DomainSpec> {
+        if text == "auto" {
+            return Ok(DomainSpec::Auto);
+        }
         if let Ok(d) = text.parse::<Domain>() {
             return Ok(DomainSpec::Named(d));
         }
         let path = Path::new(text);
         if io::extension(path) != "png" {
             return Err(Error::invalid(format!(
-                "domain '{text}' is neither image, tokens nor a .png mask"
+                "domain '{text}' is neither auto, image, tokens nor a .png mask"
             )));
         }
         Ok(DomainSpec::Mask(path.to_path_buf()))
@@ -90,6 +95,7 @@ impl FromStr for DomainSpec {
 impl fmt::Display for DomainSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            DomainSpec::Auto => f.write_str("auto"),
             DomainSpec::Named(d) => d.fmt(f),
             DomainSpec::Mask(path) => path.display().fmt(f),
         }
@@ -97,10 +103,21 @@ impl fmt::Display for DomainSpec {
 }
 
 impl DomainSpec {
-    /// The domain's mask for `picture` (a mask file is read and checked against its size).
-    pub fn resolve(&self, picture: &Picture, max_pixels: usize) -> Result<Mask> {
+    /// The named domain this stands for on a picture whose targets are (`on_backdrop`) or are
+    /// not objects on a backdrop; `None` for a mask file.
+    pub fn named(&self, on_backdrop: bool) -> Option<Domain> {
         match self {
-            DomainSpec::Named(d) => Ok(picture.domain(*d)),
+            DomainSpec::Auto if on_backdrop => Some(Domain::Tokens),
+            DomainSpec::Auto => Some(Domain::Image),
+            DomainSpec::Named(d) => Some(*d),
+            DomainSpec::Mask(_) => None,
+        }
+    }
+
+    /// The domain's mask for `picture`, whose targets are (`on_backdrop`) or are not objects
+    /// on a backdrop (a mask file is read and checked against its size).
+    pub fn resolve(&self, picture: &Picture, on_backdrop: bool, max_pixels: usize) -> Result<Mask> {
+        match self {
             DomainSpec::Mask(path) => {
                 let (w, h) = (picture.image.width(), picture.image.height());
                 let mask = io::read_mask(path, max_pixels)?;
@@ -120,6 +137,7 @@ impl DomainSpec {
                 }
                 Ok(mask)
             }
+            named => Ok(picture.domain(named.named(on_backdrop).unwrap_or_default())),
         }
     }
 }
@@ -132,7 +150,8 @@ pub struct Config {
     /// The rendered stimulus's size in pixels (height, width), as NumPy's shape; only with a
     /// stimulus.
     pub size: Option<(usize, usize)>,
-    /// Where the engine solves (default: the whole image).
+    /// Where the engine solves (default: [`DomainSpec::Auto`], the targets of an object on a
+    /// backdrop, else the whole image).
     pub domain: DomainSpec,
     /// The boundary at the domain's rim (default: flat, a relief on a plane).
     pub boundary: BoundarySource,
@@ -233,7 +252,9 @@ impl Config {
         picture.albedo = loaded.declared.albedo;
         picture.ambient = loaded.declared.ambient;
         let max_pixels = self.source.max_pixels;
-        let domain = self.domain.resolve(&picture, max_pixels)?;
+        let domain = self
+            .domain
+            .resolve(&picture, loaded.on_backdrop, max_pixels)?;
         let (w, h) = (picture.image.width(), picture.image.height());
         let boundary = self.boundary.resolve(w, h, max_pixels)?;
         let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
@@ -244,7 +265,10 @@ impl Config {
             albedo: lighting.albedo,
             ambient: lighting.ambient,
             boundary: self.boundary.to_string(),
-            domain: self.domain.to_string(),
+            domain: self
+                .domain
+                .named(loaded.on_backdrop)
+                .map_or_else(|| self.domain.to_string(), |d| d.to_string()),
             lambda: options.lambda,
             tol: options.tol,
             max_iter: options.max_iter,
@@ -285,7 +309,7 @@ pub struct Parameters {
     pub ambient: f64,
     /// The boundary, as given.
     pub boundary: String,
-    /// The domain, as given.
+    /// The domain used: `image`, `tokens` (what `auto` chose, or as given) or the mask file.
     pub domain: String,
     /// Weight λ of the brightness term.
     pub lambda: f64,

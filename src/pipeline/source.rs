@@ -58,6 +58,12 @@ pub struct Picture {
     pub origin: Value,
     /// What its maker declares: albedo, ambient level, true light (nothing for a bare image).
     pub declared: Declared,
+    /// Whether its maker says the targets are objects in front of a backdrop that is no part
+    /// of the surface: a rendered stimulus whose surface does not fill the frame (the
+    /// benchmark objects, the hollow mask's face), or an image whose sidecar says its target
+    /// is an object's silhouette. The perception analyses then solve on the targets by
+    /// default ([`crate::pipeline::perception::DomainSpec::Auto`]).
+    pub on_backdrop: bool,
 }
 
 impl Picture {
@@ -220,6 +226,7 @@ impl PictureSource {
                     labels: None,
                     origin: Value::Null,
                     declared: Declared::default(),
+                    on_backdrop: false,
                 };
                 if let Some(s) = sidecar {
                     origin["sidecar"] = s.to_json();
@@ -229,6 +236,7 @@ impl PictureSource {
                         ambient: s.ambient,
                         light: s.light,
                     };
+                    picture.on_backdrop = s.silhouette;
                     if let (Some(mask), None) = (&s.target_mask, &self.mask) {
                         let labels = io::read_labels(mask, max_pixels)
                             .map_err(|e| Error::invalid(format!("{}: {e}", s.path.display())))?;
@@ -245,6 +253,7 @@ impl PictureSource {
                 labels: None,
                 origin: json!({ "image": IN_MEMORY }),
                 declared: Declared::default(),
+                on_backdrop: false,
             },
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
@@ -282,6 +291,10 @@ impl PictureSource {
                 ))
             }
         };
+        if self.mask.is_some() || self.labels.is_some() {
+            // Targets given here say nothing of a backdrop.
+            picture.on_backdrop = false;
+        }
         if let Some(path) = &self.mask {
             let labels = io::read_labels(path, max_pixels)?;
             check_same_size(&labels, &picture.pixels, path)?;
@@ -328,6 +341,13 @@ fn rendered(
     let notes = Value::Object(output.notes.clone());
     let declared = Declared::from_record(&parameters, &notes)
         .map_err(|e| Error::invalid(format!("stimulus {name}: {e}")))?;
+    // A rendered surface that leaves part of the frame to the backdrop: its targets are the
+    // objects (a relief on a panel fills the frame).
+    let on_backdrop = output.targets.is_some()
+        && output
+            .surface
+            .as_ref()
+            .is_some_and(|s| s.mask.data().iter().any(|&inside| !inside));
     Ok(Picture {
         pixels: output.pixels,
         ppd: Some(made.geometry.ppd),
@@ -340,6 +360,7 @@ fn rendered(
             "notes": notes,
         }),
         declared,
+        on_backdrop,
     })
 }
 
