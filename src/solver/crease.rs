@@ -15,9 +15,11 @@
 //!
 //! The iteration is iteratively reweighted least squares: each neighbour pair gets the weight
 //! w = 2 φ′(d)/d of its current change d (1 for Horn's term, ε/√(d² + ε²) for Charbonnier), and
-//! a Gauss–Seidel sweep (row-major, in place: deterministic, one thread; meant for domains of
-//! tens of thousands of pixels) moves each unknown to the weighted neighbour mean (f̄, ḡ) plus
-//! the Gauss–Newton step of the brightness term taken there:
+//! a successive over-relaxation sweep (row-major, in place: deterministic, one thread; meant
+//! for domains of tens of thousands of pixels, which a caller may solve side by side) moves
+//! each unknown towards the weighted neighbour mean (f̄, ḡ) plus the Gauss–Newton step of the
+//! brightness term taken there, by ω (1.92 by default: [`CreaseOptions::relaxation`]) times
+//! the way:
 //!
 //! (f, g) ← (f̄, ḡ) + 4λ (I − R) ∇R / (W + 4λ |∇R|²),  R and ∇R = (∂R/∂f, ∂R/∂g) at (f̄, ḡ),
 //!
@@ -25,8 +27,11 @@
 //! this is Horn's update with its 4λ/k; the |∇R|² in the denominator keeps the step stable for
 //! any λ and any W (a pixel whose neighbours are all across folds has a small W). Values stay
 //! in the visible disc |(f, g)| ≤ 2. Pixels in attached shadow (I at or below the ambient
-//! level) and λ = 0 (pure interpolation of the boundary values) carry smoothness only. The
-//! sweeps stop when no f or g changes by more than the tolerance.
+//! level) and λ = 0 (pure interpolation of the boundary values) carry smoothness only; with
+//! [`CreaseOptions::shadow_along_columns`] such pixels are coupled only along their image
+//! column (a strip's generators), so the boundary above and below decides them. The sweeps
+//! stop when no f or g changes by more than the tolerance; they may start from a given shape
+//! ([`solve_from`]), which changes the sweeps needed, not the fixed point they reach.
 
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::{Error, Result};
@@ -94,11 +99,11 @@ pub struct CreaseOptions {
     /// The over-relaxation factor ω of the sweeps, 1 ≤ ω < 2 (1: plain Gauss–Seidel). It
     /// changes how fast the sweeps reach the fixed point, not the fixed point.
     pub relaxation: f64,
-    /// In attached shadow, couple a pixel only to the pixels above and below it (along the
-    /// image column), not beside it, wherever both columns hold a fixed pixel: the shading
-    /// there says only that the surface faces away from the light, and a cylinder whose
-    /// generators run down the columns (a strip profiled column by column) takes its normal
-    /// from the boundary along its generator.
+    /// In attached shadow (and everywhere when λ = 0), couple a pixel only to the pixels
+    /// above and below it (along the image column), not beside it, wherever both columns hold
+    /// a fixed pixel: the shading there says only that the surface faces away from the light,
+    /// and a cylinder whose generators run down the columns (a strip profiled column by
+    /// column) takes its normal from the boundary along its generator.
     pub shadow_along_columns: bool,
 }
 
@@ -251,7 +256,7 @@ pub fn solve_from(
         g[i] = gv;
     }
     let ambient = reflectance.ambient();
-    let pairs = Pairs::new(image, bc, ambient, options.shadow_along_columns);
+    let pairs = Pairs::new(image, bc, ambient, options);
     let four_lambda = 4.0 * options.lambda;
     let omega = options.relaxation;
     let mut sweeps = 0;
@@ -359,16 +364,23 @@ struct Pairs {
 }
 
 impl Pairs {
-    fn new(image: &Image, bc: &BoundaryConditions, ambient: f64, along_columns: bool) -> Pairs {
+    /// The pairs of `bc`'s unknowns; with shadow along columns, the pixels the data say
+    /// nothing about are those at or below the `ambient` level, or every pixel when λ = 0.
+    fn new(image: &Image, bc: &BoundaryConditions, ambient: f64, options: &CreaseOptions) -> Pairs {
         let (w, h) = (bc.roles.width(), bc.roles.height());
         let roles = bc.roles.data();
         let (mut shadow, mut anchored) = (Vec::new(), Vec::new());
-        if along_columns {
+        if options.shadow_along_columns {
             anchored = vec![false; w];
             for (p, role) in roles.iter().enumerate() {
                 anchored[p % w] |= *role == Role::Fixed;
             }
-            shadow = image.data().iter().map(|&i| i <= ambient).collect();
+            let no_data = options.lambda == 0.0;
+            shadow = image
+                .data()
+                .iter()
+                .map(|&i| no_data || i <= ambient)
+                .collect();
         }
         let mut pairs = Pairs {
             unknowns: Vec::new(),
