@@ -15,20 +15,22 @@
 use super::source::PictureSource;
 use crate::analysis::convexity::Token;
 use crate::analysis::outline::{
-    curvature_concentration, fit_shading, on_token, outline_conditions, outline_profile,
-    ProfileFit, ShadingFit, TOP_FRACTION,
+    curvature_concentration, fit_shading, outline_conditions, outline_profile, Profile, ProfileFit,
+    ShadingFit, TOP_FRACTION,
 };
 use crate::analysis::plot::{ColourBar, MapFigure};
 use crate::analysis::Picture;
+use crate::boundary::BoundaryConditions;
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
 use crate::io::{self, csv_field};
 use crate::light::Light;
+use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
-use crate::solver::crease::{self, CreaseOptions, Smoothness};
+use crate::solver::crease::{self, CreaseOptions, CreaseSolution, Smoothness};
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -62,18 +64,26 @@ pub struct OutlineConfig {
     /// The crease-preserving reconstruction's settings (its smoothness is the one compared
     /// with Horn's).
     pub crease: CreaseOptions,
+    /// Start the reconstructions from the outline's shape (true) or from a flat surface: the
+    /// same fixed point on the gallery's strips, reached in about half the sweeps.
+    pub warm_start: bool,
 }
 
 impl OutlineConfig {
     /// The defaults for `source`: the light fitted, [`ProfileFit::default`],
-    /// [`CreaseOptions::default`].
+    /// [`CreaseOptions::default`] with shadowed pixels filled along their column (the strip's
+    /// generators), a warm start.
     pub fn new(source: PictureSource) -> OutlineConfig {
         OutlineConfig {
             source,
             size: None,
             light: None,
             profile: ProfileFit::default(),
-            crease: CreaseOptions::default(),
+            crease: CreaseOptions {
+                shadow_along_columns: true,
+                ..CreaseOptions::default()
+            },
+            warm_start: true,
         }
     }
 
@@ -223,14 +233,39 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
     let picture = Picture::from_image(loaded.luminance(), Some((labels, names.as_slice())))?;
     let (w, h) = (picture.image.width(), picture.image.height());
     progress.start(picture.tokens.len() as u64, "outline");
+    // Every target's two reconstructions are independent: they run side by side, each one
+    // sequential, so the results are the same bits for any number of threads.
+    let setups = picture
+        .tokens
+        .iter()
+        .map(|token| set_up_target(&picture.image, token, config))
+        .collect::<Result<Vec<_>>>()?;
+    let jobs: Vec<(usize, Smoothness)> = (0..setups.len())
+        .flat_map(|k| [(k, config.crease.smoothness), (k, Smoothness::Quadratic)])
+        .collect();
+    let solved = jobs
+        .par_iter()
+        .map(|&(k, smoothness)| {
+            let solution = setups[k].reconstruct(smoothness, config);
+            if smoothness == Smoothness::Quadratic {
+                progress.advance(1);
+            }
+            solution
+        })
+        .collect::<Vec<Result<CreaseSolution>>>();
+    let mut solved = solved.into_iter();
     let mut targets: Vec<TargetReading> = Vec::new();
-    for token in &picture.tokens {
-        let mut reading = read_target(&picture.image, token, config)?;
+    for (setup, token) in setups.into_iter().zip(&picture.tokens) {
+        let (Some(tv), Some(quadratic)) = (solved.next(), solved.next()) else {
+            return Err(Error::Compute(
+                "a target's reconstruction is missing".into(),
+            ));
+        };
+        let mut reading = setup.reading(token, w, h, &tv?, &quadratic?);
         if targets.iter().any(|t| t.stem == reading.stem) {
             reading.stem = format!("{}-{}", reading.stem, token.label);
         }
         targets.push(reading);
-        progress.advance(1);
     }
     progress.finish();
     let mut outputs = BTreeMap::from([
@@ -290,8 +325,27 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
     })
 }
 
-/// Reads one target.
-fn read_target(image: &Image, token: &Token, config: &OutlineConfig) -> Result<TargetReading> {
+/// One target's outline reading before its reconstructions: the profile, the shading fit
+/// and what the reconstructions start from.
+struct TargetSetup {
+    /// The outline's profile.
+    profile: Profile,
+    /// The shading fit.
+    fit: ShadingFit,
+    /// The target's luminances, in the order of its pixels.
+    values: Vec<f64>,
+    /// The predicted shading Î at the target's pixels, in the same order.
+    predicted: Vec<f64>,
+    /// Î on the whole grid (0 outside the target): the reconstructions' data.
+    shading: Image,
+    /// The outline's boundary conditions.
+    bc: BoundaryConditions,
+    /// The outline's f in every target pixel (0 outside): the reconstructions' start.
+    start_f: Image,
+}
+
+/// Fits the target's outline and shading (everything but the reconstructions).
+fn set_up_target(image: &Image, token: &Token, config: &OutlineConfig) -> Result<TargetSetup> {
     let (w, h) = (image.width(), image.height());
     let profile = outline_profile(token, w, &config.profile)?;
     let pixels = token.pixels();
@@ -299,78 +353,117 @@ fn read_target(image: &Image, token: &Token, config: &OutlineConfig) -> Result<T
     let normals: Vec<_> = pixels.iter().map(|&p| profile.normal_at(p % w)).collect();
     let fit = fit_shading(&values, &normals, config.light)?;
     let predicted: Vec<f64> = normals.iter().map(|n| fit.predict(n)).collect();
-    let mean = values.iter().sum::<f64>() / values.len() as f64;
-    let index: BTreeMap<usize, usize> = pixels.iter().enumerate().map(|(k, &p)| (p, k)).collect();
-    let at = |p: usize| index.get(&p).copied().unwrap_or(0);
-    let shading = on_token(token, w, h, 0.0, |p| predicted[at(p)]);
-    let paint_rms = (values
-        .iter()
-        .zip(&predicted)
-        .map(|(i, s)| (i - s) * (i - s))
-        .sum::<f64>()
-        / values.len() as f64)
-        .sqrt();
-    // The engine reconstructs the strip from the explained shading with the outline's
-    // normals on the cut; with a shape that explains nothing the data carry nothing.
+    let mut shading = Grid::new(w, h, 0.0);
+    for (&p, &v) in pixels.iter().zip(&predicted) {
+        shading.data_mut()[p] = v;
+    }
     let bc = outline_conditions(token, &profile, w, h);
-    let reflectance = Lambertian {
-        light: fit.light,
-        albedo: fit.albedo,
-        ambient: fit.offset,
-    };
-    let lambda = if fit.albedo > 0.0 {
-        config.crease.lambda
-    } else {
-        0.0
-    };
-    let tv = crease::solve(
-        &shading,
-        &bc,
-        &reflectance,
-        &CreaseOptions {
-            lambda,
-            ..config.crease
-        },
-    )?;
-    let quadratic = crease::solve(
-        &shading,
-        &bc,
-        &reflectance,
-        &CreaseOptions {
-            lambda,
-            smoothness: Smoothness::Quadratic,
-            ..config.crease
-        },
-    )?;
-    let layers = crop_layers(token, w, h, |p| {
-        let k = at(p);
-        (
-            normal_from_fg(tv.f.data()[p], tv.g.data()[p]).x,
-            predicted[k],
-            mean + values[k] - predicted[k],
-        )
-    });
-    Ok(TargetReading {
-        label: token.label,
-        name: token.name.clone(),
-        stem: stem(&token.name, token.label),
-        pixels: pixels.len(),
-        columns: profile.slope.len(),
-        relief: profile.relief(),
-        light_tilt_deg: fit.light.tilt_deg(),
-        light_slant_deg: fit.light.slant_deg(),
-        shape_explained: fit.explained,
-        shading: fit,
-        paint_rms,
-        outline_bend_concentration: profile.bend_concentration(),
-        bend_concentration: curvature_concentration(&tv.f, pixels, TOP_FRACTION),
-        bend_concentration_quadratic: curvature_concentration(&quadratic.f, pixels, TOP_FRACTION),
-        sweeps: tv.sweeps,
-        converged: tv.converged,
-        sweeps_quadratic: quadratic.sweeps,
-        converged_quadratic: quadratic.converged,
-        layers,
+    let mut start_f = Grid::new(w, h, 0.0);
+    for &p in pixels {
+        start_f.data_mut()[p] = profile.fg_at(p % w).0;
+    }
+    Ok(TargetSetup {
+        profile,
+        fit,
+        values,
+        predicted,
+        shading,
+        bc,
+        start_f,
     })
+}
+
+impl TargetSetup {
+    /// The engine's reconstruction of the strip from the explained shading with the outline's
+    /// normals on the cut, with `smoothness`; with a shape that explains nothing (albedo 0)
+    /// the data carry nothing (λ = 0). With a warm start the sweeps start from the outline's
+    /// own shape, else from a flat one.
+    fn reconstruct(
+        &self,
+        smoothness: Smoothness,
+        config: &OutlineConfig,
+    ) -> Result<CreaseSolution> {
+        let reflectance = Lambertian {
+            light: self.fit.light,
+            albedo: self.fit.albedo,
+            ambient: self.fit.offset,
+        };
+        let lambda = if self.fit.albedo > 0.0 {
+            config.crease.lambda
+        } else {
+            0.0
+        };
+        let zero = Grid::new(self.shading.width(), self.shading.height(), 0.0);
+        crease::solve_from(
+            &self.shading,
+            &self.bc,
+            &reflectance,
+            &CreaseOptions {
+                lambda,
+                smoothness,
+                ..config.crease
+            },
+            config.warm_start.then_some((&self.start_f, &zero)),
+        )
+    }
+
+    /// The target's reading from its two reconstructions.
+    fn reading(
+        self,
+        token: &Token,
+        w: usize,
+        h: usize,
+        tv: &CreaseSolution,
+        quadratic: &CreaseSolution,
+    ) -> TargetReading {
+        let pixels = token.pixels();
+        let (values, predicted, fit, profile) =
+            (self.values, self.predicted, self.fit, self.profile);
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let paint_rms = (values
+            .iter()
+            .zip(&predicted)
+            .map(|(i, s)| (i - s) * (i - s))
+            .sum::<f64>()
+            / values.len() as f64)
+            .sqrt();
+        let index: BTreeMap<usize, usize> =
+            pixels.iter().enumerate().map(|(k, &p)| (p, k)).collect();
+        let at = |p: usize| index.get(&p).copied().unwrap_or(0);
+        let layers = crop_layers(token, w, h, |p| {
+            let k = at(p);
+            (
+                normal_from_fg(tv.f.data()[p], tv.g.data()[p]).x,
+                predicted[k],
+                mean + values[k] - predicted[k],
+            )
+        });
+        TargetReading {
+            label: token.label,
+            name: token.name.clone(),
+            stem: stem(&token.name, token.label),
+            pixels: pixels.len(),
+            columns: profile.slope.len(),
+            relief: profile.relief(),
+            light_tilt_deg: fit.light.tilt_deg(),
+            light_slant_deg: fit.light.slant_deg(),
+            shape_explained: fit.explained,
+            shading: fit,
+            paint_rms,
+            outline_bend_concentration: profile.bend_concentration(),
+            bend_concentration: curvature_concentration(&tv.f, pixels, TOP_FRACTION),
+            bend_concentration_quadratic: curvature_concentration(
+                &quadratic.f,
+                pixels,
+                TOP_FRACTION,
+            ),
+            sweeps: tv.sweeps,
+            converged: tv.converged,
+            sweeps_quadratic: quadratic.sweeps,
+            converged_quadratic: quadratic.converged,
+            layers,
+        }
+    }
 }
 
 /// The target's three layers, cropped to its bounding box and a margin; `value(p)` gives
