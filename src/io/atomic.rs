@@ -67,33 +67,21 @@ fn start_write_back(file: &fs::File) {
 #[cfg(not(target_os = "linux"))]
 fn start_write_back(_file: &fs::File) {}
 
-/// Syncs every file straight inside `dir` and then `dir` itself, the files on a few threads
-/// at once (the disk's queue takes them together).
+/// Syncs every file straight inside `dir` and then `dir` itself. Their write-back was started
+/// as each was written, so this mostly waits for what is still under way; on this thread, as
+/// more threads would each keep an allocator arena of their own and raise the peak memory.
 fn sync_folder(dir: &Path) -> Result<()> {
-    let mut files = Vec::new();
-    for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let entry = entry.map_err(|e| Error::io(dir, e))?;
-        if entry.file_type().map_err(|e| Error::io(dir, e))?.is_file() {
-            files.push(entry.path());
-        }
-    }
     let sync = |path: &Path| -> Result<()> {
         fs::File::open(path)
             .and_then(|f| f.sync_all())
             .map_err(|e| Error::io(path, e))
     };
-    const SYNC_THREADS: usize = 8;
-    let per_thread = files.len().div_ceil(SYNC_THREADS).max(1);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = files
-            .chunks(per_thread)
-            .map(|chunk| scope.spawn(move || chunk.iter().try_for_each(|p| sync(p))))
-            .collect();
-        handles.into_iter().try_for_each(|h| {
-            h.join()
-                .unwrap_or_else(|_| Err(Error::Compute("a file sync panicked".into())))
-        })
-    })?;
+    for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        if entry.file_type().map_err(|e| Error::io(dir, e))?.is_file() {
+            sync(&entry.path())?;
+        }
+    }
     sync(dir)
 }
 

@@ -1157,11 +1157,7 @@ fn coarse_row<const TRACK: bool>(
             continue;
         }
         let s = [a[0] + e[0] + u[0] + d[0], a[1] + e[1] + u[1] + d[1]];
-        let new = solve2(
-            (kd & K_BITS) as f64,
-            reaction,
-            [b[0] + s[0], b[1] + s[1]],
-        );
+        let new = solve2((kd & K_BITS) as f64, reaction, [b[0] + s[0], b[1] + s[1]]);
         if TRACK {
             worst = track(worst, *slot, new);
         }
