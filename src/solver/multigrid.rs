@@ -134,7 +134,7 @@ const COARSEST_SWEEPS: usize = 100;
 const COARSEST_REDUCTION: f64 = 1e-4;
 /// Levels with fewer unknowns than this are swept on one thread: the split costs more than it
 /// saves.
-const PARALLEL_MIN_CELLS: usize = 16_384;
+const PARALLEL_MIN_CELLS: usize = 4_096;
 /// Nested iteration (see `Multigrid::start_from_coarse_solution`) is used on problems with at
 /// least this many unknowns; smaller ones start from (0, 0).
 const NESTED_MIN_UNKNOWNS: usize = 1024;
@@ -149,7 +149,7 @@ const RISE: f64 = 2.0;
 /// Below this the coarse correction is left out: the cycles are plain Gauss–Seidel sweeps.
 const MIN_DAMPING: f64 = 1.0 / 64.0;
 /// Cells per parallel work item (whole rows; the split does not affect the result).
-const TASK_CELLS: usize = 8_192;
+const TASK_CELLS: usize = 2_048;
 
 /// One level of the hierarchy: a grid padded by one cell on every side, so that every cell of the
 /// image has four neighbours to read (padding holds 0 and is never in the domain).
@@ -396,13 +396,27 @@ impl Averages {
             f: [0.0; BLOCK],
             g: [0.0; BLOCK],
         };
-        for i in 0..n {
-            let j = j0 + i;
-            let c = 2 * j + start;
-            let inv_k = ctx.inv_k[(kind_row[c] & K_BITS) as usize];
-            let s = neighbour_sum(other, hw, r, c, j);
-            u.f[i] = s[0] * inv_k;
-            u.g[i] = s[1] * inv_k;
+        // As `neighbour_sum`, with the rows sliced once: cell j's left and right neighbours
+        // are j + start − 1 and j + start of the middle row. A block never starts at the
+        // padding column 0 of a row whose cells start at column 0 (j0 ≥ 1 there); a last cell
+        // with j + start = hw is the right padding column, left at (0, 0).
+        let (up, mid, down) = (
+            &other[(r - 1) * hw..r * hw],
+            &other[r * hw..(r + 1) * hw],
+            &other[(r + 1) * hw..(r + 2) * hw],
+        );
+        let inside = n.min(hw - start - j0);
+        let end = j0 + inside;
+        let kinds = kind_row[2 * j0 + start..].iter().step_by(2);
+        let neighbours = mid[j0 + start - 1..end + start - 1]
+            .iter()
+            .zip(&mid[j0 + start..end + start])
+            .zip(up[j0..end].iter().zip(&down[j0..end]));
+        let out = u.f[..inside].iter_mut().zip(&mut u.g[..inside]);
+        for (((f, g), &kd), ((a, b), (t, d))) in out.zip(kinds).zip(neighbours) {
+            let inv_k = ctx.inv_k[(kd & K_BITS) as usize];
+            *f = (a[0] + b[0] + t[0] + d[0]) * inv_k;
+            *g = (a[1] + b[1] + t[1] + d[1]) * inv_k;
         }
         u
     }
@@ -864,8 +878,8 @@ impl Multigrid {
     }
 
     /// Restricts the residual and the reaction matrices of level `l` to level `l + 1` (sums over
-    /// the unknown children) and zeroes the correction there. Returns the largest residual on
-    /// level `l` divided by k: on the finest level, the Jacobi residual.
+    /// the unknown children) and zeroes the correction there. On the finest level, returns the
+    /// largest residual divided by k, the Jacobi residual (0 on the others).
     fn restrict(&mut self, l: usize, ctx: &Context) -> f64 {
         // On the finest level only the red half is evaluated (see below).
         self.work += 0.25f64.powi(l as i32) * if l == 0 { 0.5 } else { 1.0 };
@@ -889,20 +903,21 @@ impl Multigrid {
                 let ckind_row = &ckind[r * cwp..(r + 1) * cwp];
                 return restrict_fine_row(ctx, fine, ckind_row, r, rhs_row, reaction_row);
             }
-            let mut worst = 0.0;
+            // Coarser levels: nobody reads their largest residual, and the unknown children
+            // of a coarse cell that is not an unknown (it is fixed) add nothing.
             for c in 1..cwp - 1 {
-                let coarse_unknown = ckind[r * cwp + c] & UNKNOWN != 0;
                 let mut res = [0.0; 2];
                 let mut react = [0.0; 3];
-                for (fr, fc) in children(fine, r, c) {
-                    let fk = fine.kind[fr * fine.wp + fc];
-                    if fk & UNKNOWN == 0 {
-                        continue;
-                    }
-                    let (d, a) = residual_at(fine, fr, fc, fk);
-                    let k = (fk & K_BITS) as f64;
-                    worst = track(worst, [0.0; 2], [d[0] / k, d[1] / k]);
-                    if coarse_unknown {
+                if ckind[r * cwp + c] & UNKNOWN != 0 {
+                    // The four children (those past the fine level's last row or column are
+                    // its padding, never unknown), in the order of `children`.
+                    let (r0, c0) = (2 * r - 1, 2 * c - 1);
+                    for (fr, fc) in [(r0, c0), (r0, c0 + 1), (r0 + 1, c0), (r0 + 1, c0 + 1)] {
+                        let fk = fine.kind[fr * fine.wp + fc];
+                        if fk & UNKNOWN == 0 {
+                            continue;
+                        }
+                        let (d, a) = residual_at(fine, fr, fc, fk);
                         res[0] += d[0];
                         res[1] += d[1];
                         react[0] += a[0];
@@ -913,7 +928,7 @@ impl Multigrid {
                 rhs_row[c] = res;
                 reaction_row[c] = react;
             }
-            worst
+            0.0
         };
         if parallel {
             crate::parallel::reduce(
@@ -960,11 +975,30 @@ impl Multigrid {
         self.work += 0.25f64.powi(l as i32) * 0.5;
         let (upper, lower) = self.levels.split_at_mut(l + 1);
         let fine = &mut upper[l];
-        let coarse = &lower[0];
+        let coarse = &mut lower[0];
         let parallel = fine.parallel();
         let (wp, hp, hw) = (fine.wp, fine.hp, fine.hw);
         let kind = &fine.kind[..];
-        let cwp = coarse.wp;
+        let (cwp, chw) = (coarse.wp, coarse.hw);
+        // The coarse correction in plain row-major order (column q of row r, from colour
+        // (r + q) mod 2), put in the coarse right-hand side, which the coarse cycle has
+        // finished with (the next restriction writes it again): the loop below then reads
+        // neighbouring columns without choosing a colour for each.
+        let Level { val, rhs, .. } = coarse;
+        over_rows(rhs, cwp, coarse.unknowns >= PARALLEL_MIN_CELLS, |r, row| {
+            let (a, b) = (
+                &val[r & 1][r * chw..(r + 1) * chw],
+                &val[(r + 1) & 1][r * chw..(r + 1) * chw],
+            );
+            for (k, pair) in row.chunks_mut(2).enumerate() {
+                pair[0] = a[k];
+                if let Some(odd) = pair.get_mut(1) {
+                    *odd = b[k];
+                }
+            }
+            0.0
+        });
+        let merged = &coarse.rhs[..];
         let ckind = &coarse.kind[..];
         for colour in 0..2 {
             let spans = &fine.spans[colour][..];
@@ -978,27 +1012,28 @@ impl Multigrid {
                 let pr = ((r - 1) >> 1) + 1;
                 let nr = if (r - 1) & 1 == 0 { pr - 1 } else { pr + 1 };
                 let kind_row = &kind[r * wp..(r + 1) * wp];
-                for (j, slot) in row
-                    .iter_mut()
-                    .enumerate()
-                    .take(hi as usize)
-                    .skip(lo as usize)
-                {
-                    let c = 2 * j + start;
-                    if kind_row[c] & UNKNOWN == 0 {
+                let (pk, nk) = (
+                    &ckind[pr * cwp..(pr + 1) * cwp],
+                    &ckind[nr * cwp..(nr + 1) * cwp],
+                );
+                let (pv, nv) = (
+                    &merged[pr * cwp..(pr + 1) * cwp],
+                    &merged[nr * cwp..(nr + 1) * cwp],
+                );
+                // Cell c = 2j + start: its parent column is j + start, the coarse column on
+                // its side j + 1 − start.
+                let (dp, dn) = (start, 1 - start);
+                for j in lo as usize..hi as usize {
+                    if kind_row[2 * j + start] & UNKNOWN == 0 {
                         continue;
                     }
-                    let pc = ((c - 1) >> 1) + 1;
-                    let nc = if (c - 1) & 1 == 0 { pc - 1 } else { pc + 1 };
-                    let p = coarse.value(pr, pc);
-                    let get = |rr: usize, cc: usize| {
-                        if ckind[rr * cwp + cc] & IN_DOMAIN != 0 {
-                            coarse.value(rr, cc)
-                        } else {
-                            p
-                        }
-                    };
-                    let (x, y, d) = (get(pr, nc), get(nr, pc), get(nr, nc));
+                    let (pc, nc) = (j + dp, j + dn);
+                    let p = pv[pc];
+                    let pick = |kind: u8, v: Pair| if kind & IN_DOMAIN != 0 { v } else { p };
+                    let x = pick(pk[nc], pv[nc]);
+                    let y = pick(nk[pc], nv[pc]);
+                    let d = pick(nk[nc], nv[nc]);
+                    let slot = &mut row[j];
                     // × 1/16 is exact, as the division by 16 was.
                     slot[0] += scale * (9.0 * p[0] + 3.0 * (x[0] + y[0]) + d[0]) * 0.0625;
                     slot[1] += scale * (9.0 * p[1] + 3.0 * (x[1] + y[1]) + d[1]) * 0.0625;
@@ -1094,19 +1129,35 @@ fn coarse_row<const TRACK: bool>(
     row: &mut [Pair],
 ) -> f64 {
     let mut worst = 0.0;
-    for (j, slot) in row.iter_mut().enumerate().take(span.1).skip(span.0) {
-        let c = 2 * j + start;
-        let kd = kind_row[c];
+    let (lo, hi) = span;
+    if lo >= hi {
+        return worst;
+    }
+    // The other colour's rows above, beside and below: the left and right neighbours of cell
+    // j are at j + start − 1 and j + start of the middle row (as in `neighbour_sum`).
+    let (up, mid, down) = (
+        &other[(r - 1) * hw..r * hw],
+        &other[r * hw..(r + 1) * hw],
+        &other[(r + 1) * hw..(r + 2) * hw],
+    );
+    // Every array cut to the span (cells c = 2j + start of the padded rows: every other one),
+    // so that the loop runs on zipped iterators without index checks.
+    let first = 2 * lo + start;
+    let cells = row[lo..hi]
+        .iter_mut()
+        .zip(kind_row[first..].iter().step_by(2))
+        .zip(rhs_row[first..].iter().step_by(2))
+        .zip(reaction_row[first..].iter().step_by(2));
+    let neighbours = mid[lo + start - 1..hi + start - 1]
+        .iter()
+        .zip(&mid[lo + start..hi + start])
+        .zip(up[lo..hi].iter().zip(&down[lo..hi]));
+    for ((((slot, &kd), b), &reaction), ((a, e), (u, d))) in cells.zip(neighbours) {
         if kd & UNKNOWN == 0 {
             continue;
         }
-        let s = neighbour_sum(other, hw, r, c, j);
-        let b = rhs_row[c];
-        let new = solve2(
-            (kd & K_BITS) as f64,
-            reaction_row[c],
-            [b[0] + s[0], b[1] + s[1]],
-        );
+        let s = [a[0] + e[0] + u[0] + d[0], a[1] + e[1] + u[1] + d[1]];
+        let new = solve2((kd & K_BITS) as f64, reaction, [b[0] + s[0], b[1] + s[1]]);
         if TRACK {
             worst = track(worst, *slot, new);
         }
