@@ -4,8 +4,8 @@
 //! A Lambertian surface of albedo ρ under a light s of unit intensity has I = ρ·max(n·s, 0) ≤ ρ,
 //! with equality where the normal points at the light. The plain maximum is no estimate of ρ:
 //! noise, interreflections and specular highlights make it too high, and a photograph the
-//! user normalised by a percentile and stored in 0..1 is clipped, its brightest pixels all at
-//! 1. A high quantile (the 95th, the rule until issue 20) avoids both but reads low: on a
+//! user normalised by a percentile and stored in 0..1 is clipped, its brightest pixels all
+//! at 1. A high quantile (the 95th, the rule until issue 20) avoids both but reads low: on a
 //! matte sphere lit from the front it is where n·s = 0.975, 2.5 % below ρ.
 //!
 //! # The rule: the bright tail, extrapolated
@@ -103,7 +103,7 @@ pub fn estimate(image: &Image, mask: &Mask) -> Result<AlbedoEstimate> {
     let values = sorted_inside(image, mask)?;
     let n = values.len();
     let top = values[n - 1];
-    if !(top > 0.0) {
+    if top <= 0.0 || top.is_nan() {
         return Err(Error::invalid(
             "the image is black inside the mask: no albedo to estimate",
         ));
@@ -146,14 +146,14 @@ fn tail_line(values: &[f64], lo: usize, hi: usize) -> Option<f64> {
     let count = (hi - lo) as f64;
     let share = |i: usize| (n - i as f64 - 0.5) / n;
     let (mut sx, mut sy) = (0.0, 0.0);
-    for i in lo..hi {
-        sx += values[i];
+    for (i, v) in values.iter().enumerate().take(hi).skip(lo) {
+        sx += v;
         sy += share(i);
     }
     let (mx, my) = (sx / count, sy / count);
     let (mut sxx, mut sxy) = (0.0, 0.0);
-    for i in lo..hi {
-        let dx = values[i] - mx;
+    for (i, v) in values.iter().enumerate().take(hi).skip(lo) {
+        let dx = v - mx;
         sxx += dx * dx;
         sxy += dx * (share(i) - my);
     }
