@@ -398,11 +398,11 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
     let reference = runs[0].shape.solution.normals();
     for (run, scale) in runs.iter().zip([1.0, 0.8, 0.5]) {
         let estimate = run.report.parameters.albedo_estimate.unwrap();
-        // The rule scales with the image exactly; on a matte sphere it reads 2.5–3 % low (the
-        // 95th percentile of a disc faces the light within about 14°: src/albedo.rs).
+        // The rule scales with the image exactly; on a matte sphere it reads 1–1.5 % low
+        // (src/albedo.rs).
         let ratio = estimate.value / scale;
         assert!(
-            ratio < 1.0 && ratio > 0.965,
+            ratio < 1.0 && ratio > 0.98,
             "scale {scale}: albedo {}",
             estimate.value
         );

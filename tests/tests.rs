@@ -21,6 +21,7 @@ mod outline;
 mod output_sets;
 mod perception;
 mod python;
+mod robustness;
 mod sidecar_input;
 mod solve;
 mod stimuli;

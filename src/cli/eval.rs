@@ -42,7 +42,9 @@ pub struct Args {
     /// both occluding and free (a row each) for Mozart and the ball.
     #[arg(long, value_name = "occluding|flat|free")]
     pub boundary: Option<String>,
-    /// The quantile of a photograph's brightness (on its mask) taken as its albedo.
+    /// A photograph's albedo: at the default, the library's rule (`solve --albedo estimate`:
+    /// the bright tail below this quantile extrapolated); any other value takes this quantile
+    /// of its brightness on its mask (a comparison).
     #[arg(long, value_name = "Q", default_value_t = shadelab::evaluation::albedo::BRIGHT_QUANTILE,
         allow_hyphen_values = true
     )]

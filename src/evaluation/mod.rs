@@ -74,8 +74,8 @@ pub struct Config {
     /// One boundary condition for every case; `None`: [`default_boundary`] per set, and
     /// [`Config::compared_boundaries`] for the ball and Mozart.
     pub boundary: Option<Boundary>,
-    /// The quantile of a photograph's brightness on the mask taken as its albedo
-    /// ([`albedo::brightness_quantile`]).
+    /// How a photograph's albedo is found ([`albedo::photo_albedo`]): the library's rule at
+    /// [`albedo::BRIGHT_QUANTILE`] (the default), else this quantile of its brightness.
     pub albedo_quantile: f64,
     /// Divide the ball photographs by the albedo their true normals give instead of the
     /// estimate: not a user's situation, a reference for how much the estimate costs.
@@ -386,15 +386,15 @@ pub fn run(
                             method: "least squares with the true normals (reference only)",
                             with_true_normals: fitted,
                         },
-                        _ => Albedo {
-                            value: albedo::brightness_quantile(
-                                &image,
-                                &mask,
-                                config.albedo_quantile,
-                            )?,
-                            method: "quantile of the brightness on the mask",
-                            with_true_normals: fitted,
-                        },
+                        _ => {
+                            let (value, method) =
+                                albedo::photo_albedo(&image, &mask, config.albedo_quantile)?;
+                            Albedo {
+                                value,
+                                method,
+                                with_true_normals: fitted,
+                            }
+                        }
                     };
                     for boundary in &boundaries {
                         let case = photo_case(
@@ -419,9 +419,11 @@ pub fn run(
                 let mask = crop.apply(&b.mask);
                 for photo in &b.photos {
                     let image = crop.apply(&photo.image);
+                    let (value, method) =
+                        albedo::photo_albedo(&image, &mask, config.albedo_quantile)?;
                     let albedo = Albedo {
-                        value: albedo::brightness_quantile(&image, &mask, config.albedo_quantile)?,
-                        method: "quantile of the brightness on the mask",
+                        value,
+                        method,
                         with_true_normals: None,
                     };
                     let case = photo_case(

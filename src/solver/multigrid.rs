@@ -669,7 +669,7 @@ impl Multigrid {
         let mut best = f64::INFINITY;
         let mut damping = 1.0;
         // Globalisation hook (see globalize.rs): the cycles stop once they stall.
-        let mut watch = super::globalize::StallWatch::new();
+        let mut watch = super::globalize::StallWatch::new(lambda);
         while !stats.converged {
             for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(0, &ctx);
