@@ -43,13 +43,13 @@
 //! last iteration's change (below `tol` once converged).
 
 use super::{
-    Method, Node, Progress, Solution, SolveOptions, SolveStats, Solver, CHUNK, DIVERGENCE_UPDATE,
+    report_iteration, Method, Node, Progress, Solution, SolveOptions, SolveStats, Solver, CHUNK,
     MULTIGRID_MAX_CYCLES, PARALLEL_MIN,
 };
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::Result;
 use crate::gradient_space::fg_from_pq;
-use crate::grid::{Grid, Image, Mask};
+use crate::grid::{Image, Mask};
 use crate::integrate::{gradients_from_fg, integrate_gradients, PoissonOptions, DEFAULT_MIN_NZ};
 use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
@@ -146,13 +146,7 @@ impl Solver {
             }
             previous_update = last_update;
             iterations += 1;
-            progress(&Progress {
-                iteration: iterations,
-                max_iter: options.max_iter,
-                last_update,
-                energy: None,
-            });
-            if last_update.is_nan() || last_update > DIVERGENCE_UPDATE {
+            if report_iteration(iterations, options.max_iter, last_update, progress) {
                 diverged = true;
                 break;
             }
@@ -170,19 +164,6 @@ impl Solver {
                 unknowns: n,
             },
         ))
-    }
-
-    /// The current (f, g) as grids (the fixed pixels' values included, 0 outside).
-    fn current_fg(&self) -> (Image, Image) {
-        let (w, h) = (self.width, self.height);
-        let value = |i: usize, of: &[f64]| match self.slot[i] {
-            super::NO_SLOT => 0.0,
-            s => of[s as usize],
-        };
-        (
-            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f)),
-            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g)),
-        )
     }
 
     /// One sweep of the screened update from `cur` into `next` (see the module documentation).

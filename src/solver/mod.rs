@@ -438,13 +438,7 @@ impl Solver {
             std::mem::swap(&mut self.cur_f, &mut self.next_f);
             std::mem::swap(&mut self.cur_g, &mut self.next_g);
             iterations += 1;
-            progress(&Progress {
-                iteration: iterations,
-                max_iter: options.max_iter,
-                last_update,
-                energy: None,
-            });
-            if last_update.is_nan() || last_update > DIVERGENCE_UPDATE {
+            if report_iteration(iterations, options.max_iter, last_update, progress) {
                 diverged = true;
                 break;
             }
@@ -625,14 +619,22 @@ impl Solver {
         reflectance: &dyn ReflectanceMap,
         stats: SolveStats,
     ) -> Solution {
+        let (f, g) = self.current_fg();
+        finish(f, g, image, bc, reflectance, stats)
+    }
+
+    /// The current values as (f, g) grids (the fixed pixels' values included, 0 outside the
+    /// domain).
+    fn current_fg(&self) -> (Image, Image) {
         let (w, h) = (self.width, self.height);
         let value = |i: usize, of: &[f64]| match self.slot[i] {
             NO_SLOT => 0.0,
             s => of[s as usize],
         };
-        let f = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f));
-        let g = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g));
-        finish(f, g, image, bc, reflectance, stats)
+        (
+            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f)),
+            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g)),
+        )
     }
 }
 
@@ -686,6 +688,24 @@ fn finish(
         globalised: false,
         energy_history: Vec::new(),
     }
+}
+
+/// Reports iteration `iteration` (of at most `max_iter`) with its largest update to
+/// `progress`; returns whether that update means the iteration blew up (not a number, or
+/// above [`DIVERGENCE_UPDATE`]).
+fn report_iteration(
+    iteration: usize,
+    max_iter: usize,
+    last_update: f64,
+    progress: &mut dyn FnMut(&Progress),
+) -> bool {
+    progress(&Progress {
+        iteration,
+        max_iter,
+        last_update,
+        energy: None,
+    });
+    last_update.is_nan() || last_update > DIVERGENCE_UPDATE
 }
 
 /// Counters of a finished iteration.
