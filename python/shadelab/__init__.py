@@ -325,7 +325,7 @@ def solve(
     estimated; or ``"estimate"``: the library's albedo rule (the 95th percentile of the
     brightness on the mask, as ``solve --albedo estimate`` and ``eval``), so the answer does not
     depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives it.
-    ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``), ``tol`` and
+    ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``, ``integrable``), ``tol`` and
     ``max_iter`` are the solver's settings.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)

@@ -52,7 +52,7 @@ def solve(
     boundary: str = ...,
     albedo: Optional[float] = ...,
     lam: float = ...,
-    method: Literal["multigrid", "jacobi", "literal"] = ...,
+    method: Literal["multigrid", "jacobi", "literal", "integrable"] = ...,
     tol: float = ...,
     max_iter: Optional[int] = ...,
 ) -> Reconstruction: ...

@@ -63,10 +63,16 @@ pub struct Args {
     pub bunny_size: usize,
     #[command(flatten)]
     pub solver: SolverFlags,
-    /// Iteration: multigrid (the default) or jacobi (the same fixed point, slowly; for
-    /// comparison).
-    #[arg(long, value_name = "multigrid|jacobi", default_value = "multigrid")]
-    pub method: String,
+    /// The methods each case is solved with, a row each (comma separated): multigrid
+    /// (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid
+    /// solution), jacobi (Ikeuchi–Horn's fixed point, slowly; for comparison).
+    #[arg(
+        long,
+        value_name = "METHODS",
+        value_delimiter = ',',
+        default_value = "multigrid,integrable"
+    )]
+    pub method: Vec<String>,
     /// The commit to record in the report; default: `git rev-parse --short HEAD` in the
     /// current folder (with `-dirty` when tracked files are modified), or "unknown".
     #[arg(long, value_name = "ID")]
@@ -99,10 +105,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.bunny_size = args.bunny_size;
     config.albedo_quantile = args.albedo_quantile;
     config.ball_albedo_from_truth = args.ball_albedo_from_truth;
-    let method = args.method.parse::<Method>()?;
-    config.options.method = method;
-    config.options.max_iter = method.default_max_iter();
+    config.methods = args
+        .method
+        .iter()
+        .map(|m| m.trim().parse::<Method>())
+        .collect::<Result<_, _>>()?;
     args.solver.apply(&mut config.options);
+    config.max_iter = args.solver.max_iter;
     config.validate()?;
     let commit = match &args.commit {
         Some(c) => c.clone(),

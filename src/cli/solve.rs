@@ -40,11 +40,12 @@ pub struct Args {
     /// (the same shape however the image was scaled).
     #[arg(long, value_name = "A|estimate", allow_hyphen_values = true)]
     pub albedo: Option<String>,
-    /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow) or literal
-    /// (R at the current value; unstable, for study).
+    /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow), literal
+    /// (R at the current value; unstable, for study) or integrable (depth and gradients solved
+    /// together from the multigrid answer, Horn 1990: the normals of one surface).
     #[arg(
         long,
-        value_name = "multigrid|jacobi|literal",
+        value_name = "multigrid|jacobi|literal|integrable",
         default_value = "multigrid"
     )]
     pub method: String,

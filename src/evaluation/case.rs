@@ -97,12 +97,13 @@ pub struct CaseResult {
     pub height: usize,
     /// Pixels in the domain.
     pub domain_pixels: usize,
-    /// The solver method (`multigrid`, `jacobi`), as `solve --method` names it.
+    /// The solver method (`multigrid`, `integrable`, `jacobi`), as `solve --method` names it.
     pub method: String,
     /// Whether the multigrid cycles stalled or blew up and the energy descent finished the
     /// solve ([`crate::solver::Solution::globalised`]).
     pub globalised: bool,
-    /// Multigrid cycles (or sweeps) done.
+    /// Iterations done, in the method's unit (multigrid cycles, Jacobi sweeps, integrable
+    /// iterations; the integrable method's warm start not counted).
     pub iterations: usize,
     /// Whether the solve met its tolerance.
     pub converged: bool,

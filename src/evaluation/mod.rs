@@ -1,8 +1,9 @@
 //! Evaluation of the shape-from-shading engine on data nobody here made.
 //!
 //! Each case is an image with its light and the object's mask, solved by the engine as a user
-//! would run it ([`crate::solver::Solver`] with the multigrid method, a boundary condition
-//! from [`crate::boundary`], Lambertian reflectance, then [`crate::integrate`] to depth), and
+//! would run it ([`crate::solver::Solver`] with each of [`Config::methods`]: by default the
+//! multigrid Ikeuchi–Horn method and the integrable one, a row each; a boundary condition from
+//! [`crate::boundary`], Lambertian reflectance, then [`crate::integrate`] to depth), and
 //! measured against the truth the data set has:
 //!
 //! - **bunny**: the Stanford bunny mesh rasterised (its interpolated vertex normals are the
@@ -40,7 +41,7 @@ use crate::light::Light;
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
-use crate::solver::SolveOptions;
+use crate::solver::{Method, SolveOptions};
 use crate::surface::Surface;
 use crop::Crop;
 use serde_json::{json, Value};
@@ -80,15 +81,25 @@ pub struct Config {
     /// Divide the ball photographs by the albedo their true normals give instead of the
     /// estimate: not a user's situation, a reference for how much the estimate costs.
     pub ball_albedo_from_truth: bool,
-    /// The solver's parameters.
+    /// The solver's parameters λ and tolerance (its method and cap are set per method by
+    /// [`Config::options_for`]).
     pub options: SolveOptions,
+    /// The methods every case is solved with, a row each, in this order.
+    pub methods: Vec<Method>,
+    /// The cap of iterations for every method; `None`: each method's default
+    /// ([`Method::default_max_iter`]).
+    pub max_iter: Option<usize>,
 }
 
-/// The solver parameters of the evaluation: the defaults of `shadelab solve` (multigrid, at
-/// most [`MAX_CYCLES`] cycles).
+/// The solver parameters of the evaluation: the defaults of `shadelab solve` (λ = 1,
+/// tolerance 10⁻⁶; the method and cap are set per method, [`Config::options_for`]).
 pub fn default_options() -> SolveOptions {
     SolveOptions::default()
 }
+
+/// The methods the evaluation compares by default: Ikeuchi–Horn (multigrid, the default of
+/// `shadelab solve`) and the integrable method, a row each.
+pub const DEFAULT_METHODS: &[Method] = &[Method::Multigrid, Method::Integrable];
 
 /// The most multigrid cycles a case may take: `shadelab solve`'s default.
 pub const MAX_CYCLES: usize = crate::solver::MULTIGRID_MAX_CYCLES;
@@ -127,12 +138,29 @@ impl Config {
             albedo_quantile: albedo::BRIGHT_QUANTILE,
             ball_albedo_from_truth: false,
             options: default_options(),
+            methods: DEFAULT_METHODS.to_vec(),
+            max_iter: None,
         })
+    }
+
+    /// The solver's parameters for `method`: λ and the tolerance of [`Config::options`], the
+    /// cap [`Config::max_iter`] or the method's default.
+    pub fn options_for(&self, method: Method) -> SolveOptions {
+        SolveOptions {
+            method,
+            max_iter: self.max_iter.unwrap_or(method.default_max_iter()),
+            ..self.options
+        }
     }
 
     /// Checks the parameters, naming the bad one.
     pub fn validate(&self) -> Result<()> {
-        self.options.validate()?;
+        if self.methods.is_empty() {
+            return Err(Error::invalid("no solver method chosen"));
+        }
+        for &m in &self.methods {
+            self.options_for(m).validate()?;
+        }
         if !(16..=4096).contains(&self.bunny_size) {
             return Err(Error::invalid(format!(
                 "bunny size {} must be from 16 to 4096 pixels",
@@ -176,19 +204,21 @@ impl Config {
         Ok(())
     }
 
-    /// The number of cases [`run`] will solve.
+    /// The number of rows [`run`] will give: each case once per method.
     pub fn case_count(&self) -> usize {
         let compared = self.boundaries_compared().len();
-        self.sets
-            .iter()
-            .map(|s| match s {
-                Set::Bunny => self.bunny_lights.len(),
-                Set::Mozart => self.mozart_lights.len() * compared,
-                Set::Diligent => self.diligent_objects.len(),
-                Set::Ball => self.ball_images.len() * compared,
-                Set::Beethoven => datasets::BEETHOVEN_IMAGES.len(),
-            })
-            .sum()
+        self.methods.len()
+            * self
+                .sets
+                .iter()
+                .map(|s| match s {
+                    Set::Bunny => self.bunny_lights.len(),
+                    Set::Mozart => self.mozart_lights.len() * compared,
+                    Set::Diligent => self.diligent_objects.len(),
+                    Set::Ball => self.ball_images.len() * compared,
+                    Set::Beethoven => datasets::BEETHOVEN_IMAGES.len(),
+                })
+                .sum::<usize>()
     }
 
     /// The boundary conditions the ball and Mozart are solved with.
@@ -243,10 +273,10 @@ impl Config {
             },
             "occluding_shrink": crate::boundary::OCCLUDING_SHRINK,
             "solver": {
-                "method": self.options.method.to_string(),
+                "methods": self.methods.iter().map(Method::to_string).collect::<Vec<_>>(),
                 "lambda": self.options.lambda,
                 "tol": self.options.tol,
-                "max_iter": self.options.max_iter,
+                "max_iter": self.methods.iter().map(|&m| (m.to_string(), Value::from(self.options_for(m).max_iter))).collect::<serde_json::Map<_, _>>(),
                 "reflectance": "Lambertian, albedo 1 (images divided by the albedo), no ambient",
             },
             "integration": {
@@ -277,9 +307,11 @@ pub fn light_label(light: &Light) -> String {
     }
 }
 
-/// Runs the evaluation. `progress` is told before each case (a stage of one step per case, its
-/// message the case's label); `picture` receives each case's picture
-/// ([`pictures::case_panel`]) with a file name for it, when `want_pictures` is set.
+/// Runs the evaluation: every case solved by each of [`Config::methods`], a row each (the
+/// methods' rows of a case one after the other). `progress` is told before each row (a stage
+/// of one step per row, its message the case's label and method); `picture` receives each
+/// row's picture ([`pictures::case_panel`]) with a file name for it (the case's, with
+/// `-<method>` added for every method but multigrid), when `want_pictures` is set.
 /// Fails before any work when a file is missing ([`datasets::check_files`]).
 pub fn run(
     config: &Config,
@@ -298,14 +330,19 @@ pub fn run(
     progress.start(total as u64, "evaluating");
     let mut results = Vec::with_capacity(total);
     let mut finish = |case: Case, file: String, results: &mut Vec<CaseResult>| -> Result<()> {
-        let label = format!("{} {}", case.object, case.light_label);
-        progress.set_position(results.len() as u64);
-        progress.message(&label);
-        let output = solve_case(&case, &config.options)?;
-        if want_pictures {
-            picture(&file, &pictures::case_panel(&case, &output))?;
+        for &method in &config.methods {
+            let label = format!("{} {} ({method})", case.object, case.light_label);
+            progress.set_position(results.len() as u64);
+            progress.message(&label);
+            let output = solve_case(&case, &config.options_for(method))?;
+            if want_pictures {
+                picture(
+                    &method_file_name(&file, method),
+                    &pictures::case_panel(&case, &output),
+                )?;
+            }
+            results.push(output.result);
         }
-        results.push(output.result);
         Ok(())
     };
     let boundary_for = |set: Set| {
@@ -501,6 +538,16 @@ fn photo_case(
         truth_normals,
         truth_depth: None,
         albedo,
+    }
+}
+
+/// The picture file of a case solved by `method`: the case's own name for multigrid (the
+/// default method, whose pictures the documentation shows), `-<method>` before the extension
+/// for any other.
+fn method_file_name(file: &str, method: Method) -> String {
+    match (method, file.strip_suffix(".png")) {
+        (Method::Multigrid, _) | (_, None) => file.to_string(),
+        (_, Some(stem)) => format!("{stem}-{method}.png"),
     }
 }
 

@@ -42,9 +42,9 @@ pub fn write_summary(
 }
 
 /// The table's header: what each column means is in docs/evaluation.md.
-const HEADER: &str = "| set | object | light | boundary | mean error | median error | depth error (RMS after scale+offset fit) | residual | seconds |\n|---|---|---|---|---:|---:|---:|---:|---:|\n";
+const HEADER: &str = "| set | object | light | boundary | method | mean error | median error | depth error (RMS after scale+offset fit) | residual | seconds |\n|---|---|---|---|---|---:|---:|---:|---:|---:|\n";
 
-/// One Markdown table row per case: normal errors in degrees on the object's mask, the depth
+/// One Markdown table row per case and method: normal errors in degrees on the object's mask, the depth
 /// error in pixels and as a percentage of the true depth range, the shading residual
 /// mean |R(n) − I| in units of the albedo, and the seconds spent solving and integrating;
 /// "—" where there is no truth to compare with.
@@ -68,8 +68,8 @@ pub fn markdown_table(results: &[CaseResult]) -> String {
             (true, false) => "",
         };
         text.push_str(&format!(
-            "| {} | {} | {} | {} | {mean} | {median} | {depth} | {:.3} | {:.2}{flag} |\n",
-            r.set, r.object, r.light_label, r.boundary, r.residual, r.seconds
+            "| {} | {} | {} | {} | {} | {mean} | {median} | {depth} | {:.3} | {:.2}{flag} |\n",
+            r.set, r.object, r.light_label, r.boundary, r.method, r.residual, r.seconds
         ));
     }
     text
@@ -116,7 +116,7 @@ mod tests {
         assert_eq!(lines.len(), 4);
         assert_eq!(
             lines[2],
-            "| beethoven | beethoven | image0 | occluding | — | — | — | 0.012 | 0.50 |"
+            "| beethoven | beethoven | image0 | occluding | multigrid | — | — | — | 0.012 | 0.50 |"
         );
         assert!(lines[3].contains("| 3.15° | 2.50° | — |"), "{}", lines[3]);
     }

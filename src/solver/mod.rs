@@ -49,10 +49,14 @@ pub enum Method {
     /// R, ∂R/∂f, ∂R/∂g at the current (f, g): the form often printed, which is unstable; kept
     /// to demonstrate that.
     Literal,
+    /// Gradients and depth solved together (Horn 1990, "Height and gradient from shading"),
+    /// from the multigrid solution: the normals become those of one surface
+    /// (`integrable.rs`).
+    Integrable,
 }
 
 /// The names of the methods, as `--method` spells them.
-pub const METHOD_NAMES: &[&str] = &["multigrid", "jacobi", "literal"];
+pub const METHOD_NAMES: &[&str] = &["multigrid", "jacobi", "literal", "integrable"];
 
 impl FromStr for Method {
     type Err = Error;
@@ -61,6 +65,7 @@ impl FromStr for Method {
             "multigrid" => Ok(Method::Multigrid),
             "jacobi" => Ok(Method::Jacobi),
             "literal" => Ok(Method::Literal),
+            "integrable" => Ok(Method::Integrable),
             other => Err(Error::unknown("solver method", other, METHOD_NAMES)),
         }
     }
@@ -72,6 +77,7 @@ impl fmt::Display for Method {
             Method::Multigrid => "multigrid",
             Method::Jacobi => "jacobi",
             Method::Literal => "literal",
+            Method::Integrable => "integrable",
         })
     }
 }
@@ -93,20 +99,24 @@ pub struct SolveOptions {
 
 impl Method {
     /// The default cap of this method's iterations: [`MULTIGRID_MAX_CYCLES`] cycles for
-    /// multigrid, [`JACOBI_MAX_SWEEPS`] sweeps for Jacobi and the literal update. The one place
-    /// these caps are decided.
+    /// multigrid, [`JACOBI_MAX_SWEEPS`] sweeps for Jacobi and the literal update,
+    /// [`INTEGRABLE_MAX_ITER`] iterations (depth solves) for the integrable method. The one
+    /// place these caps are decided.
     pub const fn default_max_iter(self) -> usize {
         match self {
             Method::Multigrid => MULTIGRID_MAX_CYCLES,
             Method::Jacobi | Method::Literal => JACOBI_MAX_SWEEPS,
+            Method::Integrable => INTEGRABLE_MAX_ITER,
         }
     }
 
-    /// What one iteration of this method is called: `cycles` for multigrid, `sweeps` else.
+    /// What one iteration of this method is called: `cycles` for multigrid, `iterations` for
+    /// the integrable method (one depth solve and its gradient sweeps), `sweeps` else.
     pub const fn iteration_unit(self) -> &'static str {
         match self {
             Method::Multigrid => "cycles",
             Method::Jacobi | Method::Literal => "sweeps",
+            Method::Integrable => "iterations",
         }
     }
 }
@@ -393,6 +403,9 @@ impl Solver {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
+        if options.method == Method::Integrable {
+            return self.solve_integrable(image, bc, reflectance, options, progress);
+        }
         if options.method == Method::Multigrid {
             let (w, h) = (self.width, self.height);
             let mg = self
@@ -439,13 +452,7 @@ impl Solver {
             std::mem::swap(&mut self.cur_f, &mut self.next_f);
             std::mem::swap(&mut self.cur_g, &mut self.next_g);
             iterations += 1;
-            progress(&Progress {
-                iteration: iterations,
-                max_iter: options.max_iter,
-                last_update,
-                energy: None,
-            });
-            if last_update.is_nan() || last_update > DIVERGENCE_UPDATE {
+            if report_iteration(iterations, options.max_iter, last_update, progress) {
                 diverged = true;
                 break;
             }
@@ -626,14 +633,22 @@ impl Solver {
         reflectance: &dyn ReflectanceMap,
         stats: SolveStats,
     ) -> Solution {
+        let (f, g) = self.current_fg();
+        finish(f, g, image, bc, reflectance, stats)
+    }
+
+    /// The current values as (f, g) grids (the fixed pixels' values included, 0 outside the
+    /// domain).
+    fn current_fg(&self) -> (Image, Image) {
         let (w, h) = (self.width, self.height);
         let value = |i: usize, of: &[f64]| match self.slot[i] {
             NO_SLOT => 0.0,
             s => of[s as usize],
         };
-        let f = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f));
-        let g = Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g));
-        finish(f, g, image, bc, reflectance, stats)
+        (
+            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_f)),
+            Grid::from_fn(w, h, |c, r| value(r * w + c, &self.cur_g)),
+        )
     }
 }
 
@@ -700,6 +715,24 @@ fn finish(
     }
 }
 
+/// Reports iteration `iteration` (of at most `max_iter`) with its largest update to
+/// `progress`; returns whether that update means the iteration blew up (not a number, or
+/// above [`DIVERGENCE_UPDATE`]).
+fn report_iteration(
+    iteration: usize,
+    max_iter: usize,
+    last_update: f64,
+    progress: &mut dyn FnMut(&Progress),
+) -> bool {
+    progress(&Progress {
+        iteration,
+        max_iter,
+        last_update,
+        energy: None,
+    });
+    last_update.is_nan() || last_update > DIVERGENCE_UPDATE
+}
+
 /// Counters of a finished iteration.
 struct SolveStats {
     iterations: usize,
@@ -756,9 +789,11 @@ fn sweep_nodes(
 
 pub mod crease;
 mod globalize;
+mod integrable;
 mod multigrid;
 
 pub use globalize::STALL_WINDOW;
+pub use integrable::{INTEGRABLE_MAX_ITER, MOMENTUM, MU, SIGMA, SWEEPS};
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,459 @@
+//! The integrable method ([`super::Method::Integrable`]): gradients and depth solved together,
+//! after Horn (1990), "Height and gradient from shading" (IJCV 5(1)).
+//!
+//! The unknowns are the orientations (f, g) of the domain's unknown pixels and the depth z of
+//! the whole domain. The energy is
+//!
+//! E = σ·e_S + λ·e_R + μ·e_I,  e_I = ¼ Σ_pixels |(f, g) − (f, g)_z|²,
+//!
+//! with e_S and e_R the Ikeuchi–Horn terms (`mod.rs`) and (f, g)_z the orientation of the depth
+//! at the pixel: its slopes are the mean of the depth differences across the pixel's edges in
+//! the domain (the central difference inside, the one-sided one at the domain's edge). It is
+//! minimised by alternation, each step lowering the energy in its own unknowns:
+//!
+//! 1. **depth**: z is the least-squares integral of the slopes of (f, g) on the domain, the
+//!    masked Poisson solve of [`crate::integrate::integrate_gradients`] (the same one that turns
+//!    any solve's normals into depth);
+//! 2. **gradients**: a few sweeps of the Ikeuchi–Horn update pulled toward (f, g)_z,
+//!
+//!    x ← x̃ + 4λ(I − R(x̃))·∇R(x̃) / (D + 4λ|∇R(x̃)|²),  x̃ = (σk·x̄ + μ·x_z)/D,  D = σk + μ,
+//!
+//!    for x = (f, g), x̄ the mean of the k neighbours in the domain: the pixel's equation
+//!    linearised at x̃ and solved exactly (a pointwise Gauss–Newton step), which no choice of
+//!    λ, σ or μ makes unstable.
+//!
+//! It starts from the Ikeuchi–Horn solution (multigrid, with its globalisation), with σ =
+//! [`SIGMA`] = 1 and μ = [`MU`]. Horn proposes shrinking σ once the field must be integrable;
+//! on the evaluation's cases σ = 0.5 gained a little on Mozart (12.2° against 12.8° frontal)
+//! but let the folded DiLiGenT objects drift to wrong surfaces (goblet 55.9°, reading 57.3°),
+//! so σ stays 1. The boundary conditions are the solver's: the fixed pixels (the occluding
+//! limb, the flat rim) keep their (f, g) and take part in the depth solve; a free edge has
+//! fewer neighbours, as before. Pixels in attached shadow carry no data term.
+//!
+//! One iteration is one depth solve and [`SWEEPS`] sweeps, a map y = T(x) of the (f, g); the
+//! alternation alone contracts slowly (about 0.98 per iteration on the ball photographs: the
+//! smooth part of the field moves the way a Jacobi sweep moves it), so the next iterate is
+//! y + β·(y − y_previous) with momentum β = [`MOMENTUM`], dropped to 0 for an iteration
+//! whenever the update grew (a restart). It has converged when an iteration moves no f or g by more than `tol`: about 80 iterations on a ball photograph
+//! instead of 400. Everything runs in a fixed order (sweeps in fixed chunks, the Poisson solve
+//! sequential), so the result does not depend on the thread count.
+//!
+//! The returned (f, g) are the last gradients, within μ's pull of the depth's own: integrating
+//! them (as every solve is integrated) gives the depth of the last depth solve to within the
+//! last iteration's change (below `tol` once converged).
+
+use super::{
+    report_iteration, Method, Node, Progress, Solution, SolveOptions, SolveStats, Solver, CHUNK,
+    MULTIGRID_MAX_CYCLES, PARALLEL_MIN,
+};
+use crate::boundary::{BoundaryConditions, Role};
+use crate::error::Result;
+use crate::gradient_space::fg_from_pq;
+use crate::grid::{Image, Mask};
+use crate::integrate::{gradients_from_fg, integrate_gradients, PoissonOptions, DEFAULT_MIN_NZ};
+use crate::parallel::prelude::*;
+use crate::reflectance::ReflectanceMap;
+
+/// Gradient sweeps per iteration (between two depth solves).
+pub const SWEEPS: usize = 10;
+
+/// The weight μ of the integrability term.
+pub const MU: f64 = 0.5;
+
+/// The weight σ of the smoothness term (see the module documentation).
+pub const SIGMA: f64 = 1.0;
+
+/// The momentum β of the iteration (see the module documentation).
+pub const MOMENTUM: f64 = 0.8;
+
+/// The default cap on iterations of the integrable method (the warm start's multigrid cycles
+/// not counted).
+pub const INTEGRABLE_MAX_ITER: usize = 200;
+
+/// The relative tolerance of each depth solve: its least-squares depth to about 6 digits,
+/// far below what one iteration of the gradients moves.
+const POISSON_TOL: f64 = 1e-7;
+
+impl Solver {
+    /// The integrable method on a domain already built (see the module documentation).
+    pub(super) fn solve_integrable(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Solution> {
+        let warm = SolveOptions {
+            method: Method::Multigrid,
+            max_iter: MULTIGRID_MAX_CYCLES,
+            ..*options
+        };
+        let start = self.solve_conditions(image, bc, reflectance, &warm, &mut |_| {})?;
+        if start.diverged || crate::cancel::requested() {
+            return Ok(start);
+        }
+        let n = self.build(image, bc, reflectance, options.lambda);
+        for (j, &p) in self.pixels.iter().enumerate() {
+            self.cur_f[j] = start.f.data()[p as usize];
+            self.cur_g[j] = start.g.data()[p as usize];
+        }
+        self.next_f.clone_from(&self.cur_f);
+        self.next_g.clone_from(&self.cur_g);
+        let domain: Mask = bc.roles.map(|r| *r != Role::Outside);
+        let poisson = PoissonOptions {
+            tol: POISSON_TOL,
+            ..PoissonOptions::default()
+        };
+        let (mut target_f, mut target_g) = (vec![0.0; n], vec![0.0; n]);
+        let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
+        let (mut previous_f, mut previous_g) = (vec![0.0; n], vec![0.0; n]);
+        let mut previous_update = f64::INFINITY;
+        let mut iterations = 0;
+        let mut last_update = 0.0;
+        let mut converged = n == 0;
+        let mut diverged = false;
+        while !converged && iterations < options.max_iter && !crate::cancel::requested() {
+            let (f, g) = self.current_fg();
+            let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;
+            let z = integrate_gradients(&dz_dx, &dz_dy, &domain, &poisson)?.depth;
+            depth_orientations(&z, &domain, &self.pixels, &mut target_f, &mut target_g);
+            before_f.copy_from_slice(&self.cur_f[..n]);
+            before_g.copy_from_slice(&self.cur_g[..n]);
+            for _ in 0..SWEEPS {
+                self.screened_sweep(n, reflectance, MU, SIGMA, (&target_f, &target_g));
+                std::mem::swap(&mut self.cur_f, &mut self.next_f);
+                std::mem::swap(&mut self.cur_g, &mut self.next_g);
+            }
+            last_update = largest_change(&before_f, &self.cur_f[..n])
+                .max(largest_change(&before_g, &self.cur_g[..n]));
+            // Momentum on the iteration's result y: x ← y + β (y − y_previous), restarted
+            // (β = 0) whenever the update grew.
+            let beta = if iterations > 0 && last_update <= previous_update {
+                MOMENTUM
+            } else {
+                0.0
+            };
+            for (cur, prev) in [
+                (&mut self.cur_f[..n], &mut previous_f),
+                (&mut self.cur_g[..n], &mut previous_g),
+            ] {
+                for (x, y) in cur.iter_mut().zip(prev.iter_mut()) {
+                    let result = *x;
+                    *x = result + beta * (result - *y);
+                    *y = result;
+                }
+            }
+            previous_update = last_update;
+            iterations += 1;
+            if report_iteration(iterations, options.max_iter, last_update, progress) {
+                diverged = true;
+                break;
+            }
+            converged = last_update < options.tol;
+        }
+        Ok(self.solution(
+            image,
+            bc,
+            reflectance,
+            SolveStats {
+                iterations,
+                converged,
+                diverged,
+                last_update,
+                unknowns: n,
+            },
+        ))
+    }
+
+    /// One sweep of the screened update from `cur` into `next` (see the module documentation).
+    fn screened_sweep(
+        &mut self,
+        n: usize,
+        reflectance: &dyn ReflectanceMap,
+        mu: f64,
+        sigma: f64,
+        target: (&[f64], &[f64]),
+    ) {
+        let (cur_f, cur_g) = (&self.cur_f[..], &self.cur_g[..]);
+        let next_f = &mut self.next_f[..n];
+        let next_g = &mut self.next_g[..n];
+        let weights = Weights { mu, sigma };
+        if n < PARALLEL_MIN {
+            screened_nodes(
+                &self.nodes,
+                0,
+                (cur_f, cur_g),
+                (next_f, next_g),
+                target,
+                reflectance,
+                weights,
+            );
+            return;
+        }
+        self.nodes
+            .par_chunks(CHUNK)
+            .zip(next_f.par_chunks_mut(CHUNK))
+            .zip(next_g.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(chunk, ((nodes, nf), ng))| {
+                screened_nodes(
+                    nodes,
+                    chunk * CHUNK,
+                    (cur_f, cur_g),
+                    (nf, ng),
+                    target,
+                    reflectance,
+                    weights,
+                )
+            });
+    }
+}
+
+/// The weights of the smoothness (σ) and integrability (μ) terms in a sweep.
+#[derive(Debug, Clone, Copy)]
+struct Weights {
+    mu: f64,
+    sigma: f64,
+}
+
+/// The screened update of the unknowns `first..first + nodes.len()`.
+fn screened_nodes(
+    nodes: &[Node],
+    first: usize,
+    (cur_f, cur_g): (&[f64], &[f64]),
+    (next_f, next_g): (&mut [f64], &mut [f64]),
+    (target_f, target_g): (&[f64], &[f64]),
+    reflectance: &dyn ReflectanceMap,
+    Weights { mu, sigma }: Weights,
+) {
+    for (j, node) in nodes.iter().enumerate() {
+        let [a, b, c, d] = node.neighbours.map(|s| s as usize);
+        let sum_f = cur_f[a] + cur_f[b] + cur_f[c] + cur_f[d];
+        let sum_g = cur_g[a] + cur_g[b] + cur_g[c] + cur_g[d];
+        // k neighbours: inv_k = 1/k (0 for an isolated pixel), and λ·4/k is the data weight.
+        let k = if node.inv_k > 0.0 {
+            1.0 / node.inv_k
+        } else {
+            0.0
+        };
+        let (tf, tg) = (target_f[first + j], target_g[first + j]);
+        let denominator = sigma * k + mu;
+        if denominator <= 0.0 {
+            next_f[j] = cur_f[first + j];
+            next_g[j] = cur_g[first + j];
+            continue;
+        }
+        let f_tilde = (sigma * sum_f + mu * tf) / denominator;
+        let g_tilde = (sigma * sum_g + mu * tg) / denominator;
+        let (mut f_new, mut g_new) = (f_tilde, g_tilde);
+        if node.data_weight != 0.0 {
+            let four_lambda = node.data_weight * k;
+            let s = reflectance.fg(f_tilde, g_tilde);
+            let gain = four_lambda * (node.intensity - s.value)
+                / (denominator + four_lambda * (s.d1 * s.d1 + s.d2 * s.d2));
+            f_new += gain * s.d1;
+            g_new += gain * s.d2;
+        }
+        next_f[j] = f_new;
+        next_g[j] = g_new;
+    }
+}
+
+/// The orientation (f, g) of the depth `z` at each unknown pixel (`pixels`, row-major
+/// indices): slopes from the mean of the depth differences across the pixel's edges inside
+/// `domain` (0 along an axis with none).
+fn depth_orientations(
+    z: &Image,
+    domain: &Mask,
+    pixels: &[u32],
+    target_f: &mut [f64],
+    target_g: &mut [f64],
+) {
+    let (w, h) = (z.width(), z.height());
+    let (zd, md) = (z.data(), domain.data());
+    let slope = |i: usize, back: Option<usize>, ahead: Option<usize>| -> f64 {
+        let mut sum = 0.0;
+        let mut count = 0.0;
+        if let Some(b) = back.filter(|&b| md[b]) {
+            sum += zd[i] - zd[b];
+            count += 1.0;
+        }
+        if let Some(a) = ahead.filter(|&a| md[a]) {
+            sum += zd[a] - zd[i];
+            count += 1.0;
+        }
+        if count > 0.0 {
+            sum / count
+        } else {
+            0.0
+        }
+    };
+    for (j, &p) in pixels.iter().enumerate() {
+        let i = p as usize;
+        let (c, r) = (i % w, i / w);
+        let dz_dx = slope(i, (c > 0).then(|| i - 1), (c + 1 < w).then(|| i + 1));
+        // Rows run downward and y upward: ∂z/∂y = −∂z/∂row.
+        let dz_dy = -slope(i, (r > 0).then(|| i - w), (r + 1 < h).then(|| i + w));
+        // p = −∂z/∂x, q = −∂z/∂y.
+        let (f, g) = fg_from_pq(-dz_dx, -dz_dy);
+        target_f[j] = f;
+        target_g[j] = g;
+    }
+}
+
+/// The largest |a − b| (∞ when one is not a number).
+fn largest_change(a: &[f64], b: &[f64]) -> f64 {
+    let mut largest: f64 = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        let change = (x - y).abs();
+        if change.is_nan() {
+            return f64::INFINITY;
+        } else if change > largest {
+            largest = change;
+        }
+    }
+    largest
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::picture;
+    use super::*;
+    use crate::boundary::{boundary_conditions, Boundary};
+    use crate::gradient_space::angle_deg;
+    use crate::light::Light;
+    use crate::surface::{gaussian, sphere, Surface};
+
+    /// Solves the picture of `surface` under `light` with `method` (λ = 1, its defaults).
+    fn solve(surface: &Surface, light: Light, boundary: &Boundary, method: Method) -> Solution {
+        let (image, map) = picture(surface, light);
+        let mut solver = Solver::new(surface.width(), surface.height()).unwrap();
+        let options = SolveOptions::for_method(method);
+        solver
+            .solve(&image, &surface.mask, boundary, &map, &options)
+            .unwrap()
+    }
+
+    /// Mean angle to the truth over the unknown pixels.
+    fn mean_error(s: &Solution, truth: &Surface, boundary: &Boundary) -> f64 {
+        let bc = boundary_conditions(&truth.mask, boundary).unwrap();
+        let normals = s.normals();
+        let (mut sum, mut n) = (0.0, 0.0);
+        for (i, role) in bc.roles.data().iter().enumerate() {
+            if *role == Role::Unknown {
+                sum += angle_deg(&normals.data()[i], &truth.normals.data()[i]);
+                n += 1.0;
+            }
+        }
+        sum / n
+    }
+
+    /// The RMS, over the edges between two unknown pixels, of what the least-squares depth of
+    /// the solution's slopes leaves of them: z_j − z_i against the mean of the two slopes
+    /// (0 for the slopes of a surface, up to the discretisation).
+    fn integrability_residual(s: &Solution, mask: &Mask, boundary: &Boundary) -> f64 {
+        let bc = boundary_conditions(mask, boundary).unwrap();
+        let (dx, dy) = gradients_from_fg(s.f.clone(), s.g.clone(), mask, DEFAULT_MIN_NZ).unwrap();
+        let z = integrate_gradients(&dx, &dy, mask, &PoissonOptions::default())
+            .unwrap()
+            .depth;
+        let unknown = |c: usize, r: usize| *bc.roles.get(c, r) == Role::Unknown;
+        let (mut sum, mut n) = (0.0, 0.0);
+        for r in 0..mask.height() - 1 {
+            for c in 0..mask.width() - 1 {
+                if !unknown(c, r) {
+                    continue;
+                }
+                if unknown(c + 1, r) {
+                    let e = z.get(c + 1, r) - z.get(c, r) - 0.5 * (dx.get(c, r) + dx.get(c + 1, r));
+                    sum += e * e;
+                    n += 1.0;
+                }
+                if unknown(c, r + 1) {
+                    let e = z.get(c, r + 1) - z.get(c, r) + 0.5 * (dy.get(c, r) + dy.get(c, r + 1));
+                    sum += e * e;
+                    n += 1.0;
+                }
+            }
+        }
+        (sum / n).sqrt()
+    }
+
+    /// A 96² sphere under an oblique light (tilt 0°, slant 45°), occluding boundary: the
+    /// integrable method converges (57 iterations), its slopes are those of a surface to
+    /// 3.2e-2 px per edge (Ikeuchi–Horn's leave 1.05e-1, three times as much), and its normals
+    /// are closer to the truth (measured 7.87° mean against Ikeuchi–Horn's 8.18°).
+    #[test]
+    fn oblique_sphere_is_recovered_as_a_surface() {
+        let s = sphere(96, 96, 43.0).unwrap();
+        let light = Light::from_tilt_slant(0.0, 45.0).unwrap();
+        let b = Boundary::Occluding;
+        let ih = solve(&s, light, &b, Method::Multigrid);
+        let int = solve(&s, light, &b, Method::Integrable);
+        assert!(
+            int.converged && !int.diverged && !int.globalised,
+            "{}",
+            int.last_update
+        );
+        assert!(int.last_update < 1e-6);
+        let (e_ih, e_int) = (mean_error(&ih, &s, &b), mean_error(&int, &s, &b));
+        let (r_ih, r_int) = (
+            integrability_residual(&ih, &s.mask, &b),
+            integrability_residual(&int, &s.mask, &b),
+        );
+        assert!((8.0..8.4).contains(&e_ih), "{e_ih}");
+        assert!(e_int < e_ih - 0.25 && e_int < 7.9, "{e_int}");
+        assert!(r_ih > 0.1 && r_int < 0.033, "{r_ih} {r_int}");
+    }
+
+    /// The frontal sphere converges within 1.3° (measured 1.01°, in 31 iterations); a
+    /// Gaussian bump with the free boundary improves on Ikeuchi–Horn (4.31° → 4.17°) and stays
+    /// finite, though it does not meet `tol` within the default cap of 200 iterations (last
+    /// update 2.4e-5, reported).
+    #[test]
+    fn frontal_sphere_converges_and_a_free_boundary_improves() {
+        let s = sphere(96, 96, 43.0).unwrap();
+        let b = Boundary::Occluding;
+        let int = solve(&s, Light::FRONT, &b, Method::Integrable);
+        let e = mean_error(&int, &s, &b);
+        assert!(int.converged && e < 1.3, "{e} {}", int.iterations);
+        let bump = gaussian(96, 96, 12.0, 12.0, 0.0, 0.0).unwrap();
+        let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
+        let ih = solve(&bump, light, &Boundary::Free, Method::Multigrid);
+        let int = solve(&bump, light, &Boundary::Free, Method::Integrable);
+        let (e_ih, e_int) = (
+            mean_error(&ih, &bump, &Boundary::Free),
+            mean_error(&int, &bump, &Boundary::Free),
+        );
+        assert!(e_int < e_ih - 0.1 && e_int < 4.2, "{e_ih} {e_int}");
+        assert!(!int.diverged && int.iterations == INTEGRABLE_MAX_ITER);
+        assert!(int.last_update < 1e-3, "{}", int.last_update);
+    }
+
+    #[test]
+    fn results_do_not_depend_on_threads() {
+        let b = gaussian(200, 200, 20.0, 20.0, 0.0, 0.0).unwrap();
+        let light = Light::from_tilt_slant(20.0, 40.0).unwrap();
+        let (image, map) = picture(&b, light);
+        let options = SolveOptions {
+            max_iter: 3,
+            ..SolveOptions::for_method(Method::Integrable)
+        };
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut solver = Solver::new(200, 200).unwrap();
+                    solver
+                        .solve(&image, &b.mask, &Boundary::Flat, &map, &options)
+                        .unwrap()
+                })
+        };
+        let one = run(1);
+        assert!(one.unknowns >= PARALLEL_MIN && one.iterations == 3);
+        assert_eq!(one, run(3));
+    }
+}
