@@ -366,7 +366,7 @@ def prior_sweep(
     mask: Any = None,
     tilts: Optional[Sequence[float]] = None,
     binding: Union[None, str, float] = None,
-    domain: str = "image",
+    domain: str = "auto",
     boundary: str = "flat",
     slant: float = 45.0,
     albedo: Optional[float] = None,
@@ -378,7 +378,9 @@ def prior_sweep(
 
     ``picture`` is a stimulus name (rendered with ``params``, ``seed``, ``ppd`` and ``shape``
     ``(height, width)``, and read with its own targets) or an image array; ``mask`` gives an
-    array's target labels (0 = background). ``tilts`` in degrees (0 = from above, +90 = from the
+    array's target labels (0 = background). ``domain`` is what is solved: ``"auto"`` (the
+    default, as the CLI: the targets of an object on a backdrop such as the sphere or the hollow
+    mask, the whole picture otherwise), ``"image"``, ``"tokens"`` or a PNG mask's path. ``tilts`` in degrees (0 = from above, +90 = from the
     left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
     light. Returns the report (what sweep.json holds) with two arrays added: ``tilts`` and
     ``convexities`` (tokens × tilts, positive convex, negative concave).
@@ -411,7 +413,7 @@ def observer(
     noise: Optional[float] = None,
     rotations: Optional[Sequence[float]] = None,
     tilts: Optional[Sequence[float]] = None,
-    domain: str = "image",
+    domain: str = "auto",
     boundary: str = "flat",
     slant: float = 45.0,
     albedo: Optional[float] = None,

@@ -24,6 +24,19 @@ def test_prior_sweep_on_an_array_equals_the_stimulus_by_name():
     assert owns_rust_buffer(on_array["convexities"])
 
 
+def test_the_default_domain_is_the_clis_auto():
+    # An object on a backdrop (the sphere) is solved on its target; a relief (bumps) whole.
+    sphere = shadelab.prior_sweep("sphere", shape=48, ppd=8, tilts=[0, 180])
+    bumps = shadelab.prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0, 180])
+    assert sphere["parameters"]["domain"] == "tokens"
+    assert bumps["parameters"]["domain"] == "image"
+    whole = shadelab.prior_sweep("sphere", shape=48, ppd=8, tilts=[0, 180], domain="image")
+    assert whole["parameters"]["domain"] == "image"
+    assert not np.array_equal(whole["convexities"], sphere["convexities"])
+    with pytest.raises(ValueError, match="domain"):
+        shadelab.prior_sweep("sphere", shape=48, tilts=[0], domain="everything")
+
+
 def test_prior_sweep_bad_tilt_is_a_value_error():
     with pytest.raises(ValueError, match="tilt"):
         shadelab.prior_sweep("bumps", shape=32, tilts=[float("nan")])
