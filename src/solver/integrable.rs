@@ -431,6 +431,7 @@ mod tests {
         assert!(int.last_update < 1e-3, "{}", int.last_update);
     }
 
+    #[cfg(feature = "parallel")]
     #[test]
     fn results_do_not_depend_on_threads() {
         let b = gaussian(200, 200, 20.0, 20.0, 0.0, 0.0).unwrap();
