@@ -43,8 +43,8 @@
 //! last iteration's change (below `tol` once converged).
 
 use super::{
-    report_iteration, Method, Node, Progress, Solution, SolveOptions, SolveStats, Solver, CHUNK,
-    MULTIGRID_MAX_CYCLES, PARALLEL_MIN,
+    iterate, Method, Node, Progress, Solution, SolveOptions, Solver, CHUNK, MULTIGRID_MAX_CYCLES,
+    PARALLEL_MIN,
 };
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::Result;
@@ -109,11 +109,7 @@ impl Solver {
         let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
         let (mut previous_f, mut previous_g) = (vec![0.0; n], vec![0.0; n]);
         let mut previous_update = f64::INFINITY;
-        let mut iterations = 0;
-        let mut last_update = 0.0;
-        let mut converged = n == 0;
-        let mut diverged = false;
-        while !converged && iterations < options.max_iter && !crate::cancel::requested() {
+        let stats = iterate(n, options, progress, |done| {
             let (f, g) = self.current_fg();
             let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;
             let z = integrate_gradients(&dz_dx, &dz_dy, &domain, &poisson)?.depth;
@@ -125,11 +121,11 @@ impl Solver {
                 std::mem::swap(&mut self.cur_f, &mut self.next_f);
                 std::mem::swap(&mut self.cur_g, &mut self.next_g);
             }
-            last_update = largest_change(&before_f, &self.cur_f[..n])
+            let last_update = largest_change(&before_f, &self.cur_f[..n])
                 .max(largest_change(&before_g, &self.cur_g[..n]));
             // Momentum on the iteration's result y: x ← y + β (y − y_previous), restarted
             // (β = 0) whenever the update grew.
-            let beta = if iterations > 0 && last_update <= previous_update {
+            let beta = if done > 0 && last_update <= previous_update {
                 MOMENTUM
             } else {
                 0.0
@@ -145,25 +141,9 @@ impl Solver {
                 }
             }
             previous_update = last_update;
-            iterations += 1;
-            if report_iteration(iterations, options.max_iter, last_update, progress) {
-                diverged = true;
-                break;
-            }
-            converged = last_update < options.tol;
-        }
-        Ok(self.solution(
-            image,
-            bc,
-            reflectance,
-            SolveStats {
-                iterations,
-                converged,
-                diverged,
-                last_update,
-                unknowns: n,
-            },
-        ))
+            Ok(last_update)
+        })?;
+        Ok(self.solution(image, bc, reflectance, stats))
     }
 
     /// One sweep of the screened update from `cur` into `next` (see the module documentation).

@@ -442,34 +442,13 @@ impl Solver {
         }
         let n_unknown = self.build(image, bc, reflectance, options.lambda);
         let literal = options.method == Method::Literal;
-        let mut iterations = 0;
-        let mut last_update = 0.0;
-        let mut converged = n_unknown == 0;
-        let mut diverged = false;
-        // A requested stop (crate::cancel) ends the sweeps; the caller turns it into an error.
-        while !converged && iterations < options.max_iter && !crate::cancel::requested() {
-            last_update = self.sweep(n_unknown, reflectance, literal);
+        let stats = iterate(n_unknown, options, progress, |_| {
+            let update = self.sweep(n_unknown, reflectance, literal);
             std::mem::swap(&mut self.cur_f, &mut self.next_f);
             std::mem::swap(&mut self.cur_g, &mut self.next_g);
-            iterations += 1;
-            if report_iteration(iterations, options.max_iter, last_update, progress) {
-                diverged = true;
-                break;
-            }
-            converged = last_update < options.tol;
-        }
-        Ok(self.solution(
-            image,
-            bc,
-            reflectance,
-            SolveStats {
-                iterations,
-                converged,
-                diverged,
-                last_update,
-                unknowns: n_unknown,
-            },
-        ))
+            Ok(update)
+        })?;
+        Ok(self.solution(image, bc, reflectance, stats))
     }
 
     /// The globalisation (`globalize.rs`) of a multigrid solve that stalled or blew up: the
@@ -715,22 +694,39 @@ fn finish(
     }
 }
 
-/// Reports iteration `iteration` (of at most `max_iter`) with its largest update to
-/// `progress`; returns whether that update means the iteration blew up (not a number, or
-/// above [`DIVERGENCE_UPDATE`]).
-fn report_iteration(
-    iteration: usize,
-    max_iter: usize,
-    last_update: f64,
+/// Runs `step` (given the number of iterations done; it returns the iteration's largest
+/// change) until the change falls below the tolerance, `max_iter` iterations, a divergence (a
+/// NaN or a change above [`DIVERGENCE_UPDATE`]) or a requested stop ([`crate::cancel`], which
+/// the caller turns into an error), reporting each iteration to `progress`.
+fn iterate(
+    unknowns: usize,
+    options: &SolveOptions,
     progress: &mut dyn FnMut(&Progress),
-) -> bool {
-    progress(&Progress {
-        iteration,
-        max_iter,
-        last_update,
-        energy: None,
-    });
-    last_update.is_nan() || last_update > DIVERGENCE_UPDATE
+    mut step: impl FnMut(usize) -> Result<f64>,
+) -> Result<SolveStats> {
+    let mut stats = SolveStats {
+        iterations: 0,
+        converged: unknowns == 0,
+        diverged: false,
+        last_update: 0.0,
+        unknowns,
+    };
+    while !stats.converged && stats.iterations < options.max_iter && !crate::cancel::requested() {
+        stats.last_update = step(stats.iterations)?;
+        stats.iterations += 1;
+        progress(&Progress {
+            iteration: stats.iterations,
+            max_iter: options.max_iter,
+            last_update: stats.last_update,
+            energy: None,
+        });
+        if stats.last_update.is_nan() || stats.last_update > DIVERGENCE_UPDATE {
+            stats.diverged = true;
+            break;
+        }
+        stats.converged = stats.last_update < options.tol;
+    }
+    Ok(stats)
 }
 
 /// Counters of a finished iteration.
