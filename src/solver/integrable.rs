@@ -43,15 +43,14 @@
 //! last iteration's change (below `tol` once converged).
 
 use super::{
-    iterate, Method, Node, Progress, Solution, SolveOptions, Solver, CHUNK, MULTIGRID_MAX_CYCLES,
-    PARALLEL_MIN,
+    iterate, sweep_chunks, Method, Node, Progress, Solution, SolveOptions, Solver,
+    MULTIGRID_MAX_CYCLES,
 };
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::Result;
 use crate::gradient_space::fg_from_pq;
 use crate::grid::{Image, Mask};
 use crate::integrate::{gradients_from_fg, integrate_gradients, PoissonOptions, DEFAULT_MIN_NZ};
-use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
 
 /// Gradient sweeps per iteration (between two depth solves).
@@ -156,37 +155,24 @@ impl Solver {
         target: (&[f64], &[f64]),
     ) {
         let (cur_f, cur_g) = (&self.cur_f[..], &self.cur_g[..]);
-        let next_f = &mut self.next_f[..n];
-        let next_g = &mut self.next_g[..n];
         let weights = Weights { mu, sigma };
-        if n < PARALLEL_MIN {
-            screened_nodes(
-                &self.nodes,
-                0,
-                (cur_f, cur_g),
-                (next_f, next_g),
-                target,
-                reflectance,
-                weights,
-            );
-            return;
-        }
-        self.nodes
-            .par_chunks(CHUNK)
-            .zip(next_f.par_chunks_mut(CHUNK))
-            .zip(next_g.par_chunks_mut(CHUNK))
-            .enumerate()
-            .for_each(|(chunk, ((nodes, nf), ng))| {
+        sweep_chunks(
+            &self.nodes,
+            &mut self.next_f[..n],
+            &mut self.next_g[..n],
+            |nodes, first, nf, ng| {
                 screened_nodes(
                     nodes,
-                    chunk * CHUNK,
+                    first,
                     (cur_f, cur_g),
                     (nf, ng),
                     target,
                     reflectance,
                     weights,
-                )
-            });
+                );
+                0.0
+            },
+        );
     }
 }
 
@@ -303,6 +289,8 @@ mod tests {
     use crate::boundary::{boundary_conditions, Boundary};
     use crate::gradient_space::angle_deg;
     use crate::light::Light;
+    #[cfg(feature = "parallel")]
+    use crate::solver::PARALLEL_MIN;
     use crate::surface::{gaussian, sphere, Surface};
 
     /// Solves the picture of `surface` under `light` with `method` (λ = 1, its defaults).

@@ -566,41 +566,13 @@ impl Solver {
     /// One Jacobi sweep from `cur` into `next`; returns the largest change (∞ for NaN).
     fn sweep(&mut self, n_unknown: usize, reflectance: &dyn ReflectanceMap, literal: bool) -> f64 {
         let (cur_f, cur_g) = (&self.cur_f[..], &self.cur_g[..]);
-        let next_f = &mut self.next_f[..n_unknown];
-        let next_g = &mut self.next_g[..n_unknown];
-        if n_unknown < PARALLEL_MIN {
-            return sweep_nodes(
-                &self.nodes,
-                0,
-                cur_f,
-                cur_g,
-                next_f,
-                next_g,
-                reflectance,
-                literal,
-            );
-        }
-        // max is exact and order-free, so the result does not depend on the thread count.
-        crate::parallel::reduce(
-            self.nodes
-                .par_chunks(CHUNK)
-                .zip(next_f.par_chunks_mut(CHUNK))
-                .zip(next_g.par_chunks_mut(CHUNK))
-                .enumerate()
-                .map(|(chunk, ((nodes, nf), ng))| {
-                    sweep_nodes(
-                        nodes,
-                        chunk * CHUNK,
-                        cur_f,
-                        cur_g,
-                        nf,
-                        ng,
-                        reflectance,
-                        literal,
-                    )
-                }),
-            0.0,
-            f64::max,
+        sweep_chunks(
+            &self.nodes,
+            &mut self.next_f[..n_unknown],
+            &mut self.next_g[..n_unknown],
+            |nodes, first, nf, ng| {
+                sweep_nodes(nodes, first, cur_f, cur_g, nf, ng, reflectance, literal)
+            },
         )
     }
 
@@ -736,6 +708,30 @@ struct SolveStats {
     diverged: bool,
     last_update: f64,
     unknowns: usize,
+}
+
+/// A sweep of `nodes` (the unknowns `0..next_f.len()`) into `next_f`, `next_g`: `update`
+/// gets each chunk of nodes with the index of its first unknown and that chunk's slices of the
+/// outputs, on the worker threads from [`PARALLEL_MIN`] unknowns, and returns a largest change;
+/// the result is the largest of those (max is exact and order-free, so it does not depend on
+/// the thread count).
+fn sweep_chunks<F>(nodes: &[Node], next_f: &mut [f64], next_g: &mut [f64], update: F) -> f64
+where
+    F: Fn(&[Node], usize, &mut [f64], &mut [f64]) -> f64 + Sync + Send,
+{
+    if next_f.len() < PARALLEL_MIN {
+        return update(nodes, 0, next_f, next_g);
+    }
+    crate::parallel::reduce(
+        nodes
+            .par_chunks(CHUNK)
+            .zip(next_f.par_chunks_mut(CHUNK))
+            .zip(next_g.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(chunk, ((nodes, nf), ng))| update(nodes, chunk * CHUNK, nf, ng)),
+        0.0,
+        f64::max,
+    )
 }
 
 /// The sweep over `nodes`, the unknowns `first..first + nodes.len()`; writes their new values
