@@ -467,11 +467,17 @@ function main() {
     assumeDial.draw();
     const sorted = [...times].sort((a, b) => a - b);
     const at = (q) => sorted[Math.min(sorted.length - 1, Math.floor(q * sorted.length))];
+    // Measured before the results are shown: the page as a class sees it.
+    const pageHeight = document.documentElement.scrollHeight;
     const out = $("bench");
     out.hidden = false;
     out.textContent = JSON.stringify({
       frames: times.length, size: state.size, stimulus: state.stimulus,
       median_ms: at(0.5), p90_ms: at(0.9), max_ms: sorted[sorted.length - 1], times_ms: times,
+      // The page's laid-out height against the window's: the page is meant to fit a 1280×900
+      // lecture screen without scrolling.
+      page_height: pageHeight, window_height: window.innerHeight,
+      window_width: window.innerWidth,
     });
   }
   document.body.dataset.ready = "1";
