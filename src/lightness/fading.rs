@@ -386,57 +386,90 @@ pub fn border_band(mask: &Mask, half_width: f64) -> Mask {
 /// The animation's rule for what is seen: inside each disk's region (the disk and its border
 /// band) the picture is the local surround colour plus the disk's relative contrast, capped
 /// at one, times the difference from it; elsewhere the picture is unchanged. The surround
-/// colour is the mean of a ring just outside the region. `regions` pairs each disk's mask with
-/// its contrast time course; a frame is made every `every` time steps.
-pub fn perceived_frames(
-    picture: &RgbImage,
-    regions: &[(&Mask, &[f64])],
-    ppd: f64,
-    band: &DogBand,
+/// colour is the mean of a ring just outside the region.
+///
+/// The frames are made one at a time ([`PerceivedFrames::frame`]), so a caller that reduces
+/// or encodes them never holds the whole animation at full size.
+#[derive(Debug, Clone)]
+pub struct PerceivedFrames<'a> {
+    picture: &'a RgbImage,
+    /// Per disk: its region, the region's surround colour and its contrast time course.
+    regions: Vec<(Mask, [f64; 3], &'a [f64])>,
     every: usize,
-) -> Result<Vec<RgbImage>> {
-    for (mask, _) in regions {
-        if !picture.same_size(*mask) {
-            return Err(Error::invalid(format!(
-                "picture is {}x{} but a disk mask is {}x{}",
-                picture.width(),
-                picture.height(),
-                mask.width(),
-                mask.height()
-            )));
+    steps: usize,
+}
+
+impl<'a> PerceivedFrames<'a> {
+    /// The frames of `picture` under the rule above. `regions` pairs each disk's mask with its
+    /// contrast time course; a frame is made every `every` time steps.
+    pub fn new(
+        picture: &'a RgbImage,
+        regions: &[(&Mask, &'a [f64])],
+        ppd: f64,
+        band: &DogBand,
+        every: usize,
+    ) -> Result<PerceivedFrames<'a>> {
+        for (mask, _) in regions {
+            if !picture.same_size(*mask) {
+                return Err(Error::invalid(format!(
+                    "picture is {}x{} but a disk mask is {}x{}",
+                    picture.width(),
+                    picture.height(),
+                    mask.width(),
+                    mask.height()
+                )));
+            }
         }
-    }
-    let steps = regions.iter().map(|(_, c)| c.len()).min().unwrap_or(0);
-    let half = band.border_half_width_deg * ppd;
-    let prepared: Vec<(Mask, [f64; 3])> = regions
-        .iter()
-        .map(|(m, _)| {
-            let region = union(m, &border_band(m, half));
-            let ring = border_band(&region, 2.0_f64.max(0.2 * ppd));
-            let mut mean = [0.0; 3];
-            let mut n = 0usize;
-            for (p, (&in_ring, &in_region)) in picture
-                .data()
-                .iter()
-                .zip(ring.data().iter().zip(region.data()))
-            {
-                if in_ring && !in_region {
-                    n += 1;
-                    for k in 0..3 {
-                        mean[k] += p[k];
+        let steps = regions.iter().map(|(_, c)| c.len()).min().unwrap_or(0);
+        let half = band.border_half_width_deg * ppd;
+        let regions = regions
+            .iter()
+            .map(|&(m, course)| {
+                let region = union(m, &border_band(m, half));
+                let ring = border_band(&region, 2.0_f64.max(0.2 * ppd));
+                let mut mean = [0.0; 3];
+                let mut n = 0usize;
+                for (p, (&in_ring, &in_region)) in picture
+                    .data()
+                    .iter()
+                    .zip(ring.data().iter().zip(region.data()))
+                {
+                    if in_ring && !in_region {
+                        n += 1;
+                        for k in 0..3 {
+                            mean[k] += p[k];
+                        }
                     }
                 }
-            }
-            for v in &mut mean {
-                *v /= n.max(1) as f64;
-            }
-            (region, mean)
+                for v in &mut mean {
+                    *v /= n.max(1) as f64;
+                }
+                (region, mean, course)
+            })
+            .collect();
+        Ok(PerceivedFrames {
+            picture,
+            regions,
+            every: every.max(1),
+            steps,
         })
-        .collect();
-    let mut frames = Vec::new();
-    for i in (0..steps).step_by(every.max(1)) {
-        let mut frame = picture.clone();
-        for ((region, surround), (_, course)) in prepared.iter().zip(regions) {
+    }
+
+    /// The number of frames: one every `every` time steps of the shortest time course.
+    pub fn len(&self) -> usize {
+        self.steps.div_ceil(self.every)
+    }
+
+    /// Whether there is no frame (an empty time course).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Frame `k` (time step `k·every`), `k` < [`PerceivedFrames::len`].
+    pub fn frame(&self, k: usize) -> RgbImage {
+        let i = k * self.every;
+        let mut frame = self.picture.clone();
+        for (region, surround, course) in &self.regions {
             let g = course[i].min(1.0);
             for (p, &inside) in frame.data_mut().iter_mut().zip(region.data()) {
                 if inside {
@@ -446,9 +479,8 @@ pub fn perceived_frames(
                 }
             }
         }
-        frames.push(frame);
+        frame
     }
-    Ok(frames)
 }
 
 fn union(a: &Mask, b: &Mask) -> Mask {
@@ -638,8 +670,9 @@ mod tests {
         let rgb = image.map(|&v| [v, v, v]);
         let (gone, kept) = ([1.0, 0.0], [1.0, 1.0]);
         let regions: [(&Mask, &[f64]); 2] = [(&left, &gone), (&right, &kept)];
-        let frames = perceived_frames(&rgb, &regions, 20.0, &DogBand::default(), 1).unwrap();
-        assert_eq!(frames.len(), 2);
+        let perceived = PerceivedFrames::new(&rgb, &regions, 20.0, &DogBand::default(), 1).unwrap();
+        assert_eq!(perceived.len(), 2);
+        let frames = [perceived.frame(0), perceived.frame(1)];
         assert_eq!(frames[0], rgb);
         // The blurred disk's centre became the surround (about 0.6: the ring just outside the
         // region still holds a little of the blur); the sharp disk's stayed 0.3.

@@ -14,9 +14,10 @@ use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
 use crate::io::{self, AtomicDir};
 use crate::lightness::fading::{
-    adaptation_time_course, border_energy, perceived_frames, AdaptationOptions, BorderEnergy, Disk,
-    DogBand, TimeCourse,
+    adaptation_time_course, border_energy, AdaptationOptions, BorderEnergy, Disk, DogBand,
+    PerceivedFrames, TimeCourse,
 };
+use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::stimulus::Pixels;
 use serde::Serialize;
@@ -174,38 +175,56 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
 
     let every = ((1.0 / FPS) / options.dt_s).round().max(1.0) as usize;
     let same_picture = blurred.picture == sharp.picture;
-    let frames = if same_picture {
+    // Each frame is made, joined and reduced on its own: the animation is never held at full
+    // size (at the fading disk's 110 ppd that was hundreds of megabytes).
+    let (left, right) = if same_picture {
         let regions: [(&Mask, &[f64]); 2] = [
             (&blurred.mask, &course.blurred),
             (&sharp.mask, &course.sharp),
         ];
-        perceived_frames(&blurred.picture, &regions, ppd, band, every)?
+        (
+            PerceivedFrames::new(&blurred.picture, &regions, ppd, band, every)?,
+            None,
+        )
     } else {
-        let left = perceived_frames(
-            &blurred.picture,
-            &[(&blurred.mask, &course.blurred)],
-            ppd,
-            band,
-            every,
-        )?;
-        let right = perceived_frames(
-            &sharp.picture,
-            &[(&sharp.mask, &course.sharp)],
-            ppd,
-            band,
-            every,
-        )?;
-        left.iter()
-            .zip(&right)
-            .map(|(l, r)| side_by_side(l, r, (0.25 * ppd).ceil() as usize, [0.0; 3]))
-            .collect()
+        (
+            PerceivedFrames::new(
+                &blurred.picture,
+                &[(&blurred.mask, &course.blurred)],
+                ppd,
+                band,
+                every,
+            )?,
+            Some(PerceivedFrames::new(
+                &sharp.picture,
+                &[(&sharp.mask, &course.sharp)],
+                ppd,
+                band,
+                every,
+            )?),
+        )
     };
-    let side = frames
-        .first()
-        .map(|f| f.width().max(f.height()))
-        .unwrap_or(1);
-    let factor = side.div_ceil(GIF_SIDE);
-    let frames: Vec<RgbImage> = frames.iter().map(|f| shrink(f, factor)).collect();
+    let gap = (0.25 * ppd).ceil() as usize;
+    let (w, h) = match &right {
+        None => (blurred.picture.width(), blurred.picture.height()),
+        Some(_) => (
+            blurred.picture.width() + gap + sharp.picture.width(),
+            blurred.picture.height().max(sharp.picture.height()),
+        ),
+    };
+    let factor = w.max(h).div_ceil(GIF_SIDE);
+    let count = right
+        .as_ref()
+        .map_or(left.len(), |r| left.len().min(r.len()));
+    let frame = |k: usize| {
+        let full = match &right {
+            None => left.frame(k),
+            Some(r) => side_by_side(&left.frame(k), &r.frame(k), gap, [0.0; 3]),
+        };
+        shrink(&full, factor)
+    };
+    let steps: Vec<usize> = (0..count).collect();
+    let frames: Vec<RgbImage> = steps.par_iter().map(|&k| frame(k)).collect();
     let delay_ms = (every as f64 * options.dt_s * 1000.0).round() as u32;
     progress.advance(1);
     progress.finish();
