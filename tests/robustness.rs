@@ -70,7 +70,10 @@ fn the_albedo_estimate_does_not_care_how_a_photograph_was_normalised() {
             assert!((error - reference).abs() < 0.5, "{what}");
             if q == 0.9 {
                 let share = clipped as f64 / mask.count() as f64;
-                assert!((0.09..0.12).contains(&share), "{what}: {clipped} px clipped");
+                assert!(
+                    (0.09..0.12).contains(&share),
+                    "{what}: {clipped} px clipped"
+                );
             }
             eprintln!("{what}, {clipped} px clipped");
         }
@@ -126,6 +129,9 @@ fn a_sphere_clipped_at_its_90th_percentile_is_solved_as_the_unclipped_one() {
     eprintln!(
         "unclipped {unclipped:.3}°, clipped: plateau left out {left_out:.3}°, kept in {kept_in:.3}°"
     );
-    assert!((left_out - unclipped).abs() < 0.5, "{left_out} against {unclipped}");
+    assert!(
+        (left_out - unclipped).abs() < 0.5,
+        "{left_out} against {unclipped}"
+    );
     assert!(kept_in > left_out + 0.2, "{kept_in} against {left_out}");
 }

@@ -654,7 +654,11 @@ impl Multigrid {
             data: 4.0 * lambda,
         };
         self.work = 0.0;
-        self.setup(image, bc, super::DataRange::new(reflectance, options.saturation));
+        self.setup(
+            image,
+            bc,
+            super::DataRange::new(reflectance, options.saturation),
+        );
         if self.nested {
             self.start_from_coarse_solution(image, bc, reflectance, options);
         }
@@ -759,7 +763,11 @@ impl Multigrid {
                         // An isolated pixel has nothing to be smooth with: Jacobi leaves it at
                         // (0, 0), and so does this solver, by keeping it out of the problem.
                         if k > 0 {
-                            let lit = if data.carries(image.data()[p]) { LIT } else { 0 };
+                            let lit = if data.carries(image.data()[p]) {
+                                LIT
+                            } else {
+                                0
+                            };
                             fine.kind[at] = UNKNOWN | lit | k;
                             unknowns += 1;
                         }
