@@ -2,11 +2,13 @@
 //! normalised them by: each photograph pre-scaled so that its 90th, 95th, 99th or 99.9th
 //! percentile, or its maximum, is 1 (clipped at 1 and rounded to 16 bits, as a PNG stores it),
 //! solved by the solve pipeline with the estimate, and compared with the truth and with the
-//! photograph solved unscaled. `cargo run --release --example albedo_estimate -- ../shared/data`
-//! (prints the table of docs/evaluation.md's "Albedo estimate" section; says why and stops
-//! when the data is absent).
+//! photograph solved unscaled; each pre-scaled photograph solved twice: with its clipped
+//! plateau left out of the data term (the default, `Saturation::Auto`) and with every pixel in
+//! it (`Saturation::None`, the solve before issue 20's part 2).
+//! `cargo run --release --example albedo_estimate -- ../shared/data` (prints the tables of
+//! docs/evaluation.md's "Albedo estimate" section; says why and stops when the data is absent).
 
-use shadelab::albedo::{albedo_with_normals, brightness_quantile};
+use shadelab::albedo::{albedo_with_normals, brightness_quantile, Saturation};
 use shadelab::evaluation::crop::Crop;
 use shadelab::evaluation::datasets::{ball, BALL_IMAGES};
 use shadelab::evaluation::metrics::angular_error;
@@ -30,15 +32,18 @@ fn prescaled(image: &Image, mask: &Mask, q: f64) -> shadelab::Result<Image> {
     Ok(image.map(|v| ((v / top).clamp(0.0, 1.0) * 65535.0).round() / 65535.0))
 }
 
-/// Mean normal error (degrees) of `image` solved with the albedo estimate.
+/// Mean normal error (degrees) of `image` solved with the albedo estimate and `saturation`,
+/// the albedo found, and the pixels left out as clipped.
 fn solve(
     image: &Image,
     mask: &Mask,
     light: Light,
     truth: &shadelab::Grid<shadelab::gradient_space::Normal>,
-) -> shadelab::Result<(f64, f64)> {
+    saturation: Saturation,
+) -> shadelab::Result<(f64, f64, usize)> {
     let mut config = SolveConfig::new("ball", LightChoice::Given(light));
     config.albedo_estimate = true;
+    config.saturation = saturation;
     let run = run_image(&config, image.clone(), Some(mask.clone()), &NoProgress)?;
     let error = angular_error(&run.shape.solution.normals(), truth, mask)?;
     let albedo = run
@@ -46,7 +51,8 @@ fn solve(
         .parameters
         .albedo_estimate
         .map_or(f64::NAN, |e| e.value);
-    Ok((error.mean_deg, albedo))
+    let clipped = run.report.solver.clipped.map_or(0, |c| c.pixels);
+    Ok((error.mean_deg, albedo, clipped))
 }
 
 fn main() -> shadelab::Result<()> {
@@ -63,6 +69,11 @@ fn main() -> shadelab::Result<()> {
     let crop = Crop::around(&set.truth.mask, 2)?;
     let mask = crop.apply(&set.truth.mask);
     let truth = crop.apply(&set.truth.normals);
+    println!(
+        "Each cell: clipped plateau left out (auto) / every pixel in (none), albedo error, \
+         pixels left out (of {} in the mask)",
+        mask.count()
+    );
     print!("| photograph | albedo with true normals | as the eval solves it |");
     for (name, _) in SCALINGS {
         print!(" {name} = 1 |");
@@ -77,7 +88,7 @@ fn main() -> shadelab::Result<()> {
         // 0..1: the rule scales with the image, so this is the evaluation's row).
         let top = brightness_quantile(&image, &mask, 1.0)?;
         let unit = image.map(|v| v / top);
-        let (base, albedo) = solve(&unit, &mask, photo.light, &truth)?;
+        let (base, albedo, _) = solve(&unit, &mask, photo.light, &truth, Saturation::Auto)?;
         let albedo = albedo * top;
         print!(
             "| {} (slant {:.0}°) | {:.4} | {base:.2}° (albedo {:+.1} %) |",
@@ -86,18 +97,21 @@ fn main() -> shadelab::Result<()> {
             reference,
             100.0 * (albedo / reference - 1.0)
         );
-        let mut worst: f64 = 0.0;
+        let (mut worst, mut worst_before): (f64, f64) = (0.0, 0.0);
         for (_, q) in SCALINGS {
             let scaled = prescaled(&image, &mask, q)?;
             let top = brightness_quantile(&image, &mask, q)?;
-            let (err, albedo) = solve(&scaled, &mask, photo.light, &truth)?;
+            let (err, albedo, clipped) =
+                solve(&scaled, &mask, photo.light, &truth, Saturation::Auto)?;
+            let (before, _, _) = solve(&scaled, &mask, photo.light, &truth, Saturation::None)?;
             worst = worst.max((err - base).abs());
+            worst_before = worst_before.max((before - base).abs());
             print!(
-                " {err:.2}° ({:+.1} %) |",
+                " **{err:.2}°** / {before:.2}° ({:+.1} %, {clipped} px clipped) |",
                 100.0 * (albedo * top / reference - 1.0)
             );
         }
-        println!(" {worst:.2}° |");
+        println!(" **{worst:.2}°** / {worst_before:.2}° |");
     }
     Ok(())
 }

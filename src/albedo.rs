@@ -30,7 +30,11 @@
 //! pixels): a photograph normalised by its 90th, 95th or 99th percentile or its maximum and
 //! stored in 0..1 gives the same albedo. A clipped plateau that reaches into the band (the
 //! pixels tied at the image's maximum, when they are more than [`PLATEAU_SHARE`] of the mask,
-//! are a plateau whose true values are unknown) moves the band below it.
+//! are a plateau whose true values are unknown) moves the band below it, and its brightness is
+//! the image's saturation level ([`AlbedoEstimate::plateau`], [`Saturation::Auto`]): the solve
+//! leaves the pixels at it out of the data term, as it leaves out attached shadow
+//! ([`crate::solver::carries_data`]), instead of pulling them all to the one orientation that
+//! gives that brightness.
 //!
 //! The rule scales with the image: an image multiplied by any factor gives the albedo
 //! multiplied by the same factor, so the shape solved with [`estimate`] does not depend on how
@@ -65,6 +69,7 @@ use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
 use crate::light::Light;
 use serde::Serialize;
+use std::str::FromStr;
 
 /// The top of the quantile band [`estimate`] fits: what is brighter plays no part.
 pub const BRIGHT_QUANTILE: f64 = 0.9;
@@ -90,6 +95,9 @@ pub struct AlbedoEstimate {
     /// The share of the mask tied at the image's maximum when it is a clipped plateau (more
     /// than [`PLATEAU_SHARE`]), else 0.
     pub clipped_share: f64,
+    /// The brightness of the clipped plateau (the image's maximum) when there is one: the
+    /// image's saturation level ([`Saturation::Auto`]).
+    pub plateau: Option<f64>,
     /// Pixels of the mask brighter than the albedo: capped by [`normalise`] before solving.
     pub brighter_pixels: usize,
     /// Pixels of the mask.
@@ -133,6 +141,7 @@ pub fn estimate(image: &Image, mask: &Mask) -> Result<AlbedoEstimate> {
         value,
         quantile,
         clipped_share,
+        plateau: (clipped_share > 0.0).then_some(top),
         brighter_pixels: n - values.partition_point(|v| *v <= value),
         mask_pixels: n,
     })
@@ -196,8 +205,76 @@ pub fn brightness_quantile(image: &Image, mask: &Mask, q: f64) -> Result<f64> {
 /// normal facing the light. Solved with albedo 1, it is the same problem whatever the image's
 /// scale.
 pub fn normalise(image: &Image, albedo: f64) -> Image {
-    let scale = 1.0 / albedo;
-    image.map(|v| (v * scale).min(1.0))
+    image.map(|&v| in_albedo_units(v, albedo).min(1.0))
+}
+
+/// A brightness `value` in units of `albedo`, exactly as [`normalise`] scales the image (before
+/// its cap): a saturation level given in the image's units becomes the level of the
+/// normalised image, the same pixels at or above it.
+pub fn in_albedo_units(value: f64, albedo: f64) -> f64 {
+    value * (1.0 / albedo)
+}
+
+/// Where an image was clipped (saturated): the brightness at or above which a pixel's true
+/// brightness is unknown, so that the solve leaves it out of the data term
+/// ([`crate::solver::SolveOptions::saturation`]). Parsed from `auto`, `none` or a number.
+///
+/// ```
+/// use shadelab::albedo::Saturation;
+/// assert_eq!("auto".parse::<Saturation>()?, Saturation::Auto);
+/// assert_eq!("0.98".parse::<Saturation>()?, Saturation::Level(0.98));
+/// assert!("-1".parse::<Saturation>().is_err());
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Saturation {
+    /// The clipped plateau the albedo estimate finds ([`AlbedoEstimate::plateau`]: pixels
+    /// tied at the image's maximum, more than [`PLATEAU_SHARE`] of the mask), when the albedo
+    /// is estimated; none otherwise.
+    #[default]
+    Auto,
+    /// No pixel is clipped.
+    None,
+    /// Pixels at or above this brightness, in the image's units (> 0), are clipped.
+    Level(f64),
+}
+
+impl Saturation {
+    /// The level in the image's units, given the albedo estimate made of the image (if any).
+    pub fn level(&self, estimate: Option<&AlbedoEstimate>) -> Option<f64> {
+        match self {
+            Saturation::Auto => estimate.and_then(|e| e.plateau),
+            Saturation::None => None,
+            Saturation::Level(v) => Some(*v),
+        }
+    }
+
+    /// Checks a given level: a positive number.
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Saturation::Level(v) if !(v.is_finite() && *v > 0.0) => Err(Error::invalid(format!(
+                "the saturation level {v} must be a positive number"
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl FromStr for Saturation {
+    type Err = Error;
+    fn from_str(text: &str) -> Result<Saturation> {
+        let saturation = match text {
+            "auto" => Saturation::Auto,
+            "none" => Saturation::None,
+            number => Saturation::Level(number.parse().map_err(|_| {
+                Error::invalid(format!(
+                    "saturation {number:?} is neither `auto`, `none` nor a number"
+                ))
+            })?),
+        };
+        saturation.validate()?;
+        Ok(saturation)
+    }
 }
 
 /// The `q`-quantile (0..1) of sorted, non-empty `values`, linearly interpolated between the
@@ -270,6 +347,18 @@ mod tests {
             let clipped = image.map(|v| (v / top).min(1.0));
             let c = estimate(&clipped, &s.mask).unwrap();
             assert!(c.clipped_share > 0.09 && c.quantile < 0.9, "{what}: {c:?}");
+            assert_eq!(c.plateau, Some(1.0), "{what}");
+            assert_eq!(e.plateau, None, "{what}");
+            assert_eq!(Saturation::Auto.level(Some(&c)), Some(1.0));
+            assert_eq!(Saturation::Auto.level(Some(&e)), None);
+            assert_eq!(Saturation::None.level(Some(&c)), None);
+            assert_eq!(Saturation::Level(0.5).level(None), Some(0.5));
+            // The level in the albedo's units picks the same pixels as the normalised image.
+            let level = in_albedo_units(1.0, c.value);
+            let unit = normalise(&clipped, c.value);
+            for (u, v) in unit.data().iter().zip(clipped.data()) {
+                assert_eq!(*u >= level, *v >= 1.0);
+            }
             assert!(
                 (c.value * top / e.value - 1.0).abs() < 0.015,
                 "{what}: {c:?}"

@@ -95,6 +95,9 @@ pub struct ReconstructOptions {
     /// Put the lowest point of the domain at depth 0 and everything outside it at 0 (`true`),
     /// or keep the integrator's own offset (`false`: the analyses read only depth differences).
     pub rest_on_zero: bool,
+    /// The level at or above which pixels are clipped and carry no data term
+    /// ([`SolveOptions::saturation`]); `None`: none.
+    pub saturation: Option<f64>,
 }
 
 /// The cap of multigrid cycles an analysis spends on one solve before falling back to Jacobi:
@@ -137,6 +140,7 @@ impl ReconstructOptions {
             depth: DepthMethod::Poisson(PoissonOptions::default()),
             min_nz: DEFAULT_MIN_NZ,
             rest_on_zero: true,
+            saturation: solve.saturation,
         }
     }
 
@@ -153,6 +157,7 @@ impl ReconstructOptions {
             tol: self.tol,
             max_iter: self.max_iter(),
             method: self.method,
+            saturation: self.saturation,
         }
     }
 

@@ -315,6 +315,7 @@ def solve(
     method: str = "multigrid",
     tol: float = 1e-6,
     max_iter: Optional[int] = None,
+    saturation: Union[float, str, None] = "auto",
 ) -> Reconstruction:
     """Recovers shape from one H×W image of linear luminance (``shadelab solve``).
 
@@ -322,11 +323,15 @@ def solve(
     ``"estimate"`` (estimated from the image with the albedo). ``mask``: nonzero = the object
     (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free`` or the path of
     an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
-    estimated; or ``"estimate"``: the library's albedo rule (the 95th percentile of the
-    brightness on the mask, as ``solve --albedo estimate`` and ``eval``), so the answer does not
-    depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives it.
-    ``lam``, ``method`` (``multigrid``, ``jacobi``, ``literal``, ``integrable``), ``tol`` and
-    ``max_iter`` are the solver's settings.
+    estimated; or ``"estimate"``: the library's albedo rule (the bright tail of the brightness
+    on the mask extrapolated, as ``solve --albedo estimate`` and ``eval``), so the answer does
+    not depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives
+    it. ``saturation``: where the image was clipped, its pixels at or above that brightness
+    carrying no brightness term (``"auto"``, the default: the clipped plateau the albedo
+    estimate finds; ``"none"`` or ``None``: no pixel; or a level in the image's units);
+    ``report["solver"]["clipped"]`` counts them. ``lam``, ``method`` (``multigrid``,
+    ``jacobi``, ``literal``, ``integrable``), ``tol`` and ``max_iter`` are the solver's
+    settings.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
     >>> r = solve(s["img"], light=(0.3, 0.4, 0.866), mask=s["target_mask"])
@@ -354,6 +359,7 @@ def solve(
         str(method),
         float(tol),
         None if max_iter is None else int(max_iter),
+        "none" if saturation is None else str(saturation),
     )
     return Reconstruction(normals, depth, f, g, json.loads(report_json))
 

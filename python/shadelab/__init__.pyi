@@ -50,11 +50,12 @@ def solve(
     light: Union[LightSpec, Literal["estimate"]],
     mask: Optional[npt.ArrayLike] = ...,
     boundary: str = ...,
-    albedo: Optional[float] = ...,
+    albedo: Optional[Union[float, Literal["estimate"]]] = ...,
     lam: float = ...,
     method: Literal["multigrid", "jacobi", "literal", "integrable"] = ...,
     tol: float = ...,
     max_iter: Optional[int] = ...,
+    saturation: Optional[Union[float, Literal["auto", "none"]]] = ...,
 ) -> Reconstruction: ...
 def prior_sweep(
     picture: PictureSpec,

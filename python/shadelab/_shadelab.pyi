@@ -31,10 +31,12 @@ def solve(
     light: str,
     boundary: str,
     albedo: Optional[float],
+    albedo_estimate: bool,
     lam: float,
     method: str,
     tol: float,
     max_iter: Optional[int],
+    saturation: str,
 ) -> Tuple[
     npt.NDArray[np.float64],
     npt.NDArray[np.float64],

@@ -222,7 +222,7 @@ fn render<'py>(
 
 /// Solves an image for shape: (normals, depth, f, g, report JSON).
 #[pyfunction]
-#[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter))]
+#[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter, saturation))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn solve<'py>(
     py: Python<'py>,
@@ -236,6 +236,7 @@ fn solve<'py>(
     method: &str,
     tol: f64,
     max_iter: Option<usize>,
+    saturation: &str,
 ) -> PyResult<(
     Bound<'py, PyArray3<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -258,6 +259,7 @@ fn solve<'py>(
     config.boundary = boundary.parse().map_err(to_py)?;
     config.albedo = albedo;
     config.albedo_estimate = albedo_estimate;
+    config.saturation = saturation.parse().map_err(to_py)?;
     config.options =
         shadelab::ReconstructOptions::from_solve(&options, shadelab::NonConvergence::Report);
     config.record = pl::solve::SolveRecord {

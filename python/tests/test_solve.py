@@ -152,6 +152,28 @@ def test_albedo_estimate_does_not_depend_on_how_the_image_was_scaled():
         shadelab.solve(s["img"], light=(0, 0, 1), mask=inside, albedo="guess")
 
 
+
+def test_a_clipped_plateau_is_left_out_of_the_data_term():
+    """A picture normalised by its 90th percentile and clipped at 1: ``saturation="auto"``
+    (the default) leaves the plateau the albedo estimate finds out of the data term and
+    counts it in the report; ``None`` keeps it in (no count); a given level counts the same
+    pixels; a word other than auto/none is refused."""
+    s = shadelab.render("sphere", shape=64, light=(0, 0, 1), layers=True)
+    inside = s["target_mask"] == 1
+    img = s["img"] / np.quantile(s["img"][inside], 0.9)
+    img = np.minimum(img, 1.0)
+    at_one = int(np.count_nonzero(inside & (img == 1.0)))
+    auto = shadelab.solve(img, light=(0, 0, 1), mask=inside, albedo="estimate")
+    clipped = auto.report["solver"]["clipped"]
+    assert clipped["pixels"] == at_one and clipped["source"] == "plateau"
+    kept = shadelab.solve(img, light=(0, 0, 1), mask=inside, albedo="estimate", saturation=None)
+    assert "clipped" not in kept.report["solver"]
+    given = shadelab.solve(img, light=(0, 0, 1), mask=inside, albedo="estimate", saturation=1.0)
+    assert given.report["solver"]["clipped"]["pixels"] == at_one
+    np.testing.assert_array_equal(given.normals, auto.normals)
+    with pytest.raises(ValueError, match="saturation"):
+        shadelab.solve(img, light=(0, 0, 1), mask=inside, saturation="high")
+
 def test_integrable_method_gives_the_normals_of_one_surface(sphere):
     """solve(method="integrable") is solve --method integrable: it converges on the oblique
     sphere, reports its method, stays close to the truth, and its slopes are those of a

@@ -36,10 +36,21 @@ pub struct Args {
     #[arg(long, value_name = "NAME", default_value = "lambertian")]
     pub brdf: String,
     /// Surface albedo (default 1, or the estimate with --light estimate); or `estimate`: the
-    /// 95th percentile of the brightness on the mask, the image divided by it and capped at 1
-    /// (the same shape however the image was scaled).
+    /// bright tail of the brightness on the mask extrapolated to the brightest normal, the
+    /// image divided by it and capped at 1 (the same shape however the image was scaled).
     #[arg(long, value_name = "A|estimate", allow_hyphen_values = true)]
     pub albedo: Option<String>,
+    /// Where the image was clipped: pixels at or above this brightness (0..1, as read) carry
+    /// no brightness term, only smoothness; `auto`: the clipped plateau that --albedo estimate
+    /// finds (pixels tied at the image's maximum), none without it; `none`: no pixel is
+    /// clipped.
+    #[arg(
+        long,
+        value_name = "auto|none|LEVEL",
+        default_value = "auto",
+        allow_hyphen_values = true
+    )]
+    pub saturation: String,
     /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow), literal
     /// (R at the current value; unstable, for study) or integrable (depth and gradients solved
     /// together from the multigrid answer, Horn 1990: the normals of one surface).
@@ -163,6 +174,10 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
         brdf: BrdfSpec::named(&args.brdf)?,
         albedo,
         albedo_estimate,
+        saturation: args
+            .saturation
+            .parse()
+            .map_err(|e| usage("--saturation", e))?,
         options,
         max_pixels: global.max_pixels,
         record: SolveRecord {

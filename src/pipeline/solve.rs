@@ -6,7 +6,7 @@
 //! `depth.png`, `surface.obj`, `convergence.csv` (and `convergence.png` with the `plots`
 //! feature) and `report.json`.
 
-use crate::albedo::AlbedoEstimate;
+use crate::albedo::{AlbedoEstimate, Saturation};
 use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
@@ -112,6 +112,11 @@ pub struct SolveConfig {
     /// instead: the image is divided by it and capped at 1, and solved with albedo 1, so the
     /// shape does not depend on how the image was scaled. Not with [`SolveConfig::albedo`].
     pub albedo_estimate: bool,
+    /// Where the image was clipped: its pixels at or above that level carry no data term
+    /// ([`crate::solver::carries_data`]). Replaces the options' own
+    /// [`ReconstructOptions::saturation`]. Default [`Saturation::Auto`]: the clipped plateau
+    /// the albedo estimate finds, when it is asked for.
+    pub saturation: Saturation,
     /// The reconstruction's policy (method, λ, tolerance, cap, non-convergence, integration).
     pub options: ReconstructOptions,
     /// The largest image accepted, in pixels.
@@ -144,6 +149,7 @@ impl SolveConfig {
             brdf: BrdfSpec::default(),
             albedo: None,
             albedo_estimate: false,
+            saturation: Saturation::Auto,
             options: ReconstructOptions::default(),
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             record: SolveRecord::default(),
@@ -153,6 +159,7 @@ impl SolveConfig {
     /// Checks everything that needs no file: the policy, the albedo, a given light in front.
     pub fn validate(&self) -> Result<()> {
         self.options.validate()?;
+        self.saturation.validate()?;
         if let Some(a) = self.albedo {
             crate::reconstruct::check_albedo(a)?;
         }
@@ -298,8 +305,23 @@ pub struct SolverReport {
     /// e_S + λ·e_R after each step of the energy descent (empty when the cycles converged
     /// alone); never increasing.
     pub energy_per_step: Vec<f64>,
+    /// The pixels left out of the data term as clipped ([`SolveConfig::saturation`]); absent
+    /// when no saturation level was in force.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clipped: Option<ClippedReport>,
     /// Seconds of solving.
     pub seconds: f64,
+}
+
+/// The pixels a solve left out of the data term as clipped.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ClippedReport {
+    /// The saturation level, in the image's units (before any albedo normalisation).
+    pub level: f64,
+    /// `plateau` (the albedo estimate's clipped plateau) or `given`.
+    pub source: &'static str,
+    /// Pixels of the mask at or above the level, left out of the data term.
+    pub pixels: usize,
 }
 
 /// How the integration went.
@@ -344,6 +366,7 @@ struct Solved {
     solve_seconds: f64,
     sidecar: Option<RenderSidecar>,
     albedo_estimate: Option<AlbedoEstimate>,
+    clipped: Option<ClippedReport>,
 }
 
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
@@ -386,13 +409,29 @@ fn solve_loaded(
     } else {
         None
     };
-    let (image, albedo) = match &albedo_estimate {
-        Some(e) => (crate::albedo::normalise(&image, e.value), Some(1.0)),
+    // Clipped pixels (the estimate's plateau, or a level given) carry no data term; the level
+    // follows the image into the albedo's units.
+    let level = config.saturation.level(albedo_estimate.as_ref());
+    let (image, albedo, saturation) = match &albedo_estimate {
+        Some(e) => (
+            crate::albedo::normalise(&image, e.value),
+            Some(1.0),
+            level.map(|l| crate::albedo::in_albedo_units(l, e.value)),
+        ),
         None => (
             image,
             config.albedo.or(sidecar.as_ref().and_then(|s| s.albedo)),
+            level,
         ),
     };
+    let clipped = level.map(|level| ClippedReport {
+        level,
+        source: match config.saturation {
+            Saturation::Level(_) => "given",
+            _ => "plateau",
+        },
+        pixels: crate::solver::clipped_pixels(&image, &mask, saturation),
+    });
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
@@ -402,7 +441,11 @@ fn solve_loaded(
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
     let reflectance = brdf.build(lighting.light)?;
-    let mut planner = Reconstructor::new(w, h, config.options)?;
+    let options = ReconstructOptions {
+        saturation,
+        ..config.options
+    };
+    let mut planner = Reconstructor::new(w, h, options)?;
     let started = Instant::now();
     let problem = Problem {
         image: &image,
@@ -425,6 +468,7 @@ fn solve_loaded(
         solve_seconds: started.elapsed().as_secs_f64(),
         sidecar,
         albedo_estimate,
+        clipped,
     })
 }
 
@@ -659,6 +703,7 @@ fn report(
             brightness_energy: s.brightness_energy,
             globalised: s.globalised,
             energy_per_step: s.energy_history.clone(),
+            clipped: solved.clipped,
             seconds: solved.solve_seconds,
         },
         integration: IntegrationSummary {

@@ -17,7 +17,9 @@
 //! checkerboard mode is multiplied by about 1 + λ·R_f² every sweep and the iteration blows up.
 //!
 //! Pixels in attached shadow (I at or below the reflectance map's ambient level) say nothing
-//! about their orientation and carry smoothness only. Unknown pixels start at (0, 0), facing
+//! about their orientation and carry smoothness only; so do clipped pixels (I at or above
+//! [`SolveOptions::saturation`], where the image was saturated and the true brightness is
+//! unknown). [`carries_data`] is that rule, for every method. Unknown pixels start at (0, 0), facing
 //! the viewer. The iteration stops when the largest change of f or g in a sweep falls below
 //! the tolerance, or after the maximum number of sweeps.
 //!
@@ -95,6 +97,10 @@ pub struct SolveOptions {
     pub max_iter: usize,
     /// How the equations are iterated.
     pub method: Method,
+    /// The brightness at which the image was clipped (saturated): pixels at or above it carry
+    /// no data term, as pixels in attached shadow do not (their true brightness is unknown);
+    /// `None` (the default): no pixel is clipped. In the image's units (> 0).
+    pub saturation: Option<f64>,
 }
 
 impl Method {
@@ -144,6 +150,7 @@ impl SolveOptions {
             tol: 1e-6,
             max_iter: method.default_max_iter(),
             method,
+            saturation: None,
         }
     }
 
@@ -164,7 +171,66 @@ impl SolveOptions {
         if self.max_iter == 0 {
             return Err(Error::invalid("max-iter must be at least 1"));
         }
+        if let Some(level) = self.saturation {
+            if !(level.is_finite() && level > 0.0) {
+                return Err(Error::invalid(format!(
+                    "the saturation level {level} must be a positive number"
+                )));
+            }
+        }
         Ok(())
+    }
+}
+
+/// Whether a pixel of brightness `intensity` carries a data term: it is lit (above the
+/// reflectance map's `ambient` level: attached shadow says nothing about the orientation) and
+/// not clipped (below the `saturation` level, where one is given: the true brightness of a
+/// clipped pixel is unknown). The one rule of every method (Jacobi, multigrid, the energy
+/// descent, the integrable method); the others carry smoothness only.
+///
+/// ```
+/// use shadelab::solver::carries_data;
+/// assert!(carries_data(0.5, 0.0, None));
+/// assert!(!carries_data(0.0, 0.0, None)); // attached shadow
+/// assert!(!carries_data(0.9, 0.0, Some(0.9))); // clipped
+/// assert!(carries_data(0.89, 0.0, Some(0.9)));
+/// ```
+pub fn carries_data(intensity: f64, ambient: f64, saturation: Option<f64>) -> bool {
+    intensity > ambient && saturation.map_or(true, |level| intensity < level)
+}
+
+/// The pixels of `mask` that `saturation` leaves out of the data term as clipped (at or above
+/// the level; none without one).
+pub fn clipped_pixels(image: &Image, mask: &Mask, saturation: Option<f64>) -> usize {
+    let Some(level) = saturation else { return 0 };
+    image
+        .data()
+        .iter()
+        .zip(mask.data())
+        .filter(|(v, &m)| m && **v >= level)
+        .count()
+}
+
+/// [`carries_data`] for one solve: the reflectance map's ambient level and the options'
+/// saturation level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DataRange {
+    ambient: f64,
+    saturation: Option<f64>,
+}
+
+impl DataRange {
+    /// The range of `reflectance` (its ambient level) and `saturation`.
+    pub(crate) fn new(reflectance: &dyn ReflectanceMap, saturation: Option<f64>) -> DataRange {
+        DataRange {
+            ambient: reflectance.ambient(),
+            saturation,
+        }
+    }
+
+    /// Whether a pixel of brightness `intensity` carries a data term ([`carries_data`]).
+    pub(crate) fn carries(&self, intensity: f64) -> bool {
+        carries_data(intensity, self.ambient, self.saturation)
     }
 }
 
@@ -259,7 +325,7 @@ struct Node {
     neighbours: [u32; 4],
     /// 1/k for k neighbours in the domain (0 for an isolated pixel, which stays at (0, 0)).
     inv_k: f64,
-    /// λ·4/k for lit pixels, 0 in attached shadow.
+    /// λ·4/k for pixels with a data term ([`carries_data`]), 0 in attached shadow or clipped.
     data_weight: f64,
     /// The image brightness.
     intensity: f64,
@@ -286,6 +352,9 @@ pub struct Solver {
     /// solve of the same mask (its contour fit costs about a tenth of a 256² solve). The
     /// roles are the key: a pixel is outside exactly where the mask is false.
     occluding: Option<BoundaryConditions>,
+    /// The saturation level of the solve under way ([`SolveOptions::saturation`]), which
+    /// `build` and the energies read.
+    saturation: Option<f64>,
 }
 
 const NO_SLOT: u32 = u32::MAX;
@@ -315,6 +384,7 @@ impl Solver {
             next_g: Vec::new(),
             multigrid: None,
             occluding: None,
+            saturation: None,
         })
     }
 
@@ -355,6 +425,7 @@ impl Solver {
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
         options.validate()?;
+        self.saturation = options.saturation;
         let (w, h) = (self.width, self.height);
         for (what, gw, gh) in [
             ("image", image.width(), image.height()),
@@ -430,6 +501,7 @@ impl Solver {
                 g,
                 image,
                 bc,
+                DataRange::new(reflectance, options.saturation),
                 reflectance,
                 SolveStats {
                     iterations: stats.cycles,
@@ -525,7 +597,7 @@ impl Solver {
         self.cur_g.push(0.0);
         self.next_f.clone_from(&self.cur_f);
         self.next_g.clone_from(&self.cur_g);
-        let ambient = reflectance.ambient();
+        let data = DataRange::new(reflectance, self.saturation);
         for &p in &self.pixels {
             let p = p as usize;
             let (col, row) = (p % w, p / w);
@@ -547,10 +619,13 @@ impl Solver {
             let (inv_k, data_weight) = if k == 0 {
                 (0.0, 0.0)
             } else {
-                let lit = intensity > ambient;
                 (
                     1.0 / k as f64,
-                    if lit { lambda * 4.0 / k as f64 } else { 0.0 },
+                    if data.carries(intensity) {
+                        lambda * 4.0 / k as f64
+                    } else {
+                        0.0
+                    },
                 )
             };
             self.nodes.push(Node {
@@ -585,7 +660,8 @@ impl Solver {
         stats: SolveStats,
     ) -> Solution {
         let (f, g) = self.current_fg();
-        finish(f, g, image, bc, reflectance, stats)
+        let data = DataRange::new(reflectance, self.saturation);
+        finish(f, g, image, bc, data, reflectance, stats)
     }
 
     /// The current values as (f, g) grids (the fixed pixels' values included, 0 outside the
@@ -620,6 +696,7 @@ fn finish(
     g: Image,
     image: &Image,
     bc: &BoundaryConditions,
+    data: DataRange,
     reflectance: &dyn ReflectanceMap,
     stats: SolveStats,
 ) -> Solution {
@@ -640,12 +717,11 @@ fn finish(
             }
         }
     }
-    let ambient = reflectance.ambient();
     let mut brightness = 0.0;
     for (p, role) in bc.roles.data().iter().enumerate() {
         if *role == Role::Unknown {
             let i = image.data()[p];
-            if i > ambient {
+            if data.carries(i) {
                 let e = i - reflectance.fg(f.data()[p], g.data()[p]).value;
                 brightness += e * e;
             }

@@ -654,7 +654,11 @@ impl Multigrid {
             data: 4.0 * lambda,
         };
         self.work = 0.0;
-        self.setup(image, bc, reflectance.ambient());
+        self.setup(
+            image,
+            bc,
+            super::DataRange::new(reflectance, options.saturation),
+        );
         if self.nested {
             self.start_from_coarse_solution(image, bc, reflectance, options);
         }
@@ -720,7 +724,7 @@ impl Multigrid {
 
     /// Lays out every level for `bc`: flags and neighbour counts, the fixed values and a start
     /// of (0, 0) at the unknowns of the finest level (which nested iteration may then replace).
-    fn setup(&mut self, image: &Image, bc: &BoundaryConditions, ambient: f64) {
+    fn setup(&mut self, image: &Image, bc: &BoundaryConditions, data: super::DataRange) {
         let (w, h) = (self.width, self.height);
         let fine = &mut self.levels[0];
         fine.kind.fill(0);
@@ -759,7 +763,11 @@ impl Multigrid {
                         // An isolated pixel has nothing to be smooth with: Jacobi leaves it at
                         // (0, 0), and so does this solver, by keeping it out of the problem.
                         if k > 0 {
-                            let lit = if image.data()[p] > ambient { LIT } else { 0 };
+                            let lit = if data.carries(image.data()[p]) {
+                                LIT
+                            } else {
+                                0
+                            };
                             fine.kind[at] = UNKNOWN | lit | k;
                             unknowns += 1;
                         }
@@ -1466,7 +1474,7 @@ mod tests {
             let (image, map) = picture(&s, Light::FRONT);
             let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
             let mut mg = Multigrid::new(size, size);
-            mg.setup(&image, &bc, map.ambient);
+            mg.setup(&image, &bc, crate::solver::DataRange::new(&map, None));
             assert!(mg.used >= 3);
             for level in &mg.levels[1..mg.used] {
                 let mut fixed = 0;

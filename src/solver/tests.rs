@@ -314,3 +314,68 @@ fn bad_input_is_an_error_not_a_panic() {
     assert_eq!("literal".parse::<Method>().unwrap(), Method::Literal);
     assert_eq!(Method::Jacobi.to_string(), "jacobi");
 }
+
+/// Clipped pixels (at or above `SolveOptions::saturation`) carry smoothness only, in every
+/// method: Jacobi ignores their values exactly (any value above the level gives the same
+/// bits, the same brightness energy), so do multigrid and the integrable method (up to the
+/// nested start, which averages the image), and without the level the same image solves
+/// differently, its clipped pixels in the brightness energy.
+#[test]
+fn clipped_pixels_carry_smoothness_only() {
+    let s = sphere(48, 48, 20.0).unwrap();
+    let light = Light::from_tilt_slant(30.0, 30.0).unwrap();
+    let (image, map) = picture(&s, light);
+    let level = 0.95;
+    let clipped = image.map(|v| v.min(level));
+    let brighter = image.map(|v| if *v >= level { 5.0 } else { *v });
+    let n_clipped = clipped_pixels(&clipped, &s.mask, Some(level));
+    assert!(n_clipped > 20, "{n_clipped}");
+    assert_eq!(clipped_pixels(&clipped, &s.mask, None), 0);
+    let mut solver = Solver::new(48, 48).unwrap();
+    let mut solve = |image: &Image, method: Method, saturation: Option<f64>| {
+        let options = SolveOptions {
+            tol: 1e-9,
+            saturation,
+            ..SolveOptions::for_method(method)
+        };
+        let sol = solver
+            .solve(image, &s.mask, &Boundary::Occluding, &map, &options)
+            .unwrap();
+        // The integrable method stops at its cap of 200 iterations short of 1e-9.
+        assert!(sol.converged || method == Method::Integrable, "{method}");
+        sol
+    };
+    let largest_difference = |a: &Solution, b: &Solution| {
+        let d = |x: &Image, y: &Image| {
+            x.data()
+                .iter()
+                .zip(y.data())
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max)
+        };
+        d(&a.f, &b.f).max(d(&a.g, &b.g))
+    };
+    let jacobi = solve(&clipped, Method::Jacobi, Some(level));
+    let other = solve(&brighter, Method::Jacobi, Some(level));
+    assert_eq!(jacobi.f, other.f);
+    assert_eq!(jacobi.g, other.g);
+    assert_eq!(jacobi.brightness_energy, other.brightness_energy);
+    let kept_in = solve(&clipped, Method::Jacobi, None);
+    assert!(largest_difference(&kept_in, &jacobi) > 1e-2);
+    assert!(kept_in.brightness_energy > jacobi.brightness_energy);
+    for method in [Method::Multigrid, Method::Integrable] {
+        let a = solve(&clipped, method, Some(level));
+        let b = solve(&brighter, method, Some(level));
+        let kept_in = solve(&clipped, method, None);
+        assert!(largest_difference(&a, &b) < 1e-5, "{method}");
+        assert!(largest_difference(&a, &kept_in) > 1e-2, "{method}");
+    }
+    // A level that is not a positive number is refused.
+    for bad in [0.0, -1.0, f64::NAN] {
+        let options = SolveOptions {
+            saturation: Some(bad),
+            ..SolveOptions::default()
+        };
+        assert!(options.validate().is_err(), "{bad}");
+    }
+}
