@@ -40,7 +40,8 @@
 //! the squared spacing, like the fine one); residuals and reaction matrices are restricted by
 //! summing the unknown children, corrections prolongated bilinearly (weights 9, 3, 3, 1 / 16),
 //! with a neighbour outside the domain lending the parent's correction (natural boundary) and a
-//! fixed one lending zero. Coarsening stops at a level with few unknowns, which is relaxed until
+//! fixed one lending zero. Only the black cells receive it: the red half-sweep that begins every
+//! post-sweep moves each red unknown to a value computed from its black neighbours alone. Coarsening stops at a level with few unknowns, which is relaxed until
 //! it settles.
 //!
 //! # The schedule
@@ -54,7 +55,8 @@
 //!
 //! Then cycles of one Gauss–Seidel sweep, the residual (checked against `tol` on exactly the
 //! values that would be returned), the coarse correction and two more sweeps, until the
-//! residual is below `tol` or `max_iter` cycles are done. The coarse correction is a W-cycle
+//! residual is below `tol` or `max_iter` cycles are done. A cycle that the last two residuals
+//! predict to be the last measures its residual first and restricts only if the test fails. The coarse correction is a W-cycle
 //! (`CycleSchedule::W_CYCLE`): every coarser level is visited twice per visit of the level
 //! above, each visit with the same pre- and post-sweeps. After a full red-black sweep every black
 //! cell sits exactly at its Jacobi target, so the residual is only evaluated on the red half.
