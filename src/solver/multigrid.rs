@@ -40,7 +40,8 @@
 //! the squared spacing, like the fine one); residuals and reaction matrices are restricted by
 //! summing the unknown children, corrections prolongated bilinearly (weights 9, 3, 3, 1 / 16),
 //! with a neighbour outside the domain lending the parent's correction (natural boundary) and a
-//! fixed one lending zero. Coarsening stops at a level with few unknowns, which is relaxed until
+//! fixed one lending zero. Only the black cells receive it: the red half-sweep that begins every
+//! post-sweep moves each red unknown to a value computed from its black neighbours alone. Coarsening stops at a level with few unknowns, which is relaxed until
 //! it settles.
 //!
 //! # The schedule
@@ -54,7 +55,8 @@
 //!
 //! Then cycles of one Gauss–Seidel sweep, the residual (checked against `tol` on exactly the
 //! values that would be returned), the coarse correction and two more sweeps, until the
-//! residual is below `tol` or `max_iter` cycles are done. The coarse correction is a W-cycle
+//! residual is below `tol` or `max_iter` cycles are done. A cycle that the last two residuals
+//! predict to be the last measures its residual first and restricts only if the test fails. The coarse correction is a W-cycle
 //! (`CycleSchedule::W_CYCLE`): every coarser level is visited twice per visit of the level
 //! above, each visit with the same pre- and post-sweeps. After a full red-black sweep every black
 //! cell sits exactly at its Jacobi target, so the residual is only evaluated on the red half.
@@ -175,6 +177,11 @@ struct Level {
     rhs: Vec<Pair>,
     /// Coarse levels: the restricted reaction matrix A, padded row-major.
     reaction: Vec<Sym>,
+    /// Coarse levels below the first: whether `reaction` already holds the restriction of the
+    /// level above's in this cycle. The reaction matrices of the finest level change only
+    /// between cycles (with the fine values), so those of level 2 and coarser are the same on
+    /// every visit of one cycle and are restricted on the first.
+    reaction_current: bool,
     /// Unknown cells on this level in the current problem.
     unknowns: usize,
     /// For each colour and padded row, the half-open range of j (index in the colour's row)
@@ -198,6 +205,7 @@ impl Level {
             val: [vec![[0.0; 2]; hp * hw], vec![[0.0; 2]; hp * hw]],
             rhs: vec![[0.0; 2]; cells],
             reaction: vec![[0.0; 3]; cells],
+            reaction_current: false,
             unknowns: 0,
             spans: [vec![(0, 0); hp], vec![(0, 0); hp]],
         }
@@ -422,7 +430,24 @@ impl Averages {
     }
 }
 
-impl Context<'_> {
+impl<'a> Context<'a> {
+    /// The context of a solve of `image` under `reflectance` with smoothness weight `lambda`.
+    fn new(image: &'a Image, reflectance: &'a dyn ReflectanceMap, lambda: f64) -> Context<'a> {
+        let mut inv_k = [0.0; 5];
+        let mut data_k = [0.0; 5];
+        for k in 1..5 {
+            inv_k[k] = 1.0 / k as f64;
+            data_k[k] = lambda * 4.0 / k as f64;
+        }
+        Context {
+            image: image.data(),
+            reflectance,
+            inv_k,
+            data_k,
+            data: 4.0 * lambda,
+        }
+    }
+
     /// The coarse model's reaction `a` (Gauss–Newton, 4λ·∇R·∇Rᵀ) of a lit fine unknown, plus
     /// the positive part of the curvature term −4λ·(I − R)·∇²R that Gauss–Newton leaves out,
     /// from the map's [`ReflectanceMap::fg_hessian`] at the neighbour average, where
@@ -472,10 +497,10 @@ impl Context<'_> {
 
     /// One half-sweep of padded row `r` of the finest level: the cells of one colour
     /// (c = 2j + `start`, j in `span`) in `row`, moved to their Jacobi targets from the other
-    /// colour's values `other`. Returns the largest change.
+    /// colour's values `other` (without `WRITE` only measured). Returns the largest change.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
-    fn fine_row<const TRACK: bool>(
+    fn fine_row<const TRACK: bool, const WRITE: bool>(
         &self,
         kind_row: &[u8],
         image_row: &[f64],
@@ -494,18 +519,26 @@ impl Context<'_> {
             let u = Averages::of(self, kind_row, other, hw, r, start, j0, n);
             self.reflectance
                 .fg_batch(&u.f[..n], &u.g[..n], &mut samples[..n]);
-            for (i, sample) in samples.iter().enumerate().take(n) {
-                let j = j0 + i;
-                let c = 2 * j + start;
-                let kd = kind_row[c];
+            // Cell j is padded column c = 2j + start, image column c − 1 (c ≥ 1: the span
+            // starts and ends at unknowns); zipped, without an index check per cell.
+            let first = 2 * j0 + start;
+            let cells = row[j0..j0 + n]
+                .iter_mut()
+                .zip(&samples[..n])
+                .zip(u.f[..n].iter().zip(&u.g[..n]))
+                .zip(kind_row[first..].iter().step_by(2))
+                .zip(image_row[first - 1..].iter().step_by(2));
+            for ((((slot, sample), (&f, &g)), &kd), &intensity) in cells {
                 if kd & UNKNOWN == 0 {
                     continue;
                 }
-                let new = self.fine_update(kd, [u.f[i], u.g[i]], image_row[c - 1], sample);
+                let new = self.fine_update(kd, [f, g], intensity, sample);
                 if TRACK {
-                    worst = track(worst, row[j], new);
+                    worst = track(worst, *slot, new);
                 }
-                row[j] = new;
+                if WRITE {
+                    *slot = new;
+                }
             }
             j0 += n;
         }
@@ -640,19 +673,7 @@ impl Multigrid {
         progress: &mut dyn FnMut(&Progress),
     ) -> (Image, Image, MultigridStats) {
         let lambda = options.lambda;
-        let mut inv_k = [0.0; 5];
-        let mut data_k = [0.0; 5];
-        for k in 1..5 {
-            inv_k[k] = 1.0 / k as f64;
-            data_k[k] = lambda * 4.0 / k as f64;
-        }
-        let ctx = Context {
-            image: image.data(),
-            reflectance,
-            inv_k,
-            data_k,
-            data: 4.0 * lambda,
-        };
+        let ctx = Context::new(image, reflectance, lambda);
         self.work = 0.0;
         self.setup(
             image,
@@ -674,11 +695,26 @@ impl Multigrid {
         let mut damping = 1.0;
         // Globalisation hook (see globalize.rs): the cycles stop once they stall.
         let mut watch = super::globalize::StallWatch::new(lambda);
+        // The last two residuals, for `predicts_convergence`.
+        let mut history = [f64::INFINITY; 2];
         while !stats.converged {
             for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(0, &ctx);
             }
-            let residual = self.restrict(0, &ctx);
+            let residual = if self.used > 1 && predicts_convergence(history, options.tol) {
+                // Expected to be the last cycle: the test alone first, the restriction (the
+                // map's Hessian, the reaction matrices) only if it fails. The same residual
+                // either way (the same red targets, and a maximum is exact).
+                let test = self.red_residual(&ctx);
+                if test < options.tol {
+                    test
+                } else {
+                    self.restrict(0, &ctx)
+                }
+            } else {
+                self.restrict(0, &ctx)
+            };
+            history = [history[1], residual];
             stats.residual = residual;
             stats.cycles += 1;
             progress(&Progress {
@@ -789,6 +825,13 @@ impl Multigrid {
             }
             self.used += 1;
         }
+        // Corrections start at zero; `restrict` clears only the cells a sweep may have written
+        // (see there), so the ones a previous problem's unknowns left are cleared here.
+        for level in &mut self.levels[1..self.used] {
+            for v in level.val.iter_mut() {
+                v.fill([0.0; 2]);
+            }
+        }
     }
 
     /// One cycle of `self.schedule` (a W-cycle: each coarser level visited twice) for the
@@ -807,14 +850,8 @@ impl Multigrid {
             }
             return;
         }
-        for visit in 0..self.schedule.coarse_visits {
-            if visit > 0 {
-                // Later visits correct what the earlier ones left: start from zero again.
-                let next = &mut self.levels[l + 1];
-                for v in next.val.iter_mut() {
-                    v.fill([0.0; 2]);
-                }
-            }
+        // Every visit starts the next level's correction from zero: `restrict` sets it.
+        for _ in 0..self.schedule.coarse_visits {
             for _ in 0..self.schedule.pre_sweeps {
                 self.smooth(l, ctx);
             }
@@ -830,22 +867,29 @@ impl Multigrid {
     /// One red-black Gauss–Seidel sweep on level `l`.
     fn smooth(&mut self, l: usize, ctx: &Context) {
         self.work += 0.25f64.powi(l as i32);
-        self.half_sweep::<false>(l, 0, ctx);
-        self.half_sweep::<false>(l, 1, ctx);
+        self.half_sweep::<false, true>(l, 0, ctx);
+        self.half_sweep::<false, true>(l, 1, ctx);
     }
 
     /// [`Multigrid::smooth`], returning the largest change (NaN counts as infinite): the
     /// coarsest level's relaxation stops on it; elsewhere it is not needed and not tracked.
     fn smooth_tracked(&mut self, l: usize, ctx: &Context) -> f64 {
         self.work += 0.25f64.powi(l as i32);
-        let a = self.half_sweep::<true>(l, 0, ctx);
-        let b = self.half_sweep::<true>(l, 1, ctx);
+        let a = self.half_sweep::<true, true>(l, 0, ctx);
+        let b = self.half_sweep::<true, true>(l, 1, ctx);
         worst_of(a, b)
     }
 
     /// Updates the cells of colour `colour` on level `l`; returns the largest change if `TRACK`
-    /// (else 0).
-    fn half_sweep<const TRACK: bool>(&mut self, l: usize, colour: usize, ctx: &Context) -> f64 {
+    /// (else 0). Without `WRITE` (finest level only) the cells are left as they are and only
+    /// the change they would make is measured.
+    fn half_sweep<const TRACK: bool, const WRITE: bool>(
+        &mut self,
+        l: usize,
+        colour: usize,
+        ctx: &Context,
+    ) -> f64 {
+        debug_assert!(WRITE || l == 0);
         let level = &mut self.levels[l];
         let parallel = level.parallel();
         let (wp, hp, hw, w) = (level.wp, level.hp, level.hw, level.w);
@@ -868,7 +912,8 @@ impl Multigrid {
             let kind_row = &kind[r * wp..(r + 1) * wp];
             if l == 0 {
                 let image_row = &ctx.image[(r - 1) * w..r * w];
-                return ctx.fine_row::<TRACK>(kind_row, image_row, other, hw, r, start, span, row);
+                return ctx
+                    .fine_row::<TRACK, WRITE>(kind_row, image_row, other, hw, r, start, span, row);
             }
             let at = r * wp..(r + 1) * wp;
             coarse_row::<TRACK>(
@@ -885,6 +930,14 @@ impl Multigrid {
         })
     }
 
+    /// The finest level's Jacobi residual as `Multigrid::restrict` returns it (the largest
+    /// change a red half-sweep would make; the black cells sit at their targets), without the
+    /// restriction.
+    fn red_residual(&mut self, ctx: &Context) -> f64 {
+        self.work += 0.5;
+        self.half_sweep::<true, false>(0, 0, ctx)
+    }
+
     /// Restricts the residual and the reaction matrices of level `l` to level `l + 1` (sums over
     /// the unknown children) and zeroes the correction there. On the finest level, returns the
     /// largest residual divided by k, the Jacobi residual (0 on the others).
@@ -894,15 +947,34 @@ impl Multigrid {
         if l + 1 >= self.used {
             return self.residual_only(ctx);
         }
+        let (pre_sweeps, used) = (self.schedule.pre_sweeps, self.used);
         let (upper, lower) = self.levels.split_at_mut(l + 1);
         let fine = &upper[l];
         let coarse = &mut lower[0];
         let parallel = fine.parallel();
         let (cwp, chp) = (coarse.wp, coarse.hp);
-        let ckind = &coarse.kind[..];
-        for v in coarse.val.iter_mut() {
+        // The correction starts from zero. The red half of the first pre-sweep overwrites every
+        // red unknown unread, and the red cells that are not unknowns are never written (they
+        // stay at the zero of `setup`), so only the black cells are cleared, unless no
+        // pre-sweep comes first or the level is the coarsest, whose tracked sweeps compare
+        // with the old values.
+        let clear_red = pre_sweeps == 0 || l + 2 == used;
+        for v in coarse.val[usize::from(!clear_red)..].iter_mut() {
             v.fill([0.0; 2]);
         }
+        // The reaction matrices of level 1 follow the fine values (restricted every time);
+        // coarser ones once per cycle (see `Level::reaction_current`).
+        let with_reaction = l == 0 || !coarse.reaction_current;
+        if l == 0 {
+            for level in lower.iter_mut().skip(1) {
+                level.reaction_current = false;
+            }
+        } else {
+            lower[0].reaction_current = true;
+        }
+        let coarse = &mut lower[0];
+        let ckind = &coarse.kind[..];
+        let cspans = &coarse.spans;
         let body = |(r, (rhs_row, reaction_row)): (usize, (&mut [Pair], &mut [Sym]))| {
             if r == 0 || r + 1 >= chp {
                 return 0.0;
@@ -911,31 +983,18 @@ impl Multigrid {
                 let ckind_row = &ckind[r * cwp..(r + 1) * cwp];
                 return restrict_fine_row(ctx, fine, ckind_row, r, rhs_row, reaction_row);
             }
-            // Coarser levels: nobody reads their largest residual, and the unknown children
-            // of a coarse cell that is not an unknown (it is fixed) add nothing.
-            for c in 1..cwp - 1 {
-                let mut res = [0.0; 2];
-                let mut react = [0.0; 3];
-                if ckind[r * cwp + c] & UNKNOWN != 0 {
-                    // The four children (those past the fine level's last row or column are
-                    // its padding, never unknown), in the order of `children`.
-                    let (r0, c0) = (2 * r - 1, 2 * c - 1);
-                    for (fr, fc) in [(r0, c0), (r0, c0 + 1), (r0 + 1, c0), (r0 + 1, c0 + 1)] {
-                        let fk = fine.kind[fr * fine.wp + fc];
-                        if fk & UNKNOWN == 0 {
-                            continue;
-                        }
-                        let (d, a) = residual_at(fine, fr, fc, fk);
-                        res[0] += d[0];
-                        res[1] += d[1];
-                        react[0] += a[0];
-                        react[1] += a[1];
-                        react[2] += a[2];
-                    }
-                }
-                rhs_row[c] = res;
-                reaction_row[c] = react;
-            }
+            // Coarser levels: nobody reads their largest residual.
+            let ckind_row = &ckind[r * cwp..(r + 1) * cwp];
+            let span = unknown_columns(cspans, r);
+            restrict_coarse_row(
+                fine,
+                ckind_row,
+                span,
+                r,
+                rhs_row,
+                reaction_row,
+                with_reaction,
+            );
             0.0
         };
         if parallel {
@@ -981,6 +1040,7 @@ impl Multigrid {
     /// `l`.
     fn prolongate(&mut self, l: usize, scale: f64) {
         self.work += 0.25f64.powi(l as i32) * 0.5;
+        let first = usize::from(self.schedule.post_sweeps > 0);
         let (upper, lower) = self.levels.split_at_mut(l + 1);
         let fine = &mut upper[l];
         let coarse = &mut lower[0];
@@ -1008,7 +1068,11 @@ impl Multigrid {
         });
         let merged = &coarse.rhs[..];
         let ckind = &coarse.kind[..];
-        for colour in 0..2 {
+        // The first post-sweep's red half moves every red unknown to a value computed from its
+        // black neighbours alone, so a correction added to the red cells would be overwritten
+        // unread: only the black cells are corrected when a post-sweep follows (always, in the
+        // solver's schedule).
+        for colour in first..2 {
             let spans = &fine.spans[colour][..];
             over_rows(&mut fine.val[colour], hw, parallel, |r, row| {
                 let (lo, hi) = spans[r];
@@ -1053,11 +1117,35 @@ impl Multigrid {
 
     /// The finest level's f and g as image grids (0 outside the domain).
     fn fine_values(&self) -> (Image, Image) {
+        let (w, h) = (self.width, self.height);
         let fine = &self.levels[0];
-        let f = Grid::from_fn(self.width, self.height, |c, r| fine.value(r + 1, c + 1)[0]);
-        let g = Grid::from_fn(self.width, self.height, |c, r| fine.value(r + 1, c + 1)[1]);
+        let (mut f, mut g) = (Grid::new(w, h, 0.0), Grid::new(w, h, 0.0));
+        // One pass, each padded row's two colours cut once: cell c of the row is cell c/2 of
+        // colour (r + c) mod 2.
+        let rows = f
+            .data_mut()
+            .chunks_mut(w.max(1))
+            .zip(g.data_mut().chunks_mut(w.max(1)));
+        for (r, (f_row, g_row)) in (1..=h).zip(rows) {
+            let colours = [
+                &fine.val[r & 1][r * fine.hw..(r + 1) * fine.hw],
+                &fine.val[(r + 1) & 1][r * fine.hw..(r + 1) * fine.hw],
+            ];
+            for (i, (f, g)) in f_row.iter_mut().zip(g_row.iter_mut()).enumerate() {
+                let c = i + 1;
+                let v = colours[c & 1][c >> 1];
+                (*f, *g) = (v[0], v[1]);
+            }
+        }
         (f, g)
     }
+}
+
+/// Whether the cycle after residuals `history` (the one before last, the last) is expected to
+/// reach `tol`: the last residual times the last reduction factor is below it.
+fn predicts_convergence(history: [f64; 2], tol: f64) -> bool {
+    let [before, last] = history;
+    before.is_finite() && before > 0.0 && last * (last / before) < tol
 }
 
 /// The problem on the half-size grid: each coarse pixel averages its children's brightness
@@ -1104,8 +1192,9 @@ fn half_size_problem(image: &Image, bc: &BoundaryConditions) -> (Image, Boundary
 }
 
 /// The residual (k-scaled) of unknown cell (r, c) on coarse level `level`, and its reaction
-/// matrix.
-#[inline]
+/// matrix: the straightforward version of what `restrict_coarse_row` sums (its reference in
+/// the tests).
+#[cfg(test)]
 fn residual_at(level: &Level, r: usize, c: usize, kd: u8) -> (Pair, Sym) {
     let s = level.neighbours(r, c);
     let u = level.value(r, c);
@@ -1117,6 +1206,111 @@ fn residual_at(level: &Level, r: usize, c: usize, kd: u8) -> (Pair, Sym) {
         b[1] + s[1] - a[1] * u[0] - (k + a[2]) * u[1],
     ];
     (res, a)
+}
+
+/// The half-open range of padded columns that holds every unknown of padded row `r` of a level
+/// with colour spans `spans` (empty: (0, 0)).
+#[inline]
+fn unknown_columns(spans: &[Vec<(u32, u32)>; 2], r: usize) -> (usize, usize) {
+    let (mut lo, mut hi) = (usize::MAX, 0);
+    for (colour, spans) in spans.iter().enumerate() {
+        let (a, b) = spans[r];
+        if a < b {
+            let start = (r + colour) & 1;
+            lo = lo.min(2 * a as usize + start);
+            hi = hi.max(2 * (b as usize - 1) + start + 1);
+        }
+    }
+    if lo < hi {
+        (lo, hi)
+    } else {
+        (0, 0)
+    }
+}
+
+/// The coarse part of `Multigrid::restrict` (level `fine` ≥ 1) for coarse padded row `r`
+/// (kinds `ckind_row`, unknowns in the columns `span`): the residuals of the unknown children
+/// of each coarse unknown summed into `rhs_row`, and their reaction matrices into
+/// `reaction_row` if `with_reaction`. Cells that are not unknowns are left as they are (no
+/// sweep, residual or restriction reads them).
+///
+/// The same sums as [`residual_at`] over the children in the order of `children`, with the
+/// rows of each colour cut once: in fine row fr, the child in column 2c − 1 is cell c − 1 of
+/// colour (fr + 1) mod 2, the child in column 2c cell c of colour fr mod 2, and each one's
+/// left and right neighbours are cells c − 1 and c of the other colour's row.
+#[inline(never)]
+fn restrict_coarse_row<'a>(
+    fine: &'a Level,
+    ckind_row: &[u8],
+    span: (usize, usize),
+    r: usize,
+    rhs_row: &mut [Pair],
+    reaction_row: &mut [Sym],
+    with_reaction: bool,
+) {
+    let (fwp, hw) = (fine.wp, fine.hw);
+    let (lo, hi) = span;
+    if lo >= hi {
+        return;
+    }
+    // The two fine rows, cut once: kinds, right-hand sides and reaction matrices (padded
+    // columns), and the rows above, at and below of each colour, x that of column 2c − 1 and y
+    // that of column 2c. A row past the last (the padding, never unknown) is left out.
+    let rows = [2 * r - 1, 2 * r].map(|fr| {
+        (fr <= fine.h).then(|| {
+            let (x, y) = (&fine.val[(fr + 1) & 1], &fine.val[fr & 1]);
+            let three = |v: &'a [Pair]| -> [&'a [Pair]; 3] {
+                [
+                    &v[(fr - 1) * hw..fr * hw],
+                    &v[fr * hw..(fr + 1) * hw],
+                    &v[(fr + 1) * hw..(fr + 2) * hw],
+                ]
+            };
+            let cells = fr * fwp..(fr + 1) * fwp;
+            (
+                &fine.kind[cells.clone()],
+                &fine.rhs[cells.clone()],
+                &fine.reaction[cells],
+                three(x),
+                three(y),
+            )
+        })
+    });
+    for c in lo..hi {
+        if ckind_row[c] & UNKNOWN == 0 {
+            continue;
+        }
+        let mut res = [0.0; 2];
+        let mut react = [0.0; 3];
+        for &(kind, rhs, reaction, x, y) in rows.iter().flatten() {
+            for child in 0..2 {
+                let fc = 2 * c - 1 + child;
+                let kd = kind[fc];
+                if kd & UNKNOWN == 0 {
+                    continue;
+                }
+                // The child's own colour, the other colour and its index in their rows.
+                let (own, [up, mid, down], j) = if child == 0 { (x, y, c - 1) } else { (y, x, c) };
+                let (a, b) = (mid[c - 1], mid[c]);
+                let (t, d) = (up[j], down[j]);
+                let s = [a[0] + b[0] + t[0] + d[0], a[1] + b[1] + t[1] + d[1]];
+                let u = own[1][j];
+                let k = (kd & K_BITS) as f64;
+                let (bb, m) = (rhs[fc], reaction[fc]);
+                res[0] += bb[0] + s[0] - (k + m[0]) * u[0] - m[1] * u[1];
+                res[1] += bb[1] + s[1] - m[1] * u[0] - (k + m[2]) * u[1];
+                if with_reaction {
+                    react[0] += m[0];
+                    react[1] += m[1];
+                    react[2] += m[2];
+                }
+            }
+        }
+        rhs_row[c] = res;
+        if with_reaction {
+            reaction_row[c] = react;
+        }
+    }
 }
 
 /// One half-sweep of padded row `r` of a coarse level (kinds `kind_row`, right-hand sides
@@ -1258,15 +1452,18 @@ fn restrict_fine_row(
                 reaction_row[c] = [0.0; 3];
                 continue;
             }
-            let unknown = [2 * r - 1, 2 * r]
-                .iter()
-                .flat_map(|&fr| [fr * fwp + 2 * c - 1, fr * fwp + 2 * c])
-                .filter(|&at| fine.kind[at] & UNKNOWN != 0)
-                .count();
             let mut a = react[i];
-            if evaluated[i] > 0 && usize::from(evaluated[i]) < unknown {
-                let scale = unknown as f64 / f64::from(evaluated[i]);
-                a = [a[0] * scale, a[1] * scale, a[2] * scale];
+            if evaluated[i] > 0 && evaluated[i] < 4 {
+                let (top, bottom) = ((2 * r - 1) * fwp + 2 * c - 1, 2 * r * fwp + 2 * c - 1);
+                let unknown = fine.kind[top..top + 2]
+                    .iter()
+                    .chain(&fine.kind[bottom..bottom + 2])
+                    .filter(|&&kd| kd & UNKNOWN != 0)
+                    .count();
+                if usize::from(evaluated[i]) < unknown {
+                    let scale = unknown as f64 / f64::from(evaluated[i]);
+                    a = [a[0] * scale, a[1] * scale, a[2] * scale];
+                }
             }
             rhs_row[c] = res[i];
             reaction_row[c] = a;
@@ -1324,6 +1521,7 @@ mod tests {
     use crate::boundary::{boundary_conditions, Boundary};
     use crate::gradient_space::{angle_deg, normal_from_fg};
     use crate::light::Light;
+    use crate::reflectance::Lambertian;
     use crate::solver::tests::picture;
     use crate::solver::{Method, Solver};
     use crate::surface::sphere;
@@ -1444,6 +1642,115 @@ mod tests {
         );
         let diff = mean_angle(&bc, (&plain.0, &plain.1), (&nested.0, &nested.1));
         assert!(diff < 0.05, "{diff}°");
+    }
+
+    /// A 64² sphere under an oblique light, laid out, with the fine values moved off the
+    /// start, the first coarse correction cycled and level 1 swept: a state in which every
+    /// level holds values that are not zero.
+    fn busy_hierarchy() -> (Image, Lambertian, Multigrid) {
+        let size = 64;
+        let s = sphere(size, size, 0.45 * size as f64).unwrap();
+        let (image, map) = picture(&s, Light::from_tilt_slant(30.0, 40.0).unwrap());
+        let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+        let mut mg = Multigrid::new(size, size);
+        mg.setup(&image, &bc, map.ambient);
+        assert!(mg.used >= 4, "{} levels", mg.used);
+        (image, map, mg)
+    }
+
+    /// Runs the solver's pieces on `mg` up to the restriction from level 1 to level 2.
+    fn sweep_to_level_one(mg: &mut Multigrid, ctx: &Context) {
+        for _ in 0..3 {
+            mg.smooth(0, ctx);
+        }
+        mg.restrict(0, ctx);
+        mg.smooth(1, ctx);
+    }
+
+    /// `restrict_coarse_row` (rows cut once, reaction matrices restricted once a cycle) sums
+    /// exactly what the cell-by-cell `residual_at` gives over the unknown children, bit for
+    /// bit, on the first visit and on a later one with new values.
+    #[test]
+    fn coarse_restriction_matches_the_cellwise_sums() {
+        let (image, map, mut mg) = busy_hierarchy();
+        let ctx = Context::new(&image, &map, SolveOptions::default().lambda);
+        sweep_to_level_one(&mut mg, &ctx);
+        for visit in 0..2 {
+            if visit > 0 {
+                mg.smooth(1, &ctx);
+            }
+            let fine = mg.levels[1].clone();
+            mg.restrict(1, &ctx);
+            let coarse = &mg.levels[2];
+            let (mut checked, mut lively) = (0, 0);
+            for r in 1..=coarse.h {
+                for c in 1..=coarse.w {
+                    let at = r * coarse.wp + c;
+                    if coarse.kind[at] & UNKNOWN == 0 {
+                        continue;
+                    }
+                    let (mut res, mut react) = ([0.0; 2], [0.0; 3]);
+                    for (fr, fc) in children(&fine, r, c) {
+                        let fk = fine.kind[fr * fine.wp + fc];
+                        if fk & UNKNOWN != 0 {
+                            let (d, a) = residual_at(&fine, fr, fc, fk);
+                            res = [res[0] + d[0], res[1] + d[1]];
+                            react = [react[0] + a[0], react[1] + a[1], react[2] + a[2]];
+                        }
+                    }
+                    lively += usize::from(res != [0.0; 2] && react != [0.0; 3]);
+                    assert_eq!(coarse.rhs[at], res, "({r}, {c}), visit {visit}");
+                    assert_eq!(coarse.reaction[at], react, "({r}, {c}), visit {visit}");
+                    // The correction starts at zero.
+                    assert_eq!(coarse.value(r, c)[0].to_bits(), 0);
+                    checked += 1;
+                }
+            }
+            assert_eq!(checked, coarse.unknowns);
+            // Most cells have a residual and a reaction (not those in attached shadow).
+            assert!(2 * lively > checked, "{lively} of {checked}");
+            assert!(coarse.reaction_current);
+        }
+    }
+
+    /// The prolongation that corrects only the black cells, followed by the red half-sweep
+    /// that every post-sweep starts with, leaves the same bits as the straightforward one that
+    /// corrects both colours, on the finest level and on a coarse one.
+    #[test]
+    fn black_only_prolongation_is_exact() {
+        let (image, map, mut mg) = busy_hierarchy();
+        let ctx = Context::new(&image, &map, SolveOptions::default().lambda);
+        sweep_to_level_one(&mut mg, &ctx);
+        mg.restrict(1, &ctx);
+        mg.cycle(2, &ctx);
+        let mut both = mg.clone();
+        for l in [1, 0] {
+            if l == 0 {
+                mg.cycle(1, &ctx);
+                both.cycle(1, &ctx);
+            }
+            let before = mg.levels[l].val.clone();
+            mg.prolongate(l, 0.75);
+            // Without a post-sweep, both colours are corrected.
+            both.schedule.post_sweeps = 0;
+            both.prolongate(l, 0.75);
+            both.schedule = mg.schedule;
+            assert_eq!(mg.levels[l].val[0], before[0], "level {l}: red untouched");
+            assert_ne!(both.levels[l].val[0], before[0], "level {l}");
+            assert_eq!(mg.levels[l].val[1], both.levels[l].val[1], "level {l}");
+            mg.half_sweep::<false, true>(l, 0, &ctx);
+            both.half_sweep::<false, true>(l, 0, &ctx);
+            let bits = |m: &Multigrid| -> Vec<u64> {
+                m.levels[l]
+                    .val
+                    .iter()
+                    .flatten()
+                    .flatten()
+                    .map(|v| v.to_bits())
+                    .collect()
+            };
+            assert_eq!(bits(&mg), bits(&both), "level {l}");
+        }
     }
 
     #[test]
