@@ -44,16 +44,21 @@ const TILTS: [f64; 6] = [0.0, 45.0, 90.0, 135.0, 180.0, 270.0];
 /// The estimates of `object` rendered at 128² under every light of the grid, as (tilt, slant,
 /// by the limb, by the moments).
 fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
+    grid_estimates_with(object, &[])
+}
+
+/// [`grid_estimates`] of stimulus `object` with the further parameters `pairs`.
+fn grid_estimates_with(
+    object: &str,
+    pairs: &[&str],
+) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
     let mut out = Vec::new();
     for slant in SLANTS {
         for tilt in TILTS {
             let light = format!("light=tilt={tilt},slant={slant}");
-            let (image, mask) = render(
-                object,
-                &[&light, "ambient=0", "albedo=0.8"],
-                (128, 128),
-                16.0,
-            );
+            let mut all = vec![light.as_str(), "ambient=0", "albedo=0.8"];
+            all.extend_from_slice(pairs);
+            let (image, mask) = render(object, &all, (128, 128), 16.0);
             let e = estimate_light_with(&image, &mask, Outline::Occluding).unwrap();
             let m = estimate_light_with(&image, &mask, Outline::Unknown).unwrap();
             out.push((tilt, slant, e, m));
@@ -65,11 +70,19 @@ fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)>
 /// The largest errors (tilt where the slant is at least 15°, |slant|) of `object` over the grid,
 /// by the limb and by the moments, printing the table (`--nocapture`).
 fn grid_errors(object: &str) -> [(f64, f64); 2] {
+    print_grid_errors(object, &grid_estimates(object))
+}
+
+/// The largest errors of the grid's `estimates` (see [`grid_errors`]), printing the table.
+fn print_grid_errors(
+    object: &str,
+    estimates: &[(f64, f64, LightEstimate, LightEstimate)],
+) -> [(f64, f64); 2] {
     let mut worst = [(0.0f64, 0.0f64); 2];
     println!(
         "{object}: tilt error, slant error (degrees), method [moments]; rows slant, columns tilt"
     );
-    for (k, (tilt, slant, e, m)) in grid_estimates(object).into_iter().enumerate() {
+    for (k, &(tilt, slant, e, m)) in estimates.iter().enumerate() {
         for (w, x) in worst.iter_mut().zip([&e, &m]) {
             if slant >= 15.0 {
                 w.0 = w.0.max(tilt_error(x.tilt_deg, tilt));
@@ -146,6 +159,38 @@ fn the_limb_estimate_on_the_bunny() {
         }
     }
     assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
+}
+
+/// The finer Stanford bunny of the shared data (`bun_zipper_res2`, 8,171 vertices, rendered
+/// by the `mesh` stimulus in the same upright view) fares no better: its silhouette normals are
+/// no closer to edge-on, and its open base and ear tips are cuts. The rim fit runs (the band's
+/// residuals are 4–8 % of the albedo): tilt within 9.7° at slant 15° (7.5° at 30°), the slant
+/// up to 15.7° low (tilt 0°, slant 45°). The goal is not met; this asserts what is achieved.
+#[test]
+fn the_limb_estimate_on_the_finer_bunny() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/bunny/bun_zipper_res2.ply");
+    if !path.is_file() {
+        eprintln!(
+            "skipping: {} not found (the shared reference data is not checked out)",
+            path.display()
+        );
+        return;
+    }
+    let pair = format!("path={}", path.display());
+    let estimates = grid_estimates_with("mesh", &[&pair]);
+    let [limb, moments] = print_grid_errors("bunny res2", &estimates);
+    assert!(limb.0 < 10.0 && limb.1 < 16.0, "{limb:?}");
+    assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
+    for &(tilt, slant, e, _) in &estimates {
+        assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
+        if slant >= 30.0 {
+            assert!(
+                tilt_error(e.tilt_deg, tilt) < 8.0,
+                "tilt {tilt} slant {slant}: {e:?}"
+            );
+        }
+    }
 }
 
 /// Without an occluding outline (the whole frame, or `Outline::Unknown`) the moments run, as
