@@ -143,17 +143,19 @@ fn the_limb_estimate_is_unbiased_on_the_vase() {
 
 /// The bunny (a coarse mesh with interpolated normals, whose silhouette normals are not edge-on
 /// and whose outline is partly a cut) is not explained by the band's model (residuals above
-/// 3 % of the albedo), so the rim fit runs: tilt within 5° from a slant of 30°, within 9° at
-/// 15°; the slant comes out up to 11° low. The goal is not met on the bunny.
+/// 3 % of the albedo), so the rim fit runs, trimmed one-sided (the limb is the lower envelope of
+/// the outline's brightness): tilt within 3° from a slant of 30°, within 6.3° at 15°; the slant
+/// within 7.4° (it was 11° low with a symmetric trim). The goal is not met on the bunny: this
+/// asserts what is achieved.
 #[test]
 fn the_limb_estimate_on_the_bunny() {
     let [limb, moments] = grid_errors("bunny");
-    assert!(limb.0 < 9.0 && limb.1 < 12.0, "{limb:?}");
+    assert!(limb.0 < 6.5 && limb.1 < 7.5, "{limb:?}");
     for (tilt, slant, e, _) in grid_estimates("bunny") {
         assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         if slant >= 30.0 {
             assert!(
-                tilt_error(e.tilt_deg, tilt) < 5.0,
+                tilt_error(e.tilt_deg, tilt) < 3.0,
                 "tilt {tilt} slant {slant}: {e:?}"
             );
         }
@@ -164,8 +166,9 @@ fn the_limb_estimate_on_the_bunny() {
 /// The finer Stanford bunny of the shared data (`bun_zipper_res2`, 8,171 vertices, rendered
 /// by the `mesh` stimulus in the same upright view) fares no better: its silhouette normals are
 /// no closer to edge-on, and its open base and ear tips are cuts. The rim fit runs (the band's
-/// residuals are 4–8 % of the albedo): tilt within 9.7° at slant 15° (7.5° at 30°), the slant
-/// up to 15.7° low (tilt 0°, slant 45°). The goal is not met; this asserts what is achieved.
+/// residuals are 4–8 % of the albedo): tilt within 4.3° from a slant of 30° but 10.2° at 15°,
+/// the slant within 7.3° (it was 15.6° low with a symmetric trim). The goal is not met; this
+/// asserts what is achieved.
 #[test]
 fn the_limb_estimate_on_the_finer_bunny() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -180,13 +183,13 @@ fn the_limb_estimate_on_the_finer_bunny() {
     let pair = format!("path={}", path.display());
     let estimates = grid_estimates_with("mesh", &[&pair]);
     let [limb, moments] = print_grid_errors("bunny res2", &estimates);
-    assert!(limb.0 < 10.0 && limb.1 < 16.0, "{limb:?}");
+    assert!(limb.0 < 10.5 && limb.1 < 7.5, "{limb:?}");
     assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
     for &(tilt, slant, e, _) in &estimates {
         assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         if slant >= 30.0 {
             assert!(
-                tilt_error(e.tilt_deg, tilt) < 8.0,
+                tilt_error(e.tilt_deg, tilt) < 5.0,
                 "tilt {tilt} slant {slant}: {e:?}"
             );
         }
