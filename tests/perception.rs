@@ -44,16 +44,21 @@ const TILTS: [f64; 6] = [0.0, 45.0, 90.0, 135.0, 180.0, 270.0];
 /// The estimates of `object` rendered at 128² under every light of the grid, as (tilt, slant,
 /// by the limb, by the moments).
 fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
+    grid_estimates_with(object, &[])
+}
+
+/// [`grid_estimates`] of stimulus `object` with the further parameters `pairs`.
+fn grid_estimates_with(
+    object: &str,
+    pairs: &[&str],
+) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
     let mut out = Vec::new();
     for slant in SLANTS {
         for tilt in TILTS {
             let light = format!("light=tilt={tilt},slant={slant}");
-            let (image, mask) = render(
-                object,
-                &[&light, "ambient=0", "albedo=0.8"],
-                (128, 128),
-                16.0,
-            );
+            let mut all = vec![light.as_str(), "ambient=0", "albedo=0.8"];
+            all.extend_from_slice(pairs);
+            let (image, mask) = render(object, &all, (128, 128), 16.0);
             let e = estimate_light_with(&image, &mask, Outline::Occluding).unwrap();
             let m = estimate_light_with(&image, &mask, Outline::Unknown).unwrap();
             out.push((tilt, slant, e, m));
@@ -65,11 +70,19 @@ fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)>
 /// The largest errors (tilt where the slant is at least 15°, |slant|) of `object` over the grid,
 /// by the limb and by the moments, printing the table (`--nocapture`).
 fn grid_errors(object: &str) -> [(f64, f64); 2] {
+    print_grid_errors(object, &grid_estimates(object))
+}
+
+/// The largest errors of the grid's `estimates` (see [`grid_errors`]), printing the table.
+fn print_grid_errors(
+    object: &str,
+    estimates: &[(f64, f64, LightEstimate, LightEstimate)],
+) -> [(f64, f64); 2] {
     let mut worst = [(0.0f64, 0.0f64); 2];
     println!(
         "{object}: tilt error, slant error (degrees), method [moments]; rows slant, columns tilt"
     );
-    for (k, (tilt, slant, e, m)) in grid_estimates(object).into_iter().enumerate() {
+    for (k, &(tilt, slant, e, m)) in estimates.iter().enumerate() {
         for (w, x) in worst.iter_mut().zip([&e, &m]) {
             if slant >= 15.0 {
                 w.0 = w.0.max(tilt_error(x.tilt_deg, tilt));
@@ -130,13 +143,49 @@ fn the_limb_estimate_is_unbiased_on_the_vase() {
 
 /// The bunny (a coarse mesh with interpolated normals, whose silhouette normals are not edge-on
 /// and whose outline is partly a cut) is not explained by the band's model (residuals above
-/// 3 % of the albedo), so the rim fit runs: tilt within 5° from a slant of 30°, within 9° at
-/// 15°; the slant comes out up to 11° low. The goal is not met on the bunny.
+/// 3 % of the albedo), so the rim fit runs, trimmed one-sided (the limb is the lower envelope of
+/// the outline's brightness): tilt within 3° from a slant of 30°, within 6.3° at 15°; the slant
+/// within 7.4° (it was 11° low with a symmetric trim). The goal is not met on the bunny: this
+/// asserts what is achieved.
 #[test]
 fn the_limb_estimate_on_the_bunny() {
     let [limb, moments] = grid_errors("bunny");
-    assert!(limb.0 < 9.0 && limb.1 < 12.0, "{limb:?}");
+    assert!(limb.0 < 6.5 && limb.1 < 7.5, "{limb:?}");
     for (tilt, slant, e, _) in grid_estimates("bunny") {
+        assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
+        if slant >= 30.0 {
+            assert!(
+                tilt_error(e.tilt_deg, tilt) < 3.0,
+                "tilt {tilt} slant {slant}: {e:?}"
+            );
+        }
+    }
+    assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
+}
+
+/// The finer Stanford bunny of the shared data (`bun_zipper_res2`, 8,171 vertices, rendered
+/// by the `mesh` stimulus in the same upright view) fares no better: its silhouette normals are
+/// no closer to edge-on, and its open base and ear tips are cuts. The rim fit runs (the band's
+/// residuals are 4–8 % of the albedo): tilt within 4.3° from a slant of 30° but 10.2° at 15°,
+/// the slant within 7.3° (it was 15.6° low with a symmetric trim). The goal is not met; this
+/// asserts what is achieved.
+#[test]
+fn the_limb_estimate_on_the_finer_bunny() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/bunny/bun_zipper_res2.ply");
+    if !path.is_file() {
+        eprintln!(
+            "skipping: {} not found (the shared reference data is not checked out)",
+            path.display()
+        );
+        return;
+    }
+    let pair = format!("path={}", path.display());
+    let estimates = grid_estimates_with("mesh", &[&pair]);
+    let [limb, moments] = print_grid_errors("bunny res2", &estimates);
+    assert!(limb.0 < 10.5 && limb.1 < 7.5, "{limb:?}");
+    assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
+    for &(tilt, slant, e, _) in &estimates {
         assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         if slant >= 30.0 {
             assert!(
@@ -145,7 +194,6 @@ fn the_limb_estimate_on_the_bunny() {
             );
         }
     }
-    assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
 }
 
 /// Without an occluding outline (the whole frame, or `Outline::Unknown`) the moments run, as
