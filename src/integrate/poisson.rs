@@ -217,10 +217,10 @@ fn solve(mask: &Mask, b: Vec<f64>, options: &PoissonOptions) -> Result<Integrati
     let (w, h) = (mask.width(), mask.height());
     let hierarchy = multigrid::Hierarchy::new(mask);
     let layout = hierarchy.layout();
-    let b = layout.from_grid(&b);
+    let b = layout.colour_order(&b);
     let (z, iterations, relative_residual, converged) = hierarchy.pcg(b, options);
     drop(hierarchy);
-    let mut z = layout.to_grid(&z);
+    let mut z = layout.grid_order(&z);
     // Means summed in row-major order.
     parts(mask).subtract_means(&mut z, SumOrder::Index);
     Ok(Integration {

@@ -76,7 +76,7 @@ impl Layout {
     }
 
     /// A row-major grid's values as a vector in this layout (0 in the empty slots).
-    pub(super) fn from_grid(&self, grid: &[f64]) -> Vec<f64> {
+    pub(super) fn colour_order(&self, grid: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; self.len()];
         for (r, row) in grid.chunks(self.w.max(1)).take(self.h).enumerate() {
             for (c, &v) in row.iter().enumerate() {
@@ -87,7 +87,7 @@ impl Layout {
     }
 
     /// The values of a vector in this layout as a row-major grid.
-    pub(super) fn to_grid(&self, v: &[f64]) -> Vec<f64> {
+    pub(super) fn grid_order(&self, v: &[f64]) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.w * self.h);
         for r in 0..self.h {
             out.extend((0..self.w).map(|c| v[self.at(c, r)]));
