@@ -98,7 +98,12 @@ pub fn write_mesh_obj(depth: &Image, mask: &Mask, out: &mut dyn Write, path: &Pa
                     _ => &[],
                 };
                 for f in faces {
-                    let _ = writeln!(text, "f {} {} {}", f[0], f[1], f[2]);
+                    text.push(b'f');
+                    for &v in f {
+                        text.push(b' ');
+                        push_whole(&mut text, v as u64);
+                    }
+                    text.push(b'\n');
                 }
             }
         }
@@ -132,6 +137,22 @@ fn write_in_bands(
     Ok(())
 }
 
+/// Appends the decimal digits of `n`, as `Display` writes them (without its formatting
+/// machinery, which took most of the time of writing the faces).
+fn push_whole(text: &mut Vec<u8>, mut n: u64) {
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    text.extend_from_slice(&digits[at..]);
+}
+
 /// Appends `v` as `Display` writes it, quickly for the whole and half numbers that pixel
 /// centres' world coordinates are.
 fn push_number(text: &mut Vec<u8>, v: f64) {
@@ -140,7 +161,7 @@ fn push_number(text: &mut Vec<u8>, v: f64) {
         if v.is_sign_negative() {
             text.push(b'-');
         }
-        let _ = write!(text, "{}", a.trunc() as u64);
+        push_whole(text, a.trunc() as u64);
         if a.fract() != 0.0 {
             text.extend_from_slice(b".5");
         }
@@ -192,6 +213,15 @@ mod tests {
             assert!(cross > 0.0, "triangle {tri:?} is wound clockwise");
         }
         assert!(mesh_obj(&depth, &Grid::new(3, 3, true)).is_err());
+    }
+
+    #[test]
+    fn whole_numbers_are_written_as_display_writes_them() {
+        for n in [0, 1, 9, 10, 99, 100, 12_345, 1_048_576, u64::MAX] {
+            let mut text = b"x".to_vec();
+            push_whole(&mut text, n);
+            assert_eq!(String::from_utf8(text).unwrap(), format!("x{n}"));
+        }
     }
 
     #[test]

@@ -24,9 +24,13 @@ pub struct PoissonOptions {
 }
 
 impl Default for PoissonOptions {
+    /// A relative residual of 1e-6: on a 1024² solve of a sphere the depth is then within
+    /// 6e-5 pixels of the fully converged one (below a float32's resolution at its height of
+    /// 600 pixels, and 1/150 of a step of the 16-bit `depth.png`), and its error against the
+    /// true depth the same to six digits (docs/performance.md, session 8).
     fn default() -> Self {
         PoissonOptions {
-            tol: 1e-9,
+            tol: 1e-6,
             max_iter: 50_000,
         }
     }
@@ -212,8 +216,11 @@ fn build_rhs(
 fn solve(mask: &Mask, b: Vec<f64>, options: &PoissonOptions) -> Result<Integration> {
     let (w, h) = (mask.width(), mask.height());
     let hierarchy = multigrid::Hierarchy::new(mask);
-    let (mut z, iterations, relative_residual, converged) = hierarchy.pcg(b, options);
+    let layout = hierarchy.layout();
+    let b = layout.colour_order(&b);
+    let (z, iterations, relative_residual, converged) = hierarchy.pcg(b, options);
     drop(hierarchy);
+    let mut z = layout.grid_order(&z);
     // Means summed in row-major order.
     parts(mask).subtract_means(&mut z, SumOrder::Index);
     Ok(Integration {

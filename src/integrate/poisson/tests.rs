@@ -29,7 +29,11 @@ fn differences(dz_dx: &Image, dz_dy: &Image) -> (Image, Image) {
 /// Largest |new − reference| over the mask relative to the reference's depth range, and the
 /// largest absolute difference outside the mask.
 fn compare(right: &Image, down: &Image, mask: &Mask) -> (f64, f64, usize, usize) {
-    let options = PoissonOptions::default();
+    // Both converged far beyond the default tolerance, so that they must agree closely.
+    let options = PoissonOptions {
+        tol: 1e-10,
+        ..PoissonOptions::default()
+    };
     let new = integrate_differences(right, down, mask, &options).unwrap();
     let old = solve_reference(mask, &differences_rhs(right, down, mask), &options).unwrap();
     assert!(new.converged && old.converged);
@@ -109,5 +113,62 @@ fn multigrid_cg_agrees_with_the_reference_on_thin_and_tiny_domains() {
         let (rel, outside, _, _) = compare(&right, &down, &mask);
         assert!(rel < 1e-7, "{w}x{h}: relative difference {rel:e}");
         assert_eq!(outside, 0.0, "{w}x{h}");
+    }
+}
+
+#[test]
+fn the_default_tolerance_is_far_below_a_depth_maps_precision() {
+    // The solver's own normals of a sphere at 256² (slopes capped at the limb, so not exactly
+    // integrable): at the default tolerance the depth is within 1e-6 of its range of the
+    // depth converged to 1e-12.
+    let s = sphere(256, 256, 115.2).unwrap();
+    let (dx, dy) = gradients_from_normals(&s.normals, &s.mask, DEFAULT_MIN_NZ).unwrap();
+    let default = integrate_gradients(&dx, &dy, &s.mask, &PoissonOptions::default()).unwrap();
+    let tight = PoissonOptions {
+        tol: 1e-12,
+        ..PoissonOptions::default()
+    };
+    let exact = integrate_gradients(&dx, &dy, &s.mask, &tight).unwrap();
+    assert!(default.iterations < exact.iterations);
+    let (lo, hi) = exact.depth.min_max().unwrap();
+    let worst = default
+        .depth
+        .data()
+        .iter()
+        .zip(exact.depth.data())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6 * (hi - lo), "{worst:e} of a range {}", hi - lo);
+}
+
+/// The same bytes on one worker thread as on several (the colour sweeps and the sums are
+/// split among threads in a fixed way).
+#[cfg(feature = "parallel")]
+#[test]
+fn the_depth_does_not_depend_on_the_thread_count() {
+    // Large enough (≥ 2^15 cells) for the parallel loops, with an odd width and height and
+    // separate parts.
+    let (w, h) = (301, 203);
+    let mask = Grid::from_fn(w, h, |c, r| {
+        let (x, y) = world_xy(c, r, w, h);
+        x.hypot(y) < 95.0 && (x - 30.0).hypot(y) > 12.0 || (x - 130.0).abs() < 15.0
+    });
+    let wiggle = |c: usize, r: usize, k: f64| ((c as f64 * 0.37 + r as f64 * 0.11) * k).sin();
+    let right = Grid::from_fn(w, h, |c, r| 0.3 + 0.2 * wiggle(c, r, 1.3));
+    let down = Grid::from_fn(w, h, |c, r| -0.1 + 0.2 * wiggle(c, r, 2.9));
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                integrate_differences(&right, &down, &mask, &PoissonOptions::default()).unwrap()
+            })
+    };
+    let one = on(1);
+    assert!(one.converged && one.iterations > 3);
+    for threads in [2, 3, 8] {
+        let many = on(threads);
+        assert_eq!(one, many, "{threads} threads");
     }
 }
