@@ -263,6 +263,11 @@ impl Hierarchy {
         Hierarchy { levels }
     }
 
+    /// out = A x on the finest level (the masked Laplacian itself).
+    pub(super) fn apply(&self, x: &[f64], out: &mut [f64]) {
+        self.levels[0].apply(x, out);
+    }
+
     /// x = M⁻¹ b by one V-cycle from level `l` down, with `work` holding (x, b) of each
     /// coarser level.
     fn vcycle(&self, l: usize, x: &mut [f64], b: &[f64], work: &mut [(Vec<f64>, Vec<f64>)]) {
