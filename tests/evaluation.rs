@@ -197,9 +197,9 @@ fn missing_data_is_a_one_line_error_naming_what_was_expected() {
 }
 
 /// The integrable method against its goals of issue 20 on the cases that are quick: the
-/// oblique Mozart with the free boundary (measured 14.47°, depth 8.6 % of its range, at its
+/// oblique Mozart with the free boundary (measured 14.30°, depth 8.7 % of its range, at its
 /// cap of 200 iterations; the best public method, Quéau et al.'s ADMM, 15.78° and 12.2 %;
-/// multigrid 18.68°) and the ball photograph 008 (26°, measured 3.33°, converged; multigrid
+/// multigrid 18.68°) and the ball photograph 008 (26°, measured 3.58°, converged; multigrid
 /// 5.13°), each more than 1° better than multigrid's row.
 #[test]
 fn integrable_method_beats_ikeuchi_horn_on_mozart_and_the_ball() {

@@ -22,8 +22,8 @@ mod poisson;
 pub use fourier::FrankotChellappa;
 pub use mesh::{mesh_obj, write_mesh_obj};
 pub use poisson::{
-    integrate_differences, integrate_gradients, integrate_owned_gradients, Integration,
-    PoissonOptions,
+    integrate_differences, integrate_gradients, integrate_gradients_from,
+    integrate_owned_gradients, Integration, PoissonOptions,
 };
 
 use crate::error::{Error, Result};

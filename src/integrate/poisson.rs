@@ -103,6 +103,61 @@ pub fn integrate_owned_gradients(
     solve(mask, b, options)
 }
 
+/// [`integrate_gradients`] started from the depth `start` (same size as `mask`) rather than
+/// from zero: for slopes that changed little since `start` was their depth, the solve only
+/// corrects the difference, in a few iterations. It stops on the same rule (the residual of
+/// the whole equation below `tol` times the right-hand side's), so it meets the same
+/// tolerance; the result agrees with [`integrate_gradients`]'s to within it, not bit for bit.
+pub fn integrate_gradients_from(
+    dz_dx: &Image,
+    dz_dy: &Image,
+    mask: &Mask,
+    options: &PoissonOptions,
+    start: &Image,
+) -> Result<Integration> {
+    check_gradient_inputs(dz_dx, dz_dy, mask, options)?;
+    if !start.same_size(mask) || start.data().iter().any(|z| !z.is_finite()) {
+        return Err(Error::invalid(
+            "the starting depth must match the mask's size and be finite",
+        ));
+    }
+    let b = gradient_rhs(dz_dx, dz_dy, mask);
+    // z = start + δ with A δ = b − A·start, solved to the absolute residual tol·‖b‖.
+    let z0: Vec<f64> = start
+        .data()
+        .iter()
+        .zip(mask.data())
+        .map(|(&z, &m)| if m { z } else { 0.0 })
+        .collect();
+    let mut r = multigrid::Hierarchy::new(mask).apply_grid(&z0);
+    for (r, b) in r.iter_mut().zip(&b) {
+        *r = b - *r;
+    }
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let (b_norm, r_norm) = (norm(&b), norm(&r));
+    let relative = if b_norm > 0.0 { r_norm / b_norm } else { 0.0 };
+    let mut result = if relative <= options.tol {
+        Integration {
+            depth: Grid::from_vec(mask.width(), mask.height(), vec![0.0; z0.len()])?,
+            iterations: 0,
+            relative_residual: 1.0,
+            converged: true,
+        }
+    } else {
+        let correction = PoissonOptions {
+            tol: options.tol / relative,
+            ..*options
+        };
+        solve(mask, r, &correction)?
+    };
+    for (z, z0) in result.depth.data_mut().iter_mut().zip(&z0) {
+        *z += z0;
+    }
+    parts(mask).subtract_means(result.depth.data_mut(), SumOrder::Index);
+    result.relative_residual *= relative;
+    Ok(result)
+}
+
 /// The checks of [`integrate_gradients`].
 fn check_gradient_inputs(
     dz_dx: &Image,

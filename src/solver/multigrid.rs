@@ -1653,7 +1653,7 @@ mod tests {
         let (image, map) = picture(&s, Light::from_tilt_slant(30.0, 40.0).unwrap());
         let bc = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
         let mut mg = Multigrid::new(size, size);
-        mg.setup(&image, &bc, map.ambient);
+        mg.setup(&image, &bc, crate::solver::DataRange::new(&map, None));
         assert!(mg.used >= 4, "{} levels", mg.used);
         (image, map, mg)
     }

@@ -406,6 +406,16 @@ impl Hierarchy {
         self.levels[0].layout
     }
 
+    /// A x on the finest level (the masked Laplacian itself), `x` and the result in row-major
+    /// grid order.
+    pub(super) fn apply_grid(&self, x: &[f64]) -> Vec<f64> {
+        let layout = self.levels[0].layout;
+        let x = layout.colour_order(x);
+        let mut out = vec![0.0; x.len()];
+        self.levels[0].apply(&x, &mut out);
+        layout.grid_order(&out)
+    }
+
     /// x = M⁻¹ b by one V-cycle from level `l` down, with `work` holding (x, b) of each
     /// coarser level.
     fn vcycle(&self, l: usize, x: &mut [f64], b: &[f64], work: &mut [(Vec<f64>, Vec<f64>)]) {
