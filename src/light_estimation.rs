@@ -48,6 +48,11 @@
 //! The standard errors are the fit's: the tilt's from the covariance of (a, b) across the light's
 //! direction, the slant's from its variance along it.
 //!
+//! The limb fits' standard errors are sampling errors: they do not cover their models' bias.
+//! On a coarse mesh whose shading normals at the silhouette are not edge-on (the Stanford bunny:
+//! n_z 0.24 on average, changing around the outline), the rim fit's slant is off by up to
+//! 13 of its standard errors (7.4° against 0.4–1.9°): see docs/perception.md.
+//!
 //! **From the interior statistics** ([`EstimateMethod::Moments`], for pictures without an
 //! occluding outline: a relief on a plane, a region cut out of a surface):
 //!
