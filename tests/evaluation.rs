@@ -197,10 +197,11 @@ fn missing_data_is_a_one_line_error_naming_what_was_expected() {
 }
 
 /// The integrable method against its goals of issue 20 on the cases that are quick: the
-/// oblique Mozart with the free boundary (measured 14.30°, depth 8.7 % of its range, at its
-/// cap of 200 iterations; the best public method, Quéau et al.'s ADMM, 15.78° and 12.2 %;
-/// multigrid 18.68°) and the ball photograph 008 (26°, measured 3.58°, converged; multigrid
-/// 5.13°), each more than 1° better than multigrid's row.
+/// oblique Mozart with the free boundary (measured 13.62°, depth 7.9 % of its range, at its
+/// cap of 200 iterations; 14.30° and 8.7 % before the angle residual of session 9; the best
+/// public method, Quéau et al.'s ADMM, 15.78° and 12.2 %; multigrid 18.68°) and the ball
+/// photograph 008 (26°, measured 3.40°, 3.58° before, converged; multigrid 5.15°), each more
+/// than 1° better than multigrid's row.
 #[test]
 fn integrable_method_beats_ikeuchi_horn_on_mozart_and_the_ball() {
     let Some(dir) = data() else { return };
@@ -228,9 +229,40 @@ fn integrable_method_beats_ikeuchi_horn_on_mozart_and_the_ball() {
     let e = mozart[1].normal_error.unwrap();
     let d = mozart[1].depth_error.unwrap();
     assert!(
-        e.mean_deg < 15.0 && d.rms_percent_of_range < 10.0,
+        e.mean_deg < 14.0 && d.rms_percent_of_range < 8.5,
         "{e:?} {d:?}"
     );
     let e = ball[1].normal_error.unwrap();
-    assert!(e.mean_deg < 4.0 && ball[1].converged, "{e:?}");
+    assert!(e.mean_deg < 3.5 && ball[1].converged, "{e:?}");
+}
+
+/// The angle residual of the integrable method (session 9) on the cases it moved most that
+/// are quick: Mozart under the frontal light with its occluding boundary (measured 10.80°,
+/// depth 5.9 % of its range; 12.15° and 6.2 % before; multigrid 17.72°) and the ball
+/// photograph 041 lit at 43° (measured 6.68°, 6.75° before; multigrid 8.69°; the goal of
+/// issue 20, 6°, is not met).
+#[test]
+fn integrable_angle_residual_on_mozart_frontal_and_ball_041() {
+    let Some(dir) = data() else { return };
+    let mut config = Config::new(&dir).unwrap();
+    config.mozart_lights = vec![Light::FRONT];
+    config.compared_boundaries = vec![Boundary::Occluding];
+    config.ball_images = vec!["041".into()];
+    config.methods = vec![Method::Integrable];
+    config.sets = vec![Set::Mozart, Set::Ball];
+    let rows = run(&config);
+    assert_eq!(rows.len(), 2);
+    let (mozart, ball) = (&rows[0], &rows[1]);
+    assert_eq!(
+        (mozart.object.as_str(), ball.object.as_str()),
+        ("mozart", "ball")
+    );
+    let e = mozart.normal_error.unwrap();
+    let d = mozart.depth_error.unwrap();
+    assert!(
+        e.mean_deg < 11.3 && d.rms_percent_of_range < 6.2 && mozart.converged,
+        "{e:?} {d:?}"
+    );
+    let e = ball.normal_error.unwrap();
+    assert!(e.mean_deg < 6.72 && ball.converged, "{e:?}");
 }

@@ -23,11 +23,27 @@
 //!    way);
 //! 2. **gradients**: a few sweeps of the Ikeuchi–Horn update pulled toward (f, g)_z,
 //!
-//!    x ← x̃ + 4λ(I − R(x̃))·∇R(x̃) / (D + 4λ|∇R(x̃)|²),  x̃ = (σk·x̄ + μ·x_z)/D,  D = σk + μ,
+//!    x ← x̃ + 4λ(φ(I) − φ(R(x̃)))·J / (D + 4λ|J|²),  J = φ′(R(x̃))·∇R(x̃),
+//!    x̃ = (σk·x̄ + μ·x_z)/D,  D = σk + μ,
 //!
 //!    for x = (f, g), x̄ the mean of the k neighbours in the domain: the pixel's equation
 //!    linearised at x̃ and solved exactly (a pointwise Gauss–Newton step), which no choice of
 //!    λ, σ or μ makes unstable.
+//!
+//! **The data residual is measured as an angle** (session 9). The brightness residual I − R
+//! loses its grip near the brightest orientation: R = cos θ (θ the angle to the light) is flat
+//! at θ = 0, so a normal 10° from the light is only 1.5 % darker than one facing it, and the
+//! smoothness and integrability terms alone place the orientations around the brightest point
+//! (on a rendered ball lit at 43°, they put it several pixels off and left a fan of 10–20°
+//! errors around it). φ(u) = asin(u), u = (R − ambient)/(peak − ambient), is 90° − θ for a
+//! Lambertian surface: the residual φ(I) − φ(R) is the angle between the orientation the pixel
+//! has and the one its brightness asks for, as firm at the top as at the terminator. Above
+//! u = 0.943 (19.5° from the light) φ continues as a straight line of slope
+//! [`ANGLE_SLOPE_CAP`] = 3, so that a pixel at the peak, where asin's slope is infinite, does
+//! not amplify noise, a highlight or an albedo error without bound (uncapped, Mozart frontal
+//! diverged). The warm start (multigrid) keeps the brightness residual. On the evaluation this
+//! lowered most rows (rendered ball 041 6.30° → 4.25°, Mozart frontal 12.15° → 10.80°, see
+//! docs/evaluation.md).
 //!
 //! It starts from the Ikeuchi–Horn solution (multigrid, with its globalisation), with σ =
 //! [`SIGMA`] = 1 and μ = [`MU`]. Horn proposes shrinking σ once the field must be integrable;
@@ -215,6 +231,7 @@ fn screened_nodes(
     reflectance: &dyn ReflectanceMap,
     Weights { mu, sigma }: Weights,
 ) {
+    let scale = AngleScale::of(reflectance);
     for (j, node) in nodes.iter().enumerate() {
         let [a, b, c, d] = node.neighbours.map(|s| s as usize);
         let sum_f = cur_f[a] + cur_f[b] + cur_f[c] + cur_f[d];
@@ -239,13 +256,77 @@ fn screened_nodes(
         if node.data_weight != 0.0 {
             let four_lambda = node.data_weight * k;
             let s = reflectance.fg(f_tilde, g_tilde);
-            let gain = four_lambda * (node.intensity - s.value)
-                / (denominator + four_lambda * (s.d1 * s.d1 + s.d2 * s.d2));
-            f_new += gain * s.d1;
-            g_new += gain * s.d2;
+            // The residual and its gradient in angle units (module documentation).
+            let (residual, slope) = scale.residual(node.intensity, s.value);
+            let (j1, j2) = (slope * s.d1, slope * s.d2);
+            let gain = four_lambda * residual / (denominator + four_lambda * (j1 * j1 + j2 * j2));
+            f_new += gain * j1;
+            g_new += gain * j2;
         }
         next_f[j] = f_new;
         next_g[j] = g_new;
+    }
+}
+
+/// The slope cap of the angle residual: dφ/du ≤ [`ANGLE_SLOPE_CAP`], reached where the
+/// brightness is 94 % of its peak (19.5° from the light for a Lambertian surface).
+pub const ANGLE_SLOPE_CAP: f64 = 3.0;
+
+/// The brightness of a reflectance map measured as an angle (module documentation): u = (R −
+/// ambient)/(peak − ambient), the fraction of the brightness range above the ambient level,
+/// taken to φ(u) = asin(u) (for a Lambertian surface, 90° less the angle between the normal
+/// and the light), continued as a straight line of slope [`ANGLE_SLOPE_CAP`] above the
+/// brightness where asin's slope reaches it.
+#[derive(Debug, Clone, Copy)]
+struct AngleScale {
+    /// The ambient level.
+    ambient: f64,
+    /// peak − ambient, the brightness range (> 0), or 0 for a map without one.
+    range: f64,
+    /// The u above which φ is a straight line.
+    knee: f64,
+}
+
+impl AngleScale {
+    /// The scale of `reflectance`: its peak is its brightness facing the light.
+    fn of(reflectance: &dyn ReflectanceMap) -> AngleScale {
+        let ambient = reflectance.ambient();
+        let range = reflectance.radiance(&reflectance.light().direction()) - ambient;
+        AngleScale {
+            ambient,
+            range: if range.is_finite() && range > 0.0 {
+                range
+            } else {
+                0.0
+            },
+            knee: (1.0 - 1.0 / (ANGLE_SLOPE_CAP * ANGLE_SLOPE_CAP)).sqrt(),
+        }
+    }
+
+    /// φ(u).
+    fn phi(&self, u: f64) -> f64 {
+        if u <= self.knee {
+            u.max(-1.0).asin()
+        } else {
+            self.knee.asin() + ANGLE_SLOPE_CAP * (u - self.knee)
+        }
+    }
+
+    /// The residual φ(intensity) − φ(value) and dφ/dR at `value` (the factor that turns ∇R
+    /// into the residual's gradient); the plain brightness residual and 1 for a map with no
+    /// brightness range.
+    fn residual(&self, intensity: f64, value: f64) -> (f64, f64) {
+        if self.range == 0.0 {
+            return (intensity - value, 1.0);
+        }
+        let to_u = |v: f64| (v - self.ambient) / self.range;
+        let u = to_u(value);
+        let slope = if u <= self.knee {
+            1.0 / (1.0 - u.clamp(-self.knee, self.knee).powi(2)).sqrt()
+        } else {
+            ANGLE_SLOPE_CAP
+        };
+        (self.phi(to_u(intensity)) - self.phi(u), slope / self.range)
     }
 }
 
@@ -396,8 +477,9 @@ mod tests {
 
     /// A 96² sphere under an oblique light (tilt 0°, slant 45°), occluding boundary: the
     /// integrable method converges, its slopes are those of a surface to
-    /// 3.3e-2 px per edge (Ikeuchi–Horn's leave 1.05e-1, three times as much), and its normals
-    /// are closer to the truth (measured 7.87° mean against Ikeuchi–Horn's 8.18°).
+    /// 3.85e-2 px per edge (Ikeuchi–Horn's leave 1.05e-1, 2.7 times as much), and its normals
+    /// are much closer to the truth (measured 4.73° mean against Ikeuchi–Horn's 8.18°; 7.87°
+    /// with the brightness residual, before the angle residual).
     #[test]
     fn oblique_sphere_is_recovered_as_a_surface() {
         let s = sphere(96, 96, 43.0).unwrap();
@@ -417,21 +499,21 @@ mod tests {
             integrability_residual(&int, &s.mask, &b),
         );
         assert!((8.0..8.4).contains(&e_ih), "{e_ih}");
-        assert!(e_int < e_ih - 0.25 && e_int < 7.9, "{e_ih} {e_int}");
-        assert!(r_ih > 0.1 && r_int < 0.034, "{r_ih} {r_int}");
+        assert!(e_int < e_ih - 3.0 && e_int < 4.9, "{e_ih} {e_int}");
+        assert!(r_ih > 0.1 && r_int < 0.04, "{r_ih} {r_int}");
     }
 
-    /// The frontal sphere converges within 1.3° (measured 1.01°, in 31 iterations); a
-    /// Gaussian bump with the free boundary improves on Ikeuchi–Horn (4.31° → 4.17°) and stays
-    /// finite, though it does not meet `tol` within the default cap of 200 iterations (last
-    /// update 2.4e-5, reported).
+    /// The frontal sphere converges within 1.3° (measured 0.31°, in 18 iterations; 1.01° in 31
+    /// with the brightness residual); a Gaussian bump with the free boundary improves on
+    /// Ikeuchi–Horn (4.31° → 3.90°) and stays finite, though it does not meet `tol` within the
+    /// default cap of 200 iterations (last update 2.7e-5, reported).
     #[test]
     fn frontal_sphere_converges_and_a_free_boundary_improves() {
         let s = sphere(96, 96, 43.0).unwrap();
         let b = Boundary::Occluding;
         let int = solve(&s, Light::FRONT, &b, Method::Integrable);
         let e = mean_error(&int, &s, &b);
-        assert!(int.converged && e < 1.3, "{e} {}", int.iterations);
+        assert!(int.converged && e < 0.5, "{e} {}", int.iterations);
         let bump = gaussian(96, 96, 12.0, 12.0, 0.0, 0.0).unwrap();
         let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
         let ih = solve(&bump, light, &Boundary::Free, Method::Multigrid);
@@ -440,9 +522,48 @@ mod tests {
             mean_error(&ih, &bump, &Boundary::Free),
             mean_error(&int, &bump, &Boundary::Free),
         );
-        assert!(e_int < e_ih - 0.1 && e_int < 4.2, "{e_ih} {e_int}");
+        assert!(e_int < e_ih - 0.3 && e_int < 4.0, "{e_ih} {e_int}");
         assert!(!int.diverged && int.iterations == INTEGRABLE_MAX_ITER);
         assert!(int.last_update < 1e-3, "{}", int.last_update);
+    }
+
+    /// The angle residual: for a Lambertian map it is the difference of the angles to the
+    /// light below the knee (whatever the albedo and ambient), φ is continuous with slope
+    /// [`ANGLE_SLOPE_CAP`] above it, and the slope returned is dφ/dR.
+    #[test]
+    fn angle_residual_is_the_angle_to_the_light() {
+        use crate::reflectance::Lambertian;
+        let light = Light::from_tilt_slant(20.0, 40.0).unwrap();
+        let map = Lambertian {
+            light,
+            albedo: 0.5,
+            ambient: 0.1,
+        };
+        let scale = AngleScale::of(&map);
+        let brightness = |deg: f64| 0.1 + 0.5 * deg.to_radians().cos();
+        let (r, _) = scale.residual(brightness(30.0), brightness(50.0));
+        assert!((r - 20f64.to_radians()).abs() < 1e-12, "{r}");
+        let (r, _) = scale.residual(brightness(85.0), brightness(25.0));
+        assert!((r + 60f64.to_radians()).abs() < 1e-12, "{r}");
+        // The knee: u = √(1 − 1/9), 19.47° from the light; φ continuous across it.
+        let knee = brightness((1.0f64 / 3.0).asin().to_degrees().max(0.0));
+        let knee_u = (knee - 0.1) / 0.5;
+        assert!((knee_u - (8.0f64 / 9.0).sqrt()).abs() < 1e-12);
+        let below = scale.phi(knee_u - 1e-9);
+        let above = scale.phi(knee_u + 1e-9);
+        assert!((above - below).abs() < 1e-8, "{below} {above}");
+        // dφ/dR by finite differences, below and above the knee.
+        for value in [0.2, 0.45, 0.58, 0.6] {
+            let h = 1e-7;
+            let (r0, slope) = scale.residual(0.3, value);
+            let (r1, _) = scale.residual(0.3, value + h);
+            let numeric = (r0 - r1) / h;
+            assert!(
+                (numeric - slope).abs() < 1e-4 * slope,
+                "{value} {numeric} {slope}"
+            );
+        }
+        assert_eq!(scale.residual(0.6, 0.59).1, ANGLE_SLOPE_CAP / 0.5);
     }
 
     /// A pixel the depth cannot tilt along an axis (no domain neighbour that way) is not
