@@ -41,8 +41,8 @@
 //! summing the unknown children, corrections prolongated bilinearly (weights 9, 3, 3, 1 / 16),
 //! with a neighbour outside the domain lending the parent's correction (natural boundary) and a
 //! fixed one lending zero. Only the black cells receive it: the red half-sweep that begins every
-//! post-sweep moves each red unknown to a value computed from its black neighbours alone. Coarsening stops at a level with few unknowns, which is relaxed until
-//! it settles.
+//! post-sweep moves each red unknown to a value computed from its black neighbours alone.
+//! Coarsening stops at a level with few unknowns, which is relaxed until it settles.
 //!
 //! # The schedule
 //!
@@ -58,11 +58,11 @@
 //!
 //! Then cycles of one Gauss–Seidel sweep, the residual (checked against `tol` on exactly the
 //! values that would be returned), the coarse correction and two more sweeps, until the
-//! residual is below `tol` or `max_iter` cycles are done. Every cycle ends with `BAND_SWEEPS` sweeps
-//! over the band of unknowns within `BAND_WIDTH` steps of the domain's edge or of the data
-//! term's (the terminator; `Multigrid::smooth_band`, local relaxation: the error there is the
-//! last to go). A cycle that the last two residuals
-//! predict to be the last measures its residual first and restricts only if the test fails. The coarse correction is a W-cycle
+//! residual is below `tol` or `max_iter` cycles are done. Every cycle ends with `BAND_SWEEPS`
+//! sweeps over the band of unknowns within `BAND_WIDTH` steps of the domain's edge or of the
+//! data term's (the terminator; `Multigrid::smooth_band`, local relaxation: the error there is
+//! the last to go). A cycle that the last two residuals predict to be the last measures its
+//! residual first and restricts only if the test fails. The coarse correction is a W-cycle
 //! (`CycleSchedule::W_CYCLE`): every coarser level is visited twice per visit of the level
 //! above, each visit with the same pre- and post-sweeps. After a full red-black sweep every black
 //! cell sits exactly at its Jacobi target, so the residual is only evaluated on the red half.
@@ -611,8 +611,8 @@ pub(crate) struct Multigrid {
     nested: bool,
     /// Sweeps over the band after every cycle (`BAND_SWEEPS`; the tests turn them off).
     band_sweeps: usize,
-    /// The finest level's unknowns beside the domain's edge (see `Multigrid::find_band`), by
-    /// colour, as padded indices r·wp + c.
+    /// The finest level's unknowns beside the domain's edge or the data term's (see
+    /// `Multigrid::find_band`), by colour, as padded indices r·wp + c.
     band: [Vec<u32>; 2],
 }
 
@@ -642,10 +642,11 @@ impl Multigrid {
 
     /// Nested iteration: solves the same problem on the half-size grid (recursively, so from
     /// the coarsest grid up) and starts the finest unknowns from that solution, interpolated
-    /// bilinearly (coarse neighbours that are not unknowns lend the parent's value). Where the shading has an attached shadow or the light is oblique, a start from
-    /// (0, 0) leaves a front (the terminator's neighbourhood, where ∇R vanishes and the linear
-    /// coarse corrections see nothing) that the fine smoothing moves about one pixel per cycle;
-    /// on the coarse grid it moves 2, 4, 8… pixels per cycle. The fixed point is the fine
+    /// bilinearly (coarse neighbours that are not unknowns lend the parent's value). Where the
+    /// shading has an attached shadow or the light is oblique, a start from (0, 0) leaves a front
+    /// (the terminator's neighbourhood, where ∇R vanishes and the linear coarse corrections see
+    /// nothing) that the fine smoothing moves about one pixel per cycle; on the coarse grid it
+    /// moves 2, 4, 8… pixels per cycle. The fixed point is the fine
     /// problem's either way: only the start differs. λ is kept on the coarse grid (the
     /// continuum scaling 4λ would break the sweep's stability bound λ·R_f² < 2); a coarse
     /// solve that diverges is ignored.
@@ -954,12 +955,11 @@ impl Multigrid {
                 }
             }
         }
-        let width = BAND_WIDTH;
         let mut next = Vec::new();
-        for step in 0..width {
+        for step in 0..BAND_WIDTH {
             for &at in &frontier {
                 band[(at / wp + at % wp) & 1].push(at as u32);
-                if step + 1 < width {
+                if step + 1 < BAND_WIDTH {
                     for n in [at - 1, at + 1, at - wp, at + wp] {
                         if level.kind[n] & (UNKNOWN | BAND) == UNKNOWN {
                             level.kind[n] |= BAND;
