@@ -114,7 +114,7 @@ pub const MU: f64 = 0.5;
 pub const SIGMA: f64 = 1.0;
 
 /// The momentum β of the iteration up to session 9, replaced since by Anderson acceleration
-/// over [`ANDERSON_DEPTH`] iterations (see the module documentation); no longer read.
+/// over `ANDERSON_DEPTH` = 5 iterations (see the module documentation); no longer read.
 pub const MOMENTUM: f64 = 0.8;
 
 /// How many past iterations the Anderson acceleration combines (see the module documentation).
