@@ -74,20 +74,23 @@
 //! The acceleration cut the iterations of the rows that converge (ball 041 59 → 37, ball 052
 //! 24 → 20, bunny 45° 154 → 92, −135° 100 → 58, cow 54 → 49, buddha 183 → 163; on a 64²
 //! oblique sphere 90 → 22 and a bump 997 → 58 against the plain alternation, the same fixed
-//! point within 1.4e-3 in f, g and 0.02° mean error) and made four of the six free-boundary
-//! ball rows converge (93–126 iterations, 0.75–1.3° better); Mozart frontal takes 178 instead
-//! of 159 and Beethoven image2 reaches the cap (it converged in 114). Tried and dropped: a
+//! point within 1.4e-3 in f, g and 0.02° mean error) and made five of the six free-boundary
+//! ball rows converge (93–196 iterations, 0.75–5.5° better); Mozart frontal takes 178
+//! iterations instead of 159 and Beethoven image2 reaches the cap (it converged in 114).
+//! Together: ball 041 in 2.75 G instructions instead of 4.90 G (callgrind, the whole command;
+//! 3.79 G with the same 59 iterations). [`SWEEPS`] 5 or 20 instead of 10 lost more than they
+//! gained (5: three rows no longer converge; 20: 50 % more time). Tried and dropped: a
 //! **coarse-to-fine start** (the integrable problem on the half-size grids, λ and μ × 4 per
 //! level, interpolated up): the coarse levels settle in other basins (Mozart frontal 10.80° →
 //! 14.18°, Mozart oblique occluding 16.99° → 56.06°) and the finest level of ball 041 still
 //! took 63 iterations (59 from multigrid): what keeps the iteration long is not a smooth start
-//! error but fronts that move across the object. **What stays unconverged** (every folded
-//! DiLiGenT object but buddha and cow, both oblique Mozart rows, the free-boundary balls 052
-//! and 041, Beethoven image2): at the cap, the largest change per iteration is 0.1–1 in f or g
-//! (goblet: 15,000 of its pixels still move by more than 1e-4 per iteration, with or without
-//! momentum; the pixel that moves most wanders over the object), or a slow drift of
-//! 5e-4–7e-4 (ball 041 free, Mozart oblique free): the method has not settled, so a looser
-//! or relative test would only hide it.
+//! error but fronts that move across the object. **What stays unconverged** (bear, cat,
+//! goblet, harvest, pot1, pot2, reading, both oblique Mozart rows, the free-boundary ball 052,
+//! Beethoven image2): at the cap the largest change per iteration is 0.1–1 in f or g (goblet:
+//! 15,000 of its pixels still move by more than 1e-4 per iteration, with or without momentum,
+//! and the pixel that moves most wanders over the object), or a slow drift of 5e-4–7e-4
+//! (Mozart oblique free): the method has not settled, and a looser or relative test would
+//! only hide it.
 //!
 //! The returned (f, g) are the last gradients, within μ's pull of the depth's own: integrating
 //! them (as every solve is integrated) gives the depth of the last depth solve to within the
