@@ -21,6 +21,7 @@ mod poisson;
 
 pub use fourier::FrankotChellappa;
 pub use mesh::{mesh_obj, write_mesh_obj};
+pub(crate) use poisson::PreparedMask;
 pub use poisson::{
     integrate_differences, integrate_gradients, integrate_gradients_from,
     integrate_owned_gradients, Integration, PoissonOptions,

@@ -12,7 +12,7 @@
 use super::check_gradients;
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Mask};
-use crate::imageops::parts::{parts, SumOrder};
+use crate::imageops::parts::{parts, Parts, SumOrder};
 
 /// Stopping rule of the conjugate-gradient solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,46 +116,102 @@ pub fn integrate_gradients_from(
     start: &Image,
 ) -> Result<Integration> {
     check_gradient_inputs(dz_dx, dz_dy, mask, options)?;
-    if !start.same_size(mask) || start.data().iter().any(|z| !z.is_finite()) {
-        return Err(Error::invalid(
-            "the starting depth must match the mask's size and be finite",
-        ));
+    PreparedMask::new(mask)?.integrate_gradients(dz_dx, dz_dy, options, Some(start))
+}
+
+/// A mask's Poisson solve prepared once for many solves on it: the multigrid hierarchy of its
+/// Laplacian and its connected parts, which [`integrate_gradients`] and
+/// [`integrate_gradients_from`] build afresh on every call (the integrable method solves one
+/// depth per iteration on the same mask). Its solves give the same depth, bit for bit, as
+/// those two functions.
+pub(crate) struct PreparedMask<'a> {
+    mask: &'a Mask,
+    hierarchy: multigrid::Hierarchy,
+    parts: Parts,
+}
+
+impl<'a> PreparedMask<'a> {
+    /// The hierarchy and parts of `mask` (fails on an empty mask).
+    pub(crate) fn new(mask: &'a Mask) -> Result<PreparedMask<'a>> {
+        check_mask(mask)?;
+        Ok(PreparedMask {
+            mask,
+            hierarchy: multigrid::Hierarchy::new(mask),
+            parts: parts(mask),
+        })
     }
-    let b = gradient_rhs(dz_dx, dz_dy, mask);
-    // z = start + δ with A δ = b − A·start, solved to the absolute residual tol·‖b‖.
-    let z0: Vec<f64> = start
-        .data()
-        .iter()
-        .zip(mask.data())
-        .map(|(&z, &m)| if m { z } else { 0.0 })
-        .collect();
-    let mut r = multigrid::Hierarchy::new(mask).apply_grid(&z0);
-    for (r, b) in r.iter_mut().zip(&b) {
-        *r = b - *r;
-    }
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let (b_norm, r_norm) = (norm(&b), norm(&r));
-    let relative = if b_norm > 0.0 { r_norm / b_norm } else { 0.0 };
-    let mut result = if relative <= options.tol {
-        Integration {
-            depth: Grid::from_vec(mask.width(), mask.height(), vec![0.0; z0.len()])?,
-            iterations: 0,
-            relative_residual: 1.0,
-            converged: true,
-        }
-    } else {
-        let correction = PoissonOptions {
-            tol: options.tol / relative,
-            ..*options
+
+    /// [`integrate_gradients`] on the prepared mask, or [`integrate_gradients_from`] `start`
+    /// where one is given.
+    pub(crate) fn integrate_gradients(
+        &self,
+        dz_dx: &Image,
+        dz_dy: &Image,
+        options: &PoissonOptions,
+        start: Option<&Image>,
+    ) -> Result<Integration> {
+        let mask = self.mask;
+        check_gradient_inputs(dz_dx, dz_dy, mask, options)?;
+        let b = gradient_rhs(dz_dx, dz_dy, mask);
+        let Some(start) = start else {
+            return self.solve(b, options);
         };
-        solve(mask, r, &correction)?
-    };
-    for (z, z0) in result.depth.data_mut().iter_mut().zip(&z0) {
-        *z += z0;
+        if !start.same_size(mask) || start.data().iter().any(|z| !z.is_finite()) {
+            return Err(Error::invalid(
+                "the starting depth must match the mask's size and be finite",
+            ));
+        }
+        let z0: Vec<f64> = start
+            .data()
+            .iter()
+            .zip(mask.data())
+            .map(|(&z, &m)| if m { z } else { 0.0 })
+            .collect();
+        let mut r = self.hierarchy.apply_grid(&z0);
+        for (r, b) in r.iter_mut().zip(&b) {
+            *r = b - *r;
+        }
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (b_norm, r_norm) = (norm(&b), norm(&r));
+        let relative = if b_norm > 0.0 { r_norm / b_norm } else { 0.0 };
+        let mut result = if relative <= options.tol {
+            Integration {
+                depth: Grid::from_vec(mask.width(), mask.height(), vec![0.0; z0.len()])?,
+                iterations: 0,
+                relative_residual: 1.0,
+                converged: true,
+            }
+        } else {
+            let correction = PoissonOptions {
+                tol: options.tol / relative,
+                ..*options
+            };
+            self.solve(r, &correction)?
+        };
+        for (z, z0) in result.depth.data_mut().iter_mut().zip(&z0) {
+            *z += z0;
+        }
+        self.parts
+            .subtract_means(result.depth.data_mut(), SumOrder::Index);
+        result.relative_residual *= relative;
+        Ok(result)
     }
-    parts(mask).subtract_means(result.depth.data_mut(), SumOrder::Index);
-    result.relative_residual *= relative;
-    Ok(result)
+
+    /// `solve` on the prepared hierarchy and parts.
+    fn solve(&self, b: Vec<f64>, options: &PoissonOptions) -> Result<Integration> {
+        let (w, h) = (self.mask.width(), self.mask.height());
+        let layout = self.hierarchy.layout();
+        let b = layout.colour_order(&b);
+        let (z, iterations, relative_residual, converged) = self.hierarchy.pcg(b, options);
+        let mut z = layout.grid_order(&z);
+        self.parts.subtract_means(&mut z, SumOrder::Index);
+        Ok(Integration {
+            depth: Grid::from_vec(w, h, z)?,
+            iterations,
+            relative_residual,
+            converged,
+        })
+    }
 }
 
 /// The checks of [`integrate_gradients`].

@@ -55,11 +55,42 @@
 //!
 //! One iteration is one depth solve and [`SWEEPS`] sweeps, a map y = T(x) of the (f, g); the
 //! alternation alone contracts slowly (about 0.98 per iteration on the ball photographs: the
-//! smooth part of the field moves the way a Jacobi sweep moves it), so the next iterate is
-//! y + β·(y − y_previous) with momentum β = [`MOMENTUM`], dropped to 0 for an iteration
-//! whenever the update grew (a restart). It has converged when an iteration moves no f or g by more than `tol`: about 80 iterations on a ball photograph
-//! instead of 400. Everything runs in a fixed order (sweeps in fixed chunks, the Poisson solve
-//! sequential), so the result does not depend on the thread count.
+//! smooth part of the field moves the way a Jacobi sweep moves it). Up to session 9 the next
+//! iterate was y + β·(y − y_previous) with momentum β = [`MOMENTUM`], restarted whenever the
+//! update grew; since session 10 it is **Anderson acceleration** (Walker & Ni 2011): T(x) less
+//! the combination of the last [`ANDERSON_DEPTH`] = 5 steps of T whose matching combination of
+//! residuals T(x) − x best cancels the present one (a 5 × 5 least-squares problem, summed in
+//! index order on one thread), the history dropped whenever the residual's norm grew. It has
+//! converged when an iteration moves no f or g by more than `tol` (the test is unchanged).
+//! Everything runs in a fixed order (sweeps in fixed chunks, the Poisson solve and the
+//! acceleration sequential), so the result does not depend on the thread count.
+//!
+//! **Speed (session 10, measured).** Where the time went (perf, the Mozart rows, one thread):
+//! the sweeps about 55 % (asin 12 %, the reflectance map 5 %), the depth solves about 30 %, of
+//! which a tenth rebuilt the Poisson hierarchy (twice per warm-started solve) and the mask's
+//! parts each iteration. Both are now built once per solve
+//! ([`crate::integrate::PreparedMask`]) and φ(I) once per pixel instead of in every sweep: the
+//! same bytes (every picture of the evaluation identical), fewer instructions per iteration.
+//! The acceleration cut the iterations of the rows that converge (ball 041 59 → 37, ball 052
+//! 24 → 20, bunny 45° 154 → 92, −135° 100 → 58, cow 54 → 49, buddha 183 → 163; on a 64²
+//! oblique sphere 90 → 22 and a bump 997 → 58 against the plain alternation, the same fixed
+//! point within 1.4e-3 in f, g and 0.02° mean error) and made five of the six free-boundary
+//! ball rows converge (93–196 iterations, 0.75–5.5° better); Mozart frontal takes 178
+//! iterations instead of 159 and Beethoven image2 reaches the cap (it converged in 114).
+//! Together: ball 041 in 2.75 G instructions instead of 4.90 G (callgrind, the whole command;
+//! 3.79 G with the same 59 iterations). [`SWEEPS`] 5 or 20 instead of 10 lost more than they
+//! gained (5: five more rows stop at the cap; 20: 50 % more time). Tried and dropped: a
+//! **coarse-to-fine start** (the integrable problem on the half-size grids, λ and μ × 4 per
+//! level, interpolated up): the coarse levels settle in other basins (Mozart frontal 10.80° →
+//! 14.18°, Mozart oblique occluding 16.99° → 56.06°) and the finest level of ball 041 still
+//! took 63 iterations (59 from multigrid): what keeps the iteration long is not a smooth start
+//! error but fronts that move across the object. **What stays unconverged** (bear, cat,
+//! goblet, harvest, pot1, pot2, reading, both oblique Mozart rows, the free-boundary ball 052,
+//! Beethoven image2): at the cap the largest change per iteration is 0.1–1 in f or g (goblet:
+//! 15,000 of its pixels still move by more than 1e-4 per iteration, with or without momentum,
+//! and the pixel that moves most wanders over the object), or a slow drift of 5e-4–7e-4
+//! (Mozart oblique free): the method has not settled, and a looser or relative test would
+//! only hide it.
 //!
 //! The returned (f, g) are the last gradients, within μ's pull of the depth's own: integrating
 //! them (as every solve is integrated) gives the depth of the last depth solve to within the
@@ -73,10 +104,7 @@ use crate::boundary::{BoundaryConditions, Role};
 use crate::error::Result;
 use crate::gradient_space::fg_from_pq;
 use crate::grid::{Image, Mask};
-use crate::integrate::{
-    gradients_from_fg, integrate_gradients, integrate_gradients_from, PoissonOptions,
-    DEFAULT_MIN_NZ,
-};
+use crate::integrate::{gradients_from_fg, PoissonOptions, PreparedMask, DEFAULT_MIN_NZ};
 use crate::reflectance::ReflectanceMap;
 
 /// Gradient sweeps per iteration (between two depth solves).
@@ -88,8 +116,12 @@ pub const MU: f64 = 0.5;
 /// The weight σ of the smoothness term (see the module documentation).
 pub const SIGMA: f64 = 1.0;
 
-/// The momentum β of the iteration (see the module documentation).
+/// The momentum β of the iteration up to session 9, replaced since by Anderson acceleration
+/// over `ANDERSON_DEPTH` = 5 iterations (see the module documentation); no longer read.
 pub const MOMENTUM: f64 = 0.8;
+
+/// How many past iterations the Anderson acceleration combines (see the module documentation).
+pub const ANDERSON_DEPTH: usize = 5;
 
 /// The default cap on iterations of the integrable method (the warm start's multigrid cycles
 /// not counted).
@@ -109,6 +141,20 @@ impl Solver {
         bc: &BoundaryConditions,
         reflectance: &dyn ReflectanceMap,
         options: &SolveOptions,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Solution> {
+        self.integrable_with_history(image, bc, reflectance, options, ANDERSON_DEPTH, progress)
+    }
+
+    /// [`Solver::solve_integrable`] with Anderson acceleration over `history` iterations (0:
+    /// the plain alternation, for comparison).
+    fn integrable_with_history(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        history: usize,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
         let warm = SolveOptions {
@@ -131,6 +177,14 @@ impl Solver {
         // slopes are infinite, capped at 1/DEFAULT_MIN_NZ) would bend it near the boundary.
         let domain: Mask = bc.roles.map(|r| *r == Role::Unknown);
         let pull = pull_weights(&domain, &self.pixels);
+        // The domain's Poisson hierarchy and parts, built once for every depth solve.
+        let prepared = PreparedMask::new(&domain)?;
+        // φ(I) of each unknown, which the sweeps read ten times per iteration.
+        let scale = AngleScale::of(reflectance);
+        let angles: Vec<f64> = self.nodes[..n]
+            .iter()
+            .map(|node| scale.angle(node.intensity))
+            .collect();
         let poisson = PoissonOptions {
             tol: POISSON_TOL,
             ..PoissonOptions::default()
@@ -138,46 +192,44 @@ impl Solver {
         let mut depth: Option<Image> = None;
         let (mut target_f, mut target_g) = (vec![0.0; n], vec![0.0; n]);
         let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
-        let (mut previous_f, mut previous_g) = (vec![0.0; n], vec![0.0; n]);
-        let mut previous_update = f64::INFINITY;
-        let stats = iterate(n, options, progress, |done| {
+        // (input, result) of an iteration, f then g.
+        let mut x = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+        let mut anderson = Anderson::new(2 * n, history);
+        let stats = iterate(n, options, progress, |_| {
             let (f, g) = self.current_fg();
             let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;
             // Each depth solve starts from the last one: the slopes moved little since.
-            let z = match &depth {
-                Some(z0) => integrate_gradients_from(&dz_dx, &dz_dy, &domain, &poisson, z0)?,
-                None => integrate_gradients(&dz_dx, &dz_dy, &domain, &poisson)?,
-            }
-            .depth;
+            let z = prepared
+                .integrate_gradients(&dz_dx, &dz_dy, &poisson, depth.as_ref())?
+                .depth;
             depth_orientations(&z, &domain, &self.pixels, &mut target_f, &mut target_g);
             depth = Some(z);
             before_f.copy_from_slice(&self.cur_f[..n]);
             before_g.copy_from_slice(&self.cur_g[..n]);
             for _ in 0..SWEEPS {
-                self.screened_sweep(n, reflectance, &pull, SIGMA, (&target_f, &target_g));
+                self.screened_sweep(
+                    n,
+                    reflectance,
+                    Weights {
+                        mu: &pull,
+                        sigma: SIGMA,
+                    },
+                    &angles,
+                    (&target_f, &target_g),
+                );
                 std::mem::swap(&mut self.cur_f, &mut self.next_f);
                 std::mem::swap(&mut self.cur_g, &mut self.next_g);
             }
             let last_update = largest_change(&before_f, &self.cur_f[..n])
                 .max(largest_change(&before_g, &self.cur_g[..n]));
-            // Momentum on the iteration's result y: x ← y + β (y − y_previous), restarted
-            // (β = 0) whenever the update grew.
-            let beta = if done > 0 && last_update <= previous_update {
-                MOMENTUM
-            } else {
-                0.0
-            };
-            for (cur, prev) in [
-                (&mut self.cur_f[..n], &mut previous_f),
-                (&mut self.cur_g[..n], &mut previous_g),
-            ] {
-                for (x, y) in cur.iter_mut().zip(prev.iter_mut()) {
-                    let result = *x;
-                    *x = result + beta * (result - *y);
-                    *y = result;
-                }
-            }
-            previous_update = last_update;
+            // The next iterate from this one and its result (Anderson acceleration).
+            x.0[..n].copy_from_slice(&before_f);
+            x.0[n..].copy_from_slice(&before_g);
+            x.1[..n].copy_from_slice(&self.cur_f[..n]);
+            x.1[n..].copy_from_slice(&self.cur_g[..n]);
+            anderson.step(&x.0, &mut x.1);
+            self.cur_f[..n].copy_from_slice(&x.1[..n]);
+            self.cur_g[..n].copy_from_slice(&x.1[n..]);
             Ok(last_update)
         })?;
         Ok(self.solution(image, bc, reflectance, stats))
@@ -188,12 +240,11 @@ impl Solver {
         &mut self,
         n: usize,
         reflectance: &dyn ReflectanceMap,
-        mu: &[f64],
-        sigma: f64,
+        weights: Weights,
+        angles: &[f64],
         target: (&[f64], &[f64]),
     ) {
         let (cur_f, cur_g) = (&self.cur_f[..], &self.cur_g[..]);
-        let weights = Weights { mu, sigma };
         sweep_chunks(
             &self.nodes,
             &mut self.next_f[..n],
@@ -205,7 +256,7 @@ impl Solver {
                     (cur_f, cur_g),
                     (nf, ng),
                     target,
-                    reflectance,
+                    (reflectance, angles),
                     weights,
                 );
                 0.0
@@ -228,7 +279,7 @@ fn screened_nodes(
     (cur_f, cur_g): (&[f64], &[f64]),
     (next_f, next_g): (&mut [f64], &mut [f64]),
     (target_f, target_g): (&[f64], &[f64]),
-    reflectance: &dyn ReflectanceMap,
+    (reflectance, angles): (&dyn ReflectanceMap, &[f64]),
     Weights { mu, sigma }: Weights,
 ) {
     let scale = AngleScale::of(reflectance);
@@ -257,7 +308,7 @@ fn screened_nodes(
             let four_lambda = node.data_weight * k;
             let s = reflectance.fg(f_tilde, g_tilde);
             // The residual and its gradient in angle units (module documentation).
-            let (residual, slope) = scale.residual(node.intensity, s.value);
+            let (residual, slope) = scale.residual(angles[first + j], s.value);
             let (j1, j2) = (slope * s.d1, slope * s.d2);
             let gain = four_lambda * residual / (denominator + four_lambda * (j1 * j1 + j2 * j2));
             f_new += gain * j1;
@@ -312,21 +363,35 @@ impl AngleScale {
         }
     }
 
-    /// The residual φ(intensity) − φ(value) and dφ/dR at `value` (the factor that turns ∇R
-    /// into the residual's gradient); the plain brightness residual and 1 for a map with no
-    /// brightness range.
-    fn residual(&self, intensity: f64, value: f64) -> (f64, f64) {
+    /// The brightness `intensity` as an angle, φ(u) (the brightness itself for a map with no
+    /// brightness range): what [`AngleScale::residual`] takes.
+    fn angle(&self, intensity: f64) -> f64 {
         if self.range == 0.0 {
-            return (intensity - value, 1.0);
+            intensity
+        } else {
+            self.phi(self.fraction(intensity))
         }
-        let to_u = |v: f64| (v - self.ambient) / self.range;
-        let u = to_u(value);
+    }
+
+    /// u of a brightness.
+    fn fraction(&self, value: f64) -> f64 {
+        (value - self.ambient) / self.range
+    }
+
+    /// The residual φ(intensity) − φ(value), given `angle` = [`AngleScale::angle`] of the
+    /// intensity, and dφ/dR at `value` (the factor that turns ∇R into the residual's
+    /// gradient); the plain brightness residual and 1 for a map with no brightness range.
+    fn residual(&self, angle: f64, value: f64) -> (f64, f64) {
+        if self.range == 0.0 {
+            return (angle - value, 1.0);
+        }
+        let u = self.fraction(value);
         let slope = if u <= self.knee {
             1.0 / (1.0 - u.clamp(-self.knee, self.knee).powi(2)).sqrt()
         } else {
             ANGLE_SLOPE_CAP
         };
-        (self.phi(to_u(intensity)) - self.phi(u), slope / self.range)
+        (angle - self.phi(u), slope / self.range)
     }
 }
 
@@ -395,6 +460,125 @@ fn depth_orientations(
     }
 }
 
+/// Anderson acceleration of a fixed-point iteration x ← T(x) (Walker & Ni 2011, "Anderson
+/// acceleration for fixed-point iterations", SIAM J. Numer. Anal. 49(4)): the next iterate is
+/// T(x) − Σ γᵢ ΔTᵢ, with ΔTᵢ the differences of the last `depth` results and γ the least-squares
+/// coefficients that make the same combination of the residuals r = T(x) − x smallest. The
+/// history is dropped whenever the residual's norm grew (a restart, as the momentum it
+/// replaces was restarted). Every sum runs in index order, on one thread.
+struct Anderson {
+    /// The largest number of differences kept (0: the plain iteration).
+    depth: usize,
+    /// Differences of consecutive residuals, oldest first.
+    residual_steps: Vec<Vec<f64>>,
+    /// Differences of consecutive results, oldest first.
+    result_steps: Vec<Vec<f64>>,
+    /// The last residual and result.
+    last_residual: Vec<f64>,
+    last_result: Vec<f64>,
+    /// The last residual's norm (∞ before the first step).
+    last_norm: f64,
+}
+
+impl Anderson {
+    /// Acceleration over vectors of `len` values, keeping `depth` differences.
+    fn new(len: usize, depth: usize) -> Anderson {
+        Anderson {
+            depth,
+            residual_steps: Vec::new(),
+            result_steps: Vec::new(),
+            last_residual: vec![0.0; len],
+            last_result: vec![0.0; len],
+            last_norm: f64::INFINITY,
+        }
+    }
+
+    /// One step: `x` the iteration's input, `result` T(x), replaced by the next iterate.
+    fn step(&mut self, x: &[f64], result: &mut [f64]) {
+        let residual: Vec<f64> = result.iter().zip(x).map(|(t, x)| t - x).collect();
+        let norm = dot(&residual, &residual).sqrt();
+        if norm.is_nan() || norm > self.last_norm {
+            // Grew, or not a number: restart (the first step also lands here, with nothing).
+            self.residual_steps.clear();
+            self.result_steps.clear();
+        } else if self.depth > 0 && self.last_norm.is_finite() {
+            let difference = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a - b).collect();
+            self.residual_steps
+                .push(difference(&residual, &self.last_residual));
+            self.result_steps
+                .push(difference(result, &self.last_result));
+            if self.residual_steps.len() > self.depth {
+                self.residual_steps.remove(0);
+                self.result_steps.remove(0);
+            }
+        }
+        self.last_residual = residual;
+        self.last_result.copy_from_slice(result);
+        self.last_norm = if norm.is_nan() { f64::INFINITY } else { norm };
+        let Some(gamma) = least_squares(&self.residual_steps, &self.last_residual) else {
+            self.residual_steps.clear();
+            self.result_steps.clear();
+            return;
+        };
+        for (g, step) in gamma.iter().zip(&self.result_steps) {
+            for (t, d) in result.iter_mut().zip(step) {
+                *t -= g * d;
+            }
+        }
+    }
+}
+
+/// The coefficients γ that minimise |r − Σ γᵢ columnsᵢ| (normal equations, with a relative
+/// ridge of 1e-10 on their diagonal, by Gaussian elimination with partial pivoting); empty
+/// for no columns, `None` for a singular or non-finite system.
+fn least_squares(columns: &[Vec<f64>], r: &[f64]) -> Option<Vec<f64>> {
+    let k = columns.len();
+    // The augmented matrix [AᵀA | Aᵀr].
+    let mut a = vec![vec![0.0; k + 1]; k];
+    let mut trace = 0.0;
+    for i in 0..k {
+        for j in 0..=i {
+            let v = dot(&columns[i], &columns[j]);
+            a[i][j] = v;
+            a[j][i] = v;
+        }
+        trace += a[i][i];
+        a[i][k] = dot(&columns[i], r);
+    }
+    for (i, row) in a.iter_mut().enumerate() {
+        row[i] += 1e-10 * trace;
+    }
+    for col in 0..k {
+        let pivot = (col..k)
+            .max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))
+            .unwrap_or(col);
+        a.swap(col, pivot);
+        let d = a[col][col];
+        if !(d.abs() > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let (upper, lower) = a.split_at_mut(col + 1);
+        let pivot_row = &upper[col];
+        for row in lower.iter_mut() {
+            let factor = row[col] / d;
+            for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= factor * p;
+            }
+        }
+    }
+    let mut gamma = vec![0.0; k];
+    for i in (0..k).rev() {
+        let tail: f64 = (i + 1..k).map(|j| a[i][j] * gamma[j]).sum();
+        gamma[i] = (a[i][k] - tail) / a[i][i];
+    }
+    gamma.iter().all(|g| g.is_finite()).then_some(gamma)
+}
+
+/// Σ aᵢbᵢ in index order.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
 /// The largest |a − b| (∞ when one is not a number).
 fn largest_change(a: &[f64], b: &[f64]) -> f64 {
     let mut largest: f64 = 0.0;
@@ -415,6 +599,7 @@ mod tests {
     use super::*;
     use crate::boundary::{boundary_conditions, Boundary};
     use crate::gradient_space::angle_deg;
+    use crate::integrate::{integrate_gradients, integrate_gradients_from};
     use crate::light::Light;
     #[cfg(feature = "parallel")]
     use crate::solver::PARALLEL_MIN;
@@ -503,10 +688,11 @@ mod tests {
         assert!(r_ih > 0.1 && r_int < 0.04, "{r_ih} {r_int}");
     }
 
-    /// The frontal sphere converges within 1.3° (measured 0.31°, in 18 iterations; 1.01° in 31
-    /// with the brightness residual); a Gaussian bump with the free boundary improves on
-    /// Ikeuchi–Horn (4.31° → 3.90°) and stays finite, though it does not meet `tol` within the
-    /// default cap of 200 iterations (last update 2.7e-5, reported).
+    /// The frontal sphere converges within 1.3° (measured 0.31°, in 13 iterations; 18 with
+    /// session 9's momentum; 1.01° in 31 with the brightness residual); a Gaussian bump with
+    /// the free boundary improves on Ikeuchi–Horn (4.31° → 4.00°) and converges, in 78
+    /// iterations (with session 9's momentum it stopped at the cap of 200, at 3.90°, last
+    /// update 2.7e-5).
     #[test]
     fn frontal_sphere_converges_and_a_free_boundary_improves() {
         let s = sphere(96, 96, 43.0).unwrap();
@@ -523,8 +709,94 @@ mod tests {
             mean_error(&int, &bump, &Boundary::Free),
         );
         assert!(e_int < e_ih - 0.3 && e_int < 4.0, "{e_ih} {e_int}");
-        assert!(!int.diverged && int.iterations == INTEGRABLE_MAX_ITER);
-        assert!(int.last_update < 1e-3, "{}", int.last_update);
+        eprintln!(
+            "MEASURE bump {e_ih} {e_int} {} {} ; sphere {e} {}",
+            int.iterations, int.last_update, 0
+        );
+        assert!(int.converged && !int.diverged, "{}", int.last_update);
+    }
+
+    /// Solves the picture of `surface` under `light` with the integrable method, Anderson
+    /// acceleration over `history` iterations, at most `max_iter` iterations.
+    fn solve_with_history(
+        surface: &Surface,
+        light: Light,
+        boundary: &Boundary,
+        history: usize,
+        max_iter: usize,
+    ) -> Solution {
+        let (image, map) = picture(surface, light);
+        let mut solver = Solver::new(surface.width(), surface.height()).unwrap();
+        let bc = boundary_conditions(&surface.mask, boundary).unwrap();
+        let options = SolveOptions {
+            max_iter,
+            ..SolveOptions::for_method(Method::Integrable)
+        };
+        solver
+            .integrable_with_history(&image, &bc, &map, &options, history, &mut |_| {})
+            .unwrap()
+    }
+
+    /// The accelerated iteration ends where the plain alternation (no acceleration, no
+    /// momentum) ends, in far fewer iterations: a 64² sphere under an oblique light and a
+    /// Gaussian bump, both with the occluding boundary (measured: 90 → 22 and 997 → 58
+    /// iterations; the two fields differ by at most 1.4e-3 and 8e-4 in f or g, and by
+    /// 0.017° and 0.004° in mean error; at tol 1e-9 the gap stays the same, so the two
+    /// iterations stop at fixed points that close, not short of one).
+    #[test]
+    fn anderson_reaches_the_plain_fixed_point_in_fewer_iterations() {
+        let cases = [
+            (sphere(64, 64, 28.0).unwrap(), (0.0, 45.0)),
+            (gaussian(64, 64, 8.0, 8.0, 0.0, 0.0).unwrap(), (30.0, 40.0)),
+        ];
+        let b = Boundary::Occluding;
+        for (surface, (tilt, slant)) in &cases {
+            let light = Light::from_tilt_slant(*tilt, *slant).unwrap();
+            let plain = solve_with_history(surface, light, &b, 0, 5000);
+            let fast = solve_with_history(surface, light, &b, ANDERSON_DEPTH, 5000);
+            assert!(plain.converged && fast.converged);
+            assert!(
+                4 * fast.iterations < plain.iterations,
+                "{} {}",
+                fast.iterations,
+                plain.iterations
+            );
+            let gap = largest_change(plain.f.data(), fast.f.data())
+                .max(largest_change(plain.g.data(), fast.g.data()));
+            let (e_plain, e_fast) = (
+                mean_error(&plain, surface, &b),
+                mean_error(&fast, surface, &b),
+            );
+            assert!(
+                gap < 2e-3 && (e_plain - e_fast).abs() < 0.05,
+                "{gap} {e_plain} {e_fast}"
+            );
+        }
+    }
+
+    /// Anderson acceleration on a linear contraction x ← Mx + b whose slowest mode contracts
+    /// by 0.999 per step: the plain iteration needs thousands of steps, the accelerated one
+    /// reaches the fixed point in a handful (as GMRES would: the history spans the modes).
+    #[test]
+    fn anderson_solves_a_slow_linear_contraction() {
+        let rates = [0.999, 0.99, 0.9, 0.5];
+        let b = [1.0, -2.0, 0.5, 3.0];
+        let fixed: Vec<f64> = rates.iter().zip(&b).map(|(m, b)| b / (1.0 - m)).collect();
+        let mut anderson = Anderson::new(4, ANDERSON_DEPTH);
+        let mut x = vec![0.0; 4];
+        let mut steps = 0;
+        while largest_change(&x, &fixed) > 1e-8 && steps < 100 {
+            let mut t: Vec<f64> = x
+                .iter()
+                .zip(rates.iter().zip(&b))
+                .map(|(x, (m, b))| m * x + b)
+                .collect();
+            anderson.step(&x, &mut t);
+            x = t;
+            steps += 1;
+        }
+        // The plain iteration would need ln(1e-8 / 1000) / ln(0.999) ≈ 25,000 steps.
+        assert!(steps <= 8, "{steps} {x:?}");
     }
 
     /// The angle residual: for a Lambertian map it is the difference of the angles to the
@@ -541,9 +813,9 @@ mod tests {
         };
         let scale = AngleScale::of(&map);
         let brightness = |deg: f64| 0.1 + 0.5 * deg.to_radians().cos();
-        let (r, _) = scale.residual(brightness(30.0), brightness(50.0));
+        let (r, _) = scale.residual(scale.angle(brightness(30.0)), brightness(50.0));
         assert!((r - 20f64.to_radians()).abs() < 1e-12, "{r}");
-        let (r, _) = scale.residual(brightness(85.0), brightness(25.0));
+        let (r, _) = scale.residual(scale.angle(brightness(85.0)), brightness(25.0));
         assert!((r + 60f64.to_radians()).abs() < 1e-12, "{r}");
         // The knee: u = √(1 − 1/9), 19.47° from the light; φ continuous across it.
         let knee = brightness((1.0f64 / 3.0).asin().to_degrees().max(0.0));
@@ -555,15 +827,18 @@ mod tests {
         // dφ/dR by finite differences, below and above the knee.
         for value in [0.2, 0.45, 0.58, 0.6] {
             let h = 1e-7;
-            let (r0, slope) = scale.residual(0.3, value);
-            let (r1, _) = scale.residual(0.3, value + h);
+            let (r0, slope) = scale.residual(scale.angle(0.3), value);
+            let (r1, _) = scale.residual(scale.angle(0.3), value + h);
             let numeric = (r0 - r1) / h;
             assert!(
                 (numeric - slope).abs() < 1e-4 * slope,
                 "{value} {numeric} {slope}"
             );
         }
-        assert_eq!(scale.residual(0.6, 0.59).1, ANGLE_SLOPE_CAP / 0.5);
+        assert_eq!(
+            scale.residual(scale.angle(0.6), 0.59).1,
+            ANGLE_SLOPE_CAP / 0.5
+        );
     }
 
     /// A pixel the depth cannot tilt along an axis (no domain neighbour that way) is not
@@ -618,6 +893,45 @@ mod tests {
         assert!(integrate_gradients_from(&dx, &dy, &s.mask, &options, &bad).is_err());
     }
 
+    /// The prepared mask's solves are those of `integrate_gradients` and
+    /// `integrate_gradients_from`, bit for bit, on a vase with a hole.
+    #[test]
+    fn prepared_mask_solves_are_the_functions_bit_for_bit() {
+        let s = crate::surface::vase(80, 96).unwrap();
+        let mut mask = s.mask.clone();
+        *mask.get_mut(40, 50) = false;
+        let fg = |n: &crate::gradient_space::Normal| crate::gradient_space::fg_from_normal(n);
+        let (dx, dy) = gradients_from_fg(
+            s.normals.map(|n| fg(n).0),
+            s.normals.map(|n| fg(n).1),
+            &mask,
+            DEFAULT_MIN_NZ,
+        )
+        .unwrap();
+        let options = PoissonOptions {
+            tol: 1e-5,
+            ..PoissonOptions::default()
+        };
+        let prepared = PreparedMask::new(&mask).unwrap();
+        let cold = integrate_gradients(&dx, &dy, &mask, &options).unwrap();
+        assert_eq!(
+            prepared
+                .integrate_gradients(&dx, &dy, &options, None)
+                .unwrap(),
+            cold
+        );
+        let start = cold.depth.map(|z| 0.8 * z - 0.2);
+        let warm = integrate_gradients_from(&dx, &dy, &mask, &options, &start).unwrap();
+        assert!(warm.iterations > 0);
+        assert_eq!(
+            prepared
+                .integrate_gradients(&dx, &dy, &options, Some(&start))
+                .unwrap(),
+            warm
+        );
+        assert!(PreparedMask::new(&Mask::new(4, 4, false)).is_err());
+    }
+
     #[cfg(feature = "parallel")]
     #[test]
     fn results_do_not_depend_on_threads() {
@@ -625,7 +939,7 @@ mod tests {
         let light = Light::from_tilt_slant(20.0, 40.0).unwrap();
         let (image, map) = picture(&b, light);
         let options = SolveOptions {
-            max_iter: 3,
+            max_iter: 8,
             ..SolveOptions::for_method(Method::Integrable)
         };
         let run = |threads: usize| {
@@ -641,7 +955,7 @@ mod tests {
                 })
         };
         let one = run(1);
-        assert!(one.unknowns >= PARALLEL_MIN && one.iterations == 3);
+        assert!(one.unknowns >= PARALLEL_MIN && one.iterations == 8);
         assert_eq!(one, run(3));
     }
 }
