@@ -56,7 +56,7 @@
 //! One iteration is one depth solve and [`SWEEPS`] sweeps, a map y = T(x) of the (f, g); the
 //! alternation alone contracts slowly (about 0.98 per iteration on the ball photographs: the
 //! smooth part of the field moves the way a Jacobi sweep moves it). Up to session 9 the next
-//! iterate was y + β·(y − y_previous) with momentum β = [`MOMENTUM`], restarted whenever the
+//! iterate was y + β·(y − y_previous) with momentum β = 0.8, restarted whenever the
 //! update grew; since session 10 it is **Anderson acceleration** (Walker & Ni 2011): T(x) less
 //! the combination of the last [`ANDERSON_DEPTH`] = 5 steps of T whose matching combination of
 //! residuals T(x) − x best cancels the present one (a 5 × 5 least-squares problem, summed in
@@ -115,10 +115,6 @@ pub const MU: f64 = 0.5;
 
 /// The weight σ of the smoothness term (see the module documentation).
 pub const SIGMA: f64 = 1.0;
-
-/// The momentum β of the iteration up to session 9, replaced since by Anderson acceleration
-/// over `ANDERSON_DEPTH` = 5 iterations (see the module documentation); no longer read.
-pub const MOMENTUM: f64 = 0.8;
 
 /// How many past iterations the Anderson acceleration combines (see the module documentation).
 pub const ANDERSON_DEPTH: usize = 5;

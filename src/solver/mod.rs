@@ -861,7 +861,7 @@ mod integrable;
 mod multigrid;
 
 pub use globalize::STALL_WINDOW;
-pub use integrable::{INTEGRABLE_MAX_ITER, MOMENTUM, MU, SIGMA, SWEEPS};
+pub use integrable::{ANDERSON_DEPTH, INTEGRABLE_MAX_ITER, MU, SIGMA, SWEEPS};
 
 #[cfg(test)]
 mod tests;
