@@ -478,6 +478,10 @@ pub struct LimbConditions {
 /// a bump from a dent, and loses only the slant that the brightness contradicts. Where the
 /// image is clipped (I ≥ `saturation`) the brightness gives no slant and the pixel is left
 /// free. Dark pixels keep their occluding value: a limb in shadow is consistent with them.
+/// The brightness is read as the solver's data term reads it, with no allowance for noise: a
+/// photograph's dark level on a limb in attached shadow (0–0.016 of the albedo on the DiLiGenT
+/// ball at a slant of 43°) reads as light just past the terminator, and those pixels are held
+/// there, as the data term pulls them anyway.
 /// On a true limb under any light nothing changes.
 ///
 /// ```
