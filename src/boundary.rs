@@ -550,13 +550,11 @@ pub fn limb_count(
     reflectance: &dyn ReflectanceMap,
     saturation: Option<f64>,
 ) -> Result<usize> {
+    let (w, h) = (mask.width(), mask.height());
     if !image.same_size(mask) {
+        let (iw, ih) = (image.width(), image.height());
         return Err(Error::invalid(format!(
-            "image is {}x{} but the mask is {}x{}",
-            image.width(),
-            image.height(),
-            mask.width(),
-            mask.height()
+            "image is {iw}x{ih} but the mask is {w}x{h}"
         )));
     }
     let occluding = boundary_conditions(mask, &Boundary::Occluding)?;

@@ -195,6 +195,13 @@ fn the_limb_boundary_is_named_and_needs_the_image() {
         .to_string();
     assert!(message.contains("limb_conditions"), "{message}");
     assert!(!message.contains('\n'));
+    // The count needs an image the mask's size.
+    let map = Lambertian::unit(Light::FRONT);
+    let small = Grid::new(SIDE - 1, SIDE, 0.5);
+    let message = limb_count(&mask, &small, &map, None)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(message, "image is 95x96 but the mask is 96x96");
 }
 
 #[test]
