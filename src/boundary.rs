@@ -25,7 +25,8 @@
 
 use crate::error::{Error, Result};
 use crate::gradient_space::{fg_from_normal, Normal, FG_RADIUS};
-use crate::grid::{Grid, Mask};
+use crate::grid::{Grid, Image, Mask};
+use crate::reflectance::ReflectanceMap;
 use nalgebra::Vector3;
 
 /// The factor by which occluding-boundary values are pulled in from the rim of the f–g disc:
@@ -56,20 +57,24 @@ pub enum Boundary {
     Flat,
     /// Nothing fixed: the natural boundary condition everywhere.
     Free,
+    /// The occluding contour where the shading allows a limb; elsewhere the contour's
+    /// outward direction at the slant the brightness gives ([`limb_conditions`]).
+    Limb,
     /// The rim holds these normals (a grid the size of the image; only rim pixels are read).
     Given(Grid<Normal>),
 }
 
 /// The names of the built-in boundary conditions, as `--boundary` spells them.
-pub const BOUNDARY_NAMES: &[&str] = &["occluding", "flat", "free"];
+pub const BOUNDARY_NAMES: &[&str] = &["occluding", "flat", "free", "limb"];
 
 impl Boundary {
-    /// The built-in condition called `name` (`occluding`, `flat` or `free`).
+    /// The built-in condition called `name` (`occluding`, `flat`, `free` or `limb`).
     pub fn named(name: &str) -> Result<Boundary> {
         match name {
             "occluding" => Ok(Boundary::Occluding),
             "flat" => Ok(Boundary::Flat),
             "free" => Ok(Boundary::Free),
+            "limb" => Ok(Boundary::Limb),
             other => Err(Error::unknown("boundary", other, BOUNDARY_NAMES)),
         }
     }
@@ -80,6 +85,7 @@ impl Boundary {
             Boundary::Occluding => "occluding",
             Boundary::Flat => "flat",
             Boundary::Free => "free",
+            Boundary::Limb => "limb",
             Boundary::Given(_) => "given",
         }
     }
@@ -376,6 +382,12 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
                 }
             }
         }
+        Boundary::Limb => {
+            return Err(Error::invalid(
+                "the limb boundary depends on the image and the reflectance map: build it from \
+                 the occluding conditions with limb_conditions",
+            ))
+        }
         Boundary::Occluding => {
             let radius = FG_RADIUS * OCCLUDING_SHRINK;
             for (index, n) in occluding_normal_list(mask) {
@@ -427,6 +439,199 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
         roles.data_mut()[index] = Role::Fixed;
     }
     Ok(BoundaryConditions { roles, fixed })
+}
+
+/// The largest n_z that [`limb_conditions`] allows a rim pixel on a limb: the centre of a rim
+/// pixel lies up to one pixel inside the silhouette, where a surface whose cross-section has a
+/// radius of curvature of r pixels has turned to n_z ≈ √(2/r) toward the viewer; 0.5 is r = 8
+/// pixels (a slant of 60°), below which an object is too small for shape from shading anyway.
+pub const LIMB_MAX_NZ: f64 = 0.5;
+
+/// How far, in degrees, [`limb_conditions`] lets the in-plane direction of a limb's normal
+/// differ from the contour's fitted outward normal: the fit is within 1.5° on a smooth contour
+/// ([`occluding_normals`]), a few degrees near a corner, where it blends.
+pub const LIMB_DIRECTION_TOLERANCE_DEG: f64 = 5.0;
+
+/// The occluding conditions with the shading's test applied ([`limb_conditions`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LimbConditions {
+    /// The conditions to solve with.
+    pub conditions: BoundaryConditions,
+    /// The occluding pixels whose brightness rules out a limb: fixed at the slant the shading
+    /// gives, or left free where the image is clipped there.
+    pub not_limb: usize,
+}
+
+/// The occluding conditions where the shading allows a limb, and elsewhere the contour's
+/// outward direction at the slant the shading gives ([`Boundary::Limb`]).
+///
+/// `occluding` are the conditions [`boundary_conditions`] gives with [`Boundary::Occluding`];
+/// each fixed pixel's (f, g) points along the contour's outward normal m. A rim pixel on a limb
+/// has a normal nearly in the image plane along m: n = (cos ε·m, sin ε) with
+/// sin ε = n_z ≤ [`LIMB_MAX_NZ`], the in-plane direction within
+/// [`LIMB_DIRECTION_TOLERANCE_DEG`] of m. A pixel brighter than the reflectance map gives any
+/// of those normals cannot be on a limb: the outline there is a cut (the edge of a range scan,
+/// a relief's border), and the surface faces the viewer more than a limb does. Such a pixel is
+/// fixed at the azimuth of m with the smallest elevation ε ≥ asin(`LIMB_MAX_NZ`) at which
+/// R = I (the orientation closest to edge-on that the brightness allows; where no elevation
+/// reaches I, the one that comes closest), so that it keeps the outward direction, which tells
+/// a bump from a dent, and loses only the slant that the brightness contradicts. Where the
+/// image is clipped (I ≥ `saturation`) the brightness gives no slant and the pixel is left
+/// free. Dark pixels keep their occluding value: a limb in shadow is consistent with them.
+/// The brightness is read as the solver's data term reads it, with no allowance for noise: a
+/// photograph's dark level on a limb in attached shadow (0–0.016 of the albedo on the DiLiGenT
+/// ball at a slant of 43°) reads as light just past the terminator, and those pixels are held
+/// there, as the data term pulls them anyway.
+/// On a true limb under any light nothing changes.
+///
+/// ```
+/// use shadelab::boundary::{boundary_conditions, limb_conditions, Boundary};
+/// use shadelab::gradient_space::normal_from_fg;
+/// use shadelab::reflectance::Lambertian;
+/// use shadelab::render::{render, RenderOptions};
+/// use shadelab::surface::sphere;
+/// use shadelab::Light;
+///
+/// let ball = sphere(64, 64, 28.0).unwrap();
+/// let map = Lambertian::unit(Light::FRONT);
+/// let mut image = render(&ball, &map, &RenderOptions::default()).image;
+/// let occluding = boundary_conditions(&ball.mask, &Boundary::Occluding).unwrap();
+/// // A sphere's outline is a limb: nothing changes.
+/// let limb = limb_conditions(&occluding, &image, &map, None);
+/// assert_eq!((limb.not_limb, &limb.conditions), (0, &occluding));
+/// // A rim pixel at brightness 0.9 under a frontal light faces the viewer (n_z = 0.9).
+/// let (index, _) = occluding.fixed_values()[0];
+/// image.data_mut()[index] = 0.9;
+/// let limb = limb_conditions(&occluding, &image, &map, None);
+/// assert_eq!(limb.not_limb, 1);
+/// let (col, row) = (index % 64, index / 64);
+/// let [f, g] = limb.conditions.fixed_value(col, row).unwrap();
+/// assert!((normal_from_fg(f, g).z - 0.9).abs() < 1e-6);
+/// ```
+pub fn limb_conditions(
+    occluding: &BoundaryConditions,
+    image: &Image,
+    reflectance: &dyn ReflectanceMap,
+    saturation: Option<f64>,
+) -> LimbConditions {
+    let mut roles = occluding.roles.clone();
+    let mut fixed = Vec::with_capacity(occluding.fixed.len());
+    let mut not_limb = 0;
+    for &(index, fg) in &occluding.fixed {
+        let intensity = image.data()[index];
+        let azimuth = fg[1].atan2(fg[0]);
+        if intensity <= limb_brightness_bound(azimuth, reflectance) {
+            fixed.push((index, fg));
+            continue;
+        }
+        not_limb += 1;
+        if saturation.is_some_and(|s| intensity >= s) {
+            roles.data_mut()[index] = Role::Unknown;
+            continue;
+        }
+        let elevation = shading_elevation(azimuth, intensity, reflectance);
+        let (f, g) = fg_from_normal(&in_plane_normal(azimuth, elevation));
+        fixed.push((index, [f, g]));
+    }
+    LimbConditions {
+        conditions: BoundaryConditions { roles, fixed },
+        not_limb,
+    }
+}
+
+/// How many occluding pixels of `mask` the shading of `image` rules out as a limb
+/// ([`LimbConditions::not_limb`]): what the solver's [`Boundary::Limb`] does, counted for a
+/// report.
+///
+/// Fails when the mask is empty or the image is not the mask's size.
+pub fn limb_count(
+    mask: &Mask,
+    image: &Image,
+    reflectance: &dyn ReflectanceMap,
+    saturation: Option<f64>,
+) -> Result<usize> {
+    let (w, h) = (mask.width(), mask.height());
+    if !image.same_size(mask) {
+        let (iw, ih) = (image.width(), image.height());
+        return Err(Error::invalid(format!(
+            "image is {iw}x{ih} but the mask is {w}x{h}"
+        )));
+    }
+    let occluding = boundary_conditions(mask, &Boundary::Occluding)?;
+    Ok(limb_conditions(&occluding, image, reflectance, saturation).not_limb)
+}
+
+/// The unit normal at `azimuth` in the image plane (radians from +x toward +y), raised by
+/// `elevation` toward the viewer.
+fn in_plane_normal(azimuth: f64, elevation: f64) -> Normal {
+    Vector3::new(
+        elevation.cos() * azimuth.cos(),
+        elevation.cos() * azimuth.sin(),
+        elevation.sin(),
+    )
+}
+
+/// The brightest a limb pixel whose contour's outward normal is at `azimuth` can be: the
+/// largest R over the normals with 0 ≤ n_z ≤ [`LIMB_MAX_NZ`] whose in-plane direction is
+/// within [`LIMB_DIRECTION_TOLERANCE_DEG`] of `azimuth` (sampled every 2° of elevation and
+/// 2.5° of direction, ends included).
+fn limb_brightness_bound(azimuth: f64, reflectance: &dyn ReflectanceMap) -> f64 {
+    const ELEVATION_STEPS: usize = 15;
+    const DIRECTION_STEPS: usize = 4;
+    let top = LIMB_MAX_NZ.asin();
+    let tolerance = LIMB_DIRECTION_TOLERANCE_DEG.to_radians();
+    let mut bound = f64::NEG_INFINITY;
+    for i in 0..=ELEVATION_STEPS {
+        let elevation = top * i as f64 / ELEVATION_STEPS as f64;
+        for j in 0..=DIRECTION_STEPS {
+            let a = azimuth + tolerance * (2.0 * j as f64 / DIRECTION_STEPS as f64 - 1.0);
+            bound = bound.max(reflectance.radiance(&in_plane_normal(a, elevation)));
+        }
+    }
+    bound
+}
+
+/// The smallest elevation from asin([`LIMB_MAX_NZ`]) up to the viewer's at which the normal at
+/// `azimuth` has R = `intensity` (found on a 1° grid, then by bisection), or, where R never
+/// reaches it, the grid elevation at which R comes closest (the lowest of equals).
+fn shading_elevation(azimuth: f64, intensity: f64, reflectance: &dyn ReflectanceMap) -> f64 {
+    const GRID_STEPS: usize = 60;
+    const BISECTIONS: usize = 40;
+    let (low, high) = (LIMB_MAX_NZ.asin(), std::f64::consts::FRAC_PI_2);
+    let at = |k: usize| low + (high - low) * k as f64 / GRID_STEPS as f64;
+    let excess = |e: f64| reflectance.radiance(&in_plane_normal(azimuth, e)) - intensity;
+    let mut closest = (f64::INFINITY, low);
+    let mut previous = excess(low);
+    if previous == 0.0 {
+        return low;
+    }
+    for k in 1..=GRID_STEPS {
+        let e = at(k);
+        let d = excess(e);
+        if d == 0.0 {
+            return e;
+        }
+        if (d > 0.0) != (previous > 0.0) {
+            let (mut a, mut b) = (at(k - 1), e);
+            for _ in 0..BISECTIONS {
+                let mid = 0.5 * (a + b);
+                if (excess(mid) > 0.0) == (previous > 0.0) {
+                    a = mid;
+                } else {
+                    b = mid;
+                }
+            }
+            return 0.5 * (a + b);
+        }
+        if previous.abs() < closest.0 {
+            closest = (previous.abs(), at(k - 1));
+        }
+        previous = d;
+    }
+    if previous.abs() < closest.0 {
+        closest = (previous.abs(), high);
+    }
+    closest.1
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@ mod golden_outputs;
 mod hostile;
 mod interrupt;
 mod lightness;
+mod limb;
 mod mesh;
 mod outline;
 mod output_sets;

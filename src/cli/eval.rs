@@ -38,9 +38,9 @@ pub struct Args {
     /// The ball photographs to run (comma separated; default 052,076,008,029,049,041).
     #[arg(long, value_name = "NAMES", value_delimiter = ',')]
     pub ball_images: Vec<String>,
-    /// One boundary condition for every case (occluding, flat, free); default: occluding, and
-    /// both occluding and free (a row each) for Mozart and the ball.
-    #[arg(long, value_name = "occluding|flat|free")]
+    /// One boundary condition for every case (occluding, flat, free, limb); default:
+    /// occluding, and occluding, free and limb (a row each) for Mozart and the ball.
+    #[arg(long, value_name = "occluding|flat|free|limb")]
     pub boundary: Option<String>,
     /// A photograph's albedo: at the default, the library's rule (`solve --albedo estimate`:
     /// the bright tail below this quantile extrapolated); any other value takes this quantile

@@ -25,10 +25,12 @@ pub struct Args {
     /// The object's mask (PNG, nonzero = inside); default: the whole image.
     #[arg(long, value_name = "PNG")]
     pub mask: Option<PathBuf>,
-    /// Boundary condition: occluding, flat, free, or an H×W×3 .npy of normals for the rim.
+    /// Boundary condition: occluding, flat, free, limb (occluding where the shading allows a
+    /// limb, elsewhere the outline's direction at the slant the brightness gives), or an H×W×3
+    /// .npy of normals for the rim.
     #[arg(
         long,
-        value_name = "occluding|flat|free|FILE.npy",
+        value_name = "occluding|flat|free|limb|FILE.npy",
         default_value = "occluding"
     )]
     pub boundary: String,

@@ -4,7 +4,7 @@
 use super::metrics::{
     angular_error, angular_error_map, depth_error, shading_residual, AngularError, DepthError,
 };
-use crate::boundary::Boundary;
+use crate::boundary::{limb_count, Boundary};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
@@ -83,6 +83,10 @@ pub struct CaseResult {
     pub slant_deg: f64,
     /// The boundary condition.
     pub boundary: &'static str,
+    /// With the `limb` boundary: the occluding pixels whose brightness rules out a limb
+    /// ([`crate::boundary::limb_conditions`]); absent for every other boundary.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_limb: Option<usize>,
     /// The albedo the image was divided by.
     pub albedo: Albedo,
     /// Angle between recovered and true normals on the scored mask.
@@ -131,6 +135,10 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
         light: case.light,
         albedo: 1.0,
         ambient: 0.0,
+    };
+    let not_limb = match case.boundary {
+        Boundary::Limb => Some(limb_count(&case.domain, &case.image, &reflectance, None)?),
+        _ => None,
     };
     let started = Instant::now();
     let policy = ReconstructOptions::from_solve(options, NonConvergence::Report);
@@ -181,6 +189,7 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             tilt_deg: case.light.tilt_deg(),
             slant_deg: case.light.slant_deg(),
             boundary: case.boundary.name(),
+            not_limb,
             albedo: case.albedo.clone(),
             normal_error,
             depth_error,

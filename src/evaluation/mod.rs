@@ -109,7 +109,8 @@ pub const MAX_CYCLES: usize = crate::solver::MULTIGRID_MAX_CYCLES;
 /// The ball and Mozart are solved with each of [`Config::compared_boundaries`] instead: the
 /// ball because which condition suits a photograph is the question users ask, Mozart because
 /// its edge is partly where the scan ends (a cliff 24 to 69 pixels high, whose finite-
-/// difference normals are not edge-on) rather than where the surface turns away.
+/// difference normals are not edge-on) rather than where the surface turns away; the limb
+/// condition ([`crate::boundary::limb_conditions`]) tells the two apart by the shading.
 pub fn default_boundary(_set: Set) -> Boundary {
     Boundary::Occluding
 }
@@ -133,7 +134,7 @@ impl Config {
             diligent_objects: DILIGENT_OBJECTS.iter().map(|s| s.to_string()).collect(),
             diligent_light: light(0.0, 30.0)?,
             ball_images: BALL_IMAGES.iter().map(|s| s.to_string()).collect(),
-            compared_boundaries: vec![Boundary::Occluding, Boundary::Free],
+            compared_boundaries: vec![Boundary::Occluding, Boundary::Free, Boundary::Limb],
             boundary: None,
             albedo_quantile: albedo::BRIGHT_QUANTILE,
             ball_albedo_from_truth: false,

@@ -91,6 +91,7 @@ mod tests {
             tilt_deg: 0.0,
             slant_deg: 0.0,
             boundary: "occluding",
+            not_limb: None,
             albedo: Albedo::known(),
             normal_error: None,
             depth_error: None,

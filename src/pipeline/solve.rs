@@ -49,7 +49,7 @@ impl std::str::FromStr for LightChoice {
 /// The boundary condition of a solve: built in, or normals read from a file.
 #[derive(Debug, Clone, PartialEq)]
 pub enum BoundarySource {
-    /// `occluding`, `flat` or `free`.
+    /// `occluding`, `flat`, `free` or `limb`.
     Named(Boundary),
     /// An H×W×3 `.npy` of unit normals for the rim.
     File(PathBuf),
@@ -272,10 +272,14 @@ pub struct LightReport {
 /// The boundary condition used.
 #[derive(Debug, Clone, Serialize)]
 pub struct BoundaryReport {
-    /// Its name (`occluding`, `flat`, `free`, `given`).
+    /// Its name (`occluding`, `flat`, `free`, `limb`, `given`).
     pub kind: &'static str,
     /// The factor limb normals are shrunk by (see [`OCCLUDING_SHRINK`]).
     pub occluding_shrink: f64,
+    /// With the `limb` boundary: the occluding pixels whose brightness rules out a limb, held
+    /// at the slant the shading gives instead ([`crate::boundary::limb_conditions`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_limb: Option<usize>,
 }
 
 /// How the solve went.
@@ -363,6 +367,7 @@ struct Solved {
     brdf: BrdfSpec,
     image_info: Value,
     boundary_kind: &'static str,
+    not_limb: Option<usize>,
     solve_seconds: f64,
     sidecar: Option<RenderSidecar>,
     albedo_estimate: Option<AlbedoEstimate>,
@@ -445,6 +450,15 @@ fn solve_loaded(
         saturation,
         ..config.options
     };
+    let not_limb = match boundary {
+        Boundary::Limb => Some(crate::boundary::limb_count(
+            &mask,
+            &image,
+            reflectance.as_ref(),
+            saturation,
+        )?),
+        _ => None,
+    };
     let mut planner = Reconstructor::new(w, h, options)?;
     let started = Instant::now();
     let problem = Problem {
@@ -465,6 +479,7 @@ fn solve_loaded(
         brdf,
         image_info,
         boundary_kind: boundary.name(),
+        not_limb,
         solve_seconds: started.elapsed().as_secs_f64(),
         sidecar,
         albedo_estimate,
@@ -690,6 +705,7 @@ fn report(
         boundary: BoundaryReport {
             kind: boundary_kind,
             occluding_shrink: OCCLUDING_SHRINK,
+            not_limb: solved.not_limb,
         },
         solver: SolverReport {
             method: method.to_string(),

@@ -30,7 +30,7 @@
 //! Its tolerance means the same: it stops when the next Jacobi sweep would change no f or g by
 //! more than `tol`.
 
-use crate::boundary::{boundary_conditions, Boundary, BoundaryConditions, Role};
+use crate::boundary::{boundary_conditions, limb_conditions, Boundary, BoundaryConditions, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::{normal_from_fg, Normal};
 use crate::grid::{Grid, Image, Mask};
@@ -452,15 +452,20 @@ impl Solver {
                 light.x, light.y, light.z
             )));
         }
-        if *boundary != Boundary::Occluding {
+        if !matches!(boundary, Boundary::Occluding | Boundary::Limb) {
             let bc = boundary_conditions(mask, boundary)?;
             return self.solve_conditions(image, &bc, reflectance, options, progress);
         }
         let bc = match self.occluding.take() {
             Some(bc) if same_domain(&bc, mask) => bc,
-            _ => boundary_conditions(mask, boundary)?,
+            _ => boundary_conditions(mask, &Boundary::Occluding)?,
         };
-        let solution = self.solve_conditions(image, &bc, reflectance, options, progress);
+        let solution = if *boundary == Boundary::Limb {
+            let limb = limb_conditions(&bc, image, reflectance, options.saturation);
+            self.solve_conditions(image, &limb.conditions, reflectance, options, progress)
+        } else {
+            self.solve_conditions(image, &bc, reflectance, options, progress)
+        };
         self.occluding = Some(bc);
         solution
     }
