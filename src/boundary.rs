@@ -539,6 +539,20 @@ pub fn limb_conditions(
     }
 }
 
+/// Each pixel's role under `boundary`, before any image is read: for [`Boundary::Limb`] those
+/// of [`Boundary::Occluding`], since the limb condition fixes the same pixels (only where the
+/// image is clipped does it leave one of them free, which needs the image); for the others
+/// those of [`boundary_conditions`].
+///
+/// Fails as [`boundary_conditions`] does.
+pub fn domain_roles(mask: &Mask, boundary: &Boundary) -> Result<Grid<Role>> {
+    let boundary = match boundary {
+        Boundary::Limb => &Boundary::Occluding,
+        other => other,
+    };
+    Ok(boundary_conditions(mask, boundary)?.roles)
+}
+
 /// How many occluding pixels of `mask` the shading of `image` rules out as a limb
 /// ([`LimbConditions::not_limb`]): what the solver's [`Boundary::Limb`] does, counted for a
 /// report.

@@ -209,7 +209,8 @@ impl Lighting {
             check_albedo(a)?;
         }
         let outline = match boundary {
-            Boundary::Occluding => Outline::Occluding,
+            // The limb condition reads the same outline; only what it fixes there differs.
+            Boundary::Occluding | Boundary::Limb => Outline::Occluding,
             _ => Outline::Unknown,
         };
         let estimate = match given {

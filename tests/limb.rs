@@ -246,3 +246,60 @@ fn solve_reports_the_rim_pixels_that_are_not_a_limb() {
         );
     }
 }
+
+/// With the limb condition the light is estimated from the outline as with the occluding one
+/// (the limb band fit on a sphere, within a degree), not from the interior statistics alone,
+/// and the analyses take it: their domain is the occluding one.
+#[test]
+fn the_limb_boundary_estimates_the_light_at_the_outline_and_serves_the_analyses() {
+    use shadelab::boundary::domain_roles;
+    use shadelab::light_estimation::EstimateMethod;
+    use shadelab::reconstruct::Lighting;
+    let s = sphere(SIDE, SIDE, RADIUS).unwrap();
+    let truth = Light::from_tilt_slant(90.0, 45.0).unwrap();
+    let image = image_of(&s, &Lambertian::unit(truth));
+    let mut estimates = Vec::new();
+    for boundary in [Boundary::Occluding, Boundary::Limb, Boundary::Free] {
+        let lighting = Lighting::resolve(None, None, &image, &s.mask, &boundary).unwrap();
+        estimates.push(lighting.estimate.unwrap());
+    }
+    let [occluding, limb, free] = [estimates[0], estimates[1], estimates[2]];
+    assert_eq!(limb.method, EstimateMethod::LimbBand);
+    assert_eq!(
+        (limb.tilt_deg, limb.slant_deg),
+        (occluding.tilt_deg, occluding.slant_deg)
+    );
+    assert!(
+        (limb.tilt_deg - 90.0).abs() < 1.0 && (limb.slant_deg - 45.0).abs() < 1.0,
+        "{limb:?}"
+    );
+    assert_eq!(free.method, EstimateMethod::Moments);
+    assert_eq!(
+        domain_roles(&s.mask, &Boundary::Limb).unwrap(),
+        boundary_conditions(&s.mask, &Boundary::Occluding)
+            .unwrap()
+            .roles
+    );
+
+    let d = scratch("prior-sweep-limb");
+    let out = shadelab(
+        &d,
+        &[
+            "analyze",
+            "prior-sweep",
+            "--stimulus",
+            "bumps",
+            "--boundary",
+            "limb",
+            "--out",
+            "sweep",
+            "--quiet",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(d.join("sweep").join("sweep.csv").is_file());
+}

@@ -321,8 +321,9 @@ def solve(
 
     ``light`` is an ``(x, y, z)`` vector toward the light, ``"tilt=T,slant=S"``, a name, or
     ``"estimate"`` (estimated from the image with the albedo). ``mask``: nonzero = the object
-    (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free`` or the path of
-    an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
+    (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free``, ``limb``
+    (occluding where the outline's shading allows a limb, else the outward direction at the
+    slant the shading gives) or the path of an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
     estimated; or ``"estimate"``: the library's albedo rule (the bright tail of the brightness
     on the mask extrapolated, as ``solve --albedo estimate`` and ``eval``), so the answer does
     not depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives

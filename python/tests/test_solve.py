@@ -54,6 +54,22 @@ def test_estimated_light(sphere):
     assert np.degrees(np.arccos(np.clip(est @ true, -1, 1))) < 10
 
 
+def test_limb_boundary_on_a_sphere_is_the_occluding_one(sphere):
+    """A sphere's outline is a limb under any light: boundary="limb" finds no rim pixel that
+    rules it out and solves exactly as "occluding"; a rim made too bright for a limb (a cut
+    facing the viewer) is counted in report["boundary"]["not_limb"]."""
+    inside = sphere["target_mask"] == 1
+    occluding = shadelab.solve(sphere["img"], light=LIGHT, mask=inside)
+    limb = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, boundary="limb")
+    assert limb.report["boundary"]["not_limb"] == 0
+    np.testing.assert_array_equal(limb.normals, occluding.normals)
+    img = sphere["img"].copy()
+    rim = inside & ~np.pad(inside, 1)[2:, 1:-1]  # the lowest pixel of each column
+    img[rim] = 1.0
+    brighter = shadelab.solve(img, light=LIGHT, mask=inside, boundary="limb")
+    assert brighter.report["boundary"]["not_limb"] > 0
+
+
 def test_any_dtype_and_memory_order(sphere):
     img = sphere["img"]
     inside = sphere["target_mask"] == 1

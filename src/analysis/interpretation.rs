@@ -20,7 +20,7 @@
 //! Other boundaries are integrated on the domain alone by the masked Poisson solver.
 
 use super::convexity::Token;
-use crate::boundary::{boundary_conditions, Boundary, Role};
+use crate::boundary::{domain_roles, Boundary, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
@@ -181,7 +181,7 @@ impl Interpreter {
             rest_on_zero: analysis.rest_on_zero,
             ..ReconstructOptions::from_solve(options, analysis.non_convergence)
         };
-        let roles = boundary_conditions(scene.domain, scene.boundary)?.roles;
+        let roles = domain_roles(scene.domain, scene.boundary)?;
         Ok(Interpreter {
             planner: Reconstructor::new(w, h, policy)?,
             roles,

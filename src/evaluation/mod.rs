@@ -72,8 +72,13 @@ pub struct Config {
     /// The boundary conditions the ball and Mozart are solved with, each giving a row: the
     /// two sets where the choice is open (see [`default_boundary`]).
     pub compared_boundaries: Vec<Boundary>,
-    /// One boundary condition for every case; `None`: [`default_boundary`] per set, and
-    /// [`Config::compared_boundaries`] for the ball and Mozart.
+    /// The boundary conditions the bunny, the DiLiGenT objects and Beethoven (objects seen
+    /// whole against a background) are solved with, each giving a row: by default
+    /// [`default_boundary`] (occluding) and the limb condition, which differ where the
+    /// outline's shading rules out a limb.
+    pub object_boundaries: Vec<Boundary>,
+    /// One boundary condition for every case; `None`: [`Config::object_boundaries`] for the
+    /// bunny, DiLiGenT and Beethoven, [`Config::compared_boundaries`] for the ball and Mozart.
     pub boundary: Option<Boundary>,
     /// How a photograph's albedo is found ([`albedo::photo_albedo`]): the library's rule at
     /// [`albedo::BRIGHT_QUANTILE`] (the default), else this quantile of its brightness.
@@ -135,6 +140,7 @@ impl Config {
             diligent_light: light(0.0, 30.0)?,
             ball_images: BALL_IMAGES.iter().map(|s| s.to_string()).collect(),
             compared_boundaries: vec![Boundary::Occluding, Boundary::Free, Boundary::Limb],
+            object_boundaries: vec![default_boundary(Set::Bunny), Boundary::Limb],
             boundary: None,
             albedo_quantile: albedo::BRIGHT_QUANTILE,
             ball_albedo_from_truth: false,
@@ -208,16 +214,17 @@ impl Config {
     /// The number of rows [`run`] will give: each case once per method.
     pub fn case_count(&self) -> usize {
         let compared = self.boundaries_compared().len();
+        let objects = self.boundaries_of_objects().len();
         self.methods.len()
             * self
                 .sets
                 .iter()
                 .map(|s| match s {
-                    Set::Bunny => self.bunny_lights.len(),
+                    Set::Bunny => self.bunny_lights.len() * objects,
                     Set::Mozart => self.mozart_lights.len() * compared,
-                    Set::Diligent => self.diligent_objects.len(),
+                    Set::Diligent => self.diligent_objects.len() * objects,
                     Set::Ball => self.ball_images.len() * compared,
-                    Set::Beethoven => datasets::BEETHOVEN_IMAGES.len(),
+                    Set::Beethoven => datasets::BEETHOVEN_IMAGES.len() * objects,
                 })
                 .sum::<usize>()
     }
@@ -227,6 +234,14 @@ impl Config {
         match &self.boundary {
             Some(b) => vec![b.clone()],
             None => self.compared_boundaries.clone(),
+        }
+    }
+
+    /// The boundary conditions the bunny, the DiLiGenT objects and Beethoven are solved with.
+    pub fn boundaries_of_objects(&self) -> Vec<Boundary> {
+        match &self.boundary {
+            Some(b) => vec![b.clone()],
+            None => self.object_boundaries.clone(),
         }
     }
 
@@ -269,7 +284,7 @@ impl Config {
                 "albedo": format!("quantile {} of the image on the mask, image then clipped at 1", self.albedo_quantile),
             },
             "boundary": {
-                "bunny, diligent, beethoven": self.boundary.as_ref().map_or("occluding", Boundary::name),
+                "bunny, diligent, beethoven": self.boundaries_of_objects().iter().map(Boundary::name).collect::<Vec<_>>(),
                 "mozart, ball": self.boundaries_compared().iter().map(Boundary::name).collect::<Vec<_>>(),
             },
             "occluding_shrink": crate::boundary::OCCLUDING_SHRINK,
@@ -346,28 +361,30 @@ pub fn run(
         }
         Ok(())
     };
-    let boundary_for = |set: Set| {
-        config
-            .boundary
-            .clone()
-            .unwrap_or_else(|| default_boundary(set))
+    // The picture of an object's occluding row keeps its name of before the limb rows; the
+    // other conditions add theirs.
+    let suffix = |boundary: &Boundary| match boundary {
+        Boundary::Occluding => String::new(),
+        other => format!("-{}", other.name()),
     };
     for &set in &config.sets {
         match set {
             Set::Bunny => {
                 let surface = datasets::bunny(&config.data, config.bunny_size)?;
                 for light in &config.bunny_lights {
-                    let case = rendered_case(
-                        "bunny",
-                        "bunny".into(),
-                        &surface,
-                        &surface.mask,
-                        *light,
-                        boundary_for(set),
-                        true,
-                    )?;
-                    let file = format!("bunny-{}.png", file_label(light));
-                    finish(case, file, &mut results)?;
+                    for boundary in config.boundaries_of_objects() {
+                        let file = format!("bunny-{}{}.png", file_label(light), suffix(&boundary));
+                        let case = rendered_case(
+                            "bunny",
+                            "bunny".into(),
+                            &surface,
+                            &surface.mask,
+                            *light,
+                            boundary,
+                            true,
+                        )?;
+                        finish(case, file, &mut results)?;
+                    }
                 }
             }
             Set::Mozart => {
@@ -397,16 +414,19 @@ pub fn run(
                         normals: truth.normals,
                         mask: truth.mask,
                     };
-                    let case = rendered_case(
-                        "diligent",
-                        object.clone(),
-                        &surface,
-                        &surface.mask,
-                        config.diligent_light,
-                        boundary_for(set),
-                        false,
-                    )?;
-                    finish(case, format!("diligent-{object}.png"), &mut results)?;
+                    for boundary in config.boundaries_of_objects() {
+                        let file = format!("diligent-{object}{}.png", suffix(&boundary));
+                        let case = rendered_case(
+                            "diligent",
+                            object.clone(),
+                            &surface,
+                            &surface.mask,
+                            config.diligent_light,
+                            boundary,
+                            false,
+                        )?;
+                        finish(case, file, &mut results)?;
+                    }
                 }
             }
             Set::Ball => {
@@ -464,19 +484,21 @@ pub fn run(
                         method,
                         with_true_normals: None,
                     };
-                    let case = photo_case(
-                        "beethoven",
-                        "beethoven",
-                        &photo.name,
-                        &image,
-                        &mask,
-                        photo.light,
-                        boundary_for(set),
-                        albedo,
-                        None,
-                    );
-                    let file = format!("beethoven-{}.png", photo.name);
-                    finish(case, file, &mut results)?;
+                    for boundary in config.boundaries_of_objects() {
+                        let case = photo_case(
+                            "beethoven",
+                            "beethoven",
+                            &photo.name,
+                            &image,
+                            &mask,
+                            photo.light,
+                            boundary.clone(),
+                            albedo.clone(),
+                            None,
+                        );
+                        let file = format!("beethoven-{}{}.png", photo.name, suffix(&boundary));
+                        finish(case, file, &mut results)?;
+                    }
                 }
             }
         }
