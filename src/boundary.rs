@@ -452,6 +452,17 @@ pub const LIMB_MAX_NZ: f64 = 0.5;
 /// ([`occluding_normals`]), a few degrees near a corner, where it blends.
 pub const LIMB_DIRECTION_TOLERANCE_DEG: f64 = 5.0;
 
+/// The fewest rim pixels in attached shadow from which [`limb_conditions`] estimates the
+/// image's dark level ([`dark_level`]; fewer give none): the median of a handful of pixels
+/// says little about a picture's black.
+pub const LIMB_DARK_MIN_PIXELS: usize = 16;
+
+/// The highest dark level [`limb_conditions`] accepts, as a fraction of the albedo: a
+/// photograph's black reads a few thousandths to a percent or two of its albedo (a median of
+/// 0.005, readings 0–0.016, on the DiLiGenT ball's shadowed limb at slant 43°); a shadowed rim
+/// that reads more is lit, a cut seen in light, and gets no allowance.
+pub const LIMB_MAX_DARK_LEVEL: f64 = 0.05;
+
 /// The occluding conditions with the shading's test applied ([`limb_conditions`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LimbConditions {
@@ -460,6 +471,42 @@ pub struct LimbConditions {
     /// The occluding pixels whose brightness rules out a limb: fixed at the slant the shading
     /// gives, or left free where the image is clipped there.
     pub not_limb: usize,
+    /// The image's dark level read on the outline, the tolerance added to the limb's brightness
+    /// bound ([`dark_level`]): 0 for an exact render.
+    pub dark_level: f64,
+}
+
+/// The dark level of an image from the `readings` of its rim pixels where a limb would be in
+/// attached shadow (R = 0 for every normal a limb could have there): their median, what the
+/// picture reads where no light falls. A photograph's black is an offset plus noise; the offset
+/// is a bias that the limb test must allow for, the noise is zero-mean and left, as everywhere
+/// else, to the solve. It is 0 where at least half of them read exactly 0 (a render's shadow),
+/// where there are fewer than [`LIMB_DARK_MIN_PIXELS`], and where the median exceeds
+/// [`LIMB_MAX_DARK_LEVEL`] (the shadowed rim is then mostly lit, a cut, and its readings are
+/// shading, not a dark level).
+///
+/// ```
+/// use shadelab::boundary::dark_level;
+///
+/// // A render: the shadowed limb reads exactly 0.
+/// assert_eq!(dark_level(&[0.0; 40]), 0.0);
+/// // A photograph: a plateau of 0.000–0.010.
+/// let plateau: Vec<f64> = (0..41).map(|k| 0.00025 * k as f64).collect();
+/// assert!((dark_level(&plateau) - 0.005).abs() < 1e-12);
+/// // Mostly lit: a cut, not a dark level.
+/// assert_eq!(dark_level(&[0.3; 40]), 0.0);
+/// ```
+pub fn dark_level(readings: &[f64]) -> f64 {
+    if readings.len() < LIMB_DARK_MIN_PIXELS {
+        return 0.0;
+    }
+    let mut sorted = readings.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[(sorted.len() - 1) / 2];
+    if median > LIMB_MAX_DARK_LEVEL {
+        return 0.0;
+    }
+    median
 }
 
 /// The occluding conditions where the shading allows a limb, and elsewhere the contour's
@@ -478,10 +525,14 @@ pub struct LimbConditions {
 /// a bump from a dent, and loses only the slant that the brightness contradicts. Where the
 /// image is clipped (I ≥ `saturation`) the brightness gives no slant and the pixel is left
 /// free. Dark pixels keep their occluding value: a limb in shadow is consistent with them.
-/// The brightness is read as the solver's data term reads it, with no allowance for noise: a
-/// photograph's dark level on a limb in attached shadow (0–0.016 of the albedo on the DiLiGenT
-/// ball at a slant of 43°) reads as light just past the terminator, and those pixels are held
-/// there, as the data term pulls them anyway.
+/// A pixel counts as brighter than a limb only above the bound plus the image's dark level
+/// ([`dark_level`], the median reading of the rim pixels where a limb would be in attached
+/// shadow): a photograph reads an offset plus noise, not 0, where no light falls (0–0.016 of
+/// the albedo, median 0.005, on the DiLiGenT ball at a slant of 43°), and without the offset
+/// its whole shadowed limb would read as surface just past the terminator. The noise about
+/// the offset is not allowed for: those brighter than it are held past the terminator as the
+/// data term pulls them. An exact render's shadow is 0, its dark level 0, and the test is the
+/// bare bound.
 /// On a true limb under any light nothing changes.
 ///
 /// ```
@@ -517,10 +568,18 @@ pub fn limb_conditions(
     let mut roles = occluding.roles.clone();
     let mut fixed = Vec::with_capacity(occluding.fixed.len());
     let mut not_limb = 0;
-    for &(index, fg) in &occluding.fixed {
+    let bounds: Vec<f64> = (occluding.fixed.iter())
+        .map(|&(_, fg)| limb_brightness_bound(fg[1].atan2(fg[0]), reflectance))
+        .collect();
+    let shadowed: Vec<f64> = (occluding.fixed.iter().zip(&bounds))
+        .filter(|&(_, &bound)| bound <= 0.0)
+        .map(|(&(index, _), _)| image.data()[index])
+        .collect();
+    let dark = dark_level(&shadowed);
+    for (&(index, fg), &bound) in occluding.fixed.iter().zip(&bounds) {
         let intensity = image.data()[index];
         let azimuth = fg[1].atan2(fg[0]);
-        if intensity <= limb_brightness_bound(azimuth, reflectance) {
+        if intensity <= bound + dark {
             fixed.push((index, fg));
             continue;
         }
@@ -536,6 +595,7 @@ pub fn limb_conditions(
     LimbConditions {
         conditions: BoundaryConditions { roles, fixed },
         not_limb,
+        dark_level: dark,
     }
 }
 

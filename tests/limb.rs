@@ -7,7 +7,8 @@
 use crate::cli::{scratch, shadelab};
 use nalgebra::Vector3;
 use shadelab::boundary::{
-    boundary_conditions, limb_conditions, limb_count, Boundary, Role, BOUNDARY_NAMES, LIMB_MAX_NZ,
+    boundary_conditions, dark_level, limb_conditions, limb_count, Boundary, Role, BOUNDARY_NAMES,
+    LIMB_MAX_NZ,
 };
 use shadelab::evaluation::metrics::angular_error;
 use shadelab::gradient_space::{angle_deg, normal_from_fg};
@@ -113,6 +114,91 @@ fn the_cut_is_held_at_its_shading_slant_and_the_limb_is_left_alone() {
         assert_eq!(limb.not_limb, changed);
         assert_eq!(limb_count(&s.mask, &image, &map, None).unwrap(), changed);
     }
+}
+
+/// `image` as a photograph reads it where no light falls: every pixel of `mask` at exactly 0
+/// raised by `offset` (a camera's black level) plus a uniform `noise` in [0, noise) from a
+/// fixed sequence.
+fn dark_offset(
+    image: &Grid<f64>,
+    mask: &shadelab::grid::Mask,
+    offset: f64,
+    noise: f64,
+) -> Grid<f64> {
+    let mut dark = image.clone();
+    let mut state = 0x5EED_u64;
+    for (value, inside) in dark.data_mut().iter_mut().zip(mask.data()) {
+        if *inside && *value == 0.0 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            *value = offset + noise * (state >> 11) as f64 / (1u64 << 53) as f64;
+        }
+    }
+    dark
+}
+
+/// A limb in attached shadow reads a photograph's dark level, not 0: the test allows for the
+/// image's own (the median reading of the rim where a limb would be dark), so a sphere whose
+/// shadow reads 0.01 is still a limb all round, while an exact render's dark level is 0; and a
+/// lit cut is still found above that allowance.
+#[test]
+fn a_shadowed_limb_at_a_photographs_dark_level_is_still_a_limb() {
+    let light = Light::from_tilt_slant(90.0, 60.0).unwrap();
+    let map = Lambertian::unit(light);
+    let ball = sphere(SIDE, SIDE, RADIUS).unwrap();
+    let occluding = boundary_conditions(&ball.mask, &Boundary::Occluding).unwrap();
+    let render = image_of(&ball, &map);
+    let exact = limb_conditions(&occluding, &render, &map, None);
+    assert_eq!((exact.not_limb, exact.dark_level), (0, 0.0));
+    // A constant black level: the shadowed limb reads it, and is a limb.
+    let photo = dark_offset(&render, &ball.mask, 0.01, 0.0);
+    let limb = limb_conditions(&occluding, &photo, &map, None);
+    assert_eq!(limb.dark_level, 0.01);
+    assert_eq!((limb.not_limb, &limb.conditions), (0, &occluding));
+    // Without the allowance those pixels would be held past the terminator.
+    let shadowed = (occluding.fixed_values().iter())
+        .filter(|(index, _)| photo.data()[*index] > 0.0 && render.data()[*index] == 0.0)
+        .count();
+    assert!(shadowed >= 40, "{shadowed} rim pixels in shadow");
+    // Noise about the black level: those at or below the level read keep the occluding value.
+    let noisy = dark_offset(&render, &ball.mask, 0.01, 0.004);
+    let limb = limb_conditions(&occluding, &noisy, &map, None);
+    assert!(
+        limb.dark_level > 0.01 && limb.dark_level < 0.014,
+        "{}",
+        limb.dark_level
+    );
+    for &(index, fg) in occluding.fixed_values() {
+        if noisy.data()[index] <= limb.dark_level {
+            let (col, row) = (index % SIDE, index / SIDE);
+            assert_eq!(limb.conditions.fixed_value(col, row), Some(fg));
+        }
+    }
+    assert!(
+        limb.not_limb <= shadowed / 2 + 1,
+        "{} of {shadowed}",
+        limb.not_limb
+    );
+    assert_eq!(dark_level(&[0.01; 40]), 0.01);
+
+    // The cut sphere lit from above, its lower limb in shadow at 0.01: the cut's upper half,
+    // brighter than a limb facing right could be, is found as in the exact render.
+    let light = Light::from_tilt_slant(0.0, 60.0).unwrap();
+    let map = Lambertian::unit(light);
+    let s = cut_sphere();
+    let occluding = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+    let render = image_of(&s, &map);
+    let exact = limb_conditions(&occluding, &render, &map, None);
+    let photo = limb_conditions(
+        &occluding,
+        &dark_offset(&render, &s.mask, 0.01, 0.0),
+        &map,
+        None,
+    );
+    assert_eq!(photo.dark_level, 0.01);
+    assert!(exact.not_limb >= 20, "{}", exact.not_limb);
+    assert_eq!(photo.not_limb, exact.not_limb);
 }
 
 /// The occluding condition pins the cut's rim edge-on, 30–60° from the truth near the cut's
