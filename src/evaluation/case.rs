@@ -4,7 +4,7 @@
 use super::metrics::{
     angular_error, angular_error_map, depth_error, shading_residual, AngularError, DepthError,
 };
-use crate::boundary::{limb_count, Boundary};
+use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
@@ -136,10 +136,6 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
         albedo: 1.0,
         ambient: 0.0,
     };
-    let not_limb = match case.boundary {
-        Boundary::Limb => Some(limb_count(&case.domain, &case.image, &reflectance, None)?),
-        _ => None,
-    };
     let started = Instant::now();
     let policy = ReconstructOptions::from_solve(options, NonConvergence::Report);
     let mut planner = Reconstructor::new(w, h, policy)?;
@@ -189,7 +185,7 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             tilt_deg: case.light.tilt_deg(),
             slant_deg: case.light.slant_deg(),
             boundary: case.boundary.name(),
-            not_limb,
+            not_limb: solution.not_limb,
             albedo: case.albedo.clone(),
             normal_error,
             depth_error,

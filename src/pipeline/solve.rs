@@ -367,7 +367,6 @@ struct Solved {
     brdf: BrdfSpec,
     image_info: Value,
     boundary_kind: &'static str,
-    not_limb: Option<usize>,
     solve_seconds: f64,
     sidecar: Option<RenderSidecar>,
     albedo_estimate: Option<AlbedoEstimate>,
@@ -450,15 +449,6 @@ fn solve_loaded(
         saturation,
         ..config.options
     };
-    let not_limb = match boundary {
-        Boundary::Limb => Some(crate::boundary::limb_count(
-            &mask,
-            &image,
-            reflectance.as_ref(),
-            saturation,
-        )?),
-        _ => None,
-    };
     let mut planner = Reconstructor::new(w, h, options)?;
     let started = Instant::now();
     let problem = Problem {
@@ -479,7 +469,6 @@ fn solve_loaded(
         brdf,
         image_info,
         boundary_kind: boundary.name(),
-        not_limb,
         solve_seconds: started.elapsed().as_secs_f64(),
         sidecar,
         albedo_estimate,
@@ -705,7 +694,7 @@ fn report(
         boundary: BoundaryReport {
             kind: boundary_kind,
             occluding_shrink: OCCLUDING_SHRINK,
-            not_limb: solved.not_limb,
+            not_limb: s.not_limb,
         },
         solver: SolverReport {
             method: method.to_string(),

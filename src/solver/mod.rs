@@ -281,6 +281,9 @@ pub struct Solution {
     /// The energy e_S + λ·e_R after each step of the energy descent (empty when the cycles
     /// converged alone); never increasing.
     pub energy_history: Vec<f64>,
+    /// With [`Boundary::Limb`]: the occluding pixels whose brightness ruled out a limb
+    /// ([`crate::boundary::LimbConditions::not_limb`]); `None` for every other boundary.
+    pub not_limb: Option<usize>,
 }
 
 impl Solution {
@@ -463,6 +466,10 @@ impl Solver {
         let solution = if *boundary == Boundary::Limb {
             let limb = limb_conditions(&bc, image, reflectance, options.saturation);
             self.solve_conditions(image, &limb.conditions, reflectance, options, progress)
+                .map(|solution| Solution {
+                    not_limb: Some(limb.not_limb),
+                    ..solution
+                })
         } else {
             self.solve_conditions(image, &bc, reflectance, options, progress)
         };
@@ -744,6 +751,7 @@ fn finish(
         unknowns: stats.unknowns,
         globalised: false,
         energy_history: Vec::new(),
+        not_limb: None,
     }
 }
 
