@@ -568,17 +568,20 @@ pub fn limb_conditions(
     let mut roles = occluding.roles.clone();
     let mut fixed = Vec::with_capacity(occluding.fixed.len());
     let mut not_limb = 0;
-    let bounds: Vec<f64> = (occluding.fixed.iter())
-        .map(|&(_, fg)| limb_brightness_bound(fg[1].atan2(fg[0]), reflectance))
+    // Each fixed pixel's contour azimuth and the brightest a limb there can be.
+    let limbs: Vec<(f64, f64)> = (occluding.fixed.iter())
+        .map(|&(_, fg)| {
+            let azimuth = fg[1].atan2(fg[0]);
+            (azimuth, limb_brightness_bound(azimuth, reflectance))
+        })
         .collect();
-    let shadowed: Vec<f64> = (occluding.fixed.iter().zip(&bounds))
-        .filter(|&(_, &bound)| bound <= 0.0)
+    let shadowed: Vec<f64> = (occluding.fixed.iter().zip(&limbs))
+        .filter(|&(_, &(_, bound))| bound <= 0.0)
         .map(|(&(index, _), _)| image.data()[index])
         .collect();
     let dark = dark_level(&shadowed);
-    for (&(index, fg), &bound) in occluding.fixed.iter().zip(&bounds) {
+    for (&(index, fg), &(azimuth, bound)) in occluding.fixed.iter().zip(&limbs) {
         let intensity = image.data()[index];
-        let azimuth = fg[1].atan2(fg[0]);
         if intensity <= bound + dark {
             fixed.push((index, fg));
             continue;

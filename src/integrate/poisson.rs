@@ -197,7 +197,9 @@ impl<'a> PreparedMask<'a> {
         Ok(result)
     }
 
-    /// `solve` on the prepared hierarchy and parts.
+    /// `solve` on the prepared hierarchy and parts. The one-off `solve` keeps its own body
+    /// rather than calling this: it drops the hierarchy before it finds the parts, so that a
+    /// large single integration never holds both (the whole solve's memory peaks there).
     fn solve(&self, b: Vec<f64>, options: &PoissonOptions) -> Result<Integration> {
         let (w, h) = (self.mask.width(), self.mask.height());
         let layout = self.hierarchy.layout();

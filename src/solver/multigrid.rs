@@ -825,7 +825,6 @@ impl Multigrid {
                 damping = (damping * 2.0).min(1.0);
                 restores -= 1;
             }
-
             best = best.min(residual);
             if self.used > 1 && damping > MIN_DAMPING {
                 self.cycle(1, &ctx);
