@@ -476,6 +476,26 @@ pub struct LimbConditions {
     pub dark_level: f64,
 }
 
+impl LimbConditions {
+    /// What the test found, without the conditions: the figures a report gives.
+    pub fn test(&self) -> LimbTest {
+        LimbTest {
+            not_limb: self.not_limb,
+            dark_level: self.dark_level,
+        }
+    }
+}
+
+/// What the limb test found on an outline ([`LimbConditions::test`]), as a solve reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LimbTest {
+    /// The occluding pixels whose brightness ruled out a limb ([`LimbConditions::not_limb`]).
+    pub not_limb: usize,
+    /// The dark level the test allowed for ([`LimbConditions::dark_level`]): 0 for an exact
+    /// render.
+    pub dark_level: f64,
+}
+
 /// The dark level of an image from the `readings` of its rim pixels where a limb would be in
 /// attached shadow (R = 0 for every normal a limb could have there): their median, what the
 /// picture reads where no light falls. A photograph's black is an offset plus noise; the offset

@@ -288,4 +288,9 @@ fn whole_objects_get_an_occluding_and_a_limb_row() {
         limb < occluding - 3.0,
         "occluding {occluding}°, limb {limb}°"
     );
+    // The limb row says what its test found (a render: no dark level); the occluding row
+    // has no test to report.
+    assert_eq!((r[0].not_limb, r[0].dark_level), (None, None));
+    assert!(r[1].not_limb.unwrap() > 0);
+    assert_eq!(r[1].dark_level, Some(0.0));
 }

@@ -330,7 +330,58 @@ fn solve_reports_the_rim_pixels_that_are_not_a_limb() {
             report["boundary"]["not_limb"].as_u64().map(|n| n as usize),
             not_limb
         );
+        // An exact render reads 0 where no light falls; no dark level without the limb test.
+        let dark_level = not_limb.map(|_| 0.0);
+        assert_eq!(report["boundary"]["dark_level"].as_f64(), dark_level);
     }
+}
+
+/// A photograph's black: the report gives the dark level the limb test allowed for, the
+/// offset added to the render where no light falls, and the count it found with it.
+#[test]
+fn solve_reports_the_dark_level_of_the_limb_test() {
+    let d = scratch("solve-dark-level");
+    let light = Light::from_tilt_slant(0.0, 60.0).unwrap();
+    let map = Lambertian::unit(light);
+    let s = cut_sphere();
+    let photo = dark_offset(&image_of(&s, &map), &s.mask, 0.01, 0.0);
+    io::write_image(&d.join("image.npy"), &photo).unwrap();
+    io::write_mask(&d.join("mask.png"), &s.mask).unwrap();
+    // The solve reads the file's 32-bit values.
+    let photo = io::read_image(&d.join("image.npy"), 1 << 20).unwrap();
+    let occluding = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
+    let expected = limb_conditions(&occluding, &photo, &map, None);
+    assert_eq!(expected.dark_level, 0.01_f32 as f64);
+    let out = shadelab(
+        &d,
+        &[
+            "solve",
+            "image.npy",
+            "--light",
+            "tilt=0,slant=60",
+            "--mask",
+            "mask.png",
+            "--boundary",
+            "limb",
+            "--out",
+            "out",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("out/report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["boundary"]["dark_level"].as_f64(),
+        Some(expected.dark_level)
+    );
+    assert_eq!(
+        report["boundary"]["not_limb"].as_u64(),
+        Some(expected.not_limb as u64)
+    );
 }
 
 /// With the limb condition the light is estimated from the outline as with the occluding one

@@ -62,6 +62,8 @@ def test_limb_boundary_on_a_sphere_is_the_occluding_one(sphere):
     occluding = shadelab.solve(sphere["img"], light=LIGHT, mask=inside)
     limb = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, boundary="limb")
     assert limb.report["boundary"]["not_limb"] == 0
+    assert limb.report["boundary"]["dark_level"] == 0.0  # a render is black where unlit
+    assert "dark_level" not in occluding.report["boundary"]
     np.testing.assert_array_equal(limb.normals, occluding.normals)
     img = sphere["img"].copy()
     rim = inside & ~np.pad(inside, 1)[2:, 1:-1]  # the lowest pixel of each column

@@ -358,7 +358,7 @@ fn lambertian(tilt_deg: f64, lighting: &Lighting) -> Result<Lambertian> {
 ///     unknowns: 2,
 ///     globalised: false,
 ///     energy_history: vec![],
-///     not_limb: None,
+///     limb: None,
 /// };
 /// let shape = Shape { solution, method: Method::Multigrid, fell_back: false, history: vec![], max_iter: 40 };
 /// let quarter = turned(&shape, 90.0); // (1, 0) turns to (0, 1)
@@ -385,7 +385,7 @@ pub fn turned(shape: &Shape, degrees: f64) -> Shape {
             unknowns: s.unknowns,
             globalised: s.globalised,
             energy_history: s.energy_history.clone(),
-            not_limb: s.not_limb,
+            limb: s.limb,
         },
         method: shape.method,
         fell_back: shape.fell_back,

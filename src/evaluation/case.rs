@@ -87,6 +87,10 @@ pub struct CaseResult {
     /// ([`crate::boundary::limb_conditions`]); absent for every other boundary.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_limb: Option<usize>,
+    /// With the `limb` boundary: the dark level the limb test allowed for
+    /// ([`crate::boundary::dark_level`]); absent for every other boundary.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dark_level: Option<f64>,
     /// The albedo the image was divided by.
     pub albedo: Albedo,
     /// Angle between recovered and true normals on the scored mask.
@@ -185,7 +189,8 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             tilt_deg: case.light.tilt_deg(),
             slant_deg: case.light.slant_deg(),
             boundary: case.boundary.name(),
-            not_limb: solution.not_limb,
+            not_limb: solution.limb.map(|l| l.not_limb),
+            dark_level: solution.limb.map(|l| l.dark_level),
             albedo: case.albedo.clone(),
             normal_error,
             depth_error,

@@ -92,6 +92,7 @@ mod tests {
             slant_deg: 0.0,
             boundary: "occluding",
             not_limb: None,
+            dark_level: None,
             albedo: Albedo::known(),
             normal_error: None,
             depth_error: None,

@@ -280,6 +280,11 @@ pub struct BoundaryReport {
     /// at the slant the shading gives instead ([`crate::boundary::limb_conditions`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_limb: Option<usize>,
+    /// With the `limb` boundary: the dark level read on the outline where a limb would be in
+    /// attached shadow, which the test allowed for ([`crate::boundary::dark_level`]; 0 for an
+    /// exact render).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dark_level: Option<f64>,
 }
 
 /// How the solve went.
@@ -694,7 +699,8 @@ fn report(
         boundary: BoundaryReport {
             kind: boundary_kind,
             occluding_shrink: OCCLUDING_SHRINK,
-            not_limb: s.not_limb,
+            not_limb: s.limb.map(|l| l.not_limb),
+            dark_level: s.limb.map(|l| l.dark_level),
         },
         solver: SolverReport {
             method: method.to_string(),

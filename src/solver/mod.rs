@@ -30,7 +30,9 @@
 //! Its tolerance means the same: it stops when the next Jacobi sweep would change no f or g by
 //! more than `tol`.
 
-use crate::boundary::{boundary_conditions, limb_conditions, Boundary, BoundaryConditions, Role};
+use crate::boundary::{
+    boundary_conditions, limb_conditions, Boundary, BoundaryConditions, LimbTest, Role,
+};
 use crate::error::{Error, Result};
 use crate::gradient_space::{normal_from_fg, Normal};
 use crate::grid::{Grid, Image, Mask};
@@ -281,9 +283,10 @@ pub struct Solution {
     /// The energy e_S + λ·e_R after each step of the energy descent (empty when the cycles
     /// converged alone); never increasing.
     pub energy_history: Vec<f64>,
-    /// With [`Boundary::Limb`]: the occluding pixels whose brightness ruled out a limb
-    /// ([`crate::boundary::LimbConditions::not_limb`]); `None` for every other boundary.
-    pub not_limb: Option<usize>,
+    /// With [`Boundary::Limb`]: what the limb test found (the occluding pixels whose
+    /// brightness ruled out a limb, and the dark level it allowed for); `None` for every
+    /// other boundary.
+    pub limb: Option<LimbTest>,
 }
 
 impl Solution {
@@ -467,7 +470,7 @@ impl Solver {
             let limb = limb_conditions(&bc, image, reflectance, options.saturation);
             self.solve_conditions(image, &limb.conditions, reflectance, options, progress)
                 .map(|solution| Solution {
-                    not_limb: Some(limb.not_limb),
+                    limb: Some(limb.test()),
                     ..solution
                 })
         } else {
@@ -751,7 +754,7 @@ fn finish(
         unknowns: stats.unknowns,
         globalised: false,
         energy_history: Vec::new(),
-        not_limb: None,
+        limb: None,
     }
 }
 
