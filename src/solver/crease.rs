@@ -33,6 +33,7 @@
 //! stop when no f or g changes by more than the tolerance; they may start from a given shape
 //! ([`solve_from`]), which changes the sweeps needed, not the fixed point they reach.
 
+use super::carries_data;
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::FG_RADIUS;
@@ -279,7 +280,7 @@ pub fn solve_from(
             }
             let (mut fn_, mut gn) = (sf / sw, sg / sw);
             let intensity = image.data()[p];
-            if four_lambda > 0.0 && intensity > ambient {
+            if four_lambda > 0.0 && carries_data(intensity, ambient, None) {
                 let s = reflectance.fg(fn_, gn);
                 let k = four_lambda * (intensity - s.value)
                     / (sw + four_lambda * (s.d1 * s.d1 + s.d2 * s.d2));
@@ -330,7 +331,7 @@ pub fn solve_from(
     let mut brightness_energy = 0.0;
     for &p in &pairs.unknowns {
         let i = image.data()[p];
-        if i > ambient {
+        if carries_data(i, ambient, None) {
             let e = i - reflectance.fg(f[p], g[p]).value;
             brightness_energy += e * e;
         }
@@ -379,7 +380,7 @@ impl Pairs {
             shadow = image
                 .data()
                 .iter()
-                .map(|&i| no_data || i <= ambient)
+                .map(|&i| no_data || !carries_data(i, ambient, None))
                 .collect();
         }
         let mut pairs = Pairs {
