@@ -141,8 +141,8 @@ fn the_limb_estimate_is_unbiased_on_the_vase() {
     }
 }
 
-/// The bunny (a coarse mesh with interpolated normals, whose silhouette normals are not edge-on
-/// and whose outline is partly a cut) is not explained by the band's model (residuals above
+/// The bunny (whose outline pixels face the viewer, its cross-sections at the limb being a few
+/// pixels in radius at 128², and whose outline is partly a cut) is not explained by the band's model (residuals above
 /// 3 % of the albedo), so the rim fit runs, trimmed one-sided (the limb is the lower envelope of
 /// the outline's brightness): tilt within 3° from a slant of 30°, within 6.3° at 15°; the slant
 /// within 7.4° (it was 11° low with a symmetric trim). The goal is not met on the bunny: this
