@@ -19,8 +19,9 @@
 //! left out (a cut in the outline, not a limb). The tilt is atan2(−g_x, g_y), the slant
 //! atan2(|g_xy|, g_z): the band's z components carry the slant, with no constant to absorb it.
 //! The model is checked: where the root mean square residual exceeds [`MAX_BAND_RESIDUAL`] of
-//! the albedo (a coarse mesh whose interpolated normals are not edge-on at the silhouette, an
-//! outline that is mostly cuts), the rim fit runs instead. The albedo is the brightest pixel;
+//! the albedo (an object whose cross-sections at the limb are a few pixels in radius or whose
+//! normals also turn along the contour inward, as the Stanford bunny's at 128²; an outline that
+//! is mostly cuts), the rim fit runs instead. The albedo is the brightest pixel;
 //! the standard errors are the fit's.
 //!
 //! **At the limb** ([`EstimateMethod::Limb`], the rim fit, where the band's model fails). On
@@ -35,22 +36,24 @@
 //! centre lies about half a pixel inside the silhouette, where n_z is already ≈ 1/√R on a
 //! curvature radius of R pixels. The fit is trimmed (pixels more than 2.5 robust standard
 //! deviations below it, or more than 1 above it, are left out and the fit repeated) so that the
-//! parts of the outline that are no limb (a vase's cut rim, a corner, a mesh's open base, a
-//! coarse mesh's silhouette whose shading normals still face the viewer) do not pull it. The
+//! parts of the outline that are no limb (a vase's cut rim, a corner, a mesh's open base) and
+//! the pixels on cross-sections a few pixels in radius, whose normals still face the viewer,
+//! do not pull it. The
 //! trim is one-sided because the limb is the lower envelope of the outline's brightness: a
 //! pixel whose normal has turned toward the viewer by n_z is brighter than the edge-on model by
 //! ρ·(n_z·cos σ − sin σ·cos Δ·(1 − √(1 − n_z²))) > 0 (Δ the normal's angle from the light's
 //! image-plane direction), for any n_z where σ ≤ 60° and for small n_z up to grazing light.
-//! Without it, such pixels lift the constant c and flatten (a, b): on a coarse mesh (the
-//! Stanford bunny, a tenth of its outline with n_z above 0.5) the slant came out up to 11° low,
+//! Without it, such pixels lift the constant c and flatten (a, b): on the Stanford bunny at
+//! 128² (a tenth of its outline with n_z above 0.5) the slant came out up to 11° low,
 //! against 7° with it. The albedo is the brightest pixel in the
 //! mask, where the normal points at the light (I = ρ·(n·s) = ρ there), and sin σ = |(a, b)|/ρ.
 //! The standard errors are the fit's: the tilt's from the covariance of (a, b) across the light's
 //! direction, the slant's from its variance along it.
 //!
 //! The limb fits' standard errors are sampling errors: they do not cover their models' bias.
-//! On a coarse mesh whose shading normals at the silhouette are not edge-on (the Stanford bunny:
-//! n_z 0.24 on average, changing around the outline), the rim fit's slant is off by up to
+//! Where the outline's shading normals are far from edge-on (the Stanford bunny at 128²: n_z 0.24
+//! on average, changing around the outline; its shape sampled half a pixel inside the limb, not
+//! its coarse mesh, since the mean halves at 512²), the rim fit's slant is off by up to
 //! 13 of its standard errors (7.4° against 0.4–1.9°): see docs/perception.md.
 //!
 //! **From the interior statistics** ([`EstimateMethod::Moments`], for pictures without an
@@ -186,8 +189,8 @@ const LIT_FRACTION: f64 = 0.02;
 const TRIM_SIGMAS: f64 = 2.5;
 
 /// The rim fit also drops pixels brighter than its fit by more than this many robust standard
-/// deviations: outline pixels that are no limb (a cut, a coarse mesh's silhouette whose
-/// shading normals still face the viewer), brighter than the edge-on model (see the module
+/// deviations: outline pixels that are no limb (a cut) or whose normals still face the viewer
+/// (on a cross-section a few pixels in radius), brighter than the edge-on model (see the module
 /// documentation).
 const TRIM_ABOVE_SIGMAS: f64 = 1.0;
 
