@@ -5,7 +5,7 @@
 //! reads (`participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image`).
 //!
 //! [`run`] renders one image per rotation (with the render pipeline, so every image has its
-//! sidecar) and draws the seeded trial order; [`write`] lands the folder whole: `index.html`
+//! sidecar) and draws the seeded trial order; [`write()`] lands the folder whole: `index.html`
 //! (the design embedded), `experiment.js` (a plain-JavaScript runner, no libraries, no
 //! network), `experiment.css`, `design.json` (every trial), `README.md` and `images/`.
 //!
@@ -464,7 +464,7 @@ fn angle_between(a: f64, b: f64) -> f64 {
 }
 
 /// Renders one image per rotation and draws the trial order (nothing is written; see
-/// [`write`]). Refuses a stimulus that does not show one target, or whose bright side does not
+/// [`write()`]). Refuses a stimulus that does not show one target, or whose bright side does not
 /// face its light (a dimple), since θ would then mean something else.
 pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     config.validate()?;
