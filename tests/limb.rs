@@ -290,6 +290,31 @@ fn the_limb_boundary_is_named_and_needs_the_image() {
     assert_eq!(message, "image is 95x96 but the mask is 96x96");
 }
 
+/// `shadelab solve image.npy --mask mask.png` in `dir` under `light` with `boundary`, into the
+/// folder named after the boundary; its report.json.
+fn solve_report(dir: &std::path::Path, light: &str, boundary: &str) -> serde_json::Value {
+    let args = [
+        "solve",
+        "image.npy",
+        "--light",
+        light,
+        "--mask",
+        "mask.png",
+        "--boundary",
+        boundary,
+        "--out",
+        boundary,
+    ];
+    let out = shadelab(dir, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = std::fs::read_to_string(dir.join(boundary).join("report.json")).unwrap();
+    serde_json::from_str(&report).unwrap()
+}
+
 #[test]
 fn solve_reports_the_rim_pixels_that_are_not_a_limb() {
     let d = scratch("solve-limb");
@@ -301,30 +326,7 @@ fn solve_reports_the_rim_pixels_that_are_not_a_limb() {
     let expected = limb_count(&s.mask, &image, &map, None).unwrap();
     assert!(expected > 0);
     for (boundary, not_limb) in [("limb", Some(expected)), ("occluding", None)] {
-        let out = shadelab(
-            &d,
-            &[
-                "solve",
-                "image.npy",
-                "--light",
-                "front",
-                "--mask",
-                "mask.png",
-                "--boundary",
-                boundary,
-                "--out",
-                boundary,
-            ],
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let report: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(d.join(boundary).join("report.json")).unwrap(),
-        )
-        .unwrap();
+        let report = solve_report(&d, "front", boundary);
         assert_eq!(report["boundary"]["kind"], boundary);
         assert_eq!(
             report["boundary"]["not_limb"].as_u64().map(|n| n as usize),
@@ -352,28 +354,7 @@ fn solve_reports_the_dark_level_of_the_limb_test() {
     let occluding = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
     let expected = limb_conditions(&occluding, &photo, &map, None);
     assert_eq!(expected.dark_level, 0.01_f32 as f64);
-    let out = shadelab(
-        &d,
-        &[
-            "solve",
-            "image.npy",
-            "--light",
-            "tilt=0,slant=60",
-            "--mask",
-            "mask.png",
-            "--boundary",
-            "limb",
-            "--out",
-            "out",
-        ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("out/report.json")).unwrap()).unwrap();
+    let report = solve_report(&d, "tilt=0,slant=60", "limb");
     assert_eq!(
         report["boundary"]["dark_level"].as_f64(),
         Some(expected.dark_level)
