@@ -311,8 +311,23 @@ fn solve_report(dir: &std::path::Path, light: &str, boundary: &str) -> serde_jso
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let report = std::fs::read_to_string(dir.join(boundary).join("report.json")).unwrap();
-    serde_json::from_str(&report).unwrap()
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(boundary).join("report.json")).unwrap(),
+    )
+    .unwrap();
+    // The summary on stdout names what the limb test found, and only for the limb boundary.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout.lines().find(|l| l.starts_with("limb test: "));
+    match report["boundary"]["not_limb"].as_u64() {
+        Some(held) => {
+            let line = line.unwrap_or_else(|| panic!("no limb line in {stdout}"));
+            let dark = report["boundary"]["dark_level"].as_f64().unwrap();
+            assert!(line.contains(&format!("{held} rim pixels")), "{line}");
+            assert!(line.ends_with(&format!("dark level {dark:.4}")), "{line}");
+        }
+        None => assert_eq!(line, None),
+    }
+    report
 }
 
 #[test]

@@ -125,6 +125,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
                 .map_or("error not given".to_string(), |s| format!("± {s:.1}°"))
         );
     }
+    if let (Some(held), Some(dark)) = (report.boundary.not_limb, report.boundary.dark_level) {
+        text += &format!(
+            "limb test: {held} rim pixels rule out a limb (held at their shading's slant, or free \
+             where clipped); dark level {dark:.4}\n"
+        );
+    }
     if let Some(t) = &light.true_light {
         text += &format!(
             "true light (sidecar): tilt {:.1}° slant {:.1}°\n",
