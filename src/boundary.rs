@@ -28,6 +28,7 @@ use crate::gradient_space::{fg_from_normal, Normal, FG_RADIUS};
 use crate::grid::{Grid, Image, Mask};
 use crate::reflectance::ReflectanceMap;
 use nalgebra::Vector3;
+use serde::Serialize;
 
 /// The factor by which occluding-boundary values are pulled in from the rim of the f–g disc:
 /// fixed pixels get |(f, g)| = [`FG_RADIUS`] × `OCCLUDING_SHRINK` = 1.8.
@@ -468,31 +469,19 @@ pub const LIMB_MAX_DARK_LEVEL: f64 = 0.05;
 pub struct LimbConditions {
     /// The conditions to solve with.
     pub conditions: BoundaryConditions,
+    /// What the test found: the figures a solve reports.
+    pub test: LimbTest,
+}
+
+/// What the limb test found on an outline ([`limb_conditions`]); a solve's report and the
+/// evaluation's rows give its two fields.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LimbTest {
     /// The occluding pixels whose brightness rules out a limb: fixed at the slant the shading
     /// gives, or left free where the image is clipped there.
     pub not_limb: usize,
     /// The image's dark level read on the outline, the tolerance added to the limb's brightness
     /// bound ([`dark_level`]): 0 for an exact render.
-    pub dark_level: f64,
-}
-
-impl LimbConditions {
-    /// What the test found, without the conditions: the figures a report gives.
-    pub fn test(&self) -> LimbTest {
-        LimbTest {
-            not_limb: self.not_limb,
-            dark_level: self.dark_level,
-        }
-    }
-}
-
-/// What the limb test found on an outline ([`LimbConditions::test`]), as a solve reports it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LimbTest {
-    /// The occluding pixels whose brightness ruled out a limb ([`LimbConditions::not_limb`]).
-    pub not_limb: usize,
-    /// The dark level the test allowed for ([`LimbConditions::dark_level`]): 0 for an exact
-    /// render.
     pub dark_level: f64,
 }
 
@@ -569,12 +558,12 @@ pub fn dark_level(readings: &[f64]) -> f64 {
 /// let occluding = boundary_conditions(&ball.mask, &Boundary::Occluding).unwrap();
 /// // A sphere's outline is a limb: nothing changes.
 /// let limb = limb_conditions(&occluding, &image, &map, None);
-/// assert_eq!((limb.not_limb, &limb.conditions), (0, &occluding));
+/// assert_eq!((limb.test.not_limb, &limb.conditions), (0, &occluding));
 /// // A rim pixel at brightness 0.9 under a frontal light faces the viewer (n_z = 0.9).
 /// let (index, _) = occluding.fixed_values()[0];
 /// image.data_mut()[index] = 0.9;
 /// let limb = limb_conditions(&occluding, &image, &map, None);
-/// assert_eq!(limb.not_limb, 1);
+/// assert_eq!(limb.test.not_limb, 1);
 /// let (col, row) = (index % 64, index / 64);
 /// let [f, g] = limb.conditions.fixed_value(col, row).unwrap();
 /// assert!((normal_from_fg(f, g).z - 0.9).abs() < 1e-6);
@@ -617,8 +606,10 @@ pub fn limb_conditions(
     }
     LimbConditions {
         conditions: BoundaryConditions { roles, fixed },
-        not_limb,
-        dark_level: dark,
+        test: LimbTest {
+            not_limb,
+            dark_level: dark,
+        },
     }
 }
 
@@ -637,7 +628,7 @@ pub fn domain_roles(mask: &Mask, boundary: &Boundary) -> Result<Grid<Role>> {
 }
 
 /// How many occluding pixels of `mask` the shading of `image` rules out as a limb
-/// ([`LimbConditions::not_limb`]): what the solver's [`Boundary::Limb`] does, counted for a
+/// ([`LimbTest::not_limb`]): what the solver's [`Boundary::Limb`] does, counted for a
 /// report.
 ///
 /// Fails when the mask is empty or the image is not the mask's size.
@@ -655,7 +646,9 @@ pub fn limb_count(
         )));
     }
     let occluding = boundary_conditions(mask, &Boundary::Occluding)?;
-    Ok(limb_conditions(&occluding, image, reflectance, saturation).not_limb)
+    Ok(limb_conditions(&occluding, image, reflectance, saturation)
+        .test
+        .not_limb)
 }
 
 /// The unit normal at `azimuth` in the image plane (radians from +x toward +y), raised by

@@ -111,7 +111,7 @@ fn the_cut_is_held_at_its_shading_slant_and_the_limb_is_left_alone() {
             "{cut_bright} bright cut pixels under {light}"
         );
         assert!(limb_kept > 100, "{limb_kept}");
-        assert_eq!(limb.not_limb, changed);
+        assert_eq!(limb.test.not_limb, changed);
         assert_eq!(limb_count(&s.mask, &image, &map, None).unwrap(), changed);
     }
 }
@@ -150,12 +150,12 @@ fn a_shadowed_limb_at_a_photographs_dark_level_is_still_a_limb() {
     let occluding = boundary_conditions(&ball.mask, &Boundary::Occluding).unwrap();
     let render = image_of(&ball, &map);
     let exact = limb_conditions(&occluding, &render, &map, None);
-    assert_eq!((exact.not_limb, exact.dark_level), (0, 0.0));
+    assert_eq!((exact.test.not_limb, exact.test.dark_level), (0, 0.0));
     // A constant black level: the shadowed limb reads it, and is a limb.
     let photo = dark_offset(&render, &ball.mask, 0.01, 0.0);
     let limb = limb_conditions(&occluding, &photo, &map, None);
-    assert_eq!(limb.dark_level, 0.01);
-    assert_eq!((limb.not_limb, &limb.conditions), (0, &occluding));
+    assert_eq!(limb.test.dark_level, 0.01);
+    assert_eq!((limb.test.not_limb, &limb.conditions), (0, &occluding));
     // Without the allowance those pixels would be held past the terminator.
     let shadowed = (occluding.fixed_values().iter())
         .filter(|(index, _)| photo.data()[*index] > 0.0 && render.data()[*index] == 0.0)
@@ -165,20 +165,20 @@ fn a_shadowed_limb_at_a_photographs_dark_level_is_still_a_limb() {
     let noisy = dark_offset(&render, &ball.mask, 0.01, 0.004);
     let limb = limb_conditions(&occluding, &noisy, &map, None);
     assert!(
-        limb.dark_level > 0.01 && limb.dark_level < 0.014,
+        limb.test.dark_level > 0.01 && limb.test.dark_level < 0.014,
         "{}",
-        limb.dark_level
+        limb.test.dark_level
     );
     for &(index, fg) in occluding.fixed_values() {
-        if noisy.data()[index] <= limb.dark_level {
+        if noisy.data()[index] <= limb.test.dark_level {
             let (col, row) = (index % SIDE, index / SIDE);
             assert_eq!(limb.conditions.fixed_value(col, row), Some(fg));
         }
     }
     assert!(
-        limb.not_limb <= shadowed / 2 + 1,
+        limb.test.not_limb <= shadowed / 2 + 1,
         "{} of {shadowed}",
-        limb.not_limb
+        limb.test.not_limb
     );
     assert_eq!(dark_level(&[0.01; 40]), 0.01);
 
@@ -196,9 +196,9 @@ fn a_shadowed_limb_at_a_photographs_dark_level_is_still_a_limb() {
         &map,
         None,
     );
-    assert_eq!(photo.dark_level, 0.01);
-    assert!(exact.not_limb >= 20, "{}", exact.not_limb);
-    assert_eq!(photo.not_limb, exact.not_limb);
+    assert_eq!(photo.test.dark_level, 0.01);
+    assert!(exact.test.not_limb >= 20, "{}", exact.test.not_limb);
+    assert_eq!(photo.test.not_limb, exact.test.not_limb);
 }
 
 /// The occluding condition pins the cut's rim edge-on, 30–60° from the truth near the cut's
@@ -226,7 +226,7 @@ fn a_whole_sphere_is_a_limb_everywhere_and_nothing_changes() {
         let map = Lambertian::unit(light);
         let image = image_of(&s, &map);
         let limb = limb_conditions(&occluding, &image, &map, None);
-        assert_eq!(limb.not_limb, 0, "under {light}");
+        assert_eq!(limb.test.not_limb, 0, "under {light}");
         assert_eq!(limb.conditions, occluding, "under {light}");
         let mut solver = Solver::new(SIDE, SIDE).unwrap();
         let options = SolveOptions::default();
@@ -249,7 +249,7 @@ fn clipped_rim_pixels_that_rule_out_a_limb_are_left_free() {
     let plain = limb_conditions(&occluding, &image, &map, None);
     // Clipped at 0.8: the cut's pixels above it carry no slant and become unknowns.
     let limb = limb_conditions(&occluding, &image, &map, Some(0.8));
-    assert_eq!(limb.not_limb, plain.not_limb);
+    assert_eq!(limb.test.not_limb, plain.test.not_limb);
     let freed: Vec<usize> = (0..SIDE * SIDE)
         .filter(|&i| {
             occluding.roles.data()[i] == Role::Fixed
@@ -368,15 +368,15 @@ fn solve_reports_the_dark_level_of_the_limb_test() {
     let photo = io::read_image(&d.join("image.npy"), 1 << 20).unwrap();
     let occluding = boundary_conditions(&s.mask, &Boundary::Occluding).unwrap();
     let expected = limb_conditions(&occluding, &photo, &map, None);
-    assert_eq!(expected.dark_level, 0.01_f32 as f64);
+    assert_eq!(expected.test.dark_level, 0.01_f32 as f64);
     let report = solve_report(&d, "tilt=0,slant=60", "limb");
     assert_eq!(
         report["boundary"]["dark_level"].as_f64(),
-        Some(expected.dark_level)
+        Some(expected.test.dark_level)
     );
     assert_eq!(
         report["boundary"]["not_limb"].as_u64(),
-        Some(expected.not_limb as u64)
+        Some(expected.test.not_limb as u64)
     );
 }
 

@@ -125,10 +125,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
                 .map_or("error not given".to_string(), |s| format!("± {s:.1}°"))
         );
     }
-    if let (Some(held), Some(dark)) = (report.boundary.not_limb, report.boundary.dark_level) {
+    if let Some(limb) = &report.boundary.limb {
         text += &format!(
-            "limb test: {held} rim pixels rule out a limb (held at their shading's slant, or free \
-             where clipped); dark level {dark:.4}\n"
+            "limb test: {} rim pixels rule out a limb (held at their shading's slant, or free \
+             where clipped); dark level {:.4}\n",
+            limb.not_limb, limb.dark_level
         );
     }
     if let Some(t) = &light.true_light {

@@ -4,7 +4,7 @@
 use super::metrics::{
     angular_error, angular_error_map, depth_error, shading_residual, AngularError, DepthError,
 };
-use crate::boundary::Boundary;
+use crate::boundary::{Boundary, LimbTest};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask};
@@ -83,14 +83,10 @@ pub struct CaseResult {
     pub slant_deg: f64,
     /// The boundary condition.
     pub boundary: &'static str,
-    /// With the `limb` boundary: the occluding pixels whose brightness rules out a limb
-    /// ([`crate::boundary::limb_conditions`]); absent for every other boundary.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub not_limb: Option<usize>,
-    /// With the `limb` boundary: the dark level the limb test allowed for
-    /// ([`crate::boundary::dark_level`]); absent for every other boundary.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dark_level: Option<f64>,
+    /// With the `limb` boundary, what its test found ([`crate::boundary::limb_conditions`]), as
+    /// the fields `not_limb` and `dark_level`; absent for every other boundary.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub limb: Option<LimbTest>,
     /// The albedo the image was divided by.
     pub albedo: Albedo,
     /// Angle between recovered and true normals on the scored mask.
@@ -189,8 +185,7 @@ pub fn solve_case(case: &Case, options: &SolveOptions) -> Result<CaseOutput> {
             tilt_deg: case.light.tilt_deg(),
             slant_deg: case.light.slant_deg(),
             boundary: case.boundary.name(),
-            not_limb: solution.limb.map(|l| l.not_limb),
-            dark_level: solution.limb.map(|l| l.dark_level),
+            limb: solution.limb,
             albedo: case.albedo.clone(),
             normal_error,
             depth_error,

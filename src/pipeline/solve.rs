@@ -7,7 +7,7 @@
 //! feature) and `report.json`.
 
 use crate::albedo::{AlbedoEstimate, Saturation};
-use crate::boundary::{Boundary, BOUNDARY_NAMES, OCCLUDING_SHRINK};
+use crate::boundary::{Boundary, LimbTest, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
@@ -276,15 +276,12 @@ pub struct BoundaryReport {
     pub kind: &'static str,
     /// The factor limb normals are shrunk by (see [`OCCLUDING_SHRINK`]).
     pub occluding_shrink: f64,
-    /// With the `limb` boundary: the occluding pixels whose brightness rules out a limb, held
-    /// at the slant the shading gives instead ([`crate::boundary::limb_conditions`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub not_limb: Option<usize>,
-    /// With the `limb` boundary: the dark level read on the outline where a limb would be in
-    /// attached shadow, which the test allowed for ([`crate::boundary::dark_level`]; 0 for an
-    /// exact render).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dark_level: Option<f64>,
+    /// With the `limb` boundary, what its test found, as the fields `not_limb` (the occluding
+    /// pixels whose brightness rules out a limb, held at the slant the shading gives instead)
+    /// and `dark_level` (the reading where a limb would be in attached shadow, which the test
+    /// allowed for; 0 for an exact render); absent for every other boundary.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub limb: Option<LimbTest>,
 }
 
 /// How the solve went.
@@ -699,8 +696,7 @@ fn report(
         boundary: BoundaryReport {
             kind: boundary_kind,
             occluding_shrink: OCCLUDING_SHRINK,
-            not_limb: s.limb.map(|l| l.not_limb),
-            dark_level: s.limb.map(|l| l.dark_level),
+            limb: s.limb,
         },
         solver: SolverReport {
             method: method.to_string(),

@@ -470,7 +470,7 @@ impl Solver {
             let limb = limb_conditions(&bc, image, reflectance, options.saturation);
             self.solve_conditions(image, &limb.conditions, reflectance, options, progress)
                 .map(|solution| Solution {
-                    limb: Some(limb.test()),
+                    limb: Some(limb.test),
                     ..solution
                 })
         } else {
