@@ -638,13 +638,7 @@ pub fn limb_count(
     reflectance: &dyn ReflectanceMap,
     saturation: Option<f64>,
 ) -> Result<usize> {
-    let (w, h) = (mask.width(), mask.height());
-    if !image.same_size(mask) {
-        let (iw, ih) = (image.width(), image.height());
-        return Err(Error::invalid(format!(
-            "image is {iw}x{ih} but the mask is {w}x{h}"
-        )));
-    }
+    image.check_same_size("image is", mask, "the mask is")?;
     let occluding = boundary_conditions(mask, &Boundary::Occluding)?;
     Ok(limb_conditions(&occluding, image, reflectance, saturation)
         .test

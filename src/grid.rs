@@ -32,6 +32,17 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
     r * rgb[0] + g * rgb[1] + b * rgb[2]
 }
 
+/// The words of every size-mismatch error, `"{what} WxH but {other_what} WxH"`: what
+/// [`Grid::check_same_size`] says, and the base of messages about a size that is not a grid's.
+pub(crate) fn size_mismatch(
+    what: &str,
+    (width, height): (usize, usize),
+    other_what: &str,
+    (other_width, other_height): (usize, usize),
+) -> String {
+    format!("{what} {width}x{height} but {other_what} {other_width}x{other_height}")
+}
+
 /// The largest grid shadelab makes unless told otherwise (about 64 megapixels).
 pub const DEFAULT_MAX_PIXELS: usize = 64 * 1024 * 1024;
 
@@ -161,6 +172,34 @@ impl<T> Grid<T> {
     /// Whether `other` has the same width and height.
     pub fn same_size<U>(&self, other: &Grid<U>) -> bool {
         self.width == other.width && self.height == other.height
+    }
+
+    /// Checks that `other` has this grid's width and height; otherwise fails with
+    /// [`Error::Invalid`] saying `"{what} WxH but {other_what} WxH"`. Each name carries its
+    /// verb ("the mask is", "normals are"), so the message reads as a sentence.
+    ///
+    /// ```
+    /// use shadelab::grid::Grid;
+    /// let image = Grid::new(3, 2, 0.5);
+    /// assert!(image
+    ///     .check_same_size("image is", &Grid::new(3, 2, true), "the mask is")
+    ///     .is_ok());
+    /// let e = image
+    ///     .check_same_size("image is", &Grid::new(2, 3, true), "the mask is")
+    ///     .unwrap_err();
+    /// assert!(matches!(e, shadelab::Error::Invalid(_)));
+    /// assert_eq!(e.to_string(), "image is 3x2 but the mask is 2x3");
+    /// ```
+    pub fn check_same_size<U>(&self, what: &str, other: &Grid<U>, other_what: &str) -> Result<()> {
+        if self.same_size(other) {
+            return Ok(());
+        }
+        Err(Error::invalid(size_mismatch(
+            what,
+            (self.width, self.height),
+            other_what,
+            (other.width, other.height),
+        )))
     }
 
     /// The pixel at column `col`, row `row` (row 0 at the top). Panics out of bounds.

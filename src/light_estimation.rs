@@ -251,15 +251,7 @@ pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Resu
 
 /// Fails on mismatched sizes or non-finite values.
 fn check_inputs(image: &Image, mask: &Mask) -> Result<()> {
-    if !image.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "image is {}x{} but the mask is {}x{}",
-            image.width(),
-            image.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    image.check_same_size("image is", mask, "the mask is")?;
     if image.data().iter().any(|v| !v.is_finite()) {
         return Err(Error::invalid("image holds NaN or infinite values"));
     }

@@ -69,15 +69,7 @@ impl Picture {
         }
         let tokens = match labels {
             Some((labels, names)) => {
-                if !labels.same_size(&image) {
-                    return Err(Error::invalid(format!(
-                        "the target mask is {}x{} but the image is {}x{}",
-                        labels.width(),
-                        labels.height(),
-                        image.width(),
-                        image.height()
-                    )));
-                }
+                labels.check_same_size("the target mask is", &image, "the image is")?;
                 tokens_from_labels(labels, names)?
             }
             None => vec![Token::whole(image.width(), image.height())?],

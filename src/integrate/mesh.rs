@@ -23,15 +23,7 @@ pub fn mesh_obj(depth: &Image, mask: &Mask) -> Result<String> {
 /// The text is formatted in bands of rows on the worker threads and written in order, a few
 /// bands at a time: the same bytes for any number of threads.
 pub fn write_mesh_obj(depth: &Image, mask: &Mask, out: &mut dyn Write, path: &Path) -> Result<()> {
-    if !depth.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "depth map is {}x{} but the mask is {}x{}",
-            depth.width(),
-            depth.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    depth.check_same_size("depth map is", mask, "the mask is")?;
     let (w, h) = (depth.width(), depth.height());
     let io = |e| Error::io(path, e);
     writeln!(

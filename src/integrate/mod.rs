@@ -42,15 +42,7 @@ pub fn gradients_from_normals(
     mask: &Mask,
     min_nz: f64,
 ) -> Result<(Image, Image)> {
-    if !normals.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "normals are {}x{} but the mask is {}x{}",
-            normals.width(),
-            normals.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    normals.check_same_size("normals are", mask, "the mask is")?;
     check_min_nz(min_nz)?;
     let slope = |pick: fn((f64, f64)) -> f64| {
         Grid::from_fn(normals.width(), normals.height(), |c, r| {
@@ -73,15 +65,7 @@ fn slopes_of(n: &Normal, min_nz: f64) -> (f64, f64) {
 /// Puts the lowest point of `depth` inside `mask` at 0 and sets 0 outside it (depth from slopes
 /// has no offset of its own); returns the height of the highest point inside.
 pub fn rest_on_zero(depth: &mut Image, mask: &Mask) -> Result<f64> {
-    if !depth.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "depth is {}x{} but the mask is {}x{}",
-            depth.width(),
-            depth.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    depth.check_same_size("depth is", mask, "the mask is")?;
     // An empty mask has no lowest point: everything is outside, and becomes 0.
     let lowest = Some(masked_fold(depth, mask, f64::INFINITY, f64::min))
         .filter(|z| z.is_finite())

@@ -224,15 +224,7 @@ fn check_gradient_inputs(
     options: &PoissonOptions,
 ) -> Result<()> {
     check_gradients(dz_dx, dz_dy)?;
-    if !dz_dx.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "gradient fields are {}x{} but the mask is {}x{}",
-            dz_dx.width(),
-            dz_dx.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    dz_dx.check_same_size("gradient fields are", mask, "the mask is")?;
     check_options(options)?;
     check_mask(mask)
 }
@@ -257,15 +249,7 @@ fn differences_rhs(right: &Image, down: &Image, mask: &Mask) -> Vec<f64> {
 /// integrator did (so its error messages are unchanged).
 fn check_inputs(right: &Image, down: &Image, mask: &Mask, options: &PoissonOptions) -> Result<()> {
     check_gradients(right, down)?;
-    if !right.same_size(mask) {
-        return Err(Error::invalid(format!(
-            "difference fields are {}x{} but the mask is {}x{}",
-            right.width(),
-            right.height(),
-            mask.width(),
-            mask.height()
-        )));
-    }
+    right.check_same_size("difference fields are", mask, "the mask is")?;
     check_options(options)?;
     check_mask(mask)
 }

@@ -91,15 +91,11 @@ pub fn predict(model: &str, output: &Image, a: &Mask, b: &Mask) -> Prediction {
 /// checker-shadow `image` and reports their predictions for squares `a` and `b`.
 pub fn checker_shadow(image: &Image, a: &Mask, b: &Mask, ppd: f64) -> Result<CheckerReport> {
     for (name, m) in [("A", a), ("B", b)] {
-        if !m.same_size(image) {
-            return Err(Error::invalid(format!(
-                "the mask of square {name} is {}x{} but the image is {}x{}",
-                m.width(),
-                m.height(),
-                image.width(),
-                image.height()
-            )));
-        }
+        m.check_same_size(
+            &format!("the mask of square {name} is"),
+            image,
+            "the image is",
+        )?;
         if m.count() == 0 {
             return Err(Error::invalid(format!(
                 "the mask of square {name} is empty"

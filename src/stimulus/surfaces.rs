@@ -222,15 +222,15 @@ pub fn heightfield(p: &HeightfieldParams, g: &Geometry) -> Result<Output> {
     let path = std::path::Path::new(&p.path);
     let depth = crate::io::read_image(path, crate::grid::DEFAULT_MAX_PIXELS)?;
     if depth.width() != g.width || depth.height() != g.height {
+        let mismatch = crate::grid::size_mismatch(
+            "depth map is",
+            (depth.width(), depth.height()),
+            "the requested size is",
+            (g.width, g.height),
+        );
         return Err(Error::format(
             path,
-            format!(
-                "depth map is {}x{} but the requested size is {}x{} (omit the size to use the map's own)",
-                depth.width(),
-                depth.height(),
-                g.width,
-                g.height
-            ),
+            format!("{mismatch} (omit the size to use the map's own)"),
         ));
     }
     let domain = if p.zero_is_background {
