@@ -125,15 +125,8 @@ pub fn target_means(
     labels: &Labels,
     names: &[String],
 ) -> Result<Vec<TargetMean>> {
-    if !labels.same_size(output) || !image.same_size(output) {
-        return Err(Error::invalid(format!(
-            "the target mask is {}x{} but the image is {}x{}",
-            labels.width(),
-            labels.height(),
-            output.width(),
-            output.height()
-        )));
-    }
+    labels.check_same_size("the target mask is", output, "the image is")?;
+    output.check_same_size("the model output is", image, "the image is")?;
     let top = labels.data().iter().copied().max().unwrap_or(0) as usize;
     let mut sums = vec![(0.0, 0.0, 0usize); top + 1];
     for ((&l, &o), &v) in labels.data().iter().zip(output.data()).zip(image.data()) {
@@ -194,6 +187,15 @@ mod tests {
         assert_eq!(m[0].output, (0.0 + 1.0 + 4.0 + 5.0) / 4.0);
         assert_eq!((m[1].label, m[1].name.as_str()), (3, "target 3"));
         assert_eq!(m[1].luminance, 0.25);
-        assert!(target_means(&out, &image, &Grid::new(3, 2, 1u16), &[]).is_err());
+        let err = target_means(&out, &image, &Grid::new(3, 2, 1u16), &[]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the target mask is 3x2 but the image is 4x2"
+        );
+        let err = target_means(&out, &Grid::new(4, 3, 0.25), &labels, &[]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the model output is 4x2 but the image is 4x3"
+        );
     }
 }
