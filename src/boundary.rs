@@ -398,13 +398,7 @@ pub fn boundary_conditions(mask: &Mask, boundary: &Boundary) -> Result<BoundaryC
             }
         }
         Boundary::Given(normals) => {
-            if !normals.same_size(mask) {
-                return Err(Error::invalid(format!(
-                    "boundary normals are {}x{} but the image is {w}x{h}",
-                    normals.width(),
-                    normals.height()
-                )));
-            }
+            normals.check_same_size("boundary normals are", mask, "the image is")?;
             for row in 0..h {
                 for col in 0..w {
                     if !is_rim(mask, col, row) {

@@ -401,13 +401,9 @@ fn method_name<S: serde::Serializer>(m: &Method, s: S) -> std::result::Result<S:
 /// Checks a scene's sizes, values, domain and tokens.
 pub fn check_scene(scene: &Scene) -> Result<()> {
     let (w, h) = (scene.image.width(), scene.image.height());
-    if !scene.domain.same_size(scene.image) {
-        return Err(Error::invalid(format!(
-            "the domain mask is {}x{} but the image is {w}x{h}",
-            scene.domain.width(),
-            scene.domain.height()
-        )));
-    }
+    scene
+        .domain
+        .check_same_size("the domain mask is", scene.image, "the image is")?;
     if let Some(i) = scene.image.data().iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid(format!(
             "image value at column {}, row {} is not a finite number",

@@ -2,7 +2,7 @@
 
 use super::check_gradients;
 use crate::error::{Error, Result};
-use crate::grid::{Grid, Image};
+use crate::grid::{size_mismatch, Grid, Image};
 use crate::imageops::fft::{RealFft2, C64};
 use std::f64::consts::PI;
 use std::fmt;
@@ -68,11 +68,13 @@ impl FrankotChellappa {
     pub fn integrate(&mut self, dz_dx: &Image, dz_dy: &Image) -> Result<Image> {
         check_gradients(dz_dx, dz_dy)?;
         let (w, h) = (self.width, self.height);
-        if (dz_dx.width(), dz_dx.height()) != (w, h) {
-            return Err(Error::invalid(format!(
-                "gradient field is {}x{} but the integrator was planned for {w}x{h}",
-                dz_dx.width(),
-                dz_dx.height()
+        let size = (dz_dx.width(), dz_dx.height());
+        if size != (w, h) {
+            return Err(Error::invalid(size_mismatch(
+                "gradient field is",
+                size,
+                "the integrator was planned for",
+                (w, h),
             )));
         }
         let half = w / 2 + 1;

@@ -410,15 +410,7 @@ impl<'a> PerceivedFrames<'a> {
         every: usize,
     ) -> Result<PerceivedFrames<'a>> {
         for (mask, _) in regions {
-            if !picture.same_size(*mask) {
-                return Err(Error::invalid(format!(
-                    "picture is {}x{} but a disk mask is {}x{}",
-                    picture.width(),
-                    picture.height(),
-                    mask.width(),
-                    mask.height()
-                )));
-            }
+            picture.check_same_size("picture is", *mask, "a disk mask is")?;
         }
         let steps = regions.iter().map(|(_, c)| c.len()).min().unwrap_or(0);
         let half = band.border_half_width_deg * ppd;
@@ -507,15 +499,8 @@ fn check_inputs(disks: &[(&str, Disk<'_>)], ppd: f64, band: &DogBand) -> Result<
                 )));
             }
         }
-        if !disk.mask.same_size(first) {
-            return Err(Error::invalid(format!(
-                "the {name} disk mask is {}x{} but its picture is {}x{}",
-                disk.mask.width(),
-                disk.mask.height(),
-                first.width(),
-                first.height()
-            )));
-        }
+        disk.mask
+            .check_same_size(&format!("the {name} disk mask is"), first, "its picture is")?;
         if disk.mask.count() == 0 {
             return Err(Error::invalid(format!("the {name} disk mask is empty")));
         }

@@ -25,7 +25,7 @@
 //! grid centre, so each spectrum is stored as a real array times a shared shift phase.
 
 use crate::error::{Error, Result};
-use crate::grid::{Grid, Image};
+use crate::grid::{size_mismatch, Grid, Image};
 use crate::imageops::fft::{dft_1d, fast_len, shift_phase, RealFft2, C64};
 use crate::parallel::prelude::*;
 use std::fmt;
@@ -319,13 +319,11 @@ impl Odog {
 
     fn check_image(&self, image: &Image) -> Result<()> {
         if image.width() != self.width || image.height() != self.height {
-            return Err(Error::invalid(format!(
-                "image is {}x{} but the {} model was planned for {}x{}",
-                image.width(),
-                image.height(),
-                self.variant,
-                self.width,
-                self.height
+            return Err(Error::invalid(size_mismatch(
+                "image is",
+                (image.width(), image.height()),
+                &format!("the {} model was planned for", self.variant),
+                (self.width, self.height),
             )));
         }
         if let Some(i) = image.data().iter().position(|v| !v.is_finite()) {

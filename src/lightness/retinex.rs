@@ -92,13 +92,7 @@ pub fn retinex(
     let full;
     let mask = match mask {
         Some(m) => {
-            if !m.same_size(image) {
-                return Err(Error::invalid(format!(
-                    "mask is {}x{} but the image is {w}x{h}",
-                    m.width(),
-                    m.height()
-                )));
-            }
+            m.check_same_size("mask is", image, "the image is")?;
             m
         }
         None => {

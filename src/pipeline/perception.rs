@@ -119,16 +119,12 @@ impl DomainSpec {
     pub fn resolve(&self, picture: &Picture, on_backdrop: bool, max_pixels: usize) -> Result<Mask> {
         match self {
             DomainSpec::Mask(path) => {
-                let (w, h) = (picture.image.width(), picture.image.height());
                 let mask = io::read_mask(path, max_pixels)?;
-                if (mask.width(), mask.height()) != (w, h) {
-                    return Err(Error::invalid(format!(
-                        "domain mask {} is {}x{} but the image is {w}x{h}",
-                        path.display(),
-                        mask.width(),
-                        mask.height()
-                    )));
-                }
+                mask.check_same_size(
+                    &format!("domain mask {} is", path.display()),
+                    &picture.image,
+                    "the image is",
+                )?;
                 if mask.count() == 0 {
                     return Err(Error::invalid(format!(
                         "domain mask {} is empty: no pixel to solve",

@@ -10,7 +10,7 @@ use crate::albedo::{AlbedoEstimate, Saturation};
 use crate::boundary::{Boundary, LimbTest, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
-use crate::grid::{Grid, Image, Mask};
+use crate::grid::{size_mismatch, Grid, Image, Mask};
 use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::Light;
 use crate::light_estimation::LightEstimate;
@@ -844,16 +844,11 @@ fn read_mask(path: &Path, config: &SolveConfig, image: &Image) -> Result<Mask> {
 
 /// `mask` (named `path` in errors) if it has the image's size and a pixel inside.
 fn check_mask(mask: Mask, path: &Path, config: &SolveConfig, image: &Image) -> Result<Mask> {
-    let (w, h) = (image.width(), image.height());
-    if !mask.same_size(image) {
-        return Err(Error::invalid(format!(
-            "mask {} is {}x{} but the image {} is {w}x{h}",
-            path.display(),
-            mask.width(),
-            mask.height(),
-            config.image.display()
-        )));
-    }
+    mask.check_same_size(
+        &format!("mask {} is", path.display()),
+        image,
+        &format!("the image {} is", config.image.display()),
+    )?;
     if mask.count() == 0 {
         return Err(Error::invalid(format!(
             "mask {} is empty: no pixel is inside the object",
@@ -866,12 +861,13 @@ fn check_mask(mask: Mask, path: &Path, config: &SolveConfig, image: &Image) -> R
 /// Rim normals read from a `.npy` of the image's size.
 fn read_boundary(path: &Path, w: usize, h: usize, max_pixels: usize) -> Result<Boundary> {
     let normals = io::read_normals(path, max_pixels)?;
-    if (normals.width(), normals.height()) != (w, h) {
-        return Err(Error::invalid(format!(
-            "boundary {} is {}x{} but the image is {w}x{h}",
-            path.display(),
-            normals.width(),
-            normals.height()
+    let size = (normals.width(), normals.height());
+    if size != (w, h) {
+        return Err(Error::invalid(size_mismatch(
+            &format!("boundary {} is", path.display()),
+            size,
+            "the image is",
+            (w, h),
         )));
     }
     Ok(Boundary::Given(normals))

@@ -8,7 +8,7 @@
 //! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
 use crate::error::{Error, Result};
-use crate::grid::{Image, Labels};
+use crate::grid::{size_mismatch, Image, Labels};
 use crate::io::{self, Beside, Declared, RenderSidecar};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
@@ -301,12 +301,13 @@ impl PictureSource {
             picture.labels = Some((labels, Vec::new()));
         }
         if let Some(labels) = &self.labels {
-            let (w, h) = picture.pixels.size();
-            if (labels.width(), labels.height()) != (w, h) {
-                return Err(Error::invalid(format!(
-                    "the target labels are {}x{} but the image is {w}x{h}",
-                    labels.width(),
-                    labels.height()
+            let size = (labels.width(), labels.height());
+            if size != picture.pixels.size() {
+                return Err(Error::invalid(size_mismatch(
+                    "the target labels are",
+                    size,
+                    "the image is",
+                    picture.pixels.size(),
                 )));
             }
             picture.labels = Some((labels.clone(), Vec::new()));
@@ -374,13 +375,13 @@ fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
 
 /// Fails unless the label map `labels` (read from `path`) has the picture's size.
 fn check_same_size(labels: &Labels, pixels: &Pixels, path: &std::path::Path) -> Result<()> {
-    let (w, h) = pixels.size();
-    if (labels.width(), labels.height()) != (w, h) {
-        return Err(Error::invalid(format!(
-            "mask {} is {}x{} but the image is {w}x{h}",
-            path.display(),
-            labels.width(),
-            labels.height()
+    let size = (labels.width(), labels.height());
+    if size != pixels.size() {
+        return Err(Error::invalid(size_mismatch(
+            &format!("mask {} is", path.display()),
+            size,
+            "the image is",
+            pixels.size(),
         )));
     }
     Ok(())

@@ -223,25 +223,13 @@ pub fn solve_from(
 ) -> Result<CreaseSolution> {
     options.validate()?;
     let (w, h) = (bc.roles.width(), bc.roles.height());
-    if (image.width(), image.height()) != (w, h) {
-        return Err(Error::invalid(format!(
-            "image is {}x{} but the domain is {w}x{h}",
-            image.width(),
-            image.height()
-        )));
-    }
+    image.check_same_size("image is", &bc.roles, "the domain is")?;
     crate::reconstruct::check_light_in_front(&reflectance.light())?;
     let roles = bc.roles.data();
     let (mut f, mut g) = match start {
         Some((f0, g0)) => {
             for s in [f0, g0] {
-                if (s.width(), s.height()) != (w, h) {
-                    return Err(Error::invalid(format!(
-                        "the start is {}x{} but the domain is {w}x{h}",
-                        s.width(),
-                        s.height()
-                    )));
-                }
+                s.check_same_size("the start is", &bc.roles, "the domain is")?;
             }
             (f0.data().to_vec(), g0.data().to_vec())
         }

@@ -68,15 +68,7 @@ impl Surface {
     /// A surface from a depth map and mask, normals by finite differences: central where
     /// both neighbours are inside the mask, one-sided where only one is, flat where neither.
     pub fn from_depth(depth: Image, mask: Mask) -> Result<Surface> {
-        if !depth.same_size(&mask) {
-            return Err(Error::invalid(format!(
-                "depth map is {}x{} but its mask is {}x{}",
-                depth.width(),
-                depth.height(),
-                mask.width(),
-                mask.height()
-            )));
-        }
+        depth.check_same_size("depth map is", &mask, "its mask is")?;
         if depth.data().iter().any(|v| !v.is_finite()) {
             return Err(Error::invalid("depth map holds NaN or infinite values"));
         }
