@@ -227,8 +227,8 @@ def test_integrable_method_gives_the_normals_of_one_surface(sphere):
 
 def test_integrable_lm_minimises_the_same_energy(sphere):
     """solve(method="integrable-lm") is solve --method integrable-lm: it converges on the oblique
-    sphere, reports its method and its unit (steps), and its normals are at least as close to
-    the truth as the alternation's."""
+    sphere (24 steps), reports its method and its unit, and its normals are closer to the truth
+    than the alternation's (measured 1.75° against 3.08° mean)."""
     inside = sphere["target_mask"] == 1
     alt = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, method="integrable")
     r = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, method="integrable-lm")
@@ -237,5 +237,4 @@ def test_integrable_lm_minimises_the_same_energy(sphere):
     assert r.report["solver"]["iteration_unit"] == "steps"
     e_alt = angular_error_deg(alt.normals, sphere["normals"], inside)
     e_lm = angular_error_deg(r.normals, sphere["normals"], inside)
-    print(f"MEASURE alt {e_alt} lm {e_lm} steps {r.report['solver']}")
-    assert e_lm <= e_alt + 0.05, (e_lm, e_alt)
+    assert e_lm < e_alt - 1.0, (e_lm, e_alt)

@@ -481,7 +481,7 @@ impl Model<'_, '_> {
         for it in 0..max_iter {
             self.apply(nu, &p, &mut ap, &mut scratch);
             let pap = dot(&p, &ap);
-            if !(pap > 0.0) {
+            if pap.is_nan() || pap <= 0.0 {
                 return it;
             }
             let alpha = rz / pap;
