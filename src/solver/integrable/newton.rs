@@ -27,7 +27,7 @@
 
 use super::super::{Node, CHUNK, PARALLEL_MIN};
 use super::{AngleScale, SIGMA};
-use crate::gradient_space::fg_from_pq;
+use crate::gradient_space::{fg_from_pq, fg_pq_jacobian};
 use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
 
@@ -72,13 +72,7 @@ impl Stencil {
 
 /// The orientation t(p, q) of a depth slope and its Jacobian [∂f/∂p, ∂f/∂q, ∂g/∂p, ∂g/∂q].
 fn orientation(p: f64, q: f64) -> ((f64, f64), [f64; 4]) {
-    let s = (1.0 + p * p + q * q).sqrt();
-    let d = 1.0 + s;
-    let d2s = d * d * s;
-    let fp = 2.0 / d - 2.0 * p * p / d2s;
-    let fq = -2.0 * p * q / d2s;
-    let gq = 2.0 / d - 2.0 * q * q / d2s;
-    (fg_from_pq(p, q), [fp, fq, fq, gq])
+    (fg_from_pq(p, q), fg_pq_jacobian(p, q))
 }
 
 /// E(f, g, z) on one domain. A point is one vector `[f…, g…, z…]` of 3n values for the n
