@@ -105,6 +105,18 @@
 //! errors on 36 of 50 rows (cat 9.89°, bear 10.68°). docs/evaluation.md, "Session 11: the
 //! coupled problem of the integrable method", has the figures.
 //!
+//! **E minimised itself: [`Method::IntegrableLm`] (session 12).** `integrable/newton.rs` takes
+//! the same start (the multigrid solution and the depth of its slopes) and minimises E over
+//! (f, g, z) together by Levenberg–Marquardt steps, each solved by conjugate gradients
+//! preconditioned by the per-pixel blocks, each kept only if it lowers E. It is a method of
+//! its own beside the alternation rather than a replacement: on the evaluation it is closer to
+//! the truth on 36 of 56 rows (bear 15.91° → 9.89°, cat 14.76° → 9.87°, reading 18.60° →
+//! 15.05°, 15 of the 18 DiLiGenT rows, the ball photographs by 0.04–0.44°, Mozart oblique with
+//! the occluding boundary 16.85° → 11.94°) and farther on 11 (Mozart frontal 10.34° → 13.88°,
+//! where E prefers the neck folded the other way, pot1 and harvest limb by 0.2–0.4°, the bunny
+//! at slant 30° and 60° by 0.2–0.6°); it converges on 23 rows against 36 and takes 1.8–20
+//! times as long (the figures: docs/evaluation.md, "Session 12").
+//!
 //! The returned (f, g) are the last gradients, within μ's pull of the depth's own: integrating
 //! them (as every solve is integrated) gives the depth of the last depth solve to within the
 //! last iteration's change (below `tol` once converged).
