@@ -54,6 +54,33 @@ pub fn fg_from_pq(p: f64, q: f64) -> (f64, f64) {
     (2.0 * p / d, 2.0 * q / d)
 }
 
+/// The derivatives of [`fg_from_pq`], analytic: [∂f/∂p, ∂f/∂q, ∂g/∂p, ∂g/∂q].
+///
+/// ```
+/// use shadelab::gradient_space::{fg_from_pq, fg_pq_jacobian};
+/// let (p, q, h) = (0.7, -1.3, 1e-6);
+/// let [fp, fq, gp, gq] = fg_pq_jacobian(p, q);
+/// let (f1, g1) = fg_from_pq(p + h, q);
+/// let (f0, g0) = fg_from_pq(p - h, q);
+/// assert!((fp - (f1 - f0) / (2.0 * h)).abs() < 1e-8 && (gp - (g1 - g0) / (2.0 * h)).abs() < 1e-8);
+/// let (f1, g1) = fg_from_pq(p, q + h);
+/// let (f0, g0) = fg_from_pq(p, q - h);
+/// assert!((fq - (f1 - f0) / (2.0 * h)).abs() < 1e-8 && (gq - (g1 - g0) / (2.0 * h)).abs() < 1e-8);
+/// ```
+pub fn fg_pq_jacobian(p: f64, q: f64) -> [f64; 4] {
+    // f = 2p/d, g = 2q/d with d = 1 + s, s = √(1+p²+q²): ∂d/∂p = p/s.
+    let s = (1.0 + p * p + q * q).sqrt();
+    let d = 1.0 + s;
+    let d2s = d * d * s;
+    let fq = -2.0 * p * q / d2s;
+    [
+        2.0 / d - 2.0 * p * p / d2s,
+        fq,
+        fq,
+        2.0 / d - 2.0 * q * q / d2s,
+    ]
+}
+
 /// (p, q) of stereographic coordinates; `None` on or outside the rim f² + g² ≥ 4.
 pub fn pq_from_fg(f: f64, g: f64) -> Option<(f64, f64)> {
     let r2 = f * f + g * g;

@@ -149,8 +149,11 @@ fn eval_writes_table_report_and_pictures() {
     assert_eq!(report["commit"], "abc1234");
     // A row per method, multigrid first, with the fields scripts read.
     let cases = report["cases"].as_array().unwrap();
-    assert_eq!(cases.len(), 2);
-    for (case, method) in cases.iter().zip(["multigrid", "integrable"]) {
+    assert_eq!(cases.len(), 3);
+    for (case, method) in cases
+        .iter()
+        .zip(["multigrid", "integrable", "integrable-lm"])
+    {
         assert_eq!(case["method"], method);
         assert_eq!(case["object"], "ball");
         assert_eq!(case["boundary"], "occluding");
@@ -159,7 +162,7 @@ fn eval_writes_table_report_and_pictures() {
     }
     assert_eq!(
         report["parameters"]["solver"]["methods"],
-        serde_json::json!(["multigrid", "integrable"])
+        serde_json::json!(["multigrid", "integrable", "integrable-lm"])
     );
     assert!(
         stdout.contains("| ball | ball | 052 (slant 4°) | occluding | integrable |"),

@@ -331,8 +331,8 @@ def solve(
     carrying no brightness term (``"auto"``, the default: the clipped plateau the albedo
     estimate finds; ``"none"`` or ``None``: no pixel; or a level in the image's units);
     ``report["solver"]["clipped"]`` counts them. ``lam``, ``method`` (``multigrid``,
-    ``jacobi``, ``literal``, ``integrable``), ``tol`` and ``max_iter`` are the solver's
-    settings.
+    ``jacobi``, ``literal``, ``integrable``, ``integrable-lm``), ``tol`` and ``max_iter`` are
+    the solver's settings.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
     >>> r = solve(s["img"], light=(0.3, 0.4, 0.866), mask=s["target_mask"])

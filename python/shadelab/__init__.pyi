@@ -52,7 +52,7 @@ def solve(
     boundary: str = ...,
     albedo: Optional[Union[float, Literal["estimate"]]] = ...,
     lam: float = ...,
-    method: Literal["multigrid", "jacobi", "literal", "integrable"] = ...,
+    method: Literal["multigrid", "jacobi", "literal", "integrable", "integrable-lm"] = ...,
     tol: float = ...,
     max_iter: Optional[int] = ...,
     saturation: Optional[Union[float, Literal["auto", "none"]]] = ...,

@@ -223,3 +223,18 @@ def test_integrable_method_gives_the_normals_of_one_surface(sphere):
     assert mismatch(r) < 0.6 * mismatch(ih), (mismatch(r), mismatch(ih))
     with pytest.raises(ValueError, match="integrable"):
         shadelab.solve(sphere["img"], light=LIGHT, mask=inside, method="integrabel")
+
+
+def test_integrable_lm_minimises_the_same_energy(sphere):
+    """solve(method="integrable-lm") is solve --method integrable-lm: it converges on the oblique
+    sphere (24 steps), reports its method and its unit, and its normals are closer to the truth
+    than the alternation's (measured 1.75° against 3.08° mean)."""
+    inside = sphere["target_mask"] == 1
+    alt = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, method="integrable")
+    r = shadelab.solve(sphere["img"], light=LIGHT, mask=inside, method="integrable-lm")
+    assert r.converged
+    assert r.report["solver"]["method"] == "integrable-lm"
+    assert r.report["solver"]["iteration_unit"] == "steps"
+    e_alt = angular_error_deg(alt.normals, sphere["normals"], inside)
+    e_lm = angular_error_deg(r.normals, sphere["normals"], inside)
+    assert e_lm < e_alt - 1.0, (e_lm, e_alt)

@@ -65,12 +65,14 @@ pub struct Args {
     pub solver: SolverFlags,
     /// The methods each case is solved with, a row each (comma separated): multigrid
     /// (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid
-    /// solution), jacobi (Ikeuchi–Horn's fixed point, slowly; for comparison).
+    /// solution), integrable-lm (the integrable method's energy minimised by
+    /// Levenberg–Marquardt; slower), jacobi (Ikeuchi–Horn's fixed point, slowly; for
+    /// comparison).
     #[arg(
         long,
         value_name = "METHODS",
         value_delimiter = ',',
-        default_value = "multigrid,integrable"
+        default_value = "multigrid,integrable,integrable-lm"
     )]
     pub method: Vec<String>,
     /// The commit to record in the report; default: `git rev-parse --short HEAD` in the

@@ -7,7 +7,8 @@ use shadelab::analysis::interpretation::MULTIGRID_CYCLES;
 use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
 use shadelab::pipeline::solve::BoundarySource;
 use shadelab::solver::{
-    SolveOptions, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES,
+    SolveOptions, INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS,
+    MULTIGRID_MAX_CYCLES,
 };
 
 /// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
@@ -42,7 +43,8 @@ fn max_iter_help() -> String {
         "Stop a solve after this many sweeps, or cycles for multigrid [default: {MULTIGRID_CYCLES} \
          cycles in the analyses, which repeat a solve that has not converged with Jacobi sweeps; \
          in solve and eval, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} \
-         sweeps for jacobi and literal, {INTEGRABLE_MAX_ITER} iterations for integrable]"
+         sweeps for jacobi and literal, {INTEGRABLE_MAX_ITER} iterations for integrable, \
+         {INTEGRABLE_LM_MAX_STEPS} steps for integrable-lm]"
     )
 }
 

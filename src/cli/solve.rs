@@ -54,11 +54,13 @@ pub struct Args {
     )]
     pub saturation: String,
     /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow), literal
-    /// (R at the current value; unstable, for study) or integrable (depth and gradients solved
-    /// together from the multigrid answer, Horn 1990: the normals of one surface).
+    /// (R at the current value; unstable, for study), integrable (depth and gradients solved
+    /// together from the multigrid answer, Horn 1990: the normals of one surface) or
+    /// integrable-lm (the same energy minimised by Levenberg–Marquardt steps: slower, and
+    /// closer on folded objects).
     #[arg(
         long,
-        value_name = "multigrid|jacobi|literal|integrable",
+        value_name = "multigrid|jacobi|literal|integrable|integrable-lm",
         default_value = "multigrid"
     )]
     pub method: String,

@@ -103,8 +103,10 @@ pub fn default_options() -> SolveOptions {
 }
 
 /// The methods the evaluation compares by default: Ikeuchi–Horn (multigrid, the default of
-/// `shadelab solve`) and the integrable method, a row each.
-pub const DEFAULT_METHODS: &[Method] = &[Method::Multigrid, Method::Integrable];
+/// `shadelab solve`), the integrable method and its energy minimised by Levenberg–Marquardt,
+/// a row each.
+pub const DEFAULT_METHODS: &[Method] =
+    &[Method::Multigrid, Method::Integrable, Method::IntegrableLm];
 
 /// The most multigrid cycles a case may take: `shadelab solve`'s default.
 pub const MAX_CYCLES: usize = crate::solver::MULTIGRID_MAX_CYCLES;

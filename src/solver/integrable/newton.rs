@@ -1,0 +1,802 @@
+//! The integrable method's energy E(f, g, z) and its minimisation by Levenberg–Marquardt: the
+//! unknowns are the orientations (f, g) and the depth z of the domain's unknown pixels, all
+//! moved together by each step.
+//!
+//! E = σ·e_S + λ·e_R + μ·e_I as in the method's documentation, as a sum of squares:
+//!
+//! - smoothness: ½σ Σ_edges |(f, g)_a − (f, g)_b|² over the edges between unknown pixels and
+//!   from unknown pixels to the fixed ring (linear in (f, g));
+//! - data: ½·4λ Σ_pixels (φ(I) − φ(R(f, g)))², over the pixels with a data term;
+//! - integrability: ½ Σ_pixels μ_j |(f, g)_j − t(p_j, q_j)|², t the stereographic map of
+//!   [`fg_from_pq`] and (p_j, q_j) = (−∂z/∂x, −∂z/∂y) from the depth differences across the
+//!   pixel's edges inside the domain (central inside, one-sided at its edge).
+//!
+//! Each step solves (H + ν·diag H) δ = −∇E by conjugate gradients, preconditioned by H's
+//! diagonal blocks (the 2 × 2 block of each pixel's (f, g), z's diagonal), and is kept only if
+//! it lowers E; ν follows how well the quadratic model predicted the decrease (Nielsen's rule).
+//! H is the Gauss–Newton matrix JᵀJ, except that the data term's 2 × 2 block is its own
+//! Hessian (the residual's curvature included, its negative part dropped): near the brightest
+//! orientation the angle residual's curvature is what holds a pixel, and with JᵀJ alone single
+//! pixels there swung by 0.1 in g from step to step. H keeps the coupling of (f, g) and z that
+//! the alternation drops, so a smooth change of the orientations moves the depth with it.
+//!
+//! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
+//! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
+//! order), and the dot products in index order on one thread: the result does not depend on
+//! the thread count.
+
+use super::super::{Node, CHUNK, PARALLEL_MIN};
+use super::{AngleScale, SIGMA};
+use crate::gradient_space::{fg_from_pq, fg_pq_jacobian};
+use crate::parallel::prelude::*;
+use crate::reflectance::ReflectanceMap;
+
+/// No unknown there.
+const NONE: u32 = u32::MAX;
+
+/// A depth slope at one pixel along one axis: up to two (unknown, weight) terms.
+#[derive(Debug, Clone, Copy, Default)]
+struct Stencil {
+    at: [u32; 2],
+    weight: [f64; 2],
+    len: u8,
+}
+
+impl Stencil {
+    /// The slope (ahead − back) at `j`: the central difference when both neighbours are
+    /// unknowns, the one-sided one when one is, none when neither is.
+    fn new(j: usize, back: u32, ahead: u32) -> Stencil {
+        let j = j as u32;
+        let (at, weight, len) = match (back != NONE, ahead != NONE) {
+            (true, true) => ([ahead, back], [0.5, -0.5], 2),
+            (false, true) => ([ahead, j], [1.0, -1.0], 2),
+            (true, false) => ([j, back], [1.0, -1.0], 2),
+            (false, false) => ([0, 0], [0.0, 0.0], 0),
+        };
+        Stencil { at, weight, len }
+    }
+
+    /// The terms.
+    fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.at[..self.len as usize]
+            .iter()
+            .zip(&self.weight)
+            .map(|(&k, &c)| (k as usize, c))
+    }
+
+    /// The slope of `z`.
+    fn of(&self, z: &[f64]) -> f64 {
+        self.terms().map(|(k, c)| c * z[k]).sum()
+    }
+}
+
+/// The orientation t(p, q) of a depth slope and its Jacobian [∂f/∂p, ∂f/∂q, ∂g/∂p, ∂g/∂q].
+fn orientation(p: f64, q: f64) -> ((f64, f64), [f64; 4]) {
+    (fg_from_pq(p, q), fg_pq_jacobian(p, q))
+}
+
+/// E(f, g, z) on one domain. A point is one vector `[f…, g…, z…]` of 3n values for the n
+/// unknown pixels.
+pub(super) struct Energy<'a> {
+    nodes: &'a [Node],
+    /// f and g of every value slot (the unknowns' entries are not read; the fixed ring's are).
+    slots: (&'a [f64], &'a [f64]),
+    /// The slot of a missing neighbour.
+    zero: usize,
+    angles: &'a [f64],
+    pull: &'a [f64],
+    scale: AngleScale,
+    reflectance: &'a dyn ReflectanceMap,
+    /// The slope along x and along the rows at each unknown: p = −(x slope), q = (row slope).
+    along_x: Vec<Stencil>,
+    along_rows: Vec<Stencil>,
+    /// Where each depth value enters the slopes: for depth k, `readers[reader_start[k]..
+    /// reader_start[k + 1]]` are the pulled pixels j whose (p, q) read it, with ∂p_j/∂z_k and
+    /// ∂q_j/∂z_k, in order of j.
+    reader_start: Vec<usize>,
+    readers: Vec<(u32, f64, f64)>,
+}
+
+impl<'a> Energy<'a> {
+    /// The energy of the unknowns `nodes` (at row-major `pixels` of a grid of `size` (width,
+    /// height) whose value slots are `slot`), the fixed ring's values in `slots`, φ(I) per
+    /// unknown in `angles` and the integrability weight per unknown in `pull`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn new(
+        nodes: &'a [Node],
+        pixels: &[u32],
+        slot: &[u32],
+        (width, height): (usize, usize),
+        slots: (&'a [f64], &'a [f64]),
+        angles: &'a [f64],
+        pull: &'a [f64],
+        reflectance: &'a dyn ReflectanceMap,
+    ) -> Energy<'a> {
+        let n = nodes.len();
+        let unknown = |q: usize| {
+            if (slot[q] as usize) < n {
+                slot[q]
+            } else {
+                NONE
+            }
+        };
+        let (mut along_x, mut along_rows) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (j, &p) in pixels.iter().enumerate() {
+            let p = p as usize;
+            let (c, r) = (p % width, p / width);
+            let left = if c > 0 { unknown(p - 1) } else { NONE };
+            let right = if c + 1 < width { unknown(p + 1) } else { NONE };
+            let up = if r > 0 { unknown(p - width) } else { NONE };
+            let down = if r + 1 < height {
+                unknown(p + width)
+            } else {
+                NONE
+            };
+            along_x.push(Stencil::new(j, left, right));
+            along_rows.push(Stencil::new(j, up, down));
+        }
+        // (depth, pixel, ∂p, ∂q), sorted by depth then pixel; a depth read by both of a
+        // pixel's slopes appears twice.
+        let mut entries: Vec<(u32, u32, f64, f64)> = Vec::with_capacity(4 * n);
+        for j in 0..n {
+            if pull[j] > 0.0 {
+                for (k, c) in along_x[j].terms() {
+                    entries.push((k as u32, j as u32, -c, 0.0));
+                }
+                for (k, c) in along_rows[j].terms() {
+                    entries.push((k as u32, j as u32, 0.0, c));
+                }
+            }
+        }
+        entries.sort_by_key(|&(k, j, _, _)| (k, j));
+        let mut reader_start = vec![0; n + 1];
+        for &(k, ..) in &entries {
+            reader_start[k as usize + 1] += 1;
+        }
+        for k in 0..n {
+            reader_start[k + 1] += reader_start[k];
+        }
+        let readers = entries.into_iter().map(|(_, j, p, q)| (j, p, q)).collect();
+        Energy {
+            nodes,
+            slots,
+            zero: slots.0.len() - 1,
+            angles,
+            pull,
+            scale: AngleScale::of(reflectance),
+            reflectance,
+            along_x,
+            along_rows,
+            reader_start,
+            readers,
+        }
+    }
+
+    /// The number of unknown pixels.
+    pub(super) fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// −Σ over the readers of depth k of (∂p·w_p + ∂q·w_q), `w` holding (w_p, w_q) per pixel:
+    /// the depth's entry of Jᵀ(…) for per-pixel (p, q) sensitivities w.
+    fn gather_depth(&self, k: usize, w: &[f64]) -> f64 {
+        let mut sum = 0.0;
+        for &(j, dp, dq) in &self.readers[self.reader_start[k]..self.reader_start[k + 1]] {
+            let j = j as usize;
+            sum -= dp * w[2 * j] + dq * w[2 * j + 1];
+        }
+        sum
+    }
+
+    /// E at `v`, and its gradient into `grad` (3n values); `scratch` holds 2n values.
+    pub(super) fn value_and_gradient(
+        &self,
+        v: &[f64],
+        grad: &mut [f64],
+        scratch: &mut [f64],
+    ) -> f64 {
+        let n = self.len();
+        let (f, rest) = v.split_at(n);
+        let (g, z) = rest.split_at(n);
+        let (grad_f, rest) = grad.split_at_mut(n);
+        let (grad_g, grad_z) = rest.split_at_mut(n);
+        let pixel = |j: usize, gf: &mut f64, gg: &mut f64, w: &mut [f64]| -> f64 {
+            let node = &self.nodes[j];
+            let (mut e, mut sf, mut sg) = (0.0, 0.0, 0.0);
+            for &q in &node.neighbours {
+                let q = q as usize;
+                if q == self.zero {
+                    continue;
+                }
+                let (df, dg) = if q < n {
+                    (f[j] - f[q], g[j] - g[q])
+                } else {
+                    (f[j] - self.slots.0[q], g[j] - self.slots.1[q])
+                };
+                // An edge between unknowns is seen from both ends.
+                let share = if q < n { 0.5 } else { 1.0 };
+                e += 0.5 * SIGMA * share * (df * df + dg * dg);
+                sf += SIGMA * df;
+                sg += SIGMA * dg;
+            }
+            if node.data_weight != 0.0 {
+                let four_lambda = node.data_weight / node.inv_k;
+                let s = self.reflectance.fg(f[j], g[j]);
+                let (r, slope) = self.scale.residual(self.angles[j], s.value);
+                e += 0.5 * four_lambda * r * r;
+                sf -= four_lambda * r * slope * s.d1;
+                sg -= four_lambda * r * slope * s.d2;
+            }
+            let mu = self.pull[j];
+            let (mut wp, mut wq) = (0.0, 0.0);
+            if mu > 0.0 {
+                let ((tf, tg), t) = orientation(-self.along_x[j].of(z), self.along_rows[j].of(z));
+                let (ef, eg) = (f[j] - tf, g[j] - tg);
+                e += 0.5 * mu * (ef * ef + eg * eg);
+                sf += mu * ef;
+                sg += mu * eg;
+                wp = mu * (ef * t[0] + eg * t[2]);
+                wq = mu * (ef * t[1] + eg * t[3]);
+            }
+            *gf = sf;
+            *gg = sg;
+            w[0] = wp;
+            w[1] = wq;
+            e
+        };
+        let e = per_pixel(n, grad_f, grad_g, scratch, pixel);
+        per_depth(grad_z, |k| self.gather_depth(k, scratch));
+        e
+    }
+
+    /// The model of E at `v`: its Gauss–Newton matrix, with the data term's own Hessian.
+    pub(super) fn linearise(&self, v: &[f64]) -> Model<'_, 'a> {
+        let n = self.len();
+        let (f, rest) = v.split_at(n);
+        let (g, z) = rest.split_at(n);
+        let mut blocks = vec![Block::default(); n];
+        let fill = |j: usize, block: &mut Block| {
+            let node = &self.nodes[j];
+            let k = node
+                .neighbours
+                .iter()
+                .filter(|&&q| q as usize != self.zero)
+                .count() as f64;
+            let mut data = [0.0; 3];
+            if node.data_weight != 0.0 {
+                let four_lambda = node.data_weight / node.inv_k;
+                let (s, h) = self.reflectance.fg_hessian(f[j], g[j]);
+                let (r, d) = self.scale.residual(self.angles[j], s.value);
+                let dd = self.scale.second(s.value);
+                let (a, b) = (d * s.d1, d * s.d2);
+                // ∇²(½r²) = ∇r∇rᵀ + r∇²r, ∇r = −φ′∇R, ∇²r = −(φ″∇R∇Rᵀ + φ′∇²R).
+                let hessian = [
+                    a * a - r * (dd * s.d1 * s.d1 + d * h[0]),
+                    a * b - r * (dd * s.d1 * s.d2 + d * h[1]),
+                    b * b - r * (dd * s.d2 * s.d2 + d * h[2]),
+                ];
+                data = positive_part(hessian).map(|x| four_lambda * x);
+            }
+            let mu = self.pull[j];
+            let slope = if mu > 0.0 {
+                orientation(-self.along_x[j].of(z), self.along_rows[j].of(z)).1
+            } else {
+                [0.0; 4]
+            };
+            let diagonal = SIGMA * k + mu;
+            *block = Block {
+                fg: [diagonal + data[0], data[1], diagonal + data[2]],
+                slope,
+            };
+        };
+        if n < PARALLEL_MIN {
+            blocks.iter_mut().enumerate().for_each(|(j, b)| fill(j, b));
+        } else {
+            blocks
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    for (i, b) in chunk.iter_mut().enumerate() {
+                        fill(c * CHUNK + i, b);
+                    }
+                });
+        }
+        // z's diagonal: Σ over its readers of μ|T′(∂p, ∂q)|².
+        let mut depth = vec![0.0; n];
+        per_depth(&mut depth, |k| {
+            let mut sum = 0.0;
+            for &(j, dp, dq) in &self.readers[self.reader_start[k]..self.reader_start[k + 1]] {
+                let j = j as usize;
+                let t = blocks[j].slope;
+                let (u, w) = (t[0] * dp + t[1] * dq, t[2] * dp + t[3] * dq);
+                sum += self.pull[j] * (u * u + w * w);
+            }
+            sum.max(DIAGONAL_FLOOR)
+        });
+        Model {
+            energy: self,
+            blocks,
+            depth,
+        }
+    }
+}
+
+/// One pixel's part of the model.
+#[derive(Debug, Clone, Copy, Default)]
+struct Block {
+    /// The (f, g) diagonal block [ff, fg, gg]: smoothness, pull and data.
+    fg: [f64; 3],
+    /// ∂t/∂(p, q) (0 where there is no pull).
+    slope: [f64; 4],
+}
+
+/// Runs `pixel(j, &mut a[j], &mut b[j], &mut w[2j..2j + 2])` for every pixel over fixed
+/// chunks and returns the sum of its results, added chunk by chunk in order.
+fn per_pixel<F>(n: usize, a: &mut [f64], b: &mut [f64], w: &mut [f64], pixel: F) -> f64
+where
+    F: Fn(usize, &mut f64, &mut f64, &mut [f64]) -> f64 + Sync + Send,
+{
+    let chunk = |c: usize, a: &mut [f64], b: &mut [f64], w: &mut [f64]| -> f64 {
+        let mut sum = 0.0;
+        for (i, ((a, b), w)) in a.iter_mut().zip(b).zip(w.chunks_mut(2)).enumerate() {
+            sum += pixel(c * CHUNK + i, a, b, w);
+        }
+        sum
+    };
+    if n < PARALLEL_MIN {
+        return a
+            .chunks_mut(CHUNK)
+            .zip(b.chunks_mut(CHUNK))
+            .zip(w.chunks_mut(2 * CHUNK))
+            .enumerate()
+            .map(|(c, ((a, b), w))| chunk(c, a, b, w))
+            .sum();
+    }
+    let sums: Vec<f64> = a
+        .par_chunks_mut(CHUNK)
+        .zip(b.par_chunks_mut(CHUNK))
+        .zip(w.par_chunks_mut(2 * CHUNK))
+        .enumerate()
+        .map(|(c, ((a, b), w))| chunk(c, a, b, w))
+        .collect();
+    sums.iter().sum()
+}
+
+/// out[k] = `depth(k)` for every depth value, over fixed chunks.
+fn per_depth<F>(out: &mut [f64], depth: F)
+where
+    F: Fn(usize) -> f64 + Sync + Send,
+{
+    let chunk = |c: usize, out: &mut [f64]| {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = depth(c * CHUNK + i);
+        }
+    };
+    if out.len() < PARALLEL_MIN {
+        out.chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, o)| chunk(c, o));
+    } else {
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, o)| chunk(c, o));
+    }
+}
+
+/// The quadratic model of [`Energy`] at one point.
+pub(super) struct Model<'e, 'a> {
+    energy: &'e Energy<'a>,
+    blocks: Vec<Block>,
+    /// z's diagonal entries (floored).
+    depth: Vec<f64>,
+}
+
+impl Model<'_, '_> {
+    /// out = (H + ν·diag H) x; `scratch` holds 2n values.
+    fn apply(&self, nu: f64, x: &[f64], out: &mut [f64], scratch: &mut [f64]) {
+        let e = self.energy;
+        let n = e.len();
+        let (xf, rest) = x.split_at(n);
+        let (xg, xz) = rest.split_at(n);
+        let (out_f, rest) = out.split_at_mut(n);
+        let (out_g, out_z) = rest.split_at_mut(n);
+        let pixel = |j: usize, of: &mut f64, og: &mut f64, w: &mut [f64]| -> f64 {
+            let node = &e.nodes[j];
+            let block = &self.blocks[j];
+            let (mut sf, mut sg) = (0.0, 0.0);
+            for &q in &node.neighbours {
+                let q = q as usize;
+                if q < n {
+                    sf += xf[q];
+                    sg += xg[q];
+                }
+            }
+            let [ff, fg, gg] = block.fg;
+            let mu = e.pull[j];
+            // The diagonal block holds σk + μ + data; off it, −σ per unknown neighbour.
+            let mut rf = (ff + nu * ff) * xf[j] + fg * xg[j] - SIGMA * sf;
+            let mut rg = fg * xf[j] + (gg + nu * gg) * xg[j] - SIGMA * sg;
+            let (mut wp, mut wq) = (0.0, 0.0);
+            if mu > 0.0 {
+                let t = block.slope;
+                let (dp, dq) = (-e.along_x[j].of(xz), e.along_rows[j].of(xz));
+                let (uf, ug) = (-mu * (t[0] * dp + t[1] * dq), -mu * (t[2] * dp + t[3] * dq));
+                rf += uf;
+                rg += ug;
+                // T′ᵀ μ (x_j − T′(dp, dq)).
+                let (vf, vg) = (mu * xf[j] + uf, mu * xg[j] + ug);
+                wp = t[0] * vf + t[2] * vg;
+                wq = t[1] * vf + t[3] * vg;
+            }
+            *of = rf;
+            *og = rg;
+            w[0] = wp;
+            w[1] = wq;
+            0.0
+        };
+        per_pixel(n, out_f, out_g, scratch, pixel);
+        per_depth(out_z, |k| {
+            e.gather_depth(k, scratch) + nu * self.depth[k] * xz[k]
+        });
+    }
+
+    /// out = M⁻¹ r for M the diagonal blocks of (H + ν·diag H).
+    fn precondition(&self, nu: f64, r: &[f64], out: &mut [f64]) {
+        let n = self.energy.len();
+        for j in 0..n {
+            let [a, b, c] = self.blocks[j].fg;
+            let (a, c) = (a * (1.0 + nu), c * (1.0 + nu));
+            let det = a * c - b * b;
+            let (rf, rg) = (r[j], r[n + j]);
+            if det > 0.0 {
+                out[j] = (c * rf - b * rg) / det;
+                out[n + j] = (a * rg - b * rf) / det;
+            } else {
+                out[j] = rf / a.max(DIAGONAL_FLOOR);
+                out[n + j] = rg / c.max(DIAGONAL_FLOOR);
+            }
+            out[2 * n + j] = r[2 * n + j] / (self.depth[j] * (1.0 + nu));
+        }
+    }
+
+    /// Solves (H + ν·diag H) x = b by preconditioned conjugate gradients from 0, to a residual
+    /// of `tol`·|b| or `max_iter` iterations; returns the iterations.
+    fn solve(&self, nu: f64, b: &[f64], x: &mut [f64], tol: f64, max_iter: usize) -> usize {
+        let len = b.len();
+        x.fill(0.0);
+        let mut r = b.to_vec();
+        let mut z = vec![0.0; len];
+        let mut scratch = vec![0.0; 2 * self.energy.len()];
+        self.precondition(nu, &r, &mut z);
+        let mut p = z.clone();
+        let mut ap = vec![0.0; len];
+        let mut rz = dot(&r, &z);
+        let b_norm = dot(b, b).sqrt();
+        for it in 0..max_iter {
+            self.apply(nu, &p, &mut ap, &mut scratch);
+            let pap = dot(&p, &ap);
+            if pap.is_nan() || pap <= 0.0 {
+                return it;
+            }
+            let alpha = rz / pap;
+            for ((x, r), (p, ap)) in x.iter_mut().zip(&mut r).zip(p.iter().zip(&ap)) {
+                *x += alpha * p;
+                *r -= alpha * ap;
+            }
+            if dot(&r, &r).sqrt() <= tol * b_norm {
+                return it + 1;
+            }
+            self.precondition(nu, &r, &mut z);
+            let rz_next = dot(&r, &z);
+            let beta = rz_next / rz;
+            rz = rz_next;
+            for (p, z) in p.iter_mut().zip(&z) {
+                *p = z + beta * *p;
+            }
+        }
+        max_iter
+    }
+
+    /// ½ xᵀHx.
+    fn quadratic(&self, x: &[f64]) -> f64 {
+        let mut out = vec![0.0; x.len()];
+        let mut scratch = vec![0.0; 2 * self.energy.len()];
+        self.apply(0.0, x, &mut out, &mut scratch);
+        0.5 * dot(x, &out)
+    }
+}
+
+/// The symmetric 2 × 2 matrix [a, b, c] with its negative eigenvalues set to 0.
+fn positive_part([a, b, c]: [f64; 3]) -> [f64; 3] {
+    let mean = 0.5 * (a + c);
+    let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    let (large, small) = (mean + radius, mean - radius);
+    if small >= 0.0 {
+        return [a, b, c];
+    }
+    if large <= 0.0 {
+        return [0.0; 3];
+    }
+    // large·vvᵀ for v the unit eigenvector of `large`.
+    let (vx, vy) = if b != 0.0 {
+        (large - c, b)
+    } else if a >= c {
+        (1.0, 0.0)
+    } else {
+        (0.0, 1.0)
+    };
+    let norm2 = vx * vx + vy * vy;
+    [
+        large * vx * vx / norm2,
+        large * vx * vy / norm2,
+        large * vy * vy / norm2,
+    ]
+}
+
+/// The smallest diagonal entry of z that the damping and the preconditioner use: a depth that
+/// no slope reads (and the depth's checkerboard, which central differences do not see) has
+/// none.
+const DIAGONAL_FLOOR: f64 = 1e-6;
+
+/// Σ aᵢbᵢ in index order.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
+/// The relative residual each step's conjugate-gradient solve stops at.
+pub const CG_TOL: f64 = 0.1;
+
+/// The most conjugate-gradient iterations of one step's solve.
+pub const CG_MAX_ITER: usize = 100;
+
+/// The damping ν of the first step (relative to H's diagonal).
+const START_DAMPING: f64 = 1e-3;
+
+/// How many times one step may raise the damping before it gives up (ν × 4 each time).
+const MAX_RETRIES: usize = 30;
+
+/// Levenberg–Marquardt on an [`Energy`].
+pub(super) struct Minimiser {
+    /// The point [f…, g…, z…].
+    pub(super) x: Vec<f64>,
+    grad: Vec<f64>,
+    e: f64,
+    nu: f64,
+    /// Conjugate-gradient iterations so far.
+    pub(super) cg_iterations: usize,
+}
+
+impl Minimiser {
+    /// Starts at `x`.
+    pub(super) fn new(energy: &Energy, x: Vec<f64>) -> Minimiser {
+        let mut grad = vec![0.0; x.len()];
+        let mut scratch = vec![0.0; 2 * energy.len()];
+        let e = energy.value_and_gradient(&x, &mut grad, &mut scratch);
+        Minimiser {
+            x,
+            grad,
+            e,
+            nu: START_DAMPING,
+            cg_iterations: 0,
+        }
+    }
+
+    /// E now.
+    #[cfg(test)]
+    pub(super) fn energy(&self) -> f64 {
+        self.e
+    }
+
+    /// One step that lowers E (raising the damping until one does); returns the largest
+    /// change of f or g, 0 when no step lowers E.
+    pub(super) fn step(&mut self, energy: &Energy) -> f64 {
+        let n = energy.len();
+        let model = energy.linearise(&self.x);
+        let b: Vec<f64> = self.grad.iter().map(|g| -g).collect();
+        let mut delta = vec![0.0; b.len()];
+        let mut trial = vec![0.0; b.len()];
+        let mut trial_grad = vec![0.0; b.len()];
+        let mut scratch = vec![0.0; 2 * n];
+        for _ in 0..MAX_RETRIES {
+            self.cg_iterations += model.solve(self.nu, &b, &mut delta, CG_TOL, CG_MAX_ITER);
+            let predicted = -(dot(&self.grad, &delta) + model.quadratic(&delta));
+            for ((t, x), d) in trial.iter_mut().zip(&self.x).zip(&delta) {
+                *t = x + d;
+            }
+            let e = energy.value_and_gradient(&trial, &mut trial_grad, &mut scratch);
+            let actual = self.e - e;
+            if actual > 0.0 && predicted > 0.0 {
+                // Nielsen's rule: less damping where the model predicted well.
+                let rho = actual / predicted;
+                self.nu = (self.nu * (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0)).max(1e-12);
+                std::mem::swap(&mut self.x, &mut trial);
+                std::mem::swap(&mut self.grad, &mut trial_grad);
+                self.e = e;
+                return delta[..2 * n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
+            }
+            self.nu *= 4.0;
+        }
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::tests::picture;
+    use super::super::{pull_weights, AngleScale};
+    use super::*;
+    use crate::boundary::{boundary_conditions, Boundary, Role};
+    use crate::grid::Mask;
+    use crate::light::Light;
+    use crate::solver::Solver;
+    use crate::surface::sphere;
+
+    /// A 20² sphere's problem (occluding boundary, light from tilt 30°, slant 40°), and a point
+    /// that is not its minimum: the truth's (f, g) bent by a smooth field, and a depth of its
+    /// own.
+    struct Case {
+        solver: Solver,
+        pull: Vec<f64>,
+        angles: Vec<f64>,
+        map: crate::reflectance::Lambertian,
+        point: Vec<f64>,
+    }
+
+    fn case() -> Case {
+        let surface = sphere(20, 20, 8.5).unwrap();
+        let (image, map) = picture(&surface, Light::from_tilt_slant(30.0, 40.0).unwrap());
+        let bc = boundary_conditions(&surface.mask, &Boundary::Occluding).unwrap();
+        let mut solver = Solver::new(20, 20).unwrap();
+        let n = solver.build(&image, &bc, &map, 1.0);
+        let domain: Mask = bc.roles.map(|r| *r == Role::Unknown);
+        let pull = pull_weights(&domain, &solver.pixels);
+        let scale = AngleScale::of(&map);
+        let angles = solver.nodes[..n]
+            .iter()
+            .map(|node| scale.angle(node.intensity))
+            .collect();
+        let mut point = vec![0.0; 3 * n];
+        for (j, &p) in solver.pixels.iter().enumerate() {
+            let (c, r) = ((p % 20) as f64, (p / 20) as f64);
+            let normal = surface.normals.data()[p as usize];
+            let (f, g) = crate::gradient_space::fg_from_normal(&normal);
+            point[j] = f + 0.1 * (0.3 * c).sin();
+            point[n + j] = g - 0.08 * (0.2 * r).cos();
+            point[2 * n + j] = 0.05 * c * r - 0.3 * c;
+        }
+        Case {
+            solver,
+            pull,
+            angles,
+            map,
+            point,
+        }
+    }
+
+    impl Case {
+        fn energy(&self) -> Energy<'_> {
+            let s = &self.solver;
+            let n = self.angles.len();
+            Energy::new(
+                &s.nodes[..n],
+                &s.pixels,
+                &s.slot,
+                (20, 20),
+                (&s.cur_f, &s.cur_g),
+                &self.angles,
+                &self.pull,
+                &self.map,
+            )
+        }
+    }
+
+    /// The gradient is E's: central differences of E along 60 coordinates of f, g and z agree
+    /// with it to 1e-6 relative.
+    #[test]
+    fn gradient_is_the_energys() {
+        let case = case();
+        let energy = case.energy();
+        let x = case.point.clone();
+        let mut grad = vec![0.0; x.len()];
+        let mut work = vec![0.0; x.len()];
+        energy.value_and_gradient(&x, &mut grad, &mut work);
+        let mut scratch = vec![0.0; x.len()];
+        let (mut y, h) = (x.clone(), 1e-6);
+        for k in 0..60 {
+            let i = (k * 7919) % x.len();
+            y[i] = x[i] + h;
+            let up = energy.value_and_gradient(&y, &mut scratch, &mut work);
+            y[i] = x[i] - h;
+            let down = energy.value_and_gradient(&y, &mut scratch, &mut work);
+            y[i] = x[i];
+            let numeric = (up - down) / (2.0 * h);
+            assert!(
+                (numeric - grad[i]).abs() <= 1e-6 * grad[i].abs().max(1.0),
+                "coordinate {i}: {numeric} against {}",
+                grad[i]
+            );
+        }
+    }
+
+    /// At a point where every residual is 0 the Gauss–Newton matrix is E's Hessian: its
+    /// product with a vector agrees with central differences of the gradient to 1e-5
+    /// relative, and it is symmetric.
+    #[test]
+    fn gauss_newton_matrix_is_the_hessian_where_the_residuals_vanish() {
+        let mut case = case();
+        let n = case.angles.len();
+        // Orientations from the depth, and the brightness they give.
+        let probe = case.energy();
+        let mut x = case.point.clone();
+        for j in 0..n {
+            if case.pull[j] > 0.0 {
+                let z = &case.point[2 * n..];
+                let ((f, g), _) = orientation(-probe.along_x[j].of(z), probe.along_rows[j].of(z));
+                x[j] = f;
+                x[n + j] = g;
+            }
+        }
+        let scale = probe.scale;
+        let angles: Vec<f64> = (0..n)
+            .map(|j| scale.angle(case.map.fg(x[j], x[n + j]).value))
+            .collect();
+        drop(probe);
+        case.angles = angles;
+        let energy = case.energy();
+        let gn = energy.linearise(&x);
+        let mut work = vec![0.0; 2 * n];
+        let v: Vec<f64> = (0..3 * n)
+            .map(|i| ((i * 37) % 11) as f64 / 11.0 - 0.4)
+            .collect();
+        let u: Vec<f64> = (0..3 * n)
+            .map(|i| ((i * 53) % 7) as f64 / 7.0 - 0.5)
+            .collect();
+        let (mut hv, mut hu) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+        gn.apply(0.0, &v, &mut hv, &mut work);
+        gn.apply(0.0, &u, &mut hu, &mut work);
+        let (uhv, vhu) = (dot(&u, &hv), dot(&v, &hu));
+        assert!(
+            (uhv - vhu).abs() <= 1e-12 * uhv.abs().max(1.0),
+            "{uhv} against {vhu}"
+        );
+        let h = 1e-6;
+        let (mut up, mut down) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+        let shifted =
+            |sign: f64| -> Vec<f64> { x.iter().zip(&v).map(|(x, v)| x + sign * h * v).collect() };
+        energy.value_and_gradient(&shifted(1.0), &mut up, &mut work);
+        energy.value_and_gradient(&shifted(-1.0), &mut down, &mut work);
+        let largest = hv.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        for i in 0..3 * n {
+            let numeric = (up[i] - down[i]) / (2.0 * h);
+            assert!(
+                (numeric - hv[i]).abs() <= 1e-5 * largest,
+                "entry {i}: {numeric} against {}",
+                hv[i]
+            );
+        }
+    }
+
+    /// Every step lowers E, and the steps reach a minimum: once they stop changing (f, g) by
+    /// 1e-10, the gradient is below 1e-6 of where it started.
+    #[test]
+    fn steps_lower_the_energy_to_a_minimum() {
+        let case = case();
+        let energy = case.energy();
+        let mut minimiser = Minimiser::new(&energy, case.point.clone());
+        let norm = |v: &[f64]| dot(v, v).sqrt();
+        let start = norm(&minimiser.grad);
+        let mut last = minimiser.energy();
+        let mut steps = 0;
+        loop {
+            let change = minimiser.step(&energy);
+            steps += 1;
+            assert!(minimiser.energy() < last || change == 0.0, "step {steps}");
+            last = minimiser.energy();
+            if change < 1e-10 || steps == 500 {
+                break;
+            }
+        }
+        let end = norm(&minimiser.grad);
+        assert!(end < 1e-6 * start, "{end} of {start} after {steps} steps");
+    }
+}
