@@ -63,22 +63,28 @@ pub struct Args {
     pub bunny_size: usize,
     #[command(flatten)]
     pub solver: SolverFlags,
-    /// The methods each case is solved with, a row each (comma separated): multigrid
-    /// (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid
-    /// solution), integrable-lm (the integrable method's energy minimised by
-    /// Levenberg–Marquardt; slower), jacobi (Ikeuchi–Horn's fixed point, slowly; for
-    /// comparison).
-    #[arg(
-        long,
-        value_name = "METHODS",
-        value_delimiter = ',',
-        default_value = "multigrid,integrable,integrable-lm"
-    )]
-    pub method: Vec<String>,
+    #[arg(long, value_name = "METHODS", value_delimiter = ',', help = methods_help())]
+    pub method: Option<Vec<String>>,
     /// The commit to record in the report; default: `git rev-parse --short HEAD` in the
     /// current folder (with `-dirty` when tracked files are modified), or "unknown".
     #[arg(long, value_name = "ID")]
     pub commit: Option<String>,
+}
+
+/// The `--method` help, with the library's default methods.
+fn methods_help() -> String {
+    let defaults: Vec<String> = evaluation::DEFAULT_METHODS
+        .iter()
+        .map(Method::to_string)
+        .collect();
+    format!(
+        "The methods each case is solved with, a row each (comma separated): multigrid \
+         (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid \
+         solution), integrable-lm (the integrable method's energy minimised by \
+         Levenberg–Marquardt; slower), jacobi (Ikeuchi–Horn's fixed point, slowly; for \
+         comparison) [default: {}]",
+        defaults.join(",")
+    )
 }
 
 /// Runs `eval`.
@@ -107,11 +113,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.bunny_size = args.bunny_size;
     config.albedo_quantile = args.albedo_quantile;
     config.ball_albedo_from_truth = args.ball_albedo_from_truth;
-    config.methods = args
-        .method
-        .iter()
-        .map(|m| m.trim().parse::<Method>())
-        .collect::<Result<_, _>>()?;
+    if let Some(methods) = &args.method {
+        config.methods = methods
+            .iter()
+            .map(|m| m.trim().parse::<Method>())
+            .collect::<Result<_, _>>()?;
+    }
     args.solver.apply(&mut config.options);
     config.max_iter = args.solver.max_iter;
     config.validate()?;
