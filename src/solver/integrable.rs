@@ -216,12 +216,6 @@ impl Solver {
             tol: POISSON_TOL,
             ..PoissonOptions::default()
         };
-        let mut depth: Option<Image> = None;
-        let (mut target_f, mut target_g) = (vec![0.0; n], vec![0.0; n]);
-        let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
-        // (input, result) of an iteration, f then g.
-        let mut x = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
-        let mut anderson = Anderson::new(2 * n, history);
         if options.method == Method::IntegrableLm {
             // The depth of the start's slopes starts the joint minimisation.
             let (f, g) = self.current_fg();
@@ -252,6 +246,12 @@ impl Solver {
             self.cur_g[..n].copy_from_slice(&x[n..2 * n]);
             return Ok(self.solution(image, bc, reflectance, stats));
         }
+        let mut depth: Option<Image> = None;
+        let (mut target_f, mut target_g) = (vec![0.0; n], vec![0.0; n]);
+        let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
+        // (input, result) of an iteration, f then g.
+        let mut x = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+        let mut anderson = Anderson::new(2 * n, history);
         let stats = iterate(n, options, progress, |_| {
             let (f, g) = self.current_fg();
             let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;

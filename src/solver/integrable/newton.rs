@@ -245,7 +245,7 @@ impl<'a> Energy<'a> {
             e
         };
         let e = per_pixel(n, grad_f, grad_g, scratch, pixel);
-        per_depth(grad_z, |k| self.gather_depth(k, scratch));
+        per_item(grad_z, |k| self.gather_depth(k, scratch));
         e
     }
 
@@ -255,7 +255,7 @@ impl<'a> Energy<'a> {
         let (f, rest) = v.split_at(n);
         let (g, z) = rest.split_at(n);
         let mut blocks = vec![Block::default(); n];
-        let fill = |j: usize, block: &mut Block| {
+        let block = |j: usize| -> Block {
             let node = &self.nodes[j];
             let k = node
                 .neighbours
@@ -284,26 +284,15 @@ impl<'a> Energy<'a> {
                 [0.0; 4]
             };
             let diagonal = SIGMA * k + mu;
-            *block = Block {
+            Block {
                 fg: [diagonal + data[0], data[1], diagonal + data[2]],
                 slope,
-            };
+            }
         };
-        if n < PARALLEL_MIN {
-            blocks.iter_mut().enumerate().for_each(|(j, b)| fill(j, b));
-        } else {
-            blocks
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, chunk)| {
-                    for (i, b) in chunk.iter_mut().enumerate() {
-                        fill(c * CHUNK + i, b);
-                    }
-                });
-        }
+        per_item(&mut blocks, block);
         // z's diagonal: Σ over its readers of μ|T′(∂p, ∂q)|².
         let mut depth = vec![0.0; n];
-        per_depth(&mut depth, |k| {
+        per_item(&mut depth, |k| {
             let mut sum = 0.0;
             for &(j, dp, dq) in &self.readers[self.reader_start[k]..self.reader_start[k + 1]] {
                 let j = j as usize;
@@ -362,14 +351,15 @@ where
     sums.iter().sum()
 }
 
-/// out[k] = `depth(k)` for every depth value, over fixed chunks.
-fn per_depth<F>(out: &mut [f64], depth: F)
+/// out[k] = `value(k)` for every k (a pixel's block, a depth's entry), over fixed chunks.
+fn per_item<T, F>(out: &mut [T], value: F)
 where
-    F: Fn(usize) -> f64 + Sync + Send,
+    T: Send,
+    F: Fn(usize) -> T + Sync + Send,
 {
-    let chunk = |c: usize, out: &mut [f64]| {
+    let chunk = |c: usize, out: &mut [T]| {
         for (i, o) in out.iter_mut().enumerate() {
-            *o = depth(c * CHUNK + i);
+            *o = value(c * CHUNK + i);
         }
     };
     if out.len() < PARALLEL_MIN {
@@ -435,7 +425,7 @@ impl Model<'_, '_> {
             0.0
         };
         per_pixel(n, out_f, out_g, scratch, pixel);
-        per_depth(out_z, |k| {
+        per_item(out_z, |k| {
             e.gather_depth(k, scratch) + nu * self.depth[k] * xz[k]
         });
     }
