@@ -376,6 +376,7 @@ fn screened_nodes(
     }
 }
 
+mod aggregation;
 mod newton;
 
 /// The slope cap of the angle residual: dφ/du ≤ [`ANGLE_SLOPE_CAP`], reached where the
@@ -733,7 +734,8 @@ mod tests {
     }
 
     /// The same sphere by integrable-lm, which minimises the energy the alternation only
-    /// balances: it converges (39 steps), its slopes are a surface's as closely as the
+    /// balances: it converges (23 steps; 39 before the multigrid preconditioner and the
+    /// stretched steps of session 13), its slopes are a surface's as closely as the
     /// alternation's (3.73e-2 px per edge against 3.85e-2), and its normals are closer to the
     /// truth (measured 3.46° mean against the alternation's 4.74°).
     #[test]
@@ -744,7 +746,7 @@ mod tests {
         let int = solve(&s, light, &b, Method::Integrable);
         let lm = solve(&s, light, &b, Method::IntegrableLm);
         assert!(
-            lm.converged && !lm.diverged,
+            lm.converged && !lm.diverged && lm.iterations <= 30,
             "{} after {}",
             lm.last_update,
             lm.iterations

@@ -1,0 +1,406 @@
+//! Multigrid by aggregation: the preconditioner of the integrable-lm method's linear solves.
+//!
+//! The model's matrix H couples each pixel's (f, g) to its neighbours' (smoothness) and to the
+//! depth around it (integrability). Its smooth modes, in which the orientations and the depth
+//! bend together, are what a per-pixel preconditioner leaves to conjugate gradients, and their
+//! number grows with the grid. Here H is coarsened by aggregates of 2 × 2 cells of one field
+//! (f, g, or one of the depth's four sublattices: central differences do not couple
+//! neighbouring depths, so the depths of even and odd columns and rows are separate fields to
+//! them), each coarse matrix PᵀAP for P the aggregates' indicators (the entries summed by
+//! aggregate, so the coarse stencils stay as compact as the fine ones), and the coarse
+//! correction scaled by [`OVER_CORRECTION`] (Blaheta 1986; Vaněk, Mandel & Brezina 1996; Notay
+//! 2010 on plain aggregation). One V-cycle (a forward Gauss–Seidel sweep before the coarse
+//! correction, a backward one after, a dense Cholesky solve at the coarsest level) is a
+//! symmetric positive definite operator, so it preconditions conjugate gradients.
+//!
+//! Smoothing the aggregates' indicators (smoothed aggregation) was measured first, on a 256²
+//! sphere: 6 conjugate-gradient iterations per step in place of 16, but 2.6 s to build each
+//! step's hierarchy (its coarse stencils grew to 700 entries a row) against 0.1 s.
+//!
+//! Everything runs on one thread in a fixed order: the result does not depend on the thread
+//! count.
+
+/// A sparse matrix in compressed rows, columns sorted within each row.
+#[derive(Debug, Clone)]
+pub(super) struct Csr {
+    start: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl Csr {
+    /// The matrix of `rows` rows whose entries are the sums of the triplets' values at their
+    /// (row, column), added in the triplets' order.
+    pub(super) fn from_triplets(rows: usize, triplets: &[(u32, u32, f64)]) -> Csr {
+        // Bucket by row (stable), then sort each row's few entries by column.
+        let mut count = vec![0usize; rows + 1];
+        for &(r, ..) in triplets {
+            count[r as usize + 1] += 1;
+        }
+        for i in 0..rows {
+            count[i + 1] += count[i];
+        }
+        let mut next = count.clone();
+        let mut bucket = vec![(0u32, 0.0); triplets.len()];
+        for &(r, c, v) in triplets {
+            bucket[next[r as usize]] = (c, v);
+            next[r as usize] += 1;
+        }
+        let mut start = vec![0; rows + 1];
+        let (mut col, mut val) = (Vec::with_capacity(triplets.len() / 2), Vec::new());
+        for i in 0..rows {
+            let row = &mut bucket[count[i]..count[i + 1]];
+            row.sort_by_key(|&(c, _)| c);
+            for &(c, v) in row.iter() {
+                match val.last_mut() {
+                    Some(last) if col.len() > start[i] && col.last() == Some(&c) => *last += v,
+                    _ => {
+                        col.push(c);
+                        val.push(v);
+                    }
+                }
+            }
+            start[i + 1] = col.len();
+        }
+        Csr { start, col, val }
+    }
+
+    /// The number of rows.
+    pub(super) fn rows(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// Row `i`'s columns and values.
+    fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let range = self.start[i]..self.start[i + 1];
+        (&self.col[range.clone()], &self.val[range])
+    }
+
+    /// y = A x.
+    pub(super) fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        for (i, y) in y.iter_mut().enumerate() {
+            let (cols, vals) = self.row(i);
+            *y = cols.iter().zip(vals).map(|(&c, v)| v * x[c as usize]).sum();
+        }
+    }
+
+    /// The diagonal entries (0 where a row has none).
+    fn diagonal(&self) -> Vec<f64> {
+        (0..self.rows())
+            .map(|i| {
+                let (cols, vals) = self.row(i);
+                cols.binary_search(&(i as u32)).map_or(0.0, |k| vals[k])
+            })
+            .collect()
+    }
+}
+
+/// Where an unknown sits for the aggregation: its field (f, g, or a sublattice of the depth)
+/// and its cell (column, row) at its level.
+pub(super) type Place = (u8, u32, u32);
+
+/// Rows at or below which a level is solved directly.
+const COARSEST: usize = 500;
+
+/// The most levels.
+const MAX_LEVELS: usize = 12;
+
+/// The factor on each coarse correction: the aggregates' piecewise constants overestimate a
+/// smooth error's energy, so their correction falls short, and scaling it makes up part of
+/// that (below 2, the cycle stays a contraction in A's norm). On a 128² Laplacian, conjugate
+/// gradients take 26 iterations with 1.0, 16 with 1.5, 14 with 1.8.
+const OVER_CORRECTION: f64 = 1.8;
+
+/// One level of the hierarchy.
+#[derive(Debug)]
+struct Level {
+    a: Csr,
+    /// 1 / A's diagonal.
+    inv_diagonal: Vec<f64>,
+    /// Each row's aggregate on the next level (none at the coarsest).
+    aggregate: Option<Vec<u32>>,
+}
+
+/// An aggregation hierarchy of one symmetric positive semi-definite matrix.
+#[derive(Debug)]
+pub(super) struct Multigrid {
+    levels: Vec<Level>,
+    /// The coarsest matrix's Cholesky factor L (row-major, lower triangle).
+    factor: Vec<f64>,
+}
+
+impl Multigrid {
+    /// The hierarchy of `a` (symmetric, with a positive diagonal), whose unknowns sit at
+    /// `places`.
+    pub(super) fn new(a: Csr, places: Vec<Place>) -> Multigrid {
+        let mut levels = Vec::new();
+        let (mut a, mut places) = (a, places);
+        loop {
+            let inv_diagonal = a.diagonal().iter().map(|d| 1.0 / d).collect();
+            let (aggregate, coarse_places) = aggregate(&places);
+            // At the coarsest size, or where coarsening stalls (a thin domain): solve here.
+            if a.rows() <= COARSEST
+                || levels.len() + 1 == MAX_LEVELS
+                || coarse_places.len() * 5 > a.rows() * 4
+            {
+                let factor = cholesky(&a);
+                levels.push(Level {
+                    a,
+                    inv_diagonal,
+                    aggregate: None,
+                });
+                return Multigrid { levels, factor };
+            }
+            // PᵀAP for P the aggregates' indicators: the entries summed by aggregate.
+            let mut triplets = Vec::with_capacity(a.val.len());
+            for i in 0..a.rows() {
+                let (cols, vals) = a.row(i);
+                let ai = aggregate[i];
+                triplets.extend(
+                    cols.iter()
+                        .zip(vals)
+                        .map(|(&c, &v)| (ai, aggregate[c as usize], v)),
+                );
+            }
+            let n = coarse_places.len();
+            let coarse = Csr::from_triplets(n, &triplets);
+            levels.push(Level {
+                a,
+                inv_diagonal,
+                aggregate: Some(aggregate),
+            });
+            a = coarse;
+            places = coarse_places;
+        }
+    }
+
+    /// x = one V-cycle applied to `b` from 0.
+    pub(super) fn apply(&self, b: &[f64], x: &mut [f64]) {
+        self.cycle(0, b, x);
+    }
+
+    fn cycle(&self, l: usize, b: &[f64], x: &mut [f64]) {
+        let level = &self.levels[l];
+        let Some(aggregate) = &level.aggregate else {
+            x.copy_from_slice(b);
+            cholesky_solve(&self.factor, x);
+            return;
+        };
+        x.fill(0.0);
+        gauss_seidel(level, b, x, false);
+        let mut residual = vec![0.0; b.len()];
+        level.a.mul_vec(x, &mut residual);
+        let coarse_len = self.levels[l + 1].a.rows();
+        let mut coarse_b = vec![0.0; coarse_len];
+        for ((res, b), &t) in residual.iter().zip(b).zip(aggregate) {
+            coarse_b[t as usize] += b - res;
+        }
+        let mut coarse_x = vec![0.0; coarse_len];
+        self.cycle(l + 1, &coarse_b, &mut coarse_x);
+        for (x, &t) in x.iter_mut().zip(aggregate) {
+            *x += OVER_CORRECTION * coarse_x[t as usize];
+        }
+        gauss_seidel(level, b, x, true);
+    }
+}
+
+/// One Gauss–Seidel sweep on A x = b, forward or backward.
+fn gauss_seidel(level: &Level, b: &[f64], x: &mut [f64], backward: bool) {
+    let sweep = |i: usize, x: &mut [f64]| {
+        let (cols, vals) = level.a.row(i);
+        let mut s = b[i];
+        for (&c, v) in cols.iter().zip(vals) {
+            if c as usize != i {
+                s -= v * x[c as usize];
+            }
+        }
+        x[i] = s * level.inv_diagonal[i];
+    };
+    if backward {
+        (0..x.len()).rev().for_each(|i| sweep(i, x));
+    } else {
+        (0..x.len()).for_each(|i| sweep(i, x));
+    }
+}
+
+/// The aggregates of 2 × 2 cells of one field: the tentative prolongation (each unknown's
+/// aggregate) and the aggregates' places.
+fn aggregate(places: &[Place]) -> (Vec<u32>, Vec<Place>) {
+    let coarse: Vec<Place> = places.iter().map(|&(f, x, y)| (f, x / 2, y / 2)).collect();
+    let mut order: Vec<usize> = (0..places.len()).collect();
+    order.sort_by_key(|&i| coarse[i]);
+    let (mut tentative, mut coarse_places) = (vec![0; places.len()], Vec::new());
+    for i in order {
+        if coarse_places.last() != Some(&coarse[i]) {
+            coarse_places.push(coarse[i]);
+        }
+        tentative[i] = (coarse_places.len() - 1) as u32;
+    }
+    (tentative, coarse_places)
+}
+
+/// The dense Cholesky factor of `a`; a pivot below 1e-12 of the largest diagonal entry is
+/// raised to it (the matrix may be singular along the depth's constant).
+fn cholesky(a: &Csr) -> Vec<f64> {
+    let n = a.rows();
+    let mut l = vec![0.0; n * n];
+    for i in 0..n {
+        let (cols, vals) = a.row(i);
+        for (&c, &v) in cols.iter().zip(vals) {
+            l[i * n + c as usize] = v;
+        }
+    }
+    let largest = (0..n).map(|i| l[i * n + i]).fold(0.0f64, f64::max);
+    let floor = 1e-12 * largest.max(f64::MIN_POSITIVE);
+    for j in 0..n {
+        let mut d = l[j * n + j];
+        for k in 0..j {
+            d -= l[j * n + k] * l[j * n + k];
+        }
+        let d = d.max(floor).sqrt();
+        l[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = l[i * n + j];
+            for k in 0..j {
+                s -= l[i * n + k] * l[j * n + k];
+            }
+            l[i * n + j] = s / d;
+        }
+    }
+    l
+}
+
+/// Solves L Lᵀ x = b in place.
+fn cholesky_solve(l: &[f64], x: &mut [f64]) {
+    let n = x.len();
+    for i in 0..n {
+        let s: f64 = (0..i).map(|k| l[i * n + k] * x[k]).sum();
+        x[i] = (x[i] - s) / l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let s: f64 = (i + 1..n).map(|k| l[k * n + i] * x[k]).sum();
+        x[i] = (x[i] - s) / l[i * n + i];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-point Laplacian of a w × h grid with a diagonal shift, its places one field.
+    fn laplacian(w: usize, h: usize, shift: f64) -> (Csr, Vec<Place>) {
+        let mut t = Vec::new();
+        let id = |x: usize, y: usize| (y * w + x) as u32;
+        for y in 0..h {
+            for x in 0..w {
+                t.push((id(x, y), id(x, y), 4.0 + shift));
+                for (dx, dy) in [(1i64, 0i64), (-1, 0), (0, 1), (0, -1)] {
+                    let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                    if nx >= 0 && ny >= 0 && (nx as usize) < w && (ny as usize) < h {
+                        t.push((id(x, y), id(nx as usize, ny as usize), -1.0));
+                    }
+                }
+            }
+        }
+        let places = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (0u8, x as u32, y as u32)))
+            .collect();
+        (Csr::from_triplets(w * h, &t), places)
+    }
+
+    /// Triplets at one place are summed, rows and columns land where they say, and the
+    /// product with a vector is the dense one.
+    #[test]
+    fn triplets_make_the_matrix() {
+        let a = Csr::from_triplets(2, &[(1, 2, 1.0), (0, 0, 2.0), (1, 2, 3.0), (0, 1, -1.0)]);
+        assert_eq!(a.row(0), (&[0u32, 1][..], &[2.0, -1.0][..]));
+        assert_eq!(a.row(1), (&[2u32][..], &[4.0][..]));
+        assert_eq!(a.diagonal(), vec![2.0, 0.0]);
+        let mut y = vec![0.0; 2];
+        a.mul_vec(&[1.0, 2.0, 3.0], &mut y);
+        assert_eq!(y, vec![0.0, 12.0]);
+    }
+
+    /// The dense coarsest solve is exact.
+    #[test]
+    fn cholesky_solves() {
+        let (a, _) = laplacian(5, 4, 0.1);
+        let l = cholesky(&a);
+        let want: Vec<f64> = (0..20).map(|i| (i as f64 * 0.7).sin()).collect();
+        let mut x = vec![0.0; 20];
+        a.mul_vec(&want, &mut x);
+        cholesky_solve(&l, &mut x);
+        for (x, w) in x.iter().zip(&want) {
+            assert!((x - w).abs() < 1e-12, "{x} against {w}");
+        }
+    }
+
+    /// Conjugate gradients on A x = b from 0 to a relative residual of 1e-8, preconditioned
+    /// by `m`; the iterations.
+    fn pcg(a: &Csr, b: &[f64], m: impl Fn(&[f64], &mut [f64])) -> usize {
+        let n = b.len();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let (mut x, mut r, mut z, mut ap) = (vec![0.0; n], b.to_vec(), vec![0.0; n], vec![0.0; n]);
+        m(&r, &mut z);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        let target = 1e-8 * dot(b, b).sqrt();
+        for it in 1..=2000 {
+            a.mul_vec(&p, &mut ap);
+            let alpha = rz / dot(&p, &ap);
+            for i in 0..n {
+                x[i] += alpha * p[i];
+                r[i] -= alpha * ap[i];
+            }
+            if dot(&r, &r).sqrt() <= target {
+                return it;
+            }
+            m(&r, &mut z);
+            let next = dot(&r, &z);
+            for i in 0..n {
+                p[i] = z[i] + next / rz * p[i];
+            }
+            rz = next;
+        }
+        2000
+    }
+
+    /// Preconditioned by one V-cycle, conjugate gradients solve a Laplacian in a number of
+    /// iterations that barely grows with the grid (4 × the unknowns at most 1.5 × the
+    /// iterations), and in a fraction of what the diagonal takes.
+    #[test]
+    fn v_cycles_make_the_iterations_almost_independent_of_the_grid() {
+        let mut counts = Vec::new();
+        for side in [64, 128] {
+            let (a, places) = laplacian(side, side, 1e-6);
+            let b: Vec<f64> = (0..side * side)
+                .map(|i| ((i % side) as f64 * 0.1).cos() + ((i / side) as f64 * 0.07).sin())
+                .collect();
+            let mg = Multigrid::new(a.clone(), places);
+            assert!(mg.levels.len() >= 3);
+            let with = pcg(&a, &b, |r, z| mg.apply(r, z));
+            let jacobi = pcg(&a, &b, |r, z| {
+                z.iter_mut().zip(r).for_each(|(z, r)| *z = r / (4.0 + 1e-6))
+            });
+            assert!(4 * with < jacobi, "{side}²: {with} against {jacobi}");
+            counts.push(with);
+        }
+        assert!(2 * counts[1] <= 3 * counts[0], "{counts:?}");
+    }
+
+    /// The V-cycle is symmetric: uᵀM⁻¹v = vᵀM⁻¹u.
+    #[test]
+    fn the_cycle_is_symmetric() {
+        let (a, places) = laplacian(40, 30, 0.01);
+        let mg = Multigrid::new(a, places);
+        let n = 1200;
+        let u: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        let v: Vec<f64> = (0..n).map(|i| ((i * 53) % 7) as f64 - 3.0).collect();
+        let (mut mu, mut mv) = (vec![0.0; n], vec![0.0; n]);
+        mg.apply(&u, &mut mu);
+        mg.apply(&v, &mut mv);
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
+        let (x, y) = (dot(&v, &mu), dot(&u, &mv));
+        assert!((x - y).abs() <= 1e-9 * x.abs().max(1.0), "{x} against {y}");
+    }
+}
