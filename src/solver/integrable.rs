@@ -114,8 +114,12 @@
 //! 15.05°, 15 of the 18 DiLiGenT rows, the ball photographs by 0.04–0.44°, Mozart oblique with
 //! the occluding boundary 16.85° → 11.94°) and farther on 11 (Mozart frontal 10.34° → 13.88°,
 //! where E prefers the neck folded the other way, pot1 and harvest limb by 0.2–0.4°, the bunny
-//! at slant 30° and 60° by 0.2–0.6°); it converges on 23 rows against 36 and takes 1.8–20
-//! times as long (the figures: docs/evaluation.md, "Session 12").
+//! at slant 30° and 60° by 0.2–0.6°); it converged on 23 rows against 36 and took 1.8–20
+//! times as long (the figures: docs/evaluation.md, "Session 12"). Session 13 preconditions its
+//! linear solves by aggregation multigrid (`integrable/aggregation.rs`) and stretches a step
+//! along its direction where E fell by more than the model said: it now converges on 41 rows,
+//! in 3.1–32 times the alternation's time (median 6.1), and a 256² sphere converges in 48
+//! steps where it stopped at the cap of 200 (docs/evaluation.md, "Session 13").
 //!
 //! The returned (f, g) are the last gradients, within μ's pull of the depth's own: integrating
 //! them (as every solve is integrated) gives the depth of the last depth solve to within the

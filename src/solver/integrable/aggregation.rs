@@ -13,6 +13,12 @@
 //! correction, a backward one after, a dense Cholesky solve at the coarsest level) is a
 //! symmetric positive definite operator, so it preconditions conjugate gradients.
 //!
+//! It is the scheme of the Poisson integrator's preconditioner (`integrate/poisson/
+//! multigrid.rs`: 2 × 2 aggregates, Galerkin coarse operators, symmetric Gauss–Seidel, the
+//! correction scaled by 1.8), which is written for one 5-point Laplacian stored by colour so
+//! that its sweeps run on every thread; the coupled model has three fields and the depth's
+//! wider stencil, so here the matrix is assembled and coarsened algebraically.
+//!
 //! Smoothing the aggregates' indicators (smoothed aggregation) was measured first, on a 256²
 //! sphere: 6 conjugate-gradient iterations per step in place of 16, but 2.6 s to build each
 //! step's hierarchy (its coarse stencils grew to 700 entries a row) against 0.1 s.
