@@ -86,6 +86,12 @@ impl Csr {
         (&self.col[range.clone()], &self.val[range])
     }
 
+    /// The entry at (`i`, `j`), 0 where none is stored.
+    fn get(&self, i: usize, j: usize) -> f64 {
+        let (cols, vals) = self.row(i);
+        cols.binary_search(&(j as u32)).map_or(0.0, |k| vals[k])
+    }
+
     /// y = A x.
     pub(super) fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
         for (i, y) in y.iter_mut().enumerate() {
@@ -136,17 +142,17 @@ impl Multigrid {
         let mut levels = Vec::new();
         let (mut a, mut places) = (a, places);
         loop {
-            let blocks = blocks(&a, &places);
             let (aggregate, coarse_places) = aggregate(&places);
             // At the coarsest size, or where coarsening stalls (a thin domain): solve here.
             if a.rows() <= COARSEST
                 || levels.len() + 1 == MAX_LEVELS
                 || coarse_places.len() * 5 > a.rows() * 4
             {
+                // Solved by its factor: no smoother.
                 let factor = cholesky(&a);
                 levels.push(Level {
                     a,
-                    blocks,
+                    blocks: Vec::new(),
                     aggregate: None,
                 });
                 return Multigrid { levels, factor };
@@ -165,8 +171,8 @@ impl Multigrid {
             let n = coarse_places.len();
             let coarse = Csr::from_triplets(n, &triplets);
             levels.push(Level {
+                blocks: blocks(&a, &places),
                 a,
-                blocks,
                 aggregate: Some(aggregate),
             });
             a = coarse;
@@ -217,10 +223,6 @@ struct Block {
 /// The smoother's blocks: each place of field 0 (f) with the place of field 1 (g) at its cell,
 /// every other unknown alone; in the order of their first rows.
 fn blocks(a: &Csr, places: &[Place]) -> Vec<Block> {
-    let entry = |i: usize, j: usize| {
-        let (cols, vals) = a.row(i);
-        cols.binary_search(&(j as u32)).map_or(0.0, |k| vals[k])
-    };
     let mut partner = vec![u32::MAX; places.len()];
     let mut g_rows: Vec<(u32, u32, usize)> = places
         .iter()
@@ -244,7 +246,7 @@ fn blocks(a: &Csr, places: &[Place]) -> Vec<Block> {
         if other != u32::MAX && j < i {
             continue;
         }
-        let d = entry(i, i);
+        let d = a.get(i, i);
         if other == u32::MAX {
             out.push(Block {
                 rows: [i as u32, i as u32],
@@ -253,7 +255,7 @@ fn blocks(a: &Csr, places: &[Place]) -> Vec<Block> {
             });
             continue;
         }
-        let (b, c) = (entry(i, j), entry(j, j));
+        let (b, c) = (a.get(i, j), a.get(j, j));
         let det = d * c - b * b;
         out.push(Block {
             rows: [i as u32, j as u32],
@@ -513,11 +515,7 @@ mod tests {
         let (paired, mg) = iterations(0);
         let block = mg.levels[0].blocks[5];
         assert!(block.pair && block.rows == [5, (n + 5) as u32]);
-        let entry = |i: usize, j: usize| {
-            let (cols, vals) = a.row(i);
-            cols.binary_search(&(j as u32)).map_or(0.0, |k| vals[k])
-        };
-        let (aa, ab, bb) = (entry(5, 5), entry(5, n + 5), entry(n + 5, n + 5));
+        let (aa, ab, bb) = (a.get(5, 5), a.get(5, n + 5), a.get(n + 5, n + 5));
         let [p, q, r] = block.inverse;
         for (x, want) in [
             (aa * p + ab * q, 1.0),
