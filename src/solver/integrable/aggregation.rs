@@ -27,6 +27,12 @@
 //! sphere: 6 conjugate-gradient iterations per step in place of 16, but 2.6 s to build each
 //! step's hierarchy (its coarse stencils grew to 700 entries a row) against 0.1 s.
 //!
+//! The hierarchy is planned once per minimisation from the matrix's sparsity pattern, which is
+//! the same at every step (the aggregates, every level's pattern, where each entry lands on
+//! the next level), and refilled with each step's values ([`Multigrid::fill`]): building it
+//! anew at each step, most of that time went to sorting each row's entries by column. The
+//! V-cycle's buffers are the caller's ([`Multigrid::scratch`]).
+//!
 //! Everything runs on one thread in a fixed order: the result does not depend on the thread
 //! count.
 
@@ -41,38 +47,57 @@ pub(super) struct Csr {
 impl Csr {
     /// The matrix of `rows` rows whose entries are the sums of the triplets' values at their
     /// (row, column), added in the triplets' order.
+    #[cfg(test)]
     pub(super) fn from_triplets(rows: usize, triplets: &[(u32, u32, f64)]) -> Csr {
-        // Bucket by row (stable), then sort each row's few entries by column.
+        let (mut a, entry) = Csr::pattern(rows, triplets.iter().map(|&(r, c, _)| (r, c)));
+        a.fill(&entry, triplets.iter().map(|t| t.2));
+        a
+    }
+
+    /// The matrix of `rows` rows with an entry, 0, at each of the (row, column) `positions`
+    /// (repeats stored once), and the index of each position's entry in the values.
+    fn pattern(rows: usize, positions: impl Iterator<Item = (u32, u32)>) -> (Csr, Vec<u32>) {
+        let positions: Vec<(u32, u32)> = positions.collect();
+        // Bucket by row (stable), then sort each row's few entries by column (stable too).
         let mut count = vec![0usize; rows + 1];
-        for &(r, ..) in triplets {
+        for &(r, _) in &positions {
             count[r as usize + 1] += 1;
         }
         for i in 0..rows {
             count[i + 1] += count[i];
         }
         let mut next = count.clone();
-        let mut bucket = vec![(0u32, 0.0); triplets.len()];
-        for &(r, c, v) in triplets {
-            bucket[next[r as usize]] = (c, v);
+        let mut bucket = vec![(0u32, 0u32); positions.len()];
+        for (k, &(r, c)) in positions.iter().enumerate() {
+            bucket[next[r as usize]] = (c, k as u32);
             next[r as usize] += 1;
         }
         let mut start = vec![0; rows + 1];
-        let (mut col, mut val) = (Vec::with_capacity(triplets.len() / 2), Vec::new());
+        let mut col: Vec<u32> = Vec::with_capacity(positions.len() / 2);
+        let mut entry = vec![0u32; positions.len()];
         for i in 0..rows {
             let row = &mut bucket[count[i]..count[i + 1]];
             row.sort_by_key(|&(c, _)| c);
-            for &(c, v) in row.iter() {
-                match val.last_mut() {
-                    Some(last) if col.len() > start[i] && col.last() == Some(&c) => *last += v,
-                    _ => {
-                        col.push(c);
-                        val.push(v);
-                    }
+            for &(c, k) in row.iter() {
+                if col.len() == start[i] || col.last() != Some(&c) {
+                    col.push(c);
                 }
+                entry[k as usize] = (col.len() - 1) as u32;
             }
             start[i + 1] = col.len();
         }
-        Csr { start, col, val }
+        let val = vec![0.0; col.len()];
+        (Csr { start, col, val }, entry)
+    }
+
+    /// Sets every entry to the sum of the `values` whose index in `entry` points at it, added
+    /// in their order (`values` in the order of the positions `entry` was made from).
+    fn fill(&mut self, entry: &[u32], values: impl ExactSizeIterator<Item = f64>) {
+        assert_eq!(values.len(), entry.len(), "values for another pattern");
+        self.val.fill(0.0);
+        for (&k, v) in entry.iter().zip(values) {
+            self.val[k as usize] += v;
+        }
     }
 
     /// The number of rows.
@@ -123,89 +148,131 @@ struct Level {
     a: Csr,
     /// The smoother's blocks, in the order it visits them.
     blocks: Vec<Block>,
-    /// Each row's aggregate on the next level (none at the coarsest).
-    aggregate: Option<Vec<u32>>,
+    /// Each row's aggregate on the next level and, for each of A's stored entries, its entry
+    /// in the next level's matrix (none at the coarsest).
+    coarse: Option<(Vec<u32>, Vec<u32>)>,
 }
 
-/// An aggregation hierarchy of one symmetric positive semi-definite matrix.
+/// An aggregation hierarchy for the symmetric positive semi-definite matrices of one sparsity
+/// pattern: planned once from the pattern (the aggregates, every level's pattern and where
+/// each entry goes on the next), then [`Multigrid::fill`]ed with each matrix's values, so that
+/// a minimisation whose steps share a pattern sorts it once.
 #[derive(Debug)]
 pub(super) struct Multigrid {
     levels: Vec<Level>,
+    /// Where each position of the finest pattern lands among its entries.
+    entry: Vec<u32>,
     /// The coarsest matrix's Cholesky factor L (row-major, lower triangle).
     factor: Vec<f64>,
 }
 
 impl Multigrid {
-    /// The hierarchy of `a` (symmetric, with a positive diagonal), whose unknowns sit at
-    /// `places`.
-    pub(super) fn new(a: Csr, places: Vec<Place>) -> Multigrid {
+    /// The hierarchy for matrices of `rows` rows with entries at the (row, column) `positions`
+    /// (symmetric, the diagonal among them), whose unknowns sit at `places`; its values are 0
+    /// until [`Multigrid::fill`].
+    pub(super) fn plan(
+        rows: usize,
+        positions: impl Iterator<Item = (u32, u32)>,
+        places: Vec<Place>,
+    ) -> Multigrid {
+        let (mut a, entry) = Csr::pattern(rows, positions);
+        let mut places = places;
         let mut levels = Vec::new();
-        let (mut a, mut places) = (a, places);
         loop {
             let (aggregate, coarse_places) = aggregate(&places);
-            // At the coarsest size, or where coarsening stalls (a thin domain): solve here.
+            // At the coarsest size, or where coarsening stalls (a thin domain): solve here,
+            // by its factor, with no smoother.
             if a.rows() <= COARSEST
                 || levels.len() + 1 == MAX_LEVELS
                 || coarse_places.len() * 5 > a.rows() * 4
             {
-                // Solved by its factor: no smoother.
-                let factor = cholesky(&a);
                 levels.push(Level {
                     a,
                     blocks: Vec::new(),
-                    aggregate: None,
+                    coarse: None,
                 });
-                return Multigrid { levels, factor };
+                return Multigrid {
+                    levels,
+                    entry,
+                    factor: Vec::new(),
+                };
             }
             // PᵀAP for P the aggregates' indicators: the entries summed by aggregate.
-            let mut triplets = Vec::with_capacity(a.val.len());
-            for i in 0..a.rows() {
-                let (cols, vals) = a.row(i);
+            let positions = (0..a.rows()).flat_map(|i| {
                 let ai = aggregate[i];
-                triplets.extend(
-                    cols.iter()
-                        .zip(vals)
-                        .map(|(&c, &v)| (ai, aggregate[c as usize], v)),
-                );
-            }
-            let n = coarse_places.len();
-            let coarse = Csr::from_triplets(n, &triplets);
+                let aggregate = &aggregate;
+                a.row(i).0.iter().map(move |&c| (ai, aggregate[c as usize]))
+            });
+            let (coarse, scatter) = Csr::pattern(coarse_places.len(), positions);
             levels.push(Level {
-                blocks: blocks(&a, &places),
+                blocks: blocks(&places),
                 a,
-                aggregate: Some(aggregate),
+                coarse: Some((aggregate, scatter)),
             });
             a = coarse;
             places = coarse_places;
         }
     }
 
-    /// x = one V-cycle applied to `b` from 0.
-    pub(super) fn apply(&self, b: &[f64], x: &mut [f64]) {
-        self.cycle(0, b, x);
+    /// Sets the finest matrix to the sums of `values` at the planned positions (in their
+    /// order), and every coarser level, smoother and factor from it.
+    pub(super) fn fill(&mut self, values: impl ExactSizeIterator<Item = f64>) {
+        self.levels[0].a.fill(&self.entry, values);
+        for l in 0..self.levels.len() {
+            let (fine, coarser) = self.levels.split_at_mut(l + 1);
+            let level = &mut fine[l];
+            for block in &mut level.blocks {
+                block.invert(&level.a);
+            }
+            match (&level.coarse, coarser.first_mut()) {
+                (Some((_, scatter)), Some(next)) => {
+                    next.a.fill(scatter, level.a.val.iter().copied());
+                }
+                _ => self.factor = cholesky(&level.a),
+            }
+        }
     }
 
-    fn cycle(&self, l: usize, b: &[f64], x: &mut [f64]) {
+    /// Buffers for [`Multigrid::apply`], three per level.
+    pub(super) fn scratch(&self) -> Vec<[Vec<f64>; 3]> {
+        self.levels
+            .iter()
+            .map(|level| std::array::from_fn(|_| vec![0.0; level.a.rows()]))
+            .collect()
+    }
+
+    /// x = one V-cycle applied to `b` from 0, in the buffers of [`Multigrid::scratch`].
+    pub(super) fn apply(&self, b: &[f64], x: &mut [f64], scratch: &mut [[Vec<f64>; 3]]) {
+        self.cycle(0, b, x, scratch);
+    }
+
+    fn cycle(&self, l: usize, b: &[f64], x: &mut [f64], scratch: &mut [[Vec<f64>; 3]]) {
         let level = &self.levels[l];
-        let Some(aggregate) = &level.aggregate else {
+        let Some((aggregate, _)) = &level.coarse else {
             x.copy_from_slice(b);
             cholesky_solve(&self.factor, x);
             return;
         };
         x.fill(0.0);
         gauss_seidel(level, b, x, false);
-        let mut residual = vec![0.0; b.len()];
-        level.a.mul_vec(x, &mut residual);
-        let coarse_len = self.levels[l + 1].a.rows();
-        let mut coarse_b = vec![0.0; coarse_len];
+        // Level l's buffers: its residual, and its right-hand side and solution (below the
+        // finest).
+        let (here, below) = scratch.split_at_mut(l + 1);
+        let residual = &mut here[l][0];
+        let [_, coarse_b, coarse_x] = &mut below[0];
+        level.a.mul_vec(x, residual);
+        coarse_b.fill(0.0);
         for ((res, b), &t) in residual.iter().zip(b).zip(aggregate) {
             coarse_b[t as usize] += b - res;
         }
-        let mut coarse_x = vec![0.0; coarse_len];
-        self.cycle(l + 1, &coarse_b, &mut coarse_x);
+        let coarse_b = std::mem::take(coarse_b);
+        let mut coarse_x = std::mem::take(coarse_x);
+        self.cycle(l + 1, &coarse_b, &mut coarse_x, scratch);
         for (x, &t) in x.iter_mut().zip(aggregate) {
             *x += OVER_CORRECTION * coarse_x[t as usize];
         }
+        scratch[l + 1][1] = coarse_b;
+        scratch[l + 1][2] = coarse_x;
         gauss_seidel(level, b, x, true);
     }
 }
@@ -220,9 +287,29 @@ struct Block {
     inverse: [f64; 3],
 }
 
-/// The smoother's blocks: each place of field 0 (f) with the place of field 1 (g) at its cell,
-/// every other unknown alone; in the order of their first rows.
-fn blocks(a: &Csr, places: &[Place]) -> Vec<Block> {
+impl Block {
+    /// The inverse of `a`'s block at the block's rows.
+    fn invert(&mut self, a: &Csr) {
+        let [i, j] = self.rows.map(|r| r as usize);
+        let d = a.get(i, i);
+        self.inverse = if !self.pair {
+            [1.0 / d, 0.0, 0.0]
+        } else {
+            let (b, c) = (a.get(i, j), a.get(j, j));
+            let det = d * c - b * b;
+            if det > 0.0 {
+                [c / det, -b / det, d / det]
+            } else {
+                // Not positive definite in floating point: the two diagonals alone.
+                [1.0 / d, 0.0, 1.0 / c]
+            }
+        };
+    }
+}
+
+/// The smoother's blocks (to be inverted): each place of field 0 (f) with the place of field 1
+/// (g) at its cell, every other unknown alone; in the order of their first rows.
+fn blocks(places: &[Place]) -> Vec<Block> {
     let mut partner = vec![u32::MAX; places.len()];
     let mut g_rows: Vec<(u32, u32, usize)> = places
         .iter()
@@ -246,26 +333,11 @@ fn blocks(a: &Csr, places: &[Place]) -> Vec<Block> {
         if other != u32::MAX && j < i {
             continue;
         }
-        let d = a.get(i, i);
-        if other == u32::MAX {
-            out.push(Block {
-                rows: [i as u32, i as u32],
-                pair: false,
-                inverse: [1.0 / d, 0.0, 0.0],
-            });
-            continue;
-        }
-        let (b, c) = (a.get(i, j), a.get(j, j));
-        let det = d * c - b * b;
+        let pair = other != u32::MAX;
         out.push(Block {
-            rows: [i as u32, j as u32],
-            pair: true,
-            inverse: if det > 0.0 {
-                [c / det, -b / det, d / det]
-            } else {
-                // Not positive definite in floating point: the two diagonals alone.
-                [1.0 / d, 0.0, 1.0 / c]
-            },
+            rows: [i as u32, if pair { j as u32 } else { i as u32 }],
+            pair,
+            inverse: [0.0; 3],
         });
     }
     out
@@ -388,6 +460,42 @@ mod tests {
         (Csr::from_triplets(w * h, &t), places)
     }
 
+    /// The hierarchy of `a`: planned for its pattern and filled with its values.
+    fn hierarchy(a: &Csr, places: Vec<Place>) -> Multigrid {
+        let positions = (0..a.rows()).flat_map(|i| a.row(i).0.iter().map(move |&c| (i as u32, c)));
+        let mut mg = Multigrid::plan(a.rows(), positions, places);
+        mg.fill(a.val.iter().copied());
+        mg
+    }
+
+    /// A hierarchy planned once and filled with another matrix of the same pattern is the one
+    /// planned for that matrix: the same V-cycle to the bit, at every level.
+    #[test]
+    fn a_refilled_hierarchy_is_the_matrixs_own() {
+        let (first, places) = laplacian(70, 50, 0.5);
+        let (second, _) = laplacian(70, 50, 0.01);
+        // The second's values made uneven, so that no level is the first's scaled.
+        let mut second = second;
+        for (k, v) in second.val.iter_mut().enumerate() {
+            if second.col[k] as usize == second.start.partition_point(|&s| s <= k) - 1 {
+                *v += (k % 5) as f64 * 0.1;
+            }
+        }
+        let mut refilled = hierarchy(&first, places.clone());
+        refilled.fill(second.val.iter().copied());
+        let own = hierarchy(&second, places);
+        assert!(own.levels.len() >= 3);
+        for (a, b) in refilled.levels.iter().zip(&own.levels) {
+            assert_eq!(a.a.val, b.a.val);
+        }
+        assert_eq!(refilled.factor, own.factor);
+        let b: Vec<f64> = (0..second.rows()).map(|i| (i as f64 * 0.3).sin()).collect();
+        let (mut x, mut y) = (vec![0.0; b.len()], vec![0.0; b.len()]);
+        refilled.apply(&b, &mut x, &mut refilled.scratch());
+        own.apply(&b, &mut y, &mut own.scratch());
+        assert_eq!(x, y);
+    }
+
     /// Triplets at one place are summed, rows and columns land where they say, and the
     /// product with a vector is the dense one.
     #[test]
@@ -416,7 +524,7 @@ mod tests {
 
     /// Conjugate gradients on A x = b from 0 to a relative residual of 1e-8, preconditioned
     /// by `m`; the iterations.
-    fn pcg(a: &Csr, b: &[f64], m: impl Fn(&[f64], &mut [f64])) -> usize {
+    fn pcg(a: &Csr, b: &[f64], mut m: impl FnMut(&[f64], &mut [f64])) -> usize {
         let n = b.len();
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
         let (mut x, mut r, mut z, mut ap) = (vec![0.0; n], b.to_vec(), vec![0.0; n], vec![0.0; n]);
@@ -455,9 +563,10 @@ mod tests {
             let b: Vec<f64> = (0..side * side)
                 .map(|i| ((i % side) as f64 * 0.1).cos() + ((i / side) as f64 * 0.07).sin())
                 .collect();
-            let mg = Multigrid::new(a.clone(), places);
+            let mg = hierarchy(&a, places);
             assert!(mg.levels.len() >= 3);
-            let with = pcg(&a, &b, |r, z| mg.apply(r, z));
+            let mut scratch = mg.scratch();
+            let with = pcg(&a, &b, |r, z| mg.apply(r, z, &mut scratch));
             let jacobi = pcg(&a, &b, |r, z| {
                 z.iter_mut().zip(r).for_each(|(z, r)| *z = r / (4.0 + 1e-6))
             });
@@ -509,8 +618,9 @@ mod tests {
                 .map(|&(_, x, y)| (0, x, y))
                 .chain(cells.iter().map(|&(_, x, y)| (1, x + offset, y)))
                 .collect();
-            let mg = Multigrid::new(a.clone(), places);
-            (pcg(&a, &rhs, |r, z| mg.apply(r, z)), mg)
+            let mg = hierarchy(&a, places);
+            let mut scratch = mg.scratch();
+            (pcg(&a, &rhs, |r, z| mg.apply(r, z, &mut scratch)), mg)
         };
         let (paired, mg) = iterations(0);
         let block = mg.levels[0].blocks[5];
@@ -533,13 +643,14 @@ mod tests {
     #[test]
     fn the_cycle_is_symmetric() {
         let (a, places) = laplacian(40, 30, 0.01);
-        let mg = Multigrid::new(a, places);
+        let mg = hierarchy(&a, places);
+        let mut scratch = mg.scratch();
         let n = 1200;
         let u: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
         let v: Vec<f64> = (0..n).map(|i| ((i * 53) % 7) as f64 - 3.0).collect();
         let (mut mu, mut mv) = (vec![0.0; n], vec![0.0; n]);
-        mg.apply(&u, &mut mu);
-        mg.apply(&v, &mut mv);
+        mg.apply(&u, &mut mu, &mut scratch);
+        mg.apply(&v, &mut mv, &mut scratch);
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
         let (x, y) = (dot(&v, &mu), dot(&u, &mv));
         assert!((x - y).abs() <= 1e-9 * x.abs().max(1.0), "{x} against {y}");
