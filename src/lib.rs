@@ -49,6 +49,7 @@ pub mod analysis;
 pub mod boundary;
 pub mod cancel;
 pub mod colormap;
+mod conjugate_gradients;
 mod error;
 pub mod evaluation;
 pub mod gallery;

@@ -21,6 +21,7 @@
 //! read, so the correction is prolonged to the red cells only.
 
 use super::PoissonOptions;
+use crate::conjugate_gradients::{self, Stop};
 use crate::grid::Mask;
 use crate::parallel::prelude::*;
 
@@ -36,8 +37,6 @@ const COARSE_SCALE: f64 = 1.8;
 const BAND_ROWS: usize = 16;
 /// Levels with fewer cells than this are done on the calling thread (threads cost more).
 const PARALLEL_CELLS: usize = 1 << 15;
-/// Values per partial sum of a dot product (a fixed split, whatever the thread count).
-const SUM_CHUNK: usize = 1 << 13;
 
 /// Where a cell of a `w` × `h` grid is stored: colour k = (column + row) mod 2 in the k-th half
 /// of a vector; in it, row r (1-based, rows 0 and h + 1 are empty frames) at offset
@@ -372,16 +371,6 @@ impl Level {
     }
 }
 
-/// Σ u_i v_i, summed in fixed chunks whose partial sums are added in order.
-fn dot(u: &[f64], v: &[f64]) -> f64 {
-    let partial: Vec<f64> = u
-        .par_chunks(SUM_CHUNK)
-        .zip(v.par_chunks(SUM_CHUNK))
-        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>())
-        .collect();
-    partial.iter().sum()
-}
-
 /// The levels of a mask's Laplacian, finest first.
 pub(super) struct Hierarchy {
     levels: Vec<Level>,
@@ -451,62 +440,30 @@ impl Hierarchy {
     ) -> (Vec<f64>, usize, f64, bool) {
         let fine = &self.levels[0];
         let n = b.len();
-        let b_norm = dot(&b, &b).sqrt();
-        let mut z = vec![0.0; n];
-        if b_norm == 0.0 {
-            return (z, 0, 0.0, true);
-        }
         let mut work: Vec<(Vec<f64>, Vec<f64>)> = self.levels[1..]
             .iter()
             .map(|l| (vec![0.0; l.layout.len()], vec![0.0; l.layout.len()]))
             .collect();
-        let mut r = b;
-        // q holds A p and, once r is updated, the preconditioned residual M⁻¹ r: four vectors
-        // of the image's size in all.
-        let mut q = vec![0.0; n];
-        self.vcycle(0, &mut q, &r, &mut work);
-        let mut p = q.clone();
-        let mut rs = dot(&r, &q);
-        let target = options.tol * b_norm;
-        let mut residual = b_norm;
-        for iteration in 1..=options.max_iter {
-            fine.apply(&p, &mut q);
-            let curvature = dot(&p, &q);
-            if curvature <= 0.0 {
-                return (z, iteration - 1, residual / b_norm, residual <= target);
-            }
-            let alpha = rs / curvature;
-            // The update and ‖r‖² in one pass (partial sums in fixed chunks, as `dot`).
-            let partial: Vec<f64> = z
-                .par_chunks_mut(SUM_CHUNK)
-                .zip(r.par_chunks_mut(SUM_CHUNK))
-                .zip(p.par_chunks(SUM_CHUNK).zip(q.par_chunks(SUM_CHUNK)))
-                .map(|((z, r), (p, q))| {
-                    let mut rr = 0.0;
-                    for ((z, r), (p, q)) in z.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(q)) {
-                        *z += alpha * p;
-                        *r -= alpha * q;
-                        rr += *r * *r;
-                    }
-                    rr
-                })
-                .collect();
-            residual = f64::sqrt(partial.iter().sum());
-            if residual <= target {
-                return (z, iteration, residual / b_norm, true);
-            }
-            self.vcycle(0, &mut q, &r, &mut work);
-            let rs_next = dot(&r, &q);
-            let beta = rs_next / rs;
-            rs = rs_next;
-            p.par_chunks_mut(SUM_CHUNK)
-                .zip(q.par_chunks(SUM_CHUNK))
-                .for_each(|(p, q)| {
-                    for (p, q) in p.iter_mut().zip(q) {
-                        *p = q + beta * *p;
-                    }
-                });
-        }
-        (z, options.max_iter, residual / b_norm, false)
+        // Four vectors of the image's size in all: z, the residual (b's own buffer), and the
+        // direction and its product.
+        let (mut z, mut r, mut p, mut q) = (vec![0.0; n], b, vec![0.0; n], vec![0.0; n]);
+        let stop = Stop {
+            tol: options.tol,
+            max_iter: options.max_iter,
+        };
+        let outcome = conjugate_gradients::solve(
+            |v, out| fine.apply(v, out),
+            |r, out| self.vcycle(0, out, r, &mut work),
+            &mut r,
+            &mut z,
+            [&mut p, &mut q],
+            stop,
+        );
+        (
+            z,
+            outcome.iterations,
+            outcome.relative_residual,
+            outcome.converged,
+        )
     }
 }

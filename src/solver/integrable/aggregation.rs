@@ -524,32 +524,16 @@ mod tests {
 
     /// Conjugate gradients on A x = b from 0 to a relative residual of 1e-8, preconditioned
     /// by `m`; the iterations.
-    fn pcg(a: &Csr, b: &[f64], mut m: impl FnMut(&[f64], &mut [f64])) -> usize {
+    fn pcg(a: &Csr, b: &[f64], m: impl FnMut(&[f64], &mut [f64])) -> usize {
         let n = b.len();
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
-        let (mut x, mut r, mut z, mut ap) = (vec![0.0; n], b.to_vec(), vec![0.0; n], vec![0.0; n]);
-        m(&r, &mut z);
-        let mut p = z.clone();
-        let mut rz = dot(&r, &z);
-        let target = 1e-8 * dot(b, b).sqrt();
-        for it in 1..=2000 {
-            a.mul_vec(&p, &mut ap);
-            let alpha = rz / dot(&p, &ap);
-            for i in 0..n {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-            }
-            if dot(&r, &r).sqrt() <= target {
-                return it;
-            }
-            m(&r, &mut z);
-            let next = dot(&r, &z);
-            for i in 0..n {
-                p[i] = z[i] + next / rz * p[i];
-            }
-            rz = next;
-        }
-        2000
+        let (mut r, mut x, mut p, mut q) = (b.to_vec(), vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let stop = crate::conjugate_gradients::Stop {
+            tol: 1e-8,
+            max_iter: 2000,
+        };
+        let apply = |v: &[f64], out: &mut [f64]| a.mul_vec(v, out);
+        crate::conjugate_gradients::solve(apply, m, &mut r, &mut x, [&mut p, &mut q], stop)
+            .iterations
     }
 
     /// Preconditioned by one V-cycle, conjugate gradients solve a Laplacian in a number of

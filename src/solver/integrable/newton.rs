@@ -41,6 +41,15 @@
 //! what the stiff model started. A step that would move a pixel's f or g by more than 1 is
 //! retried with more damping.
 //!
+//! Neither model is E along every pixel's orientation: on DiLiGenT pot1 (occluding) the last
+//! hundred steps moved one pixel by 1e-4 to 1e-3 each, 7 % of the way to its least each time,
+//! and the soft model's steps moved others too far. Once a step's largest change is below 1e-2,
+//! the pixels it moved by more than a tenth of that are relaxed in turn, three times over: each
+//! moved to the least of E along its own orientation, every other unknown held (Newton's
+//! method on its 2 × 2 problem with the data term's whole Hessian, which cannot raise E). The
+//! step's change, the convergence test's, is then what the step and the relaxation moved
+//! together.
+//!
 //! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
 //! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
 //! order), and the dot products in index order on one thread: the result does not depend on
@@ -49,6 +58,7 @@
 use super::super::{Node, CHUNK, PARALLEL_MIN};
 use super::aggregation::{Multigrid, Place};
 use super::{AngleScale, SIGMA};
+use crate::conjugate_gradients::{self, dot, Stop};
 use crate::gradient_space::{fg_from_pq, fg_pq_jacobian};
 use crate::parallel::prelude::*;
 use crate::reflectance::ReflectanceMap;
@@ -292,6 +302,110 @@ impl<'a> Energy<'a> {
         e
     }
 
+    /// Pixel j's part of E as a function of its own orientation `at`, everything else held at
+    /// `v`: its value, gradient and Hessian [ff, fg, gg] (the data term's whole Hessian, its
+    /// negative curvature included), with the integrability residual's target `target` (t of
+    /// the pixel's slopes; `None` where it has no pull).
+    fn local(
+        &self,
+        v: &[f64],
+        j: usize,
+        target: Option<(f64, f64)>,
+        (f, g): (f64, f64),
+    ) -> (f64, [f64; 2], [f64; 3]) {
+        let n = self.len();
+        let node = &self.nodes[j];
+        let (mut e, mut gradient, mut hessian) = (0.0, [0.0; 2], [0.0; 3]);
+        for &q in &node.neighbours {
+            let q = q as usize;
+            if q == self.zero {
+                continue;
+            }
+            let (df, dg) = if q < n {
+                (f - v[q], g - v[n + q])
+            } else {
+                (f - self.slots.0[q], g - self.slots.1[q])
+            };
+            e += 0.5 * SIGMA * (df * df + dg * dg);
+            gradient[0] += SIGMA * df;
+            gradient[1] += SIGMA * dg;
+            hessian[0] += SIGMA;
+            hessian[2] += SIGMA;
+        }
+        if node.data_weight != 0.0 {
+            let four_lambda = node.data_weight / node.inv_k;
+            let (s, h) = self.reflectance.fg_hessian(f, g);
+            let (r, d) = self.scale.residual(self.angles[j], s.value);
+            let dd = self.scale.second(s.value);
+            let (a, b) = (d * s.d1, d * s.d2);
+            e += 0.5 * four_lambda * r * r;
+            gradient[0] -= four_lambda * r * a;
+            gradient[1] -= four_lambda * r * b;
+            hessian[0] += four_lambda * (a * a - r * (dd * s.d1 * s.d1 + d * h[0]));
+            hessian[1] += four_lambda * (a * b - r * (dd * s.d1 * s.d2 + d * h[1]));
+            hessian[2] += four_lambda * (b * b - r * (dd * s.d2 * s.d2 + d * h[2]));
+        }
+        if let Some((tf, tg)) = target {
+            let mu = self.pull[j];
+            let (ef, eg) = (f - tf, g - tg);
+            e += 0.5 * mu * (ef * ef + eg * eg);
+            gradient[0] += mu * ef;
+            gradient[1] += mu * eg;
+            hessian[0] += mu;
+            hessian[2] += mu;
+        }
+        (e, gradient, hessian)
+    }
+
+    /// Moves pixel j's orientation in `v` to the least of E along it, every other unknown
+    /// held: Newton's method on the 2 × 2 problem, its Hessian raised where it is not
+    /// positive definite, each step halved until it lowers E. E never rises.
+    fn relax(&self, v: &mut [f64], j: usize) {
+        let n = self.len();
+        let z = &v[2 * n..];
+        let target = (self.pull[j] > 0.0)
+            .then(|| orientation(-self.along_x[j].of(z), self.along_rows[j].of(z)).0);
+        let mut at = (v[j], v[n + j]);
+        let (mut e, mut gradient, mut hessian) = self.local(v, j, target, at);
+        for _ in 0..RELAX_ITERATIONS {
+            let [a, b, c] = hessian;
+            let mean = 0.5 * (a + c);
+            let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+            let floor = RELAX_FLOOR * (mean + radius).abs().max(f64::MIN_POSITIVE);
+            let raise = (floor - (mean - radius)).max(0.0);
+            let (a, c) = (a + raise, c + raise);
+            let det = a * c - b * b;
+            let mut step = [
+                -(c * gradient[0] - b * gradient[1]) / det,
+                -(a * gradient[1] - b * gradient[0]) / det,
+            ];
+            let length = step[0].abs().max(step[1].abs());
+            if !length.is_finite() {
+                break;
+            }
+            if length > RELAX_MAX_STEP {
+                step = step.map(|s| s * RELAX_MAX_STEP / length);
+            }
+            let mut moved = false;
+            for _ in 0..RELAX_HALVINGS {
+                let next = (at.0 + step[0], at.1 + step[1]);
+                let (e_next, gradient_next, hessian_next) = self.local(v, j, target, next);
+                if e_next < e {
+                    at = next;
+                    (e, gradient, hessian) = (e_next, gradient_next, hessian_next);
+                    moved = true;
+                    break;
+                }
+                step = step.map(|s| 0.5 * s);
+            }
+            if !moved {
+                break;
+            }
+        }
+        v[j] = at.0;
+        v[n + j] = at.1;
+    }
+
     /// The model of E at `v`: its Gauss–Newton matrix, with the data term's own Hessian. The
     /// stiff model drops that Hessian's negative curvature; the `soft` one keeps it as far as
     /// each pixel's smoothness and pull hold it ([`held`]), so that its matrix is closer to E's
@@ -489,9 +603,19 @@ impl Model<'_, '_> {
     }
 
     /// The entries of [`Model::matrix`] as (row, column, value) triplets, summed where they
-    /// meet: the matrix the preconditioner coarsens. Their positions are the same at every
-    /// point of one energy, in the same order.
+    /// meet.
+    #[cfg(test)]
     fn triplets(&self, nu: f64) -> Vec<(u32, u32, f64)> {
+        let mut t = Vec::with_capacity(48 * self.energy.len());
+        self.entries(nu, |r, c, v| t.push((r, c, v)));
+        t
+    }
+
+    /// Calls `emit(row, column, value)` for each entry of [`Model::matrix`] (summed where they
+    /// meet): the matrix the preconditioner coarsens. The positions are the same at every
+    /// point of one energy, in the same order, so the preconditioner is planned from them once
+    /// and later steps read the values alone.
+    fn entries(&self, nu: f64, mut emit: impl FnMut(u32, u32, f64)) {
         let e = self.energy;
         let n = e.len();
         let (f, g, z) = (
@@ -499,19 +623,18 @@ impl Model<'_, '_> {
             |j: usize| (n + j) as u32,
             |k: usize| (2 * n + k) as u32,
         );
-        let mut t: Vec<(u32, u32, f64)> = Vec::with_capacity(48 * n);
         let mut terms: Vec<(usize, f64, f64)> = Vec::with_capacity(4);
         for j in 0..n {
             let [ff, fg, gg] = self.blocks[j].fg;
-            t.push((f(j), f(j), ff * (1.0 + nu) + DIAGONAL_FLOOR));
-            t.push((f(j), g(j), fg));
-            t.push((g(j), f(j), fg));
-            t.push((g(j), g(j), gg * (1.0 + nu) + DIAGONAL_FLOOR));
+            emit(f(j), f(j), ff * (1.0 + nu) + DIAGONAL_FLOOR);
+            emit(f(j), g(j), fg);
+            emit(g(j), f(j), fg);
+            emit(g(j), g(j), gg * (1.0 + nu) + DIAGONAL_FLOOR);
             for &q in &e.nodes[j].neighbours {
                 let q = q as usize;
                 if q < n {
-                    t.push((f(j), f(q), -SIGMA));
-                    t.push((g(j), g(q), -SIGMA));
+                    emit(f(j), f(q), -SIGMA);
+                    emit(g(j), g(q), -SIGMA);
                 }
             }
             let mu = e.pull[j];
@@ -525,20 +648,19 @@ impl Model<'_, '_> {
                     terms.push((k, -(s[0] * dp + s[1] * dq), -(s[2] * dp + s[3] * dq)));
                 }
                 for &(k, af, ag) in &terms {
-                    t.push((f(j), z(k), mu * af));
-                    t.push((z(k), f(j), mu * af));
-                    t.push((g(j), z(k), mu * ag));
-                    t.push((z(k), g(j), mu * ag));
+                    emit(f(j), z(k), mu * af);
+                    emit(z(k), f(j), mu * af);
+                    emit(g(j), z(k), mu * ag);
+                    emit(z(k), g(j), mu * ag);
                     for &(l, bf, bg) in &terms {
-                        t.push((z(k), z(l), mu * (af * bf + ag * bg)));
+                        emit(z(k), z(l), mu * (af * bf + ag * bg));
                     }
                 }
             }
         }
         for k in 0..n {
-            t.push((z(k), z(k), nu * self.depth[k] + DIAGONAL_FLOOR));
+            emit(z(k), z(k), nu * self.depth[k] + DIAGONAL_FLOOR);
         }
-        t
     }
 
     /// Solves (H + ν·diag H) x = b by conjugate gradients preconditioned by `mg` (one V-cycle)
@@ -549,42 +671,21 @@ impl Model<'_, '_> {
         (mg, cycle): (&Multigrid, &mut [[Vec<f64>; 3]]),
         b: &[f64],
         x: &mut [f64],
-        tol: f64,
-        max_iter: usize,
+        stop: Stop,
     ) -> usize {
         let len = b.len();
-        x.fill(0.0);
-        let mut r = b.to_vec();
-        let mut z = vec![0.0; len];
+        let mut residual = b.to_vec();
+        let (mut p, mut q) = (vec![0.0; len], vec![0.0; len]);
         let mut scratch = vec![0.0; 2 * self.energy.len()];
-        mg.apply(&r, &mut z, cycle);
-        let mut p = z.clone();
-        let mut ap = vec![0.0; len];
-        let mut rz = dot(&r, &z);
-        let b_norm = dot(b, b).sqrt();
-        for it in 0..max_iter {
-            self.apply(nu, &p, &mut ap, &mut scratch);
-            let pap = dot(&p, &ap);
-            if pap.is_nan() || pap <= 0.0 {
-                return it;
-            }
-            let alpha = rz / pap;
-            for ((x, r), (p, ap)) in x.iter_mut().zip(&mut r).zip(p.iter().zip(&ap)) {
-                *x += alpha * p;
-                *r -= alpha * ap;
-            }
-            if dot(&r, &r).sqrt() <= tol * b_norm {
-                return it + 1;
-            }
-            mg.apply(&r, &mut z, cycle);
-            let rz_next = dot(&r, &z);
-            let beta = rz_next / rz;
-            rz = rz_next;
-            for (p, z) in p.iter_mut().zip(&z) {
-                *p = z + beta * *p;
-            }
-        }
-        max_iter
+        conjugate_gradients::solve(
+            |v, out| self.apply(nu, v, out, &mut scratch),
+            |r, out| mg.apply(r, out, cycle),
+            &mut residual,
+            x,
+            [&mut p, &mut q],
+            stop,
+        )
+        .iterations
     }
 
     /// ½ xᵀHx.
@@ -643,16 +744,17 @@ fn held(data: [f64; 3], diagonal: f64) -> [f64; 3] {
 /// which central differences do not see) has none.
 const DIAGONAL_FLOOR: f64 = 1e-6;
 
-/// Σ aᵢbᵢ in index order.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(a, b)| a * b).sum()
-}
-
 /// The relative residual each step's conjugate-gradient solve stops at.
 pub const CG_TOL: f64 = 0.1;
 
 /// The most conjugate-gradient iterations of one step's solve.
 pub const CG_MAX_ITER: usize = 100;
+
+/// Where each step's conjugate-gradient solve stops.
+const CG_STOP: Stop = Stop {
+    tol: CG_TOL,
+    max_iter: CG_MAX_ITER,
+};
 
 /// The damping ν of the first step (relative to H's diagonal).
 const START_DAMPING: f64 = 1e-3;
@@ -687,6 +789,33 @@ const MAX_STEP: f64 = 1.0;
 /// How many times one step may raise the damping before it gives up (ν × 4 each time).
 const MAX_RETRIES: usize = 30;
 
+/// Pixels are relaxed one by one after each step whose largest change of f or g is below this
+/// (the end of a minimisation).
+const RELAX_BELOW: f64 = 1e-2;
+
+/// The pixels relaxed: those that the step moved by more than this share of its largest change.
+const RELAX_SHARE: f64 = 0.1;
+
+/// The pixels are relaxed only where they are at most this share of the unknowns: where the
+/// step moves most pixels alike (the free boundary on the ball photographs), it moves a smooth
+/// mode that only the whole step can, and relaxing pixel by pixel works against it.
+const RELAX_MOST: f64 = 0.1;
+
+/// How many times the chosen pixels are relaxed in turn after a step.
+const RELAX_SWEEPS: usize = 3;
+
+/// Newton iterations of one pixel's relaxation.
+const RELAX_ITERATIONS: usize = 20;
+
+/// How many times a relaxation step is halved before the pixel stays where it is.
+const RELAX_HALVINGS: usize = 30;
+
+/// A relaxation step's largest change of f or g.
+const RELAX_MAX_STEP: f64 = 0.25;
+
+/// A pixel's 2 × 2 Hessian is raised until its least eigenvalue is this share of its largest.
+const RELAX_FLOOR: f64 = 1e-3;
+
 /// Levenberg–Marquardt on an [`Energy`].
 pub(super) struct Minimiser {
     /// The point [f…, g…, z…].
@@ -699,6 +828,8 @@ pub(super) struct Minimiser {
     /// The preconditioner, planned at the first step for the model's pattern (the same at
     /// every point) and refilled at each, and its V-cycle's buffers.
     multigrid: Option<(Multigrid, Vec<[Vec<f64>; 3]>)>,
+    /// The model's matrix entries at this step, in the order of [`Model::entries`].
+    values: Vec<f64>,
     /// Whether the steps use the soft model (see [`Energy::linearise`]).
     soft: bool,
     /// How many times the soft model predicted badly (after [`SOFT_TRIES`], it is not taken up
@@ -719,6 +850,7 @@ impl Minimiser {
             nu: START_DAMPING,
             cg_iterations: 0,
             multigrid: None,
+            values: Vec::new(),
             soft: false,
             soft_failed: 0,
         }
@@ -738,23 +870,24 @@ impl Minimiser {
         // Planned at the first step for the model's pattern and refilled at each; filled for
         // this step's first damping, it serves the raised ones too: a larger ν only makes the
         // matrix more diagonal.
-        let triplets = model.triplets(self.nu);
         let (mg, cycle) = self.multigrid.get_or_insert_with(|| {
-            let positions = triplets.iter().map(|&(r, c, _)| (r, c));
-            let mg = Multigrid::plan(3 * n, positions, energy.places());
+            let mut positions = Vec::with_capacity(48 * n);
+            model.entries(self.nu, |r, c, _| positions.push((r, c)));
+            let mg = Multigrid::plan(3 * n, positions.into_iter(), energy.places());
             let cycle = mg.scratch();
             (mg, cycle)
         });
-        mg.fill(triplets.iter().map(|t| t.2));
-        drop(triplets);
+        let values = &mut self.values;
+        values.clear();
+        model.entries(self.nu, |_, _, v| values.push(v));
+        mg.fill(values.iter().copied());
         let b: Vec<f64> = self.grad.iter().map(|g| -g).collect();
         let mut delta = vec![0.0; b.len()];
         let mut trial = vec![0.0; b.len()];
         let mut trial_grad = vec![0.0; b.len()];
         let mut scratch = vec![0.0; 2 * n];
         for _ in 0..MAX_RETRIES {
-            self.cg_iterations +=
-                model.solve(self.nu, (mg, cycle), &b, &mut delta, CG_TOL, CG_MAX_ITER);
+            self.cg_iterations += model.solve(self.nu, (mg, cycle), &b, &mut delta, CG_STOP);
             let largest = delta[..2 * n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
             if largest > MAX_STEP {
                 // Farther than the model can be trusted: more damping.
@@ -815,7 +948,38 @@ impl Minimiser {
                         alpha = 1.0 + (alpha - 1.0) / 3.0;
                     }
                 }
-                return stretch * largest;
+                if stretch * largest >= RELAX_BELOW {
+                    return stretch * largest;
+                }
+                // The pixels the step moved most, each moved to the least of E along its own
+                // orientation: where E is flatter than the model along a pixel's orientation,
+                // the model's steps move it a little at a time.
+                let cut = RELAX_SHARE * largest;
+                let chosen: Vec<usize> = (0..n)
+                    .filter(|&j| delta[j].abs().max(delta[n + j].abs()) > cut)
+                    .collect();
+                if chosen.len() as f64 > RELAX_MOST * n as f64 {
+                    return stretch * largest;
+                }
+                let before: Vec<(f64, f64)> = chosen
+                    .iter()
+                    .map(|&j| {
+                        (
+                            self.x[j] - stretch * delta[j],
+                            self.x[n + j] - stretch * delta[n + j],
+                        )
+                    })
+                    .collect();
+                for _ in 0..RELAX_SWEEPS {
+                    for &j in &chosen {
+                        energy.relax(&mut self.x, j);
+                    }
+                }
+                self.e = energy.value_and_gradient(&self.x, &mut self.grad, &mut scratch);
+                let relaxed = chosen.iter().zip(&before).fold(0.0f64, |a, (&j, &(f, g))| {
+                    a.max((self.x[j] - f).abs()).max((self.x[n + j] - g).abs())
+                });
+                return (stretch * largest).max(relaxed);
             }
             self.nu *= 4.0;
         }
@@ -1085,5 +1249,94 @@ mod tests {
         }
         let end = norm(&minimiser.grad);
         assert!(end < 1e-6 * start, "{end} of {start} after {steps} steps");
+    }
+
+    /// Pixels of the case: some with a data term and a pull, and every one without either
+    /// (the sphere's shadow, the pixels the depth cannot tilt; there is at least one).
+    fn kinds_of_pixel(energy: &Energy) -> Vec<usize> {
+        let n = energy.len();
+        let mut chosen = Vec::new();
+        for want in [(true, true), (true, false), (false, true), (false, false)] {
+            let pick = (0..n)
+                .filter(|&j| (energy.nodes[j].data_weight != 0.0, energy.pull[j] > 0.0) == want);
+            chosen.extend(
+                pick.step_by(if want == (true, true) { 7 } else { 1 })
+                    .take(6),
+            );
+        }
+        assert!(chosen.len() > 6, "{chosen:?}");
+        chosen
+    }
+
+    /// A pixel's part of E is E along its orientation: moving the pixel changes E by what its
+    /// part changes by (to 1e-10), its gradient is E's at the pixel, and its Hessian agrees
+    /// with central differences of that gradient to 1e-5.
+    #[test]
+    fn a_pixels_part_is_e_along_its_orientation() {
+        let case = case();
+        let energy = case.energy();
+        let n = energy.len();
+        let x = case.point.clone();
+        let z = &x[2 * n..];
+        let (mut grad, mut work) = (vec![0.0; 3 * n], vec![0.0; 2 * n]);
+        let e = energy.value_and_gradient(&x, &mut grad, &mut work);
+        let mut scratch = vec![0.0; 3 * n];
+        for j in kinds_of_pixel(&energy) {
+            let target = (energy.pull[j] > 0.0)
+                .then(|| orientation(-energy.along_x[j].of(z), energy.along_rows[j].of(z)).0);
+            let at = (x[j], x[n + j]);
+            let (part, gradient, hessian) = energy.local(&x, j, target, at);
+            let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * a.abs().max(1.0);
+            assert!(close(gradient[0], grad[j], 1e-10), "pixel {j}: ∂f");
+            assert!(close(gradient[1], grad[n + j], 1e-10), "pixel {j}: ∂g");
+            let mut y = x.clone();
+            y[j] += 0.03;
+            y[n + j] -= 0.02;
+            let moved = energy.local(&x, j, target, (y[j], y[n + j])).0;
+            let e_moved = energy.value_and_gradient(&y, &mut scratch, &mut work);
+            assert!(close(e_moved - e, moved - part, 1e-10), "pixel {j}: E");
+            let h = 1e-6;
+            let d = |df: f64, dg: f64| energy.local(&x, j, target, (at.0 + df, at.1 + dg)).1;
+            let (fp, fm, gp, gm) = (d(h, 0.0), d(-h, 0.0), d(0.0, h), d(0.0, -h));
+            let numeric = [
+                (fp[0] - fm[0]) / (2.0 * h),
+                (fp[1] - fm[1]) / (2.0 * h),
+                (gp[1] - gm[1]) / (2.0 * h),
+            ];
+            for i in 0..3 {
+                assert!(
+                    close(hessian[i], numeric[i], 1e-5),
+                    "pixel {j}: entry {i}, {} against {}",
+                    hessian[i],
+                    numeric[i]
+                );
+            }
+        }
+    }
+
+    /// Relaxing a pixel never raises E and leaves it at a least of E along its orientation:
+    /// E's gradient at the pixel is below 1e-6 of where it was, and no other unknown moves.
+    #[test]
+    fn relaxing_a_pixel_finds_the_least_along_its_orientation() {
+        let case = case();
+        let energy = case.energy();
+        let n = energy.len();
+        let (mut grad, mut work) = (vec![0.0; 3 * n], vec![0.0; 2 * n]);
+        for j in kinds_of_pixel(&energy) {
+            let x = case.point.clone();
+            let e = energy.value_and_gradient(&x, &mut grad, &mut work);
+            let before = grad[j].hypot(grad[n + j]);
+            let mut y = x.clone();
+            energy.relax(&mut y, j);
+            let relaxed = energy.value_and_gradient(&y, &mut grad, &mut work);
+            assert!(relaxed <= e, "pixel {j}: E {e} → {relaxed}");
+            let after = grad[j].hypot(grad[n + j]);
+            assert!(
+                after <= 1e-6 * before.max(1.0),
+                "pixel {j}: gradient {before} → {after}"
+            );
+            let others = (0..3 * n).filter(|&i| i != j && i != n + j);
+            assert!(others.into_iter().all(|i| x[i] == y[i]), "pixel {j}");
+        }
     }
 }
