@@ -48,7 +48,9 @@
 //! moved to the least of E along its own orientation, every other unknown held (Newton's
 //! method on its 2 × 2 problem with the data term's whole Hessian, which cannot raise E). The
 //! step's change, the convergence test's, is then what the step and the relaxation moved
-//! together.
+//! together. Where those pixels are more than a tenth of the unknowns (a smooth mode, as on the
+//! ball photographs' free boundary), they are left to the steps: relaxed one by one, they stood
+//! in the way of the stretched steps, and the ball's free rows stopped converging.
 //!
 //! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
 //! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
@@ -367,11 +369,11 @@ impl<'a> Energy<'a> {
             .then(|| orientation(-self.along_x[j].of(z), self.along_rows[j].of(z)).0);
         let mut at = (v[j], v[n + j]);
         let (mut e, mut gradient, mut hessian) = self.local(v, j, target, at);
-        for _ in 0..RELAX_ITERATIONS {
+        for _ in 0..RELAX.iterations {
             let [a, b, c] = hessian;
             let mean = 0.5 * (a + c);
             let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
-            let floor = RELAX_FLOOR * (mean + radius).abs().max(f64::MIN_POSITIVE);
+            let floor = RELAX.floor * (mean + radius).abs().max(f64::MIN_POSITIVE);
             let raise = (floor - (mean - radius)).max(0.0);
             let (a, c) = (a + raise, c + raise);
             let det = a * c - b * b;
@@ -383,11 +385,11 @@ impl<'a> Energy<'a> {
             if !length.is_finite() {
                 break;
             }
-            if length > RELAX_MAX_STEP {
-                step = step.map(|s| s * RELAX_MAX_STEP / length);
+            if length > RELAX.max_step {
+                step = step.map(|s| s * RELAX.max_step / length);
             }
             let mut moved = false;
-            for _ in 0..RELAX_HALVINGS {
+            for _ in 0..RELAX.halvings {
                 let next = (at.0 + step[0], at.1 + step[1]);
                 let (e_next, gradient_next, hessian_next) = self.local(v, j, target, next);
                 if e_next < e {
@@ -789,32 +791,42 @@ const MAX_STEP: f64 = 1.0;
 /// How many times one step may raise the damping before it gives up (ν × 4 each time).
 const MAX_RETRIES: usize = 30;
 
-/// Pixels are relaxed one by one after each step whose largest change of f or g is below this
-/// (the end of a minimisation).
-const RELAX_BELOW: f64 = 1e-2;
+/// How pixels are relaxed one by one at the end of a minimisation (see the module's
+/// documentation).
+struct Relaxation {
+    /// Pixels are relaxed after each step whose largest change of f or g is below this.
+    below: f64,
+    /// The pixels relaxed: those that the step moved by more than this share of its largest
+    /// change,
+    share: f64,
+    /// and only where they are at most this share of the unknowns: where the step moves most
+    /// pixels alike (the free boundary on the ball photographs), it moves a smooth mode that
+    /// only the whole step can, and relaxing pixel by pixel works against it.
+    most: f64,
+    /// How many times the chosen pixels are relaxed in turn after a step.
+    sweeps: usize,
+    /// Newton iterations of one pixel's relaxation.
+    iterations: usize,
+    /// How many times a relaxation step is halved before the pixel stays where it is.
+    halvings: usize,
+    /// A relaxation step's largest change of f or g.
+    max_step: f64,
+    /// A pixel's 2 × 2 Hessian is raised until its least eigenvalue is this share of its
+    /// largest.
+    floor: f64,
+}
 
-/// The pixels relaxed: those that the step moved by more than this share of its largest change.
-const RELAX_SHARE: f64 = 0.1;
-
-/// The pixels are relaxed only where they are at most this share of the unknowns: where the
-/// step moves most pixels alike (the free boundary on the ball photographs), it moves a smooth
-/// mode that only the whole step can, and relaxing pixel by pixel works against it.
-const RELAX_MOST: f64 = 0.1;
-
-/// How many times the chosen pixels are relaxed in turn after a step.
-const RELAX_SWEEPS: usize = 3;
-
-/// Newton iterations of one pixel's relaxation.
-const RELAX_ITERATIONS: usize = 20;
-
-/// How many times a relaxation step is halved before the pixel stays where it is.
-const RELAX_HALVINGS: usize = 30;
-
-/// A relaxation step's largest change of f or g.
-const RELAX_MAX_STEP: f64 = 0.25;
-
-/// A pixel's 2 × 2 Hessian is raised until its least eigenvalue is this share of its largest.
-const RELAX_FLOOR: f64 = 1e-3;
+/// The relaxation's settings.
+const RELAX: Relaxation = Relaxation {
+    below: 1e-2,
+    share: 0.1,
+    most: 0.1,
+    sweeps: 3,
+    iterations: 20,
+    halvings: 30,
+    max_step: 0.25,
+    floor: 1e-3,
+};
 
 /// Levenberg–Marquardt on an [`Energy`].
 pub(super) struct Minimiser {
@@ -948,17 +960,17 @@ impl Minimiser {
                         alpha = 1.0 + (alpha - 1.0) / 3.0;
                     }
                 }
-                if stretch * largest >= RELAX_BELOW {
+                if stretch * largest >= RELAX.below {
                     return stretch * largest;
                 }
                 // The pixels the step moved most, each moved to the least of E along its own
                 // orientation: where E is flatter than the model along a pixel's orientation,
                 // the model's steps move it a little at a time.
-                let cut = RELAX_SHARE * largest;
+                let cut = RELAX.share * largest;
                 let chosen: Vec<usize> = (0..n)
                     .filter(|&j| delta[j].abs().max(delta[n + j].abs()) > cut)
                     .collect();
-                if chosen.len() as f64 > RELAX_MOST * n as f64 {
+                if chosen.len() as f64 > RELAX.most * n as f64 {
                     return stretch * largest;
                 }
                 let before: Vec<(f64, f64)> = chosen
@@ -970,7 +982,7 @@ impl Minimiser {
                         )
                     })
                     .collect();
-                for _ in 0..RELAX_SWEEPS {
+                for _ in 0..RELAX.sweeps {
                     for &j in &chosen {
                         energy.relax(&mut self.x, j);
                     }
