@@ -233,11 +233,19 @@ impl Multigrid {
         }
     }
 
-    /// Buffers for [`Multigrid::apply`], three per level.
+    /// Buffers for [`Multigrid::apply`], three per level: its residual (on every level but the
+    /// coarsest), and its right-hand side and solution (on every level but the finest, whose
+    /// are the caller's).
     pub(super) fn scratch(&self) -> Vec<[Vec<f64>; 3]> {
         self.levels
             .iter()
-            .map(|level| std::array::from_fn(|_| vec![0.0; level.a.rows()]))
+            .enumerate()
+            .map(|(l, level)| {
+                let n = level.a.rows();
+                let residual = if level.coarse.is_some() { n } else { 0 };
+                let own = if l > 0 { n } else { 0 };
+                [vec![0.0; residual], vec![0.0; own], vec![0.0; own]]
+            })
             .collect()
     }
 
