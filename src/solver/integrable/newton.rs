@@ -54,8 +54,8 @@
 //!
 //! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
 //! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
-//! order), and the dot products in index order on one thread: the result does not depend on
-//! the thread count.
+//! order), and the dot products in fixed chunks added in order (`conjugate_gradients::dot`):
+//! the result does not depend on the thread count.
 
 use super::super::{Node, CHUNK, PARALLEL_MIN};
 use super::aggregation::{Multigrid, Place};
@@ -285,7 +285,7 @@ impl<'a> Energy<'a> {
             let mu = self.pull[j];
             let (mut wp, mut wq) = (0.0, 0.0);
             if mu > 0.0 {
-                let ((tf, tg), t) = orientation(-self.along_x[j].of(z), self.along_rows[j].of(z));
+                let ((tf, tg), t) = self.target(j, z);
                 let (ef, eg) = (f[j] - tf, g[j] - tg);
                 e += 0.5 * mu * (ef * ef + eg * eg);
                 sf += mu * ef;
@@ -302,6 +302,34 @@ impl<'a> Energy<'a> {
         let e = per_pixel(n, grad_f, grad_g, scratch, pixel);
         per_item(grad_z, |k| self.gather_depth(k, scratch));
         e
+    }
+
+    /// t(p_j, q_j) and ∂t/∂(p, q) at pixel j for the depth `z`: the orientation its slopes
+    /// give, which the integrability residual pulls it toward.
+    fn target(&self, j: usize, z: &[f64]) -> ((f64, f64), [f64; 4]) {
+        orientation(-self.along_x[j].of(z), self.along_rows[j].of(z))
+    }
+
+    /// Pixel j's data term at the orientation (f, g), for a pixel that has one: its value, its
+    /// gradient and its whole Hessian [ff, fg, gg] (the residual's curvature included).
+    fn data_term(&self, j: usize, (f, g): (f64, f64)) -> (f64, [f64; 2], [f64; 3]) {
+        let node = &self.nodes[j];
+        let four_lambda = node.data_weight / node.inv_k;
+        let (s, h) = self.reflectance.fg_hessian(f, g);
+        let (r, d) = self.scale.residual(self.angles[j], s.value);
+        let dd = self.scale.second(s.value);
+        let (a, b) = (d * s.d1, d * s.d2);
+        // ∇²(½r²) = ∇r∇rᵀ + r∇²r, ∇r = −φ′∇R, ∇²r = −(φ″∇R∇Rᵀ + φ′∇²R).
+        let hessian = [
+            a * a - r * (dd * s.d1 * s.d1 + d * h[0]),
+            a * b - r * (dd * s.d1 * s.d2 + d * h[1]),
+            b * b - r * (dd * s.d2 * s.d2 + d * h[2]),
+        ];
+        (
+            0.5 * four_lambda * r * r,
+            [-(four_lambda * r * a), -(four_lambda * r * b)],
+            hessian.map(|x| four_lambda * x),
+        )
     }
 
     /// Pixel j's part of E as a function of its own orientation `at`, everything else held at
@@ -335,17 +363,14 @@ impl<'a> Energy<'a> {
             hessian[2] += SIGMA;
         }
         if node.data_weight != 0.0 {
-            let four_lambda = node.data_weight / node.inv_k;
-            let (s, h) = self.reflectance.fg_hessian(f, g);
-            let (r, d) = self.scale.residual(self.angles[j], s.value);
-            let dd = self.scale.second(s.value);
-            let (a, b) = (d * s.d1, d * s.d2);
-            e += 0.5 * four_lambda * r * r;
-            gradient[0] -= four_lambda * r * a;
-            gradient[1] -= four_lambda * r * b;
-            hessian[0] += four_lambda * (a * a - r * (dd * s.d1 * s.d1 + d * h[0]));
-            hessian[1] += four_lambda * (a * b - r * (dd * s.d1 * s.d2 + d * h[1]));
-            hessian[2] += four_lambda * (b * b - r * (dd * s.d2 * s.d2 + d * h[2]));
+            let (data, slope, curvature) = self.data_term(j, (f, g));
+            e += data;
+            for i in 0..2 {
+                gradient[i] += slope[i];
+            }
+            for i in 0..3 {
+                hessian[i] += curvature[i];
+            }
         }
         if let Some((tf, tg)) = target {
             let mu = self.pull[j];
@@ -365,8 +390,7 @@ impl<'a> Energy<'a> {
     fn relax(&self, v: &mut [f64], j: usize) {
         let n = self.len();
         let z = &v[2 * n..];
-        let target = (self.pull[j] > 0.0)
-            .then(|| orientation(-self.along_x[j].of(z), self.along_rows[j].of(z)).0);
+        let target = (self.pull[j] > 0.0).then(|| self.target(j, z).0);
         let mut at = (v[j], v[n + j]);
         let (mut e, mut gradient, mut hessian) = self.local(v, j, target, at);
         for _ in 0..RELAX.iterations {
@@ -426,18 +450,7 @@ impl<'a> Energy<'a> {
                 .count() as f64;
             let mut data = [0.0; 3];
             if node.data_weight != 0.0 {
-                let four_lambda = node.data_weight / node.inv_k;
-                let (s, h) = self.reflectance.fg_hessian(f[j], g[j]);
-                let (r, d) = self.scale.residual(self.angles[j], s.value);
-                let dd = self.scale.second(s.value);
-                let (a, b) = (d * s.d1, d * s.d2);
-                // ∇²(½r²) = ∇r∇rᵀ + r∇²r, ∇r = −φ′∇R, ∇²r = −(φ″∇R∇Rᵀ + φ′∇²R).
-                let hessian = [
-                    a * a - r * (dd * s.d1 * s.d1 + d * h[0]),
-                    a * b - r * (dd * s.d1 * s.d2 + d * h[1]),
-                    b * b - r * (dd * s.d2 * s.d2 + d * h[2]),
-                ];
-                let h = hessian.map(|x| four_lambda * x);
+                let (_, _, h) = self.data_term(j, (f[j], g[j]));
                 data = if soft {
                     held(h, SIGMA * k + self.pull[j])
                 } else {
@@ -446,7 +459,7 @@ impl<'a> Energy<'a> {
             }
             let mu = self.pull[j];
             let slope = if mu > 0.0 {
-                orientation(-self.along_x[j].of(z), self.along_rows[j].of(z)).1
+                self.target(j, z).1
             } else {
                 [0.0; 4]
             };
@@ -1110,7 +1123,7 @@ mod tests {
         for j in 0..n {
             if case.pull[j] > 0.0 {
                 let z = &case.point[2 * n..];
-                let ((f, g), _) = orientation(-probe.along_x[j].of(z), probe.along_rows[j].of(z));
+                let ((f, g), _) = probe.target(j, z);
                 x[j] = f;
                 x[n + j] = g;
             }
@@ -1294,8 +1307,7 @@ mod tests {
         let e = energy.value_and_gradient(&x, &mut grad, &mut work);
         let mut scratch = vec![0.0; 3 * n];
         for j in kinds_of_pixel(&energy) {
-            let target = (energy.pull[j] > 0.0)
-                .then(|| orientation(-energy.along_x[j].of(z), energy.along_rows[j].of(z)).0);
+            let target = (energy.pull[j] > 0.0).then(|| energy.target(j, z).0);
             let at = (x[j], x[n + j]);
             let (part, gradient, hessian) = energy.local(&x, j, target, at);
             let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * a.abs().max(1.0);
