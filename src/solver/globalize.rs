@@ -605,16 +605,9 @@ mod tests {
     use crate::boundary::Boundary;
     use crate::gradient_space::angle_deg;
     use crate::light::Light;
-    use crate::solver::tests::picture;
+    use crate::solver::tests::{bunny, picture};
     use crate::solver::{Method, SolveOptions};
-    use crate::surface::{sphere, vase, Mesh, Surface};
-
-    fn bunny(size: usize) -> Surface {
-        let ply = include_bytes!("../../tests/data/bun_zipper_res3.ply");
-        let mesh = Mesh::from_ply(ply, std::path::Path::new("bun_zipper_res3.ply")).unwrap();
-        mesh.rasterize(size, size, &nalgebra::Rotation3::identity(), 0.85)
-            .unwrap()
-    }
+    use crate::surface::{sphere, vase, Surface};
 
     /// Mean angle (degrees) from the truth over the mask.
     fn mean_error(solution: &Solution, truth: &Surface) -> f64 {

@@ -4,13 +4,21 @@ use crate::integrate::{gradients_from_normals, integrate_gradients, PoissonOptio
 use crate::light::Light;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
-use crate::surface::{gaussian, sphere, vase, Surface};
+use crate::surface::{gaussian, sphere, vase, Mesh, Surface};
 
 /// The image of `surface` under a Lambertian surface of albedo 1 lit from `light`.
 pub(super) fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
     let map = Lambertian::unit(light);
     let image = render(surface, &map, &RenderOptions::default()).image;
     (image, map)
+}
+
+/// The built-in Stanford bunny (`bun_zipper_res3`) rasterised into a `size`² frame.
+pub(super) fn bunny(size: usize) -> Surface {
+    let ply = include_bytes!("../../tests/data/bun_zipper_res3.ply");
+    let mesh = Mesh::from_ply(ply, std::path::Path::new("bun_zipper_res3.ply")).unwrap();
+    mesh.rasterize(size, size, &nalgebra::Rotation3::identity(), 0.85)
+        .unwrap()
 }
 
 /// Mean angle (degrees) between the solution's normals and the truth over the unknowns.

@@ -52,6 +52,20 @@
 //! ball photographs' free boundary), they are left to the steps: relaxed one by one, they stood
 //! in the way of the stretched steps, and the ball's free rows stopped converging.
 //!
+//! Where E falls along a long, shallow valley the steps creep: on ball photograph 052 with the
+//! free boundary (a light 4° from the view, nothing at the outline to hold the shape) each
+//! step moved about 1.6e-3 in the direction of the last (cosine 0.985 between consecutive
+//! steps), its model predicting it well (E fell by 1.0–1.4 times the predicted decrease, the
+//! damping at its floor), and a step's linear solve taken to 1e-3 in place of 0.1 made the
+//! same steps: the model itself is that curved along the valley. So each step is followed by
+//! **Anderson acceleration** over the last [`LM_ANDERSON_DEPTH`] steps (`anderson.rs`): the
+//! step's end less the combination of past steps that best cancels the present one, taken
+//! only where E is lower there than at the step's end (so E still never rises), the history
+//! kept even where the steps grow. The step's change is then the larger of the step's and
+//! what the mixed point moved. Ball 052 (free) converges in 786 steps where 1000 had not
+//! sufficed, and on the evaluation's other rows the same minima (errors within 0.001°) are
+//! reached in a fifth fewer steps (harvest occluding 314 → 245, pot2 occluding 207 → 156).
+//!
 //! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
 //! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
 //! order), and the dot products in fixed chunks added in order (`conjugate_gradients::dot`):
@@ -59,6 +73,7 @@
 
 use super::super::{Node, CHUNK, PARALLEL_MIN};
 use super::aggregation::{Multigrid, Place};
+use super::anderson::{Anderson, Restart};
 use super::{AngleScale, SIGMA};
 use crate::conjugate_gradients::{self, dot, Stop};
 use crate::gradient_space::{fg_from_pq, fg_pq_jacobian};
@@ -771,6 +786,11 @@ const CG_STOP: Stop = Stop {
     max_iter: CG_MAX_ITER,
 };
 
+/// How many past steps the Anderson acceleration of the steps combines (see the module
+/// documentation): 3 and 5 took the same steps within 5 % on the evaluation's hard rows, and
+/// each costs two vectors of the unknowns' length.
+pub const LM_ANDERSON_DEPTH: usize = 3;
+
 /// The damping ν of the first step (relative to H's diagonal).
 const START_DAMPING: f64 = 1e-3;
 
@@ -860,12 +880,25 @@ pub(super) struct Minimiser {
     /// How many times the soft model predicted badly (after [`SOFT_TRIES`], it is not taken up
     /// again).
     soft_failed: usize,
+    /// The acceleration of the steps, and its buffers: the point before this step, and the
+    /// mixed point with its gradient.
+    anderson: Anderson,
+    start: Vec<f64>,
+    mixed: Vec<f64>,
+    mixed_grad: Vec<f64>,
 }
 
 impl Minimiser {
     /// Starts at `x`.
     pub(super) fn new(energy: &Energy, x: Vec<f64>) -> Minimiser {
-        let mut grad = vec![0.0; x.len()];
+        Minimiser::with_acceleration(energy, x, LM_ANDERSON_DEPTH)
+    }
+
+    /// Starts at `x`, the steps accelerated over `depth` past steps (0: plain
+    /// Levenberg–Marquardt).
+    fn with_acceleration(energy: &Energy, x: Vec<f64>, depth: usize) -> Minimiser {
+        let len = x.len();
+        let mut grad = vec![0.0; len];
         let mut scratch = vec![0.0; 2 * energy.len()];
         let e = energy.value_and_gradient(&x, &mut grad, &mut scratch);
         Minimiser {
@@ -878,6 +911,10 @@ impl Minimiser {
             values: Vec::new(),
             soft: false,
             soft_failed: 0,
+            anderson: Anderson::new(len, depth, Restart::Never),
+            start: vec![0.0; len],
+            mixed: vec![0.0; len],
+            mixed_grad: vec![0.0; len],
         }
     }
 
@@ -887,9 +924,45 @@ impl Minimiser {
         self.e
     }
 
-    /// One step that lowers E (raising the damping until one does); returns the largest
-    /// change of f or g, 0 when no step lowers E.
+    /// One step that lowers E (raising the damping until one does), then accelerated where
+    /// that lowers E further; returns the largest change of f or g, 0 when no step lowers E.
     pub(super) fn step(&mut self, energy: &Energy) -> f64 {
+        self.start.copy_from_slice(&self.x);
+        let change = self.descend(energy);
+        if change == 0.0 {
+            return 0.0;
+        }
+        change.max(self.accelerate(energy))
+    }
+
+    /// The Anderson-mixed point of the steps so far ([`LM_ANDERSON_DEPTH`]), taken where E is
+    /// lower there than after this step; returns how far it moved f or g from there (0 where
+    /// it was not taken).
+    fn accelerate(&mut self, energy: &Energy) -> f64 {
+        self.mixed.copy_from_slice(&self.x);
+        if !self.anderson.step(&self.start, &mut self.mixed) {
+            return 0.0;
+        }
+        let mut scratch = vec![0.0; 2 * energy.len()];
+        let e = energy.value_and_gradient(&self.mixed, &mut self.mixed_grad, &mut scratch);
+        if !(e < self.e) {
+            return 0.0;
+        }
+        let n = energy.len();
+        let moved = self.mixed[..2 * n]
+            .iter()
+            .zip(&self.x)
+            .fold(0.0f64, |a, (m, x)| a.max((m - x).abs()));
+        std::mem::swap(&mut self.x, &mut self.mixed);
+        std::mem::swap(&mut self.grad, &mut self.mixed_grad);
+        self.e = e;
+        moved
+    }
+
+    /// One Levenberg–Marquardt step that lowers E (raising the damping until one does),
+    /// stretched and relaxed as the module's documentation says; returns the largest change
+    /// of f or g, 0 when no step lowers E.
+    fn descend(&mut self, energy: &Energy) -> f64 {
         let n = energy.len();
         let model = energy.linearise(&self.x, self.soft);
         // Planned at the first step for the model's pattern and refilled at each; filled for
@@ -1035,10 +1108,16 @@ mod tests {
     }
 
     fn case() -> Case {
-        let surface = sphere(20, 20, 8.5).unwrap();
-        let (image, map) = picture(&surface, Light::from_tilt_slant(30.0, 40.0).unwrap());
-        let bc = boundary_conditions(&surface.mask, &Boundary::Occluding).unwrap();
-        let mut solver = Solver::new(20, 20).unwrap();
+        case_with(20, &Boundary::Occluding, (30.0, 40.0))
+    }
+
+    /// A `size`² sphere (radius 0.425 of the size) lit from (tilt, slant), solved with
+    /// `boundary`, from a perturbed start.
+    fn case_with(size: usize, boundary: &Boundary, (tilt, slant): (f64, f64)) -> Case {
+        let surface = sphere(size, size, 0.425 * size as f64).unwrap();
+        let (image, map) = picture(&surface, Light::from_tilt_slant(tilt, slant).unwrap());
+        let bc = boundary_conditions(&surface.mask, boundary).unwrap();
+        let mut solver = Solver::new(size, size).unwrap();
         let n = solver.build(&image, &bc, &map, 1.0);
         let domain: Mask = bc.roles.map(|r| *r == Role::Unknown);
         let pull = pull_weights(&domain, &solver.pixels);
@@ -1049,7 +1128,7 @@ mod tests {
             .collect();
         let mut point = vec![0.0; 3 * n];
         for (j, &p) in solver.pixels.iter().enumerate() {
-            let (c, r) = ((p % 20) as f64, (p / 20) as f64);
+            let (c, r) = ((p as usize % size) as f64, (p as usize / size) as f64);
             let normal = surface.normals.data()[p as usize];
             let (f, g) = crate::gradient_space::fg_from_normal(&normal);
             point[j] = f + 0.1 * (0.3 * c).sin();
@@ -1073,7 +1152,7 @@ mod tests {
                 &s.nodes[..n],
                 &s.pixels,
                 &s.slot,
-                (20, 20),
+                (s.width, s.height),
                 (&s.cur_f, &s.cur_g),
                 &self.angles,
                 &self.pull,
@@ -1274,6 +1353,55 @@ mod tests {
         }
         let end = norm(&minimiser.grad);
         assert!(end < 1e-6 * start, "{end} of {start} after {steps} steps");
+    }
+
+    /// Steps from the case's start until a step changes nothing by 1e-9 (or 2000 steps), with
+    /// the acceleration over `depth` steps; returns the steps, E and |∇E| at the end.
+    fn minimise(case: &Case, depth: usize) -> (usize, f64, f64) {
+        let energy = case.energy();
+        let mut minimiser = Minimiser::with_acceleration(&energy, case.point.clone(), depth);
+        let mut last = minimiser.energy();
+        let mut steps = 0;
+        loop {
+            let change = minimiser.step(&energy);
+            steps += 1;
+            // E never rises, but for rounding where the relaxation re-sums it.
+            let e = minimiser.energy();
+            assert!(
+                e <= last * (1.0 + 1e-14),
+                "depth {depth}, step {steps}: {last} → {e}"
+            );
+            last = minimiser.energy();
+            if change < 1e-9 || steps == 2000 {
+                break;
+            }
+        }
+        (steps, last, dot(&minimiser.grad, &minimiser.grad).sqrt())
+    }
+
+    /// The acceleration keeps E falling at every step and ends at the plain steps' minimum,
+    /// in fewer steps where they creep: on the sphere under an oblique light with the occluding
+    /// boundary, and under a light 5° from the view with the free boundary (a shallow valley of
+    /// E, as on ball photograph 052, where the plain steps shrink slowly).
+    #[test]
+    fn acceleration_reaches_the_same_minimum_in_fewer_steps() {
+        for (size, boundary, light) in [
+            (20, Boundary::Occluding, (30.0, 40.0)),
+            (48, Boundary::Free, (30.0, 5.0)),
+            (48, Boundary::Free, (30.0, 2.0)),
+            (48, Boundary::Occluding, (30.0, 60.0)),
+        ] {
+            let case = case_with(size, &boundary, light);
+            let plain = minimise(&case, 0);
+            let fast = minimise(&case, LM_ANDERSON_DEPTH);
+            eprintln!("{boundary:?}: plain {plain:?}, accelerated {fast:?}");
+            assert!(plain.2 < 1e-6 && fast.2 < 1e-6, "{plain:?} {fast:?}");
+            assert!(
+                (plain.1 - fast.1).abs() < 1e-9 * plain.1,
+                "{plain:?} {fast:?}"
+            );
+            assert!(fast.0 <= plain.0, "{plain:?} {fast:?}");
+        }
     }
 
     /// Pixels of the case: some with a data term and a pull, and every one without either
