@@ -63,8 +63,9 @@
 //! only where E is lower there than at the step's end (so E still never rises), the history
 //! kept even where the steps grow. The step's change is then the larger of the step's and
 //! what the mixed point moved. Ball 052 (free) converges in 786 steps where 1000 had not
-//! sufficed, and on the evaluation's other rows the same minima (errors within 0.001°) are
-//! reached in a fifth fewer steps (harvest occluding 314 → 245, pot2 occluding 207 → 156).
+//! sufficed, and the evaluation's other 55 rows reach the same minima (their errors the same to
+//! the evaluation table's digits) in 29 % fewer steps (3,453 against 4,867; harvest occluding
+//! 314 → 245, pot2 occluding 207 → 156).
 //!
 //! Every loop runs over fixed chunks of pixels, each value computed by one pixel's own
 //! expression (the depth's terms gathered from the pixels whose slopes read it, in a fixed
@@ -945,7 +946,7 @@ impl Minimiser {
         }
         let mut scratch = vec![0.0; 2 * energy.len()];
         let e = energy.value_and_gradient(&self.mixed, &mut self.mixed_grad, &mut scratch);
-        if !(e < self.e) {
+        if e.is_nan() || e >= self.e {
             return 0.0;
         }
         let n = energy.len();
