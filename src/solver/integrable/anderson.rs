@@ -183,13 +183,7 @@ mod tests {
     ) -> usize {
         let mut x = vec![0.0; fixed.len()];
         let mut steps = 0;
-        let off = |x: &[f64]| {
-            x.iter()
-                .zip(fixed)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max)
-        };
-        while off(&x) > 1e-8 && steps < 100 {
+        while super::super::largest_change(&x, fixed) > 1e-8 && steps < 100 {
             let mut t = map(&x);
             anderson.step(&x, &mut t);
             x = t;

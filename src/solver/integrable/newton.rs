@@ -881,12 +881,15 @@ pub(super) struct Minimiser {
     /// How many times the soft model predicted badly (after [`SOFT_TRIES`], it is not taken up
     /// again).
     soft_failed: usize,
-    /// The acceleration of the steps, and its buffers: the point before this step, and the
-    /// mixed point with its gradient.
+    /// The acceleration of the steps, and the point before this step that it reads.
     anderson: Anderson,
     start: Vec<f64>,
-    mixed: Vec<f64>,
-    mixed_grad: Vec<f64>,
+    /// A point tried (a step's end, a stretched one, the accelerated one) and E's gradient
+    /// there, swapped with `x` and `grad` where it is taken; and `value_and_gradient`'s 2n
+    /// values of scratch.
+    trial: Vec<f64>,
+    trial_grad: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 impl Minimiser {
@@ -914,8 +917,9 @@ impl Minimiser {
             soft_failed: 0,
             anderson: Anderson::new(len, depth, Restart::Never),
             start: vec![0.0; len],
-            mixed: vec![0.0; len],
-            mixed_grad: vec![0.0; len],
+            trial: vec![0.0; len],
+            trial_grad: vec![0.0; len],
+            scratch,
         }
     }
 
@@ -940,22 +944,18 @@ impl Minimiser {
     /// lower there than after this step; returns how far it moved f or g from there (0 where
     /// it was not taken).
     fn accelerate(&mut self, energy: &Energy) -> f64 {
-        self.mixed.copy_from_slice(&self.x);
-        if !self.anderson.step(&self.start, &mut self.mixed) {
+        self.trial.copy_from_slice(&self.x);
+        if !self.anderson.step(&self.start, &mut self.trial) {
             return 0.0;
         }
-        let mut scratch = vec![0.0; 2 * energy.len()];
-        let e = energy.value_and_gradient(&self.mixed, &mut self.mixed_grad, &mut scratch);
+        let e = energy.value_and_gradient(&self.trial, &mut self.trial_grad, &mut self.scratch);
         if e.is_nan() || e >= self.e {
             return 0.0;
         }
         let n = energy.len();
-        let moved = self.mixed[..2 * n]
-            .iter()
-            .zip(&self.x)
-            .fold(0.0f64, |a, (m, x)| a.max((m - x).abs()));
-        std::mem::swap(&mut self.x, &mut self.mixed);
-        std::mem::swap(&mut self.grad, &mut self.mixed_grad);
+        let moved = super::largest_change(&self.trial[..2 * n], &self.x[..2 * n]);
+        std::mem::swap(&mut self.x, &mut self.trial);
+        std::mem::swap(&mut self.grad, &mut self.trial_grad);
         self.e = e;
         moved
     }
@@ -982,9 +982,8 @@ impl Minimiser {
         mg.fill(values.iter().copied());
         let b: Vec<f64> = self.grad.iter().map(|g| -g).collect();
         let mut delta = vec![0.0; b.len()];
-        let mut trial = vec![0.0; b.len()];
-        let mut trial_grad = vec![0.0; b.len()];
-        let mut scratch = vec![0.0; 2 * n];
+        let (trial, trial_grad, scratch) =
+            (&mut self.trial, &mut self.trial_grad, &mut self.scratch);
         for _ in 0..MAX_RETRIES {
             self.cg_iterations += model.solve(self.nu, (mg, cycle), &b, &mut delta, CG_STOP);
             let largest = delta[..2 * n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
@@ -998,7 +997,7 @@ impl Minimiser {
             for ((t, x), d) in trial.iter_mut().zip(&self.x).zip(&delta) {
                 *t = x + d;
             }
-            let e = energy.value_and_gradient(&trial, &mut trial_grad, &mut scratch);
+            let e = energy.value_and_gradient(trial, trial_grad, scratch);
             let actual = self.e - e;
             if actual > 0.0 && predicted > 0.0 {
                 // Nielsen's rule: less damping where the model predicted well.
@@ -1013,8 +1012,8 @@ impl Minimiser {
                     self.soft_failed += 1;
                 }
                 let start = self.e;
-                std::mem::swap(&mut self.x, &mut trial);
-                std::mem::swap(&mut self.grad, &mut trial_grad);
+                std::mem::swap(&mut self.x, trial);
+                std::mem::swap(&mut self.grad, trial_grad);
                 self.e = e;
                 let mut stretch = 1.0;
                 if rho > STRETCH_ABOVE {
@@ -1035,11 +1034,10 @@ impl Minimiser {
                         for ((t, x), d) in trial.iter_mut().zip(&self.x).zip(&delta) {
                             *t = x + (alpha - 1.0) * d;
                         }
-                        let longer =
-                            energy.value_and_gradient(&trial, &mut trial_grad, &mut scratch);
+                        let longer = energy.value_and_gradient(trial, trial_grad, scratch);
                         if longer < self.e {
-                            std::mem::swap(&mut self.x, &mut trial);
-                            std::mem::swap(&mut self.grad, &mut trial_grad);
+                            std::mem::swap(&mut self.x, trial);
+                            std::mem::swap(&mut self.grad, trial_grad);
                             self.e = longer;
                             stretch = alpha;
                             break;
@@ -1074,7 +1072,7 @@ impl Minimiser {
                         energy.relax(&mut self.x, j);
                     }
                 }
-                self.e = energy.value_and_gradient(&self.x, &mut self.grad, &mut scratch);
+                self.e = energy.value_and_gradient(&self.x, &mut self.grad, scratch);
                 let relaxed = chosen.iter().zip(&before).fold(0.0f64, |a, (&j, &(f, g))| {
                     a.max((self.x[j] - f).abs()).max((self.x[n + j] - g).abs())
                 });
