@@ -13,9 +13,9 @@
 //! is (q·n_x, q·n_y, √(1 − q²)) with q = 1 − d/R. The limb pixel's centre lies half a step
 //! inside the contour (d = ½·max(|n_x|, |n_y|) for the ray's first sample). The fit alternates:
 //! given every ray's R, a least-squares fit I = g·n over all samples gives g = ρ·s, the scaled
-//! light; given g, each ray takes the R (1.5 to 128 pixels) that fits its samples best. R starts
-//! at half the chord across the mask along the ray (exact for a sphere and a surface of
-//! revolution seen side-on). Rays that stay more than 2.5 robust standard deviations off are
+//! light; given g, each ray takes the R (1.5 pixels up to the mask's size) that fits its
+//! samples best. R starts at half the chord across the mask along the ray (exact for a sphere
+//! and a surface of revolution seen side-on). Rays that stay more than 2.5 robust standard deviations off are
 //! left out (a cut in the outline, not a limb). The tilt is atan2(−g_x, g_y), the slant
 //! atan2(|g_xy|, g_z): the band's z components carry the slant, with no constant to absorb it.
 //! The model is checked: where the root mean square residual exceeds [`MAX_BAND_RESIDUAL`] of
@@ -173,11 +173,29 @@ pub const MAX_BAND_RESIDUAL: f64 = 0.03;
 /// The band's samples along each limb pixel's inward normal, pixels from the limb pixel.
 const BAND_STEPS: [f64; 4] = [0.0, 1.0, 2.0, 3.0];
 
-/// The cross-section radii (pixels) the band fit chooses from, per limb pixel.
+/// The cross-section radii (pixels) the band fit chooses from, per limb pixel, up to 128;
+/// [`band_radii`] continues them (1.5 and 2 times each power of two) to the size of the mask.
 const BAND_RADII: [f64; 18] = [
     1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 24.0, 32.0, 40.0, 48.0, 64.0, 96.0,
     128.0,
 ];
+
+/// The radii the band fit chooses from on a mask `width`×`height`: [`BAND_RADII`], then
+/// 192, 256, 384, 512, … while below the longer side, so that a large object's limb (a sphere
+/// of radius 230 pixels at 512²) is not fitted with too tight a cross-section.
+fn band_radii(width: usize, height: usize) -> Vec<f64> {
+    let limit = width.max(height) as f64;
+    let mut radii = BAND_RADII.to_vec();
+    let mut base = 128.0;
+    while 1.5 * base < limit {
+        radii.push(1.5 * base);
+        if 2.0 * base < limit {
+            radii.push(2.0 * base);
+        }
+        base *= 2.0;
+    }
+    radii
+}
 
 /// Rounds of the band fit (the light given the radii, the radii given the light).
 const BAND_ROUNDS: usize = 6;
@@ -489,6 +507,7 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     if directions.len() < MIN_LIMB_PIXELS || !spans_two_directions(&directions) {
         return Ok(None);
     }
+    let radii = band_radii(mask.width(), mask.height());
     let mut keep = vec![true; rays.len()];
     let mut fit = None;
     for _ in 0..BAND_ROUNDS {
@@ -504,7 +523,7 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
                 continue;
             }
             let mut best = (f64::INFINITY, ray.radius);
-            for radius in BAND_RADII {
+            for &radius in &radii {
                 let e = ray.misfit(&f.coef, radius);
                 if e < best.0 {
                     best = (e, radius);
@@ -822,6 +841,14 @@ mod tests {
     fn tilt_difference(a: f64, b: f64) -> f64 {
         let d = (a - b).rem_euclid(360.0);
         d.min(360.0 - d)
+    }
+
+    #[test]
+    fn band_radii_reach_the_size_of_the_mask() {
+        assert_eq!(band_radii(128, 96), BAND_RADII.to_vec());
+        let radii = band_radii(300, 600);
+        assert_eq!(radii[BAND_RADII.len()..], [192.0, 256.0, 384.0, 512.0]);
+        assert!(radii.windows(2).all(|w| w[0] < w[1]));
     }
 
     #[test]
