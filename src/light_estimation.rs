@@ -15,8 +15,8 @@
 //! given every ray's R, a least-squares fit I = g·n over all samples gives g = ρ·s, the scaled
 //! light; given g, each ray takes the R (1.5 pixels up to the mask's size) that fits its
 //! samples best. R starts at half the chord across the mask along the ray (exact for a sphere
-//! and a surface of revolution seen side-on). Rays that stay more than 2.5 robust standard deviations off are
-//! left out (a cut in the outline, not a limb). The tilt is atan2(−g_x, g_y), the slant
+//! and a surface of revolution seen side-on). Rays that stay more than 2.5 robust standard
+//! deviations off are left out (a cut in the outline, not a limb). The tilt is atan2(−g_x, g_y), the slant
 //! atan2(|g_xy|, g_z): the band's z components carry the slant, with no constant to absorb it.
 //! The model is checked: where the root mean square residual exceeds [`MAX_BAND_RESIDUAL`] of
 //! the albedo (an object whose cross-sections at the limb are a few pixels in radius or whose
@@ -182,7 +182,7 @@ const BAND_RADII: [f64; 18] = [
 
 /// The radii the band fit chooses from on a mask `width`×`height`: [`BAND_RADII`], then
 /// 192, 256, 384, 512, … while below the longer side, so that a large object's limb (a sphere
-/// of radius 230 pixels at 512²) is not fitted with too tight a cross-section.
+/// of radius 218 pixels at 512²) is not fitted with too tight a cross-section.
 fn band_radii(width: usize, height: usize) -> Vec<f64> {
     let limit = width.max(height) as f64;
     let mut radii = BAND_RADII.to_vec();

@@ -44,19 +44,12 @@ const TILTS: [f64; 6] = [0.0, 45.0, 90.0, 135.0, 180.0, 270.0];
 /// The estimates of `object` rendered at 128² under every light of the grid, as (tilt, slant,
 /// by the limb, by the moments).
 fn grid_estimates(object: &str) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
-    grid_estimates_with(object, &[])
+    grid_estimates_at(object, &[], 16.0)
 }
 
-/// [`grid_estimates`] of stimulus `object` with the further parameters `pairs`.
-fn grid_estimates_with(
-    object: &str,
-    pairs: &[&str],
-) -> Vec<(f64, f64, LightEstimate, LightEstimate)> {
-    grid_estimates_at(object, pairs, 16.0)
-}
-
-/// [`grid_estimates_with`] in the same 8° frame at `ppd` pixels per degree (16: 128², 32:
-/// 256², the objects' default size).
+/// The estimates of stimulus `object` with the further parameters `pairs` (see
+/// [`grid_estimates`]) in the same 8° frame at `ppd` pixels per degree (16: 128², 32: 256², the
+/// objects' default size).
 fn grid_estimates_at(
     object: &str,
     pairs: &[&str],
@@ -78,13 +71,8 @@ fn grid_estimates_at(
     out
 }
 
-/// The largest errors (tilt where the slant is at least 15°, |slant|) of `object` over the grid,
-/// by the limb and by the moments, printing the table (`--nocapture`).
-fn grid_errors(object: &str) -> [(f64, f64); 2] {
-    print_grid_errors(object, &grid_estimates(object))
-}
-
-/// The largest errors of the grid's `estimates` (see [`grid_errors`]), printing the table.
+/// The largest errors (tilt where the slant is at least 15°, |slant|) of the grid's `estimates`
+/// of `object`, by the limb and by the moments, printing the table (`--nocapture`).
 fn print_grid_errors(
     object: &str,
     estimates: &[(f64, f64, LightEstimate, LightEstimate)],
@@ -123,11 +111,12 @@ fn print_grid_errors(
 /// within 5°), by the limb band fit; in fact within 1°.
 #[test]
 fn the_limb_estimate_is_unbiased_on_the_sphere() {
-    let [limb, moments] = grid_errors("sphere");
+    let estimates = grid_estimates("sphere");
+    let [limb, moments] = print_grid_errors("sphere", &estimates);
     assert!(limb.0 < 0.5 && limb.1 < 1.0, "{limb:?}");
     // The moments were 22° off in slant at frontal light.
     assert!(moments.1 > 15.0, "{moments:?}");
-    for (tilt, slant, e, _) in grid_estimates("sphere") {
+    for &(tilt, slant, e, _) in &estimates {
         assert_eq!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         assert!(e.slant_se_deg.unwrap() < 1.0, "{e:?}");
         if slant >= 15.0 {
@@ -142,9 +131,10 @@ fn the_limb_estimate_is_unbiased_on_the_sphere() {
 /// the side).
 #[test]
 fn the_limb_estimate_is_unbiased_on_the_vase() {
-    let [limb, _] = grid_errors("vase");
+    let estimates = grid_estimates("vase");
+    let [limb, _] = print_grid_errors("vase", &estimates);
     assert!(limb.0 < 5.0 && limb.1 < 5.0, "{limb:?}");
-    for (tilt, slant, e, _) in grid_estimates("vase") {
+    for &(tilt, slant, e, _) in &estimates {
         // At frontal light the band's residuals (3.1 % of the albedo) just miss the check and
         // the rim fit runs, within 0.3°.
         let band = slant >= 15.0;
@@ -160,9 +150,10 @@ fn the_limb_estimate_is_unbiased_on_the_vase() {
 /// asserts what is achieved.
 #[test]
 fn the_limb_estimate_on_the_bunny() {
-    let [limb, moments] = grid_errors("bunny");
+    let estimates = grid_estimates("bunny");
+    let [limb, moments] = print_grid_errors("bunny", &estimates);
     assert!(limb.0 < 6.5 && limb.1 < 7.5, "{limb:?}");
-    for (tilt, slant, e, _) in grid_estimates("bunny") {
+    for &(tilt, slant, e, _) in &estimates {
         assert_ne!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
         if slant >= 30.0 {
             assert!(
@@ -227,7 +218,7 @@ fn the_limb_estimate_on_the_finer_bunny() {
         return;
     }
     let pair = format!("path={}", path.display());
-    let estimates = grid_estimates_with("mesh", &[&pair]);
+    let estimates = grid_estimates_at("mesh", &[&pair], 16.0);
     let [limb, moments] = print_grid_errors("bunny res2", &estimates);
     assert!(limb.0 < 10.5 && limb.1 < 7.5, "{limb:?}");
     assert!(moments.0 > limb.0, "{moments:?} {limb:?}");
