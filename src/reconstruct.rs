@@ -391,14 +391,23 @@ impl Reconstructor {
                 shape.fell_back = true;
             }
         }
-        if shape.solution.diverged {
+        let s = &shape.solution;
+        let blown = |v: f64| !(v.abs() < crate::solver::BLOWN_UP);
+        if s.diverged
+            || blown(s.last_update)
+            || s.f.data().iter().chain(s.g.data()).any(|&v| blown(v))
+        {
             return Err(Error::Compute(format!(
-                "the {} iteration diverged after {} {} (last update {:.3e}); use the jacobi \
-                 method or a smaller λ",
+                "the {} iteration diverged after {} {} (last update {:.3e}); use {}a smaller λ",
                 shape.method,
                 shape.solution.iterations,
                 shape.method.iteration_unit(),
-                shape.solution.last_update
+                shape.solution.last_update,
+                if shape.method == Method::Jacobi {
+                    ""
+                } else {
+                    "the jacobi method or "
+                }
             )));
         }
         Ok(shape)

@@ -178,13 +178,27 @@ pub fn parse_pair<T: std::str::FromStr + Copy>(text: &str, what: &str) -> Result
 }
 
 /// Parses a size written `N` (square) or `WxH` (width first, as on the command line) into the
-/// library's (height, width).
+/// library's (height, width); both sides must be positive.
 ///
 /// ```
-/// assert_eq!(shadelab::visual_size::parse_size::<usize>("256x128", "size").unwrap(), (128, 256));
+/// use shadelab::visual_size::parse_size;
+/// assert_eq!(parse_size::<usize>("256x128", "--size").unwrap(), (128, 256));
+/// let zero = parse_size::<usize>("0x128", "--size").unwrap_err().to_string();
+/// assert!(zero.starts_with("--size '0x128'"), "{zero}");
+/// assert!(parse_size::<f64>("nan", "--visual-size").is_err());
 /// ```
-pub fn parse_size<T: std::str::FromStr + Copy>(text: &str, what: &str) -> Result<(T, T)> {
-    parse_pair(text, what).map(|(w, h)| (h, w))
+pub fn parse_size<T: std::str::FromStr + Copy + PartialOrd + Default>(
+    text: &str,
+    what: &str,
+) -> Result<(T, T)> {
+    let (w, h) = parse_pair(text, what)?;
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN is refused too
+    if !(w > T::default() && h > T::default()) {
+        return Err(Error::invalid(format!(
+            "{what} '{text}': both sides must be positive"
+        )));
+    }
+    Ok((h, w))
 }
 
 #[cfg(test)]

@@ -78,7 +78,7 @@ fn the_written_images_bright_side_faces_theta() {
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap();
+    let folder = experiment::write(&config, &report).unwrap().folder;
     let img = |deg: &str| folder.join(format!("images/theta-{deg}.png"));
     let (h, w) = report.design.display.shape;
     assert_eq!((h, w), (128, 128));
@@ -169,7 +169,7 @@ fn the_folder_is_whole_and_replaced_only_when_it_is_shadelabs() {
     config.repeats = 2;
     config.practice = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap();
+    let folder = experiment::write(&config, &report).unwrap().folder;
     for f in [
         "index.html",
         "experiment.js",
@@ -330,7 +330,7 @@ fn a_participant_answers_by_key_and_gets_the_csv_in_headless_chromium() {
     config.repeats = 2;
     config.practice = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap();
+    let folder = experiment::write(&config, &report).unwrap().folder;
     let server = Server::start(&folder, &[("__participant.html", PARTICIPANT)]);
     let page = run(
         &server.url("__participant.html"),
@@ -401,7 +401,7 @@ fn the_page_pilots_the_design_in_headless_chromium() {
     let d = scratch("experiment-browser");
     let config = Config::new(d.join("e"));
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap();
+    let folder = experiment::write(&config, &report).unwrap().folder;
     let server = Server::start(&folder, &[]);
     let args = [
         "--virtual-time-budget=10000",

@@ -115,9 +115,9 @@ fn participants_are_fitted_one_by_one() {
             lapse: 0.02,
         };
         let text = simulated_responses(&m, &design(), 15, seed, who);
-        csv.push_str(text.strip_prefix(RESPONSES_HEADER).unwrap());
+        csv.push_str(text.strip_prefix(RESPONSES_HEADER).unwrap().trim_end());
     }
-    csv.push_str("cat,1,test,disc,0,convex,400,f,\ncat,2,test,disc,180,concave,400,j,\n");
+    csv.push_str("\ncat,1,test,disc,0,convex,400,f,,\ncat,2,test,disc,180,concave,400,j,,\n");
     std::fs::write(dir.join("r.csv"), csv).unwrap();
     let run = shadelab(
         &dir,

@@ -27,3 +27,4 @@ mod sidecar_input;
 mod solve;
 mod stimuli;
 mod teaching;
+mod user_files;

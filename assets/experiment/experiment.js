@@ -26,7 +26,7 @@
   const design = JSON.parse(document.getElementById('design').textContent);
   const app = document.getElementById('app');
   const url = new URLSearchParams(window.location.search);
-  const HEADER = 'participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image';
+  const HEADER = design.model.responses_csv; // ...,image,design_hash
   const CARD_WIDTH_CM = 8.56; // ISO/IEC 7810 ID-1 (credit card): 85.60 mm x 53.98 mm
   const CARD_ASPECT = 53.98 / 85.6;
 
@@ -183,6 +183,7 @@
       rt_ms: rt,
       key: pressed,
       image: trial.image,
+      design_hash: design.design_hash, // tells these rows from an earlier design's
     });
   }
 

@@ -54,6 +54,9 @@ pub const DEFAULT_PRIOR_KAPPA: f64 = 2.0;
 /// The default image noise σ of the likelihood, in luminance units.
 pub const DEFAULT_NOISE: f64 = 0.05;
 
+/// The largest image noise σ accepted: the whole luminance range.
+pub const MAX_NOISE: f64 = 1.0;
+
 /// The observer's prior.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LightPrior {
@@ -135,9 +138,9 @@ impl ObserverOptions {
                 p.convexity_bias
             )));
         }
-        if !(self.noise.is_finite() && self.noise > 0.0) {
+        if !(self.noise > 0.0 && self.noise <= MAX_NOISE) {
             return Err(Error::invalid(format!(
-                "noise {} must be a positive number",
+                "noise {:e} is outside 0..{MAX_NOISE} (σ in luminance units, which run 0..1)",
                 self.noise
             )));
         }

@@ -17,8 +17,7 @@ pub struct Args {
     /// beethoven/ as in ../shared/data).
     #[arg(long, value_name = "DIR")]
     pub data: PathBuf,
-    /// Output folder for evaluation.md, evaluation.json and one picture per case (written
-    /// whole or not at all); default: only print the table.
+    /// Output folder for evaluation.md, evaluation.json and one picture per case (written whole or not at all; it replaces only the files shadelab writes and keeps every other file); default: only print the table.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Run only these sets (comma separated): bunny, mozart, diligent, ball, beethoven.
@@ -119,7 +118,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             .map(|m| m.trim().parse::<Method>())
             .collect::<Result<_, _>>()?;
     }
-    args.solver.apply(&mut config.options);
+    args.solver.apply(&mut config.options)?;
     config.max_iter = args.solver.max_iter;
     config.validate()?;
     let commit = match &args.commit {
@@ -129,7 +128,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 
     // Claim the output folder first, so an unwritable one fails before the long part.
     let folder = match &args.out {
-        Some(out) => Some(AtomicDir::create(out, report::REPORT_FILE, global.force)?),
+        Some(out) => Some(
+            AtomicDir::create(out, report::REPORT_FILE, global.force)?.reads(&[&config.data])?,
+        ),
         None => None,
     };
     let bar = Bar::new(global.quiet);

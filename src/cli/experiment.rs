@@ -10,7 +10,7 @@ use std::time::Instant;
 /// Arguments of `experiment`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder (written whole, or not at all): index.html, experiment.js, experiment.css, design.json, README.md and images/.
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): index.html, experiment.js, experiment.css, design.json, README.md and images/.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// The stimulus shown (any with a light and one target, e.g. bumps, gaussian, sphere) [default: bumps, one bump].
@@ -94,10 +94,26 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     config.force = global.force;
     config.max_pixels = global.max_pixels;
-    config.validate()?;
+    config.check().map_err(super::flags::setting)?;
     let report = build(&config, &Bar::new(global.quiet))?;
-    let folder = write(&config, &report)?;
+    let written = write(&config, &report)?;
+    let folder = written.folder;
     let out = super::output::Output::new(global);
+    if !written.kept.is_empty() {
+        out.warn(format!(
+            "kept {} file(s) in {} that the design did not write ({}); response rows carry \
+             the design's hash (design_hash {}) to tell the designs apart",
+            written.kept.len(),
+            folder.display(),
+            written
+                .kept
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            report.design.design_hash
+        ));
+    }
     out.wrote(&folder, started.elapsed().as_secs_f64());
     let d = &report.design;
     out.results(

@@ -25,7 +25,7 @@ pub struct ObserverArgs {
     /// response (convex/concave or 1/0) at least; block (test rows are fitted) and
     /// participant (one fit each, beside the pooled fit) when present.
     responses: PathBuf,
-    /// Output folder (written whole or not at all): fit.json, fit.png, fit.svg, methods.md.
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): fit.json, fit.png, fit.svg, methods.md.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Parametric-bootstrap replicates for the percentile intervals given beside the profile-likelihood ones, and for the non-parametric prior's (0: none).
@@ -75,7 +75,8 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
         },
         "--bootstrap",
     )?;
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let folder =
+        AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&[&config.responses])?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;

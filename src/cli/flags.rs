@@ -15,7 +15,8 @@ use shadelab::solver::{
 /// the library's configuration of the command already holds).
 #[derive(Debug, Clone, clap::Args)]
 pub struct SolverFlags {
-    /// Weight λ of the brightness term (> 0).
+    /// Weight λ of the brightness term (0.001 to 1000, where the solvers are checked to
+    /// converge; Jacobi sweeps diverge above about 1).
     #[arg(
         long = "lambda",
         value_name = "L",
@@ -24,7 +25,7 @@ pub struct SolverFlags {
     )]
     pub lambda: f64,
     /// Stop when the largest change of f or g in a Jacobi sweep is below this (for multigrid:
-    /// the change the next Jacobi sweep would make).
+    /// the change the next Jacobi sweep would make); 1e-12 to 0.1.
     #[arg(
         long,
         value_name = "T",
@@ -49,13 +50,25 @@ fn max_iter_help() -> String {
 }
 
 impl SolverFlags {
-    /// Sets λ, the tolerance and (when given) the cap of `options`.
-    pub fn apply(&self, options: &mut SolveOptions) {
+    /// Sets λ, the tolerance and (when given) the cap of `options`, each checked alone
+    /// ([`SolveOptions::validate`]) so that a refusal names its own flag and the range.
+    pub fn apply(&self, options: &mut SolveOptions) -> Result<(), CliError> {
+        let alone = |flag: &str, set: &dyn Fn(&mut SolveOptions)| {
+            let mut one = SolveOptions::default();
+            set(&mut one);
+            one.validate().map_err(|e| usage(flag, e))
+        };
+        alone("--lambda", &|o| o.lambda = self.lambda)?;
+        alone("--tol", &|o| o.tol = self.tol)?;
+        if let Some(n) = self.max_iter {
+            alone("--max-iter", &|o| o.max_iter = n)?;
+        }
         options.lambda = self.lambda;
         options.tol = self.tol;
         if let Some(n) = self.max_iter {
             options.max_iter = n;
         }
+        Ok(())
     }
 }
 
@@ -132,6 +145,12 @@ const FIELD_FLAGS: &[(&str, &str)] = &[
     ("convexity_bias", "--convexity-bias"),
     ("noise", "--noise"),
     ("lapse", "--lapse"),
+    ("repeats", "--repeats"),
+    ("practice", "--practice"),
+    ("ppd", "--ppd"),
+    ("viewing_distance_cm", "--viewing-distance"),
+    ("visual_size", "--visual-size"),
+    ("keys", "--keys"),
 ];
 
 /// A bad setting, named by its flag.

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 /// Arguments of `gallery`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder (written whole, or not at all): images, sidecars, masks, thumbnails, index.html.
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): images, sidecars, masks, thumbnails, index.html.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// A folder of stimulus specs (*.json) to use instead of the built-in presets of stimuli/.

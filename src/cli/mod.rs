@@ -37,7 +37,8 @@ pub struct Global {
         allow_hyphen_values = true
     )]
     pub max_pixels: usize,
-    /// Replace existing files or folders that shadelab did not write.
+    /// Write into a folder that shadelab did not write (every other file in it stays), or
+    /// replace a file that it did not write.
     #[arg(long, global = true)]
     pub force: bool,
 }
@@ -207,7 +208,9 @@ fn hint(error: &anyhow::Error) -> &'static str {
         .chain()
         .find_map(|c| c.downcast_ref::<shadelab::Error>())
     {
-        Some(shadelab::Error::NotOurs { .. }) => "; use --force to replace it",
+        Some(shadelab::Error::NotOurs { .. }) => {
+            "; use --force to write into it (every file shadelab did not write stays)"
+        }
         Some(shadelab::Error::TooLarge(_)) => " (--max-pixels)",
         _ => "",
     }

@@ -151,6 +151,17 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     export.layers |= args.layers;
     export.force = global.force;
+    // A value given as a flag that the output's format cannot take is named by its flag.
+    if args.range.is_some() {
+        export
+            .check_range(&config.out)
+            .map_err(|e| super::flags::usage("--range", e))?;
+    }
+    if args.gamma.is_some() {
+        export
+            .check_gamma(&config.out)
+            .map_err(|e| super::flags::usage("--gamma", e))?;
+    }
     config.max_pixels = global.max_pixels;
     render_to(&config, global)
 }

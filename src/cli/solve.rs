@@ -66,7 +66,7 @@ pub struct Args {
     pub method: String,
     #[command(flatten)]
     pub solver: SolverFlags,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
@@ -84,12 +84,17 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         );
     }
     // Claim the output folder before the long part, so an unwritable one fails at once.
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&config.files())?;
     let bar = Bar::new(global.quiet);
     let report = solve::run_into(&config, folder.path(), &bar).map_err(|e| match e {
-        shadelab::Error::Compute(why) if why.contains("diverged") => CliError::from(
-            shadelab::Error::Compute(format!("{why} (--method jacobi, --lambda)")),
-        ),
+        shadelab::Error::Compute(why) if why.contains("diverged") => {
+            let flags = if why.contains("jacobi method") {
+                "--method jacobi, --lambda"
+            } else {
+                "--lambda"
+            };
+            CliError::from(shadelab::Error::Compute(format!("{why} ({flags})")))
+        }
         other => CliError::from(other),
     })?;
     let target = folder.commit()?;
@@ -154,7 +159,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
     let method: Method = args.method.parse()?;
     let mut solve = SolveOptions::for_method(method);
-    args.solver.apply(&mut solve);
+    args.solver.apply(&mut solve)?;
     let options = ReconstructOptions::from_solve(&solve, NonConvergence::Report);
     options
         .validate()

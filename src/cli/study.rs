@@ -28,7 +28,7 @@ pub struct RunArgs {
     /// Run only shard I of N (0 ≤ I < N): the grid points whose number is I modulo N.
     #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<String>,
-    /// Output folder (written whole or not at all): results.csv, sweep.csv, study.json.
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): results.csv, sweep.csv, study.json.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -39,7 +39,7 @@ pub struct MergeArgs {
     /// The shard output folders (every shard of one study, any order).
     #[arg(required = true)]
     dirs: Vec<PathBuf>,
-    /// Output folder for the merged results.csv, sweep.csv and study.json.
+    /// Output folder for the merged results.csv, sweep.csv and study.json (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -61,7 +61,7 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
     };
     let config = StudyRunConfig::load(&args.spec, shard, global.max_pixels)?;
     // Claimed before the work, so that a folder that may not be replaced fails at once.
-    let folder = AtomicDir::create(&args.out, REPORT, global.force)?;
+    let folder = AtomicDir::create(&args.out, REPORT, global.force)?.reads(&[&args.spec])?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     report.write_into(folder.path())?;
     let target = folder.commit()?;

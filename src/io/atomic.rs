@@ -300,29 +300,86 @@ pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> 
 /// [`OutputSet`] of one folder). The output is locked from [`AtomicDir::create`] on, so a second
 /// run writing the same folder fails with [`Error::Locked`]; dropped uncommitted, the temporary
 /// folder and the lock are removed.
+///
+/// The folder is the user's too (see [`super::keep`]): the new folder replaces only the files
+/// this run writes and those the previous run's manifest lists; every other file in the old
+/// folder is carried over unchanged, with or without `force`. An input the run reads
+/// ([`AtomicDir::reads`]) is never replaced.
 #[derive(Debug)]
 pub struct AtomicDir {
     set: OutputSet,
     temp: PathBuf,
     target: PathBuf,
+    /// The path as the user gave it (a link to a folder is followed to `target`).
+    shown: PathBuf,
     marker: String,
+    force: bool,
+    /// The run's inputs inside the output folder: as given, and their path inside it.
+    inputs: Vec<(PathBuf, PathBuf)>,
+    /// Files in the folder that the last run did not write are refused without `force`
+    /// (kept with it): the name of what they would be, e.g. "the experiment's design".
+    refuse_collected: Option<String>,
     /// Files written straight into `temp` are synced at the commit (see [`STAGED`]).
     staged: Staged,
 }
 
+/// The folder an output path names: itself, or where a link to a folder leads.
+fn resolve_folder(target: &Path) -> Result<PathBuf> {
+    let Ok(meta) = fs::symlink_metadata(target) else {
+        return Ok(target.to_path_buf());
+    };
+    if !meta.file_type().is_symlink() {
+        return Ok(target.to_path_buf());
+    }
+    match fs::canonicalize(target) {
+        Ok(real) if real.is_dir() => Ok(real),
+        Ok(real) => Err(Error::format(
+            target,
+            format!(
+                "is a link to {}, which is not a folder, so it cannot be the output folder",
+                real.display()
+            ),
+        )),
+        Err(_) => Err(Error::format(
+            target,
+            format!(
+                "is a link to {}, which does not exist: make that folder or give another output folder",
+                fs::read_link(target).unwrap_or_default().display()
+            ),
+        )),
+    }
+}
+
+/// A short list of paths for a message: the first few, then how many more.
+fn some_names(paths: &[PathBuf]) -> String {
+    let mut names: Vec<String> = paths
+        .iter()
+        .take(3)
+        .map(|p| p.display().to_string())
+        .collect();
+    if paths.len() > 3 {
+        names.push(format!("and {} more", paths.len() - 3));
+    }
+    names.join(", ")
+}
+
 impl AtomicDir {
-    /// Starts an output folder for `target`. `marker` names the file (e.g. `report.json`) that
-    /// identifies a folder shadelab wrote: an existing `target` is replaced only when it is
-    /// empty or holds that file, or when `force` is set (and it is then still never a file).
+    /// Starts an output folder for `target` (a link to a folder is followed). `marker` names
+    /// the file (e.g. `report.json`) that identifies a folder shadelab wrote: an existing
+    /// `target` is written into only when it is empty or holds that file, or when `force` is
+    /// set (and it is then still never a file). Either way the files in it that this run does
+    /// not write are kept (see [`super::keep`]).
     pub fn create(target: &Path, marker: &str, force: bool) -> Result<AtomicDir> {
-        check_parent(target)?;
-        let set = OutputSet::begin(&[target.to_path_buf()])?;
+        let shown = target.to_path_buf();
+        let target = resolve_folder(target)?;
+        check_parent(&target)?;
+        let set = OutputSet::begin(std::slice::from_ref(&target))?;
         if target.exists() {
             if !target.is_dir() {
-                return Err(Error::format(target, "exists and is not a folder"));
+                return Err(Error::format(&shown, "exists and is not a folder"));
             }
-            let empty = fs::read_dir(target)
-                .map_err(|e| Error::io(target, e))?
+            let empty = fs::read_dir(&target)
+                .map_err(|e| Error::io(&shown, e))?
                 .next()
                 .is_none();
             if !empty && !force && !written_by_shadelab(&target.join(marker)) {
@@ -332,20 +389,65 @@ impl AtomicDir {
                     format!("no {marker} in it")
                 };
                 return Err(Error::NotOurs {
-                    path: target.to_path_buf(),
+                    path: shown,
                     message: format!("folder exists and was not written by shadelab ({why})"),
                 });
             }
         }
-        let temp = set.staged(target)?.to_path_buf();
-        fs::create_dir(&temp).map_err(|e| Error::io(target, e))?;
+        let temp = set.staged(&target)?.to_path_buf();
+        fs::create_dir(&temp).map_err(|e| Error::io(&shown, e))?;
         Ok(AtomicDir {
             set,
             staged: Staged::new(&temp),
             temp,
-            target: target.to_path_buf(),
+            target,
+            shown,
             marker: marker.to_string(),
+            force,
+            inputs: Vec::new(),
+            refuse_collected: None,
         })
+    }
+
+    /// Names the files and folders this run reads, so that none is ever replaced: an input
+    /// that is the output folder itself, or a file in it that the previous run wrote (which
+    /// this run replaces), is refused now, before any work, naming both; any other input inside
+    /// the folder is kept like every file of the user's, and the commit is refused should the
+    /// run write a file under its name.
+    pub fn reads<P: AsRef<Path>>(mut self, inputs: &[P]) -> Result<AtomicDir> {
+        let ours = super::keep::read_manifest(&self.target);
+        for input in inputs {
+            let input = input.as_ref();
+            let Some(rel) = super::keep::inside(input, &self.target) else {
+                continue;
+            };
+            let replaced = rel.as_os_str().is_empty()
+                || rel == Path::new(&self.marker)
+                || ours
+                    .iter()
+                    .any(|f| f.starts_with(&rel) || rel.starts_with(f));
+            if replaced {
+                return Err(Error::format(
+                    input,
+                    format!(
+                        "is an input of this run and lies in its output folder {}, which the \
+                         run replaces: move the input out of the folder or choose another \
+                         output folder",
+                        self.shown.display()
+                    ),
+                ));
+            }
+            self.inputs.push((input.to_path_buf(), rel));
+        }
+        Ok(self)
+    }
+
+    /// Refuses to write into a folder that holds files the previous run did not write (a
+    /// participant's responses beside an experiment's design) unless `force` was given; with
+    /// it they are kept as always. `what` names what this run writes, for the message.
+    pub fn refusing_collected(mut self, what: &str) -> AtomicDir {
+        self.refuse_collected = Some(what.to_string());
+        self
     }
 
     /// Where to write the folder's files until it is committed.
@@ -358,19 +460,66 @@ impl AtomicDir {
         &self.target
     }
 
-    /// Moves the finished folder into place, replacing an earlier shadelab output there.
-    /// Fails with [`Error::Cancelled`], writing nothing, when a stop was requested.
+    /// Moves the finished folder into place, replacing an earlier shadelab output there and
+    /// keeping every file this run did not write. Fails with [`Error::Cancelled`], writing
+    /// nothing, when a stop was requested.
     pub fn commit(self) -> Result<PathBuf> {
+        self.commit_keeping().map(|(path, _)| path)
+    }
+
+    /// [`AtomicDir::commit`], also returning the files of the old folder that were kept (paths
+    /// inside the folder).
+    pub fn commit_keeping(self) -> Result<(PathBuf, Vec<PathBuf>)> {
         if !self.temp.join(&self.marker).exists() {
             return Err(Error::Compute(format!(
                 "internal: output folder lacks its {}",
                 self.marker
             )));
         }
+        let written = super::keep::write_manifest(&self.temp)?;
+        if let Some((input, rel)) = self.inputs.iter().find(|(_, rel)| {
+            written
+                .iter()
+                .any(|f| f.starts_with(rel) || rel.starts_with(f))
+        }) {
+            return Err(Error::format(
+                input,
+                format!(
+                    "is an input of this run, and the run would write {} over it: move the \
+                     input out of the folder or choose another output folder (nothing was written)",
+                    self.shown.join(rel).display()
+                ),
+            ));
+        }
+        let kept = if self.target.is_dir() {
+            let ours = super::keep::read_manifest(&self.target);
+            super::keep::carry(&self.target, &self.temp, &ours, super::keep::Carry::Link)?
+        } else {
+            Vec::new()
+        };
+        if let Some(what) = &self.refuse_collected {
+            let collected: Vec<PathBuf> = kept
+                .iter()
+                .filter(|p| !p.to_string_lossy().starts_with('.'))
+                .cloned()
+                .collect();
+            if !collected.is_empty() && !self.force {
+                return Err(Error::NotOurs {
+                    path: self.shown.clone(),
+                    message: format!(
+                        "holds {} file{} that {what} did not write ({}): collected data? \
+                         Nothing was written; forced, the new files go beside them",
+                        collected.len(),
+                        if collected.len() == 1 { "" } else { "s" },
+                        some_names(&collected)
+                    ),
+                });
+            }
+        }
         sync_folder(&self.temp)?;
         drop(self.staged);
         self.set.commit()?;
-        Ok(self.target)
+        Ok((self.shown, kept))
     }
 }
 

@@ -6,6 +6,7 @@
 mod atomic;
 mod csv;
 mod gif;
+mod keep;
 mod npy;
 mod output_set;
 mod png;
@@ -16,6 +17,7 @@ pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
 pub(crate) use csv::check_csv_finite;
 pub use csv::{csv_field, csv_record, parse_csv};
 pub use gif::write_gif;
+pub use keep::MANIFEST;
 pub use npy::{
     encode_f64, encode_npz, encode_text, npy_file_scale, npy_scale, read_array,
     read_array_from_bytes, read_image, read_image_from_bytes, read_luminance_npy, read_normals,

@@ -251,11 +251,25 @@ impl Journal {
         }
         match self.entries.last() {
             Some(record) if !present(&record.staged) => {
-                // The commit record is in place: the new set is whole; drop the old versions.
-                self.entries.iter().all(|e| remove_any(&e.backup).is_ok())
+                // The commit record is in place: the new set is whole; drop the old versions
+                // (a folder's files that the new one does not hold are moved over first).
+                self.entries.iter().all(|e| {
+                    rescue_into(e);
+                    remove_any(&e.backup).is_ok()
+                })
             }
             _ => undo(&self.entries),
         }
+    }
+}
+
+/// Before an old folder is deleted: what appeared in it after its files to keep were linked
+/// into the new one is moved over (see [`super::keep`]).
+fn rescue_into(e: &Entry) {
+    if fs::symlink_metadata(&e.backup).is_ok_and(|m| m.is_dir())
+        && fs::symlink_metadata(&e.target).is_ok_and(|m| m.is_dir())
+    {
+        super::keep::rescue(&e.backup, &e.target);
     }
 }
 
@@ -479,6 +493,7 @@ impl OutputSet {
             return Err(err);
         }
         for e in &self.journal.entries {
+            rescue_into(e);
             let _ = remove_any(&e.backup);
         }
         let _ = fs::remove_file(&self.lock);

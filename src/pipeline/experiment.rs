@@ -21,13 +21,14 @@
 //! config.validate()?;
 //! let report = run(&config, &NoProgress)?;
 //! assert_eq!(report.design.trials.len(), 4 * 2 + 1);
-//! let folder = write(&config, &report)?;
+//! let folder = write(&config, &report)?.folder;
 //! assert!(folder.join("index.html").exists() && folder.join("design.json").exists());
 //! assert!(folder.join("images/theta-090.png").exists());
 //! # std::fs::remove_dir_all(&dir)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use super::perception::{field, BadSetting};
 use crate::analysis::convexity;
 use crate::error::{Error, Result};
 use crate::io::{self, AtomicDir, BitDepth};
@@ -45,7 +46,7 @@ pub const MARKER: &str = "design.json";
 
 /// The header of the responses CSV the page writes (and `fit observer` reads).
 pub const CSV_HEADER: &str =
-    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image";
+    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image,design_hash";
 
 /// The observer model the pilot mode simulates and `fit observer` estimates.
 pub const MODEL: &str =
@@ -181,6 +182,106 @@ impl Config {
 
     /// Checks everything that needs no rendering; each problem is one line.
     pub fn validate(&self) -> Result<()> {
+        self.check().map_err(Error::from)
+    }
+
+    /// [`Config::validate`], naming the field that failed (the command line names its flag).
+    pub fn check(&self) -> std::result::Result<(), BadSetting> {
+        field("stimulus", self.check_stimulus())?;
+        if !(self.slant_deg.is_finite() && self.slant_deg > 0.0 && self.slant_deg < 90.0) {
+            return Err(BadSetting {
+                field: "slant_deg",
+                error: Error::invalid(format!(
+                    "the light's slant {} must be above 0 and below 90 degrees",
+                    self.slant_deg
+                )),
+            });
+        }
+        field("rotations", rotations(&self.rotations).map(|_| ()))?;
+        if self.repeats == 0 || self.repeats > MAX_REPEATS {
+            return Err(BadSetting {
+                field: "repeats",
+                error: Error::invalid(format!(
+                    "repeats {} must be 1 to {MAX_REPEATS}",
+                    self.repeats
+                )),
+            });
+        }
+        if self.practice > MAX_PRACTICE {
+            return Err(BadSetting {
+                field: "practice",
+                error: Error::invalid(format!(
+                    "practice trials {} must be at most {MAX_PRACTICE}",
+                    self.practice
+                )),
+            });
+        }
+        if !(self.ppd.is_finite() && self.ppd > 0.0 && self.ppd <= 1000.0) {
+            return Err(BadSetting {
+                field: "ppd",
+                error: Error::invalid(format!(
+                    "pixels per degree {} must be above 0 and at most 1000",
+                    self.ppd
+                )),
+            });
+        }
+        if !(self.viewing_distance_cm.is_finite()
+            && (10.0..=1000.0).contains(&self.viewing_distance_cm))
+        {
+            return Err(BadSetting {
+                field: "viewing_distance_cm",
+                error: Error::invalid(format!(
+                    "the viewing distance {} cm must be 10 to 1000 cm",
+                    self.viewing_distance_cm
+                )),
+            });
+        }
+        let (h, w) = self.visual_size;
+        if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0 && h <= 180.0 && w <= 180.0) {
+            return Err(BadSetting { field: "visual_size", error: Error::invalid(format!(
+                "the visual size {h} x {w} degrees (height x width) must be above 0 and at most 180 each"
+            )) });
+        }
+        let key_ok = |k: char| k.is_ascii_lowercase() || k.is_ascii_digit();
+        if !key_ok(self.keys.convex) || !key_ok(self.keys.concave) {
+            return Err(BadSetting {
+                field: "keys",
+                error: Error::invalid(format!(
+                    "the response keys '{}' and '{}' must be lower-case letters or digits",
+                    self.keys.convex, self.keys.concave
+                )),
+            });
+        }
+        if self.keys.convex == self.keys.concave {
+            return Err(BadSetting {
+                field: "keys",
+                error: Error::invalid(format!(
+                    "the two response keys are both '{}'",
+                    self.keys.convex
+                )),
+            });
+        }
+        if self.timing.fixation_ms > 10_000 || self.timing.blank_ms > 10_000 {
+            return Err(BadSetting {
+                field: "timing",
+                error: Error::invalid(
+                    "the fixation and blank screens must each last at most 10000 ms",
+                ),
+            });
+        }
+        if let Some(g) = self.gamma {
+            if !(g.is_finite() && (0.1..=10.0).contains(&g)) {
+                return Err(BadSetting {
+                    field: "gamma",
+                    error: Error::invalid(format!("the display gamma {g} must be 0.1 to 10")),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The stimulus has a light to turn, and the light is left to the trials.
+    fn check_stimulus(&self) -> Result<()> {
         let info = stimulus::find(&self.stimulus)?.info();
         if !info.params.iter().any(|p| p.name == "light") {
             return Err(Error::invalid(format!(
@@ -192,70 +293,6 @@ impl Config {
             return Err(Error::invalid(
                 "the light is set by each trial's rotation; give its slant instead of a light parameter",
             ));
-        }
-        if !(self.slant_deg.is_finite() && self.slant_deg > 0.0 && self.slant_deg < 90.0) {
-            return Err(Error::invalid(format!(
-                "the light's slant {} must be above 0 and below 90 degrees",
-                self.slant_deg
-            )));
-        }
-        rotations(&self.rotations)?;
-        if self.repeats == 0 || self.repeats > MAX_REPEATS {
-            return Err(Error::invalid(format!(
-                "repeats {} must be 1 to {MAX_REPEATS}",
-                self.repeats
-            )));
-        }
-        if self.practice > MAX_PRACTICE {
-            return Err(Error::invalid(format!(
-                "practice trials {} must be at most {MAX_PRACTICE}",
-                self.practice
-            )));
-        }
-        if !(self.ppd.is_finite() && self.ppd > 0.0 && self.ppd <= 1000.0) {
-            return Err(Error::invalid(format!(
-                "pixels per degree {} must be above 0 and at most 1000",
-                self.ppd
-            )));
-        }
-        if !(self.viewing_distance_cm.is_finite()
-            && (10.0..=1000.0).contains(&self.viewing_distance_cm))
-        {
-            return Err(Error::invalid(format!(
-                "the viewing distance {} cm must be 10 to 1000 cm",
-                self.viewing_distance_cm
-            )));
-        }
-        let (h, w) = self.visual_size;
-        if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0 && h <= 180.0 && w <= 180.0) {
-            return Err(Error::invalid(format!(
-                "the visual size {h} x {w} degrees (height x width) must be above 0 and at most 180 each"
-            )));
-        }
-        let key_ok = |k: char| k.is_ascii_lowercase() || k.is_ascii_digit();
-        if !key_ok(self.keys.convex) || !key_ok(self.keys.concave) {
-            return Err(Error::invalid(format!(
-                "the response keys '{}' and '{}' must be lower-case letters or digits",
-                self.keys.convex, self.keys.concave
-            )));
-        }
-        if self.keys.convex == self.keys.concave {
-            return Err(Error::invalid(format!(
-                "the two response keys are both '{}'",
-                self.keys.convex
-            )));
-        }
-        if self.timing.fixation_ms > 10_000 || self.timing.blank_ms > 10_000 {
-            return Err(Error::invalid(
-                "the fixation and blank screens must each last at most 10000 ms",
-            ));
-        }
-        if let Some(g) = self.gamma {
-            if !(g.is_finite() && (0.1..=10.0).contains(&g)) {
-                return Err(Error::invalid(format!(
-                    "the display gamma {g} must be 0.1 to 10"
-                )));
-            }
         }
         Ok(())
     }
@@ -393,6 +430,28 @@ pub struct Design {
     pub images: Vec<ImageEntry>,
     /// Every trial in presentation order: the practice trials, then the shuffled test trials.
     pub trials: Vec<Trial>,
+    /// The first 16 hex digits of the MD5 of this design as JSON (with this field empty):
+    /// every response row carries it, so that responses collected under an earlier design in
+    /// the same folder are told apart from the current design's.
+    pub design_hash: String,
+}
+
+impl Design {
+    /// The hash [`Design::design_hash`] holds.
+    fn hash(&self) -> Result<String> {
+        use md5::{Digest, Md5};
+        let unhashed = Design {
+            design_hash: String::new(),
+            ..self.clone()
+        };
+        let bytes = serde_json::to_vec(&unhashed)
+            .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?;
+        Ok(Md5::digest(&bytes)
+            .iter()
+            .take(8)
+            .map(|b| format!("{b:02x}"))
+            .collect())
+    }
 }
 
 /// One rendered image, kept for the writer.
@@ -558,6 +617,11 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         },
         images,
         trials,
+        design_hash: String::new(),
+    };
+    let design = Design {
+        design_hash: design.hash()?,
+        ..design
     };
     Ok(Report {
         design,
@@ -604,8 +668,13 @@ fn background_css(output: &Output, gamma: Option<f64>) -> String {
 /// Writes the experiment folder whole (or not at all) and returns its path: `index.html`,
 /// `experiment.js`, `experiment.css`, `design.json`, `README.md` and `images/` (per rotation
 /// a PNG, its sidecar and its target mask).
-pub fn write(config: &Config, report: &Report) -> Result<PathBuf> {
-    let dir = AtomicDir::create(&config.out, MARKER, config.force)?;
+///
+/// A folder that holds files an earlier run did not write (responses saved beside the design)
+/// is refused unless `config.force`; with it they are kept, as every file shadelab did not
+/// write always is, and [`Written::kept`] lists them.
+pub fn write(config: &Config, report: &Report) -> Result<Written> {
+    let dir = AtomicDir::create(&config.out, MARKER, config.force)?
+        .refusing_collected("the experiment's design");
     let images = dir.path().join("images");
     std::fs::create_dir(&images).map_err(|e| Error::io(&images, e))?;
     let options = ExportOptions {
@@ -645,7 +714,17 @@ pub fn write(config: &Config, report: &Report) -> Result<PathBuf> {
     io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
     io::write_text(&dir.path().join("README.md"), &readme(design))?;
     io::write_text(&dir.path().join("index.html"), &page)?;
-    dir.commit()
+    let (folder, kept) = dir.commit_keeping()?;
+    Ok(Written { folder, kept })
+}
+
+/// What [`write()`] did.
+#[derive(Debug, Clone)]
+pub struct Written {
+    /// The experiment folder.
+    pub folder: PathBuf,
+    /// The files of the folder that shadelab did not write and kept (paths inside it).
+    pub kept: Vec<PathBuf>,
 }
 
 /// The lab's README for one experiment folder.

@@ -274,8 +274,10 @@ impl FadingReport {
     /// only with `force` and only when an earlier run wrote it): `time_course.csv`, with plots
     /// `time_course.png` and `.svg` ([`FadingReport::time_course_plot`]), `fading.gif` and
     /// `fading.json`. Returns the folder written.
-    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
-        let folder = AtomicDir::create(out, FADING_REPORT, force)?;
+    /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never
+    /// replaces them (see [`AtomicDir::reads`]).
+    pub fn write(&self, out: &Path, force: bool, inputs: &[PathBuf]) -> Result<PathBuf> {
+        let folder = AtomicDir::create(out, FADING_REPORT, force)?.reads(inputs)?;
         let dir = folder.path().to_path_buf();
         let c = &self.course;
         let mut csv = String::from("time_s,blurred,sharp,eye_x_deg,eye_y_deg\n");

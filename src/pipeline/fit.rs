@@ -320,12 +320,11 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
 }
 
 /// The header of a responses CSV, as `shadelab experiment` writes it.
-pub const RESPONSES_HEADER: &str =
-    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image\n";
+pub const RESPONSES_HEADER: &str = super::experiment::CSV_HEADER;
 
 /// A simulated responses CSV (the format [`parse_responses`] reads): `repeats` test trials at
 /// each of `rotations` answered by the observer model `model` with draws from a generator
-/// seeded with `seed`, in a seeded random order; `rt_ms` is 0 and `key` and `image` are empty
+/// seeded with `seed`, in a seeded random order; `rt_ms` is 0 and `key`, `image` and `design_hash` are empty
 /// (nothing was shown).
 ///
 /// ```
@@ -353,11 +352,11 @@ pub fn simulated_responses(
         let j = rng.below(i + 1);
         order.swap(i, j);
     }
-    let mut csv = String::from(RESPONSES_HEADER);
+    let mut csv = format!("{RESPONSES_HEADER}\n");
     for (i, &r) in order.iter().enumerate() {
         let convex = rng.next_f64() < model.p_convex(r);
         csv.push_str(&format!(
-            "{},{},test,simulated,{r},{},0,,\n",
+            "{},{},test,simulated,{r},{},0,,,\n",
             io::csv_field(participant),
             i + 1,
             if convex { "convex" } else { "concave" }

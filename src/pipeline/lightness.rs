@@ -242,8 +242,10 @@ impl LightnessReport {
     /// only with `force` and only when an earlier run wrote it): each model's `.npy` and
     /// `.png`, `targets.csv` and `targets.json` when there are targets, and `lightness.json`.
     /// Returns the folder written.
-    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
-        let folder = AtomicDir::create(out, LIGHTNESS_REPORT, force)?;
+    /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never
+    /// replaces them (see [`AtomicDir::reads`]).
+    pub fn write(&self, out: &Path, force: bool, inputs: &[PathBuf]) -> Result<PathBuf> {
+        let folder = AtomicDir::create(out, LIGHTNESS_REPORT, force)?.reads(inputs)?;
         let dir = folder.path().to_path_buf();
         for (files, (model, image)) in self.outputs.iter().zip(&self.images) {
             io::write_image(&dir.join(&files.npy), image)?;

@@ -138,6 +138,17 @@ pub struct SolveRecord {
 }
 
 impl SolveConfig {
+    /// The files this solve reads: the image and the sidecar beside it, the mask, the rim's
+    /// normals (see [`crate::io::AtomicDir::reads`]: an output folder never replaces them).
+    pub fn files(&self) -> Vec<PathBuf> {
+        let mut files = vec![self.image.clone(), self.image.with_extension("json")];
+        files.extend(self.mask.clone());
+        if let BoundarySource::File(path) = &self.boundary {
+            files.push(path.clone());
+        }
+        files
+    }
+
     /// A configuration with `shadelab solve`'s defaults: no mask, the occluding boundary,
     /// Lambertian reflectance, [`ReconstructOptions::default`].
     pub fn new(image: impl Into<PathBuf>, light: LightChoice) -> SolveConfig {
@@ -439,6 +450,11 @@ fn solve_loaded(
         pixels: crate::solver::clipped_pixels(&image, &mask, saturation),
     });
     let boundary = config.boundary.resolve(w, h, config.max_pixels)?;
+    if let BoundarySource::File(path) = &config.boundary {
+        // The rim's normals checked here, where the file they came from is known.
+        crate::boundary::boundary_conditions(&mask, &boundary)
+            .map_err(|e| Error::format(path, e.to_string()))?;
+    }
     let given = match config.light {
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,

@@ -74,6 +74,18 @@ impl Picture {
 }
 
 impl PictureSource {
+    /// The files this source reads: the image and the sidecar beside it, the spec, the mask
+    /// (see [`crate::io::AtomicDir::reads`]: an output folder never replaces them).
+    pub fn files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = [&self.image, &self.spec, &self.mask]
+            .into_iter()
+            .flatten()
+            .cloned()
+            .collect();
+        files.extend(self.image.as_ref().map(|i| i.with_extension("json")));
+        files
+    }
+
     /// Checks what needs no file: a positive resolution and exactly one source.
     pub fn check(&self) -> Result<()> {
         if let Some(p) = self.ppd {

@@ -126,9 +126,10 @@ impl Default for CreaseOptions {
 impl CreaseOptions {
     /// Checks every parameter, naming the bad one.
     pub fn validate(&self) -> Result<()> {
-        if !(self.lambda.is_finite() && self.lambda >= 0.0) {
+        let hi = super::LAMBDA_RANGE.1;
+        if !(self.lambda >= 0.0 && self.lambda <= hi) {
             return Err(Error::invalid(format!(
-                "lambda = {} must be a number ≥ 0",
+                "lambda = {:e} is outside 0..{hi:e} (0: the data alone)",
                 self.lambda
             )));
         }

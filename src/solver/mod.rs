@@ -147,6 +147,22 @@ impl Method {
     }
 }
 
+/// The smoothness weights λ accepted (both ends included): the multigrid solve converges
+/// across it on the rendered sphere and vase (tests/solve.rs); Jacobi sweeps are stable only
+/// for the smaller λ of it (about λ ≤ 1 at 128², see docs/reliability.md) and fail with a
+/// divergence error above. Beyond it the answer is either the data alone or smoothness alone.
+pub const LAMBDA_RANGE: (f64, f64) = (1e-3, 1e3);
+
+/// The stopping tolerances accepted: below 10⁻¹² a solve in f64 cannot get there; above 0.1
+/// it stops before it has moved.
+pub const TOL_RANGE: (f64, f64) = (1e-12, 0.1);
+
+/// The largest iteration cap accepted.
+pub const MAX_ITER_LIMIT: usize = 10_000_000;
+
+/// A last update or value beyond this magnitude is a solve that blew up, never an answer.
+pub const BLOWN_UP: f64 = 1e30;
+
 impl Default for SolveOptions {
     /// Multigrid, λ = 1, tolerance 10⁻⁶, at most [`MULTIGRID_MAX_CYCLES`] cycles.
     fn default() -> Self {
@@ -176,20 +192,27 @@ impl SolveOptions {
 
     /// Checks every parameter, naming the bad one.
     pub fn validate(&self) -> Result<()> {
-        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+        let (lo, hi) = LAMBDA_RANGE;
+        if !(self.lambda.is_finite() && (lo..=hi).contains(&self.lambda)) {
             return Err(Error::invalid(format!(
-                "lambda = {} must be a positive number",
+                "lambda = {:e} is outside {lo:e}..{hi:e}, the range in which the solvers are \
+                 checked to converge",
                 self.lambda
             )));
         }
-        if !(self.tol.is_finite() && self.tol > 0.0) {
+        let (lo, hi) = TOL_RANGE;
+        if !(self.tol.is_finite() && (lo..=hi).contains(&self.tol)) {
             return Err(Error::invalid(format!(
-                "tol = {} must be a positive number",
+                "tol = {:e} is outside {lo:e}..{hi:e} (the largest change of f or g, or the \
+                 residual, at which a solve stops)",
                 self.tol
             )));
         }
-        if self.max_iter == 0 {
-            return Err(Error::invalid("max-iter must be at least 1"));
+        if !(1..=MAX_ITER_LIMIT).contains(&self.max_iter) {
+            return Err(Error::invalid(format!(
+                "max_iter = {} is outside 1..{MAX_ITER_LIMIT}",
+                self.max_iter
+            )));
         }
         if let Some(level) = self.saturation {
             if !(level.is_finite() && level > 0.0) {

@@ -72,17 +72,30 @@ impl ExportOptions {
                     .join(", ")
             )));
         }
+        self.check_range(path)?;
+        self.check_gamma(path)?;
+        Ok(ext)
+    }
+
+    /// The range for a file named `path`: psychopy's −1..1 only in float formats.
+    pub fn check_range(&self, path: &Path) -> Result<()> {
+        let ext = io::extension(path);
         if self.range == Range::Psychopy && !matches!(ext.as_str(), "npy" | "mat" | "npz") {
             return Err(Error::invalid(format!(
                 "range psychopy applies to float formats (.npy, .mat, .npz), not .{ext}"
             )));
         }
-        if self.gamma.is_some() && ext != "png" {
+        Ok(())
+    }
+
+    /// The display gamma for a file named `path`: PNG only.
+    pub fn check_gamma(&self, path: &Path) -> Result<()> {
+        if self.gamma.is_some() && io::extension(path) != "png" {
             return Err(Error::invalid(
                 "a display gamma applies to PNG output only (float formats stay linear)",
             ));
         }
-        Ok(ext)
+        Ok(())
     }
 }
 

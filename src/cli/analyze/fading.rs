@@ -73,7 +73,7 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     border: f64,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: std::path::PathBuf,
 }
@@ -111,7 +111,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     };
     let config = FadingConfig::new(args.source.to_library(global)?, band, adaptation)?;
     let report = fading::run(&config, &Bar::new(global.quiet))?;
-    let target = report.write(&args.out, global.force)?;
+    let target = report.write(&args.out, global.force, &config.source.files())?;
     let out = Output::new(global);
     out.note(format!("wrote {}", target.display()));
     let (energy, last) = (&report.border_energy, &report.final_contrast);

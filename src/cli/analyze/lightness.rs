@@ -15,7 +15,7 @@ pub struct Args {
     /// The model: odog, lodog, flodog, retinex, or all (each in turn).
     #[arg(long, value_name = "odog|lodog|flodog|retinex|all")]
     model: String,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: std::path::PathBuf,
 }
@@ -35,7 +35,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     let config = LightnessConfig::new(args.source.to_library(global)?, models)?;
     let report = lightness::run(&config, &Bar::new(global.quiet))?;
-    let target = report.write(&args.out, global.force)?;
+    let target = report.write(&args.out, global.force, &config.source.files())?;
     let out = Output::new(global);
     out.wrote(&target, report.seconds.total);
     let mut text = String::new();

@@ -58,7 +58,7 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     tilts: String,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -80,7 +80,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         config.use_fit(path).map_err(|e| usage("--prior", e))?;
     }
     config.check().map_err(flags::setting)?;
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let mut inputs = config.picture.source.files();
+    inputs.extend(args.prior.clone());
+    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&inputs)?;
     let report = observer::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;

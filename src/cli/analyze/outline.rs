@@ -46,7 +46,7 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     lambda: f64,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -73,7 +73,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         .validate()
         .map_err(|e| usage("--depth-scale", e))?;
     config.crease.validate().map_err(|e| usage("--lambda", e))?;
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let folder =
+        AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&config.source.files())?;
     let report = outline::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;

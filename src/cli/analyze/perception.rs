@@ -55,7 +55,7 @@ impl PictureArgs {
         config.slant_deg = self.analysis.slant;
         config.albedo = self.analysis.albedo;
         config.ambient = self.analysis.ambient;
-        self.solver.apply(&mut config.solver);
+        self.solver.apply(&mut config.solver)?;
         Ok(config)
     }
 }

@@ -27,7 +27,7 @@ pub struct Args {
     /// a light estimated from each token alone.
     #[arg(long, value_name = "estimate|TILT", allow_hyphen_values = true)]
     binding: Option<String>,
-    /// Output folder (written whole or not at all).
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -46,7 +46,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..Config::new(args.picture.config(global)?)?
     };
     config.check().map_err(flags::setting)?;
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?;
+    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?
+        .reads(&config.picture.source.files())?;
     let report = prior_sweep::run(&config, &Bar::new(global.quiet))?;
     report.write(folder.path())?;
     let target = folder.commit()?;
