@@ -392,7 +392,7 @@ impl Reconstructor {
             }
         }
         let s = &shape.solution;
-        let blown = |v: f64| !(v.abs() < crate::solver::BLOWN_UP);
+        let blown = |v: f64| v.is_nan() || v.abs() >= crate::solver::BLOWN_UP;
         if s.diverged
             || blown(s.last_update)
             || s.f.data().iter().chain(s.g.data()).any(|&v| blown(v))

@@ -153,7 +153,7 @@ fn bad_input_gets_one_line_and_nothing_written() {
         (
             &["render", "sphere", "--size", "0", "--out", "x.png"],
             2,
-            "empty",
+            "--size '0': both sides must be positive",
         ),
         (
             &["render", "sphere", "--light", "0,0,0", "--out", "x.png"],

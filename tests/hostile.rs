@@ -863,8 +863,14 @@ fn render_refuses_bad_numbers_names_and_sizes() {
     fixtures(&d);
     let table = cases(&[
         ("render sphere --size -1 --out o.png", &["--size", "-1"]),
-        ("render sphere --size 0 --out o.png", &["0x0", "empty"]),
-        ("render sphere --size 0x5 --out o.png", &["0x5", "empty"]),
+        (
+            "render sphere --size 0 --out o.png",
+            &["--size '0'", "both sides must be positive"],
+        ),
+        (
+            "render sphere --size 0x5 --out o.png",
+            &["--size '0x5'", "both sides must be positive"],
+        ),
         (
             "render sphere --width 0 --height 5 --out o.png",
             &["0x5", "empty"],
@@ -921,7 +927,7 @@ fn render_refuses_bad_numbers_names_and_sizes() {
         ),
         (
             "render sphere --visual-size -2 --out o.png",
-            &["visual size", "-2"],
+            &["--visual-size '-2'", "both sides must be positive"],
         ),
         (
             "render sphere --visual-size 1e300 --ppd 1e300 --out o.png",
@@ -1070,14 +1076,19 @@ fn own_outputs_may_be_replaced_and_foreign_ones_with_force() {
     std::fs::remove_file(d.join("s.json")).unwrap();
     let out = shadelab(&d, &["render", "sphere", "--size", "8", "--out", "s.png"]);
     assert_error(&out, 1, "--force");
-    // --force replaces files and folders shadelab did not write.
+    // --force replaces files shadelab did not write, and writes into a folder it did not
+    // write, keeping every file of the user's there (the output-folder rule).
     works(&d, "render sphere --size 8 --force --out foreign.png");
     works(&d, "render sphere --size 8 --force --out photo.png");
     let sidecar: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.join("photo.json")).unwrap()).unwrap();
     assert_eq!(sidecar["program"], "shadelab");
+    let holiday = std::fs::read(d.join("foreign/holiday.jpg")).unwrap();
     works(&d, "solve in/ok.png --light above --force --out foreign");
-    assert!(!d.join("foreign/holiday.jpg").exists());
+    assert_eq!(
+        std::fs::read(d.join("foreign/holiday.jpg")).unwrap(),
+        holiday
+    );
     assert!(d.join("foreign/report.json").exists());
 }
 

@@ -265,6 +265,7 @@ fn the_command_writes_its_table_report_and_pictures() {
     assert_eq!(
         files,
         [
+            ".shadelab-files.json",
             "outline.csv",
             "outline.json",
             "sawtooth-strip-paint.png",

@@ -55,6 +55,7 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     assert_eq!(
         files_in(&result),
         [
+            ".shadelab-files.json",
             "convergence.csv",
             "convergence.png",
             "depth.npy",

@@ -518,28 +518,27 @@ fn numbers_out_of_range_and_diverging_runs_write_nothing() {
         assert_error(&solve(extra), 2, needle);
         assert!(!d.join("o").exists(), "{extra:?}");
     }
-    // λ at both ends of the range converges (multigrid, the default).
-    for lambda in ["1e-3", "1e3"] {
-        let out = shadelab(
-            &d,
-            &[
-                "--quiet",
-                "solve",
-                "s.png",
-                "--light",
-                "tilt=30,slant=40",
-                "--lambda",
-                lambda,
-                "--out",
-                lambda,
-            ],
-        );
-        ok(&out, lambda);
-        assert!(
-            String::from_utf8_lossy(&out.stdout).starts_with("converged"),
-            "{lambda}: {}",
-            String::from_utf8_lossy(&out.stdout)
-        );
+    // λ at both ends of the range converges (multigrid, the default) on the sphere and the
+    // vase under an oblique light, with their masks.
+    for object in ["sphere", "vase"] {
+        let light = "tilt=30,slant=40";
+        let picture = format!("{object}.png");
+        let render = [
+            "--quiet", "render", object, "--size", "64", "--light", light, "--out", &picture,
+        ];
+        ok(&shadelab(&d, &render), object);
+        let mask = format!("{object}_mask.png");
+        for lambda in ["1e-3", "1e3"] {
+            let out_dir = format!("{object}-{lambda}");
+            let args = [
+                "--quiet", "solve", &picture, "--mask", &mask, "--light", light, "--lambda",
+                lambda, "--out", &out_dir,
+            ];
+            let out = shadelab(&d, &args);
+            ok(&out, &out_dir);
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert!(stdout.starts_with("converged"), "{out_dir}: {stdout}");
+        }
     }
     // Jacobi sweeps diverge at a λ multigrid takes: exit 1, the flag to change, nothing written.
     let out = solve(&["--method", "jacobi", "--lambda", "30"]);

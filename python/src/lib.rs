@@ -14,6 +14,8 @@ use shadelab::grid::{Grid, Image, Labels, Mask, RgbImage};
 use shadelab::pipeline::{self as pl, perception};
 use shadelab::{Error, NoProgress, Pixels, SizeRequest};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
 
 /// The library's error as the Python exception a Python user expects, with its one-line text.
 fn to_py(e: Error) -> PyErr {
@@ -28,13 +30,50 @@ fn to_py(e: Error) -> PyErr {
     }
 }
 
+/// How often a running call looks for Ctrl-C (Python's pending signals).
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
 /// Runs `work` with the GIL released; a library error becomes its Python exception and a panic
 /// (a bug, never expected) a RuntimeError without the panic's text.
+///
+/// Ctrl-C: the work runs on a worker thread while the calling thread looks for Python's
+/// pending signals every [`SIGNAL_POLL`] (`check_signals`, which runs Python's handlers: the
+/// default SIGINT handler raises KeyboardInterrupt). When one raises, the library's stop flag
+/// ([`shadelab::cancel`]) is raised, the work stops at its next check (an output being written
+/// is removed, never left half-written), the flag is lowered for the next call, and the
+/// handler's exception is raised in Python.
 fn run_released<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> Result<T, Error> + Send,
 ) -> PyResult<T> {
-    py.detach(|| catch_unwind(AssertUnwindSafe(work)))
+    let (outcome, interrupted) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (done, finished) = mpsc::channel();
+            let worker = scope.spawn(move || {
+                let outcome = catch_unwind(AssertUnwindSafe(work));
+                let _ = done.send(());
+                outcome
+            });
+            let mut interrupted = None;
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
+                if interrupted.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        shadelab::cancel::request();
+                        interrupted = Some(e);
+                    }
+                }
+            }
+            let outcome = worker.join().unwrap_or_else(Err);
+            if interrupted.is_some() {
+                shadelab::cancel::reset();
+            }
+            (outcome, interrupted)
+        })
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    outcome
         .map_err(|_| {
             PyRuntimeError::new_err(
                 "shadelab failed unexpectedly (an internal error); please report it with the call that caused it",

@@ -80,7 +80,7 @@ fn bad_input_is_one_line_nonzero_and_writes_nothing() {
         (
             &["render", "fading-disk", "--size", "0x10", "--out", "x.png"],
             2,
-            "empty",
+            "--size '0x10': both sides must be positive",
         ),
         (
             &[
