@@ -635,3 +635,40 @@ fn rim_normals_facing_away_are_refused_naming_the_file() {
     assert!(!d.join("o").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn a_render_never_replaces_the_spec_it_reads() {
+    let d = scratch("keep-spec");
+    let preset = Path::new(env!("CARGO_MANIFEST_DIR")).join("stimuli/bumps.json");
+    std::fs::copy(&preset, d.join("my.json")).unwrap();
+    let spec = std::fs::read(d.join("my.json")).unwrap();
+    for force in [false, true] {
+        let mut args = vec!["--quiet"];
+        if force {
+            args.push("--force");
+        }
+        args.extend(["render", "--spec", "my.json", "--out", "my.png"]);
+        let out = shadelab(&d, &args);
+        assert_error(&out, 1, "my.json: is the spec this render reads");
+        assert_eq!(std::fs::read(d.join("my.json")).unwrap(), spec);
+        assert!(!d.join("my.png").exists());
+    }
+    // Under another name it renders, and its own sidecar re-renders the same set.
+    ok(
+        &shadelab(
+            &d,
+            &["--quiet", "render", "--spec", "my.json", "--out", "b.png"],
+        ),
+        "spec",
+    );
+    let png = std::fs::read(d.join("b.png")).unwrap();
+    ok(
+        &shadelab(
+            &d,
+            &["--quiet", "render", "--spec", "b.json", "--out", "b.png"],
+        ),
+        "sidecar",
+    );
+    assert_eq!(std::fs::read(d.join("b.png")).unwrap(), png);
+    let _ = std::fs::remove_dir_all(&d);
+}

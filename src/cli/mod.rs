@@ -208,9 +208,10 @@ fn hint(error: &anyhow::Error) -> &'static str {
         .chain()
         .find_map(|c| c.downcast_ref::<shadelab::Error>())
     {
-        Some(shadelab::Error::NotOurs { .. }) => {
+        Some(shadelab::Error::NotOurs { path, .. }) if path.is_dir() => {
             "; use --force to write into it (every file shadelab did not write stays)"
         }
+        Some(shadelab::Error::NotOurs { .. }) => "; use --force to replace it",
         Some(shadelab::Error::TooLarge(_)) => " (--max-pixels)",
         _ => "",
     }

@@ -96,6 +96,18 @@ impl RenderConfig {
         let is_sidecar = value.get("program").and_then(Value::as_str) == Some("shadelab")
             && value.get("parameters").is_some();
         if !is_sidecar {
+            let out = out.into();
+            // A spec of the user's is an input, never an output: the render's sidecar must
+            // not replace it (a shadelab sidecar describes its own set and is re-rendered).
+            let sidecar = crate::io::render_sidecar::sidecar_path(&out);
+            let canonical = |p: &Path| std::fs::canonicalize(p).ok();
+            if canonical(&sidecar).is_some() && canonical(&sidecar) == canonical(path) {
+                return Err(Error::format(
+                    path,
+                    "is the spec this render reads, and the render's sidecar would replace it \
+                     (even with --force): give the output another name",
+                ));
+            }
             let spec: Spec = serde_json::from_value(value)
                 .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))?;
             return Ok(RenderConfig::from_spec(&spec, out));
