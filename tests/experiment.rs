@@ -353,6 +353,7 @@ fn a_participant_answers_by_key_and_gets_the_csv_in_headless_chromium() {
     assert_eq!(rows.len(), 9, "{csv}");
     for (row, trial) in rows.iter().zip(&report.design.trials) {
         assert_eq!(row[0], "T1");
+        assert_eq!(row[9], report.design.design_hash);
         assert_eq!(
             (row[1], row[2]),
             (trial.trial.to_string().as_str(), trial.block)
@@ -427,7 +428,14 @@ fn the_page_pilots_the_design_in_headless_chromium() {
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let d_ = &report.design;
     assert_eq!(rows.len(), d_.trials.len());
-    assert!(rows.iter().all(|r| r.len() == 9), "{rows:?}");
+    assert!(rows.iter().all(|r| r.len() == 10), "{rows:?}");
+    // Every row carries the design's hash (the output-folder rule: responses of an earlier
+    // design in the same folder are told apart).
+    assert!(
+        rows.iter().all(|r| r[9] == d_.design_hash),
+        "{rows:?} {}",
+        d_.design_hash
+    );
     let mut convex: BTreeMap<i64, (usize, usize)> = BTreeMap::new();
     for (row, trial) in rows.iter().zip(&d_.trials) {
         // The page keeps the design's order, rotation and image.

@@ -270,8 +270,9 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
 }
 
 impl FadingReport {
-    /// Writes the output folder `out` (whole or not at all; an existing folder is replaced
-    /// only with `force` and only when an earlier run wrote it): `time_course.csv`, with plots
+    /// Writes the output folder `out` (whole or not at all; a folder shadelab did not write is
+    /// written into only with `force`, and every file this run does not write stays, see
+    /// [`AtomicDir`]): `time_course.csv`, with plots
     /// `time_course.png` and `.svg` ([`FadingReport::time_course_plot`]), `fading.gif` and
     /// `fading.json`. Returns the folder written.
     /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never

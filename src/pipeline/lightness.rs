@@ -238,8 +238,9 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
 }
 
 impl LightnessReport {
-    /// Writes the output folder `out` (whole or not at all; an existing folder is replaced
-    /// only with `force` and only when an earlier run wrote it): each model's `.npy` and
+    /// Writes the output folder `out` (whole or not at all; a folder shadelab did not write is
+    /// written into only with `force`, and every file this run does not write stays, see
+    /// [`AtomicDir`]): each model's `.npy` and
     /// `.png`, `targets.csv` and `targets.json` when there are targets, and `lightness.json`.
     /// Returns the folder written.
     /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never

@@ -129,8 +129,9 @@ impl StudyRunReport {
         write_study_files(dir, &self.results, &self.sweep, self)
     }
 
-    /// Writes the output folder `out` whole or not at all (an existing folder is replaced
-    /// only when shadelab wrote it, or with `force`); returns the folder.
+    /// Writes the output folder `out` whole or not at all (a folder shadelab did not write is
+    /// written into only with `force`, and every file this run does not write stays, see
+    /// [`AtomicDir`]); returns the folder.
     pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
         write_study_folder(out, force, |dir| self.write_into(dir))
     }
@@ -233,8 +234,9 @@ impl StudyMergeReport {
         write_study_files(dir, &self.results, &self.sweep, self)
     }
 
-    /// Writes the output folder `out` whole or not at all (an existing folder is replaced
-    /// only when shadelab wrote it, or with `force`); returns the folder.
+    /// Writes the output folder `out` whole or not at all (a folder shadelab did not write is
+    /// written into only with `force`, and every file this run does not write stays, see
+    /// [`AtomicDir`]); returns the folder.
     pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
         write_study_folder(out, force, |dir| self.write_into(dir))
     }
