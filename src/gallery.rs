@@ -176,6 +176,9 @@ pub struct Options {
     /// repository root): [`DOCS_BASE`], or a URL of the repository's files, or an absolute path,
     /// for a gallery rendered elsewhere.
     pub docs_base: String,
+    /// What the presets were read from (a folder of specs), never replaced by the output
+    /// (see [`AtomicDir::reads`]).
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 impl Default for Options {
@@ -184,6 +187,7 @@ impl Default for Options {
             force: false,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             docs_base: DOCS_BASE.to_string(),
+            inputs: Vec::new(),
         }
     }
 }
@@ -226,7 +230,7 @@ pub fn build(
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<GalleryReport> {
     check_presets(presets)?;
-    let dir = AtomicDir::create(out, MARKER, options.force)?;
+    let dir = AtomicDir::create(out, MARKER, options.force)?.reads(&options.inputs)?;
     let thumbs = dir.path().join("thumbs");
     std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
     let rendered: Vec<Rendered> = presets

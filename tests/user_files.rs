@@ -327,6 +327,20 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
         "g",
         &["--quiet", "gallery", "--presets", "presets", "--out", "g"],
     );
+    // Presets kept in a folder of the user's inside the gallery: read, and kept.
+    std::fs::create_dir(d.join("g/mine")).unwrap();
+    std::fs::copy(presets.join("bumps.json"), d.join("g/mine/bumps.json")).unwrap();
+    let mine = std::fs::read(d.join("g/mine/bumps.json")).unwrap();
+    ok(
+        &shadelab(
+            &d,
+            &["--quiet", "gallery", "--presets", "g/mine", "--out", "g"],
+        ),
+        "gallery from inside",
+    );
+    assert_eq!(std::fs::read(d.join("g/mine/bumps.json")).unwrap(), mine);
+    assert!(d.join("g/bumps.json").exists() && !d.join("g/crater.json").exists());
+    assert_user_files(&d.join("g"), "gallery from inside");
 
     // eval, on a bunny folder made from the test mesh (its data read from inside the output
     // folder the second time).

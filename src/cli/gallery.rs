@@ -30,6 +30,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         force: global.force,
         max_pixels: global.max_pixels,
         docs_base: args.docs_base,
+        ..config.options
     };
     let report = build(&config, &Bar::new(global.quiet))?;
     let out = super::output::Output::new(global);

@@ -50,7 +50,10 @@ impl GalleryConfig {
         Ok(GalleryConfig {
             presets: gallery::load_presets(presets)?,
             out: out.into(),
-            options: Options::default(),
+            options: Options {
+                inputs: vec![presets.to_path_buf()],
+                ..Options::default()
+            },
         })
     }
 
