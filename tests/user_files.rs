@@ -131,8 +131,6 @@ fn solve_keeps_the_users_files_and_its_inputs() {
 #[test]
 fn the_analyses_keep_the_users_files() {
     let d = scratch("keep-analyses");
-    render_sphere(&d);
-    let picture = ["s.png"];
     for (out, args) in [
         (
             "sweep",
@@ -192,33 +190,44 @@ fn the_analyses_keep_the_users_files() {
                 "--stimulus",
                 "fading-disk",
                 "--ppd",
-                "4",
+                "8",
                 "--duration",
                 "1",
             ],
         ),
     ] {
-        let mut args: Vec<&str> = [&["--quiet"][..], &args[..], &["--out", out]].concat();
-        keeps_user_files(&d, out, &args);
-        // The lightness models read a picture: one inside their own folder is kept.
-        if out == "lightness" {
-            std::fs::copy(d.join(picture[0]), d.join("lightness/s.png")).unwrap();
-            args = vec![
-                "--quiet",
-                "analyze",
-                "lightness",
-                "lightness/s.png",
-                "--ppd",
-                "16",
-                "--model",
-                "retinex",
-                "--out",
-                "lightness",
-            ];
-            ok(&shadelab(&d, &args), "lightness from inside");
-            assert!(d.join("lightness/s.png").exists());
-            assert_user_files(&d.join("lightness"), "lightness from inside");
+        let with_out: Vec<&str> = [&["--quiet"][..], &args[..], &["--out", out]].concat();
+        keeps_user_files(&d, out, &with_out);
+        // The same stimulus rendered into the output folder and analysed from there: the
+        // picture, its sidecar and its mask are read, and kept.
+        let at = args.iter().position(|a| *a == "--stimulus").unwrap();
+        let name = args[at + 1];
+        let picture = format!("{out}/pic.png");
+        let mut render = vec!["--quiet", "render", name, "--out", &picture];
+        let mut from_file = vec!["--quiet", args[0], args[1], &picture];
+        let mut rest = args[2..].iter();
+        while let Some(&flag) = rest.next() {
+            match flag {
+                "--stimulus" => {
+                    rest.next();
+                }
+                "--size" | "--ppd" => {
+                    let value = rest.next().unwrap();
+                    render.extend([flag, value]);
+                    if flag == "--ppd" {
+                        from_file.extend([flag, value]);
+                    }
+                }
+                other => from_file.push(other),
+            }
         }
+        from_file.extend(["--out", out]);
+        ok(&shadelab(&d, &render), &format!("render into {out}"));
+        let bytes = std::fs::read(d.join(&picture)).unwrap();
+        ok(&shadelab(&d, &from_file), &format!("{out} from inside"));
+        assert_eq!(std::fs::read(d.join(&picture)).unwrap(), bytes, "{out}");
+        assert!(d.join(out).join("pic.json").exists() && d.join(out).join("pic_mask.png").exists());
+        assert_user_files(&d.join(out), &format!("{out} from inside"));
     }
     let _ = std::fs::remove_dir_all(&d);
 }
