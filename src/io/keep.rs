@@ -195,11 +195,41 @@ fn link_again(from: &Path, to: &Path) -> std::io::Result<()> {
     fs::copy(from, to).map(|_| ())
 }
 
-/// Moves into `new` what appeared in `old` (a folder just swapped out) after its files were
-/// linked into `new`, before `old` is deleted: see [`carry`].
+/// Moves into `new` what changed in `old` (a folder just swapped out) after its files were
+/// linked into `new`, before `old` is deleted: a file that appeared meanwhile (see [`carry`]),
+/// and a kept file that was replaced meanwhile by a new file under its name (an editor saving
+/// by rename), which replaces the stale link. Files the new run wrote are never touched.
 pub(crate) fn rescue(old: &Path, new: &Path) {
     let ours = read_manifest(old);
+    let written = read_manifest(new);
     let _ = carry(old, new, &ours, Carry::Move);
+    let Ok(entries) = files_under(old) else {
+        return;
+    };
+    for rel in entries {
+        if ours.contains(&rel) || written.contains(&rel) || rel.iter().any(passing) {
+            continue;
+        }
+        let (from, to) = (old.join(&rel), new.join(&rel));
+        if !same_file(&from, &to) && fs::symlink_metadata(&from).is_ok_and(|m| m.is_file()) {
+            let _ = fs::rename(&from, &to);
+        }
+    }
+}
+
+/// Whether two names are links to one file (false where this cannot be told).
+#[cfg(unix)]
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::symlink_metadata(a), fs::symlink_metadata(b)) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_a: &Path, _b: &Path) -> bool {
+    true // without inode numbers, a kept copy is left as it was carried
 }
 
 /// Whether `input` (a file or folder a run reads) lies inside the output folder `out` or is
@@ -294,6 +324,37 @@ mod tests {
         assert_eq!(
             fs::read_to_string(old.join("images/a.png")).unwrap(),
             "old a"
+        );
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn rescue_brings_what_appeared_or_was_replaced_after_the_links() {
+        let d = scratch("keep-rescue");
+        let (old, new) = (d.join("old"), d.join("new"));
+        fs::create_dir_all(&old).unwrap();
+        fs::create_dir_all(&new).unwrap();
+        fs::write(old.join("notes.txt"), "v1").unwrap();
+        fs::write(old.join("report.json"), "old report").unwrap();
+        fs::write(
+            old.join(MANIFEST),
+            r#"{"program": "shadelab", "files": ["report.json"]}"#,
+        )
+        .unwrap();
+        fs::write(new.join("report.json"), "new report").unwrap();
+        write_manifest(&new).unwrap();
+        carry(&old, &new, &read_manifest(&old), Carry::Link).unwrap();
+        // Meanwhile the user saves notes.txt by rename (a new file) and adds another.
+        fs::write(old.join(".notes.swp"), "v2").unwrap();
+        fs::rename(old.join(".notes.swp"), old.join("notes.txt")).unwrap();
+        fs::write(old.join("late.txt"), "late").unwrap();
+        rescue(&old, &new);
+        assert_eq!(fs::read_to_string(new.join("notes.txt")).unwrap(), "v2");
+        assert_eq!(fs::read_to_string(new.join("late.txt")).unwrap(), "late");
+        assert_eq!(
+            fs::read_to_string(new.join("report.json")).unwrap(),
+            "new report"
         );
         fs::remove_dir_all(&d).unwrap();
     }
