@@ -343,10 +343,21 @@ fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
     if source.image.is_some() {
         let input = source.load(true)?;
         let ppd = input.ppd.unwrap_or_default();
-        let (labels, _) = input
+        let (labels, names) = input
             .labels
             .as_ref()
             .ok_or_else(|| Error::invalid("an image needs target labels"))?;
+        // Targets named by a render's sidecar are that render's (the fading disk's are `disk`
+        // and `fixation`), not a blurred and a sharp disk: reading them as such would compare
+        // the disk with the fixation dot.
+        if names.len() >= 2 && !names[1].contains("sharp") {
+            return Err(Error::invalid(format!(
+                "the image's targets are {} (from its sidecar), not label 1 = the blurred disk \
+                 and 2 = the sharp disk: analyse the stimulus itself (it is rendered blurred and \
+                 sharp), or give target labels with those two disks",
+                names.join(", ")
+            )));
+        }
         let mask = |l: u16, what: &str| -> Result<Mask> {
             let m = labels.map(|&v| v == l);
             if m.count() == 0 {
