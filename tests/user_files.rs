@@ -24,6 +24,16 @@ const USER_FILES: [(&str, &[u8]); 2] = [
     ("participants/p01.csv", b"rotation_deg,response\n0,convex\n"),
 ];
 
+/// Runs `args` quietly in `d`, with `--force` when `force`.
+fn quiet(d: &Path, force: bool, args: &[&str]) -> Output {
+    let mut all = vec!["--quiet"];
+    if force {
+        all.push("--force");
+    }
+    all.extend_from_slice(args);
+    shadelab(d, &all)
+}
+
 fn put_user_files(out: &Path) {
     for (name, bytes) in USER_FILES {
         let path = out.join(name);
@@ -55,9 +65,7 @@ fn keeps_user_files(d: &Path, out: &str, args: &[&str]) {
     put_user_files(&d.join(out));
     ok(&shadelab(d, args), out);
     assert_user_files(&d.join(out), &format!("{out}, second run"));
-    let mut forced = vec!["--force"];
-    forced.extend_from_slice(args);
-    ok(&shadelab(d, &forced), out);
+    ok(&shadelab(d, &[&["--force"][..], args].concat()), out);
     assert_user_files(&d.join(out), &format!("{out}, --force"));
 }
 
@@ -78,14 +86,10 @@ fn solve_keeps_the_users_files_and_its_inputs() {
     let d = scratch("keep-solve");
     render_sphere(&d);
     let solve = |image: &str, mask: &str, force: bool| {
-        let mut args = vec!["--quiet"];
-        if force {
-            args.push("--force");
-        }
-        args.extend([
+        let args = [
             "solve", image, "--mask", mask, "--light", "front", "--out", "sfs",
-        ]);
-        shadelab(&d, &args)
+        ];
+        quiet(&d, force, &args)
     };
     keeps_user_files(
         &d,
@@ -263,12 +267,8 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
     );
     std::fs::write(d.join("fit2/p01.csv"), &csv).unwrap();
     for force in [false, true] {
-        let mut args = vec!["--quiet"];
-        if force {
-            args.push("--force");
-        }
-        args.extend(["fit", "observer", "fit2/p01.csv", "--out", "fit2"]);
-        ok(&shadelab(&d, &args), "fit from inside");
+        let args = ["fit", "observer", "fit2/p01.csv", "--out", "fit2"];
+        ok(&quiet(&d, force, &args), "fit from inside");
         assert_eq!(
             std::fs::read_to_string(d.join("fit2/p01.csv")).unwrap(),
             csv
@@ -484,12 +484,9 @@ fn a_link_to_a_folder_is_followed_and_a_broken_link_is_named() {
     std::os::unix::fs::symlink("real", d.join("plink")).unwrap();
     std::fs::write(d.join("real/mine.txt"), "mine").unwrap();
     for force in [true, false] {
-        let mut args = vec!["--quiet"];
-        if force {
-            args.push("--force"); // the first time: the folder is not shadelab's yet
-        }
-        args.extend(["solve", "s.png", "--light", "front", "--out", "plink"]);
-        ok(&shadelab(&d, &args), "solve into a link");
+        // Forced the first time: the folder is not shadelab's yet.
+        let args = ["solve", "s.png", "--light", "front", "--out", "plink"];
+        ok(&quiet(&d, force, &args), "solve into a link");
         assert!(d.join("real/report.json").exists());
         assert!(std::fs::symlink_metadata(d.join("plink"))
             .unwrap()
@@ -677,12 +674,8 @@ fn a_render_never_replaces_the_spec_it_reads() {
     std::fs::copy(&preset, d.join("my.json")).unwrap();
     let spec = std::fs::read(d.join("my.json")).unwrap();
     for force in [false, true] {
-        let mut args = vec!["--quiet"];
-        if force {
-            args.push("--force");
-        }
-        args.extend(["render", "--spec", "my.json", "--out", "my.png"]);
-        let out = shadelab(&d, &args);
+        let args = ["render", "--spec", "my.json", "--out", "my.png"];
+        let out = quiet(&d, force, &args);
         assert_error(&out, 1, "my.json: is the spec this render reads");
         assert_eq!(std::fs::read(d.join("my.json")).unwrap(), spec);
         assert!(!d.join("my.png").exists());

@@ -423,9 +423,7 @@ impl AtomicDir {
             };
             let replaced = rel.as_os_str().is_empty()
                 || rel == Path::new(&self.marker)
-                || ours
-                    .iter()
-                    .any(|f| f.starts_with(&rel) || rel.starts_with(f));
+                || ours.iter().any(|f| super::keep::overlaps(f, &rel));
             if replaced {
                 return Err(Error::format(
                     input,
@@ -477,11 +475,11 @@ impl AtomicDir {
             )));
         }
         let written = super::keep::write_manifest(&self.temp)?;
-        if let Some((input, rel)) = self.inputs.iter().find(|(_, rel)| {
-            written
-                .iter()
-                .any(|f| f.starts_with(rel) || rel.starts_with(f))
-        }) {
+        if let Some((input, rel)) = self
+            .inputs
+            .iter()
+            .find(|(_, rel)| written.iter().any(|f| super::keep::overlaps(f, rel)))
+        {
             return Err(Error::format(
                 input,
                 format!(

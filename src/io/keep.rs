@@ -232,6 +232,11 @@ fn same_file(_a: &Path, _b: &Path) -> bool {
     true // without inode numbers, a kept copy is left as it was carried
 }
 
+/// Whether two paths inside one folder name the same entry, or one holds the other.
+pub(crate) fn overlaps(a: &Path, b: &Path) -> bool {
+    a.starts_with(b) || b.starts_with(a)
+}
+
 /// Whether `input` (a file or folder a run reads) lies inside the output folder `out` or is
 /// it; the path inside (empty for `out` itself) when it does. Both are resolved (links
 /// followed) where they exist.

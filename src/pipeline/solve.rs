@@ -141,7 +141,10 @@ impl SolveConfig {
     /// The files this solve reads: the image and the sidecar beside it, the mask, the rim's
     /// normals (see [`crate::io::AtomicDir::reads`]: an output folder never replaces them).
     pub fn files(&self) -> Vec<PathBuf> {
-        let mut files = vec![self.image.clone(), self.image.with_extension("json")];
+        let mut files = vec![
+            self.image.clone(),
+            io::render_sidecar::sidecar_path(&self.image),
+        ];
         files.extend(self.mask.clone());
         if let BoundarySource::File(path) = &self.boundary {
             files.push(path.clone());

@@ -82,7 +82,7 @@ impl PictureSource {
             .flatten()
             .cloned()
             .collect();
-        files.extend(self.image.as_ref().map(|i| i.with_extension("json")));
+        files.extend(self.image.as_deref().map(io::render_sidecar::sidecar_path));
         files
     }
 
