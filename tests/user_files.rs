@@ -71,10 +71,11 @@ fn keeps_user_files(d: &Path, out: &str, args: &[&str]) {
 
 fn render_sphere(d: &Path) {
     ok(
-        &shadelab(
+        &quiet(
             d,
+            false,
             &[
-                "--quiet", "render", "sphere", "--size", "32", "--light", "front", "--out", "s.png",
+                "render", "sphere", "--size", "32", "--light", "front", "--out", "s.png",
             ],
         ),
         "render",
@@ -288,10 +289,7 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
     );
     std::fs::copy(d.join("spec.json"), d.join("st/spec.json")).unwrap();
     ok(
-        &shadelab(
-            &d,
-            &["--quiet", "study", "run", "st/spec.json", "--out", "st"],
-        ),
+        &quiet(&d, false, &["study", "run", "st/spec.json", "--out", "st"]),
         "study from inside",
     );
     assert_eq!(
@@ -300,10 +298,10 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
     );
     for i in 0..2 {
         ok(
-            &shadelab(
+            &quiet(
                 &d,
+                false,
                 &[
-                    "--quiet",
                     "study",
                     "run",
                     "spec.json",
@@ -352,10 +350,7 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
     std::fs::copy(presets.join("bumps.json"), d.join("g/mine/bumps.json")).unwrap();
     let mine = std::fs::read(d.join("g/mine/bumps.json")).unwrap();
     ok(
-        &shadelab(
-            &d,
-            &["--quiet", "gallery", "--presets", "g/mine", "--out", "g"],
-        ),
+        &quiet(&d, false, &["gallery", "--presets", "g/mine", "--out", "g"]),
         "gallery from inside",
     );
     assert_eq!(std::fs::read(d.join("g/mine/bumps.json")).unwrap(), mine);
@@ -498,11 +493,10 @@ fn a_link_to_a_folder_is_followed_and_a_broken_link_is_named() {
         );
     }
     std::os::unix::fs::symlink("nowhere", d.join("broken")).unwrap();
-    let out = shadelab(
+    let out = quiet(
         &d,
-        &[
-            "--quiet", "solve", "s.png", "--light", "front", "--out", "broken",
-        ],
+        false,
+        &["solve", "s.png", "--light", "front", "--out", "broken"],
     );
     assert_error(
         &out,
@@ -511,11 +505,10 @@ fn a_link_to_a_folder_is_followed_and_a_broken_link_is_named() {
     );
     std::fs::write(d.join("file.txt"), "x").unwrap();
     std::os::unix::fs::symlink("file.txt", d.join("flink")).unwrap();
-    let out = shadelab(
+    let out = quiet(
         &d,
-        &[
-            "--quiet", "solve", "s.png", "--light", "front", "--out", "flink",
-        ],
+        false,
+        &["solve", "s.png", "--light", "front", "--out", "flink"],
     );
     assert_error(&out, 1, "which is not a folder");
     assert_eq!(std::fs::read_to_string(d.join("file.txt")).unwrap(), "x");
@@ -645,10 +638,10 @@ fn rim_normals_facing_away_are_refused_naming_the_file() {
     // Normals facing away from the viewer everywhere: (0, 0, -1).
     let normals = shadelab::grid::Grid::new(32, 32, nalgebra::Vector3::new(0.0, 0.0, -1.0));
     shadelab::io::write_normals(&d.join("back_normals.npy"), &normals).unwrap();
-    let out = shadelab(
+    let out = quiet(
         &d,
+        false,
         &[
-            "--quiet",
             "solve",
             "s.png",
             "--mask",
@@ -682,18 +675,16 @@ fn a_render_never_replaces_the_spec_it_reads() {
     }
     // Under another name it renders, and its own sidecar re-renders the same set.
     ok(
-        &shadelab(
+        &quiet(
             &d,
-            &["--quiet", "render", "--spec", "my.json", "--out", "b.png"],
+            false,
+            &["render", "--spec", "my.json", "--out", "b.png"],
         ),
         "spec",
     );
     let png = std::fs::read(d.join("b.png")).unwrap();
     ok(
-        &shadelab(
-            &d,
-            &["--quiet", "render", "--spec", "b.json", "--out", "b.png"],
-        ),
+        &quiet(&d, false, &["render", "--spec", "b.json", "--out", "b.png"]),
         "sidecar",
     );
     assert_eq!(std::fs::read(d.join("b.png")).unwrap(), png);
