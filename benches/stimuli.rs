@@ -1,5 +1,6 @@
 //! Benchmarks of the stimulus generator: the 1024² checkerboard and disc compared with stimupy
-//! (`benches/stimupy_compare.py` times stimupy on the same stimuli), and every gallery preset.
+//! (`benches/stimupy_compare.py` times stimupy on the same stimuli), every gallery preset, and
+//! the whole gallery as `shadelab gallery` builds it (files, thumbnails, sheet and page).
 //!
 //! `cargo bench --bench stimuli` runs criterion. The figures are recorded in
 //! docs/performance.md under "Stimuli".
@@ -70,6 +71,20 @@ fn bench(c: &mut Criterion) {
         });
     }
     group.finish();
+
+    // The whole gallery into one folder, replaced each time (README: "about a second").
+    let mut group = c.benchmark_group("gallery");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
+    let presets = shadelab::gallery::builtin_presets().expect("the built-in presets");
+    let out = std::env::temp_dir().join(format!("shadelab-bench-gallery-{}", std::process::id()));
+    let options = shadelab::gallery::Options::default();
+    group.bench_function("build", |b| {
+        b.iter(|| shadelab::gallery::build(black_box(&presets), &out, &options, &|_| {}))
+    });
+    group.finish();
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 criterion_group!(benches, bench);

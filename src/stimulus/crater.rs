@@ -22,7 +22,7 @@ use crate::grid::Grid;
 use crate::light::Light;
 use crate::params::{param_choice, stimulus_params, ParamSet};
 use crate::reflectance::Lambertian;
-use crate::render::{cast_shadows, render, RenderOptions};
+use crate::render::{render, RenderOptions, ShadowCaster};
 use crate::surface::Surface;
 use crate::visual_size::Geometry;
 use nalgebra::Vector3;
@@ -211,10 +211,8 @@ fn soften_shadow(
 ) {
     use crate::parallel::prelude::*;
     let directions = light_disc(s, size_deg);
-    let shadows: Vec<crate::grid::Mask> = directions
-        .par_iter()
-        .map(|d| cast_shadows(surface, *d))
-        .collect();
+    let caster = ShadowCaster::new(surface);
+    let shadows: Vec<crate::grid::Mask> = directions.par_iter().map(|d| caster.cast(*d)).collect();
     let (w, h) = (surface.width(), surface.height());
     let mut hidden = Grid::new(w, h, 0usize);
     for shadow in &shadows {
