@@ -114,14 +114,7 @@ pub struct ShadowCaster<'a> {
 impl<'a> ShadowCaster<'a> {
     /// Plans the casting of shadows over `surface`.
     pub fn new(surface: &'a Surface) -> Self {
-        let zmax = surface
-            .depth
-            .data()
-            .iter()
-            .zip(surface.mask.data())
-            .filter(|(_, &m)| m)
-            .map(|(z, _)| *z)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let zmax = highest(surface);
         let levels = SHADOW_BLOCKS
             .iter()
             .map(|&shift| BlockHeights::new(surface, shift))
@@ -173,6 +166,19 @@ impl<'a> ShadowCaster<'a> {
             }
         })
     }
+}
+
+/// The highest masked depth of `surface` (−∞ where nothing is masked): no ray above it can be
+/// shadowed.
+fn highest(surface: &Surface) -> f64 {
+    surface
+        .depth
+        .data()
+        .iter()
+        .zip(surface.mask.data())
+        .filter(|(_, &m)| m)
+        .map(|(z, _)| *z)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// A ray's direction across the image plane, with the reciprocals that find where it leaves a
@@ -334,14 +340,7 @@ mod tests {
             return Grid::new(w, h, false);
         }
         let (dc, dr, dz) = (s.x / horizontal, -s.y / horizontal, s.z / horizontal);
-        let zmax = surface
-            .depth
-            .data()
-            .iter()
-            .zip(surface.mask.data())
-            .filter(|(_, &m)| m)
-            .map(|(z, _)| *z)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let zmax = highest(surface);
         Grid::from_fn(w, h, |col, row| {
             if !*surface.mask.get(col, row) {
                 return false;
