@@ -332,33 +332,13 @@ mod tests {
     }
 
     /// The plain march, one half-pixel step after another: the reference twin of
-    /// [`cast_shadows`].
+    /// [`cast_shadows`], the same march with no block to skip.
     fn cast_shadows_step_by_step(surface: &Surface, s: nalgebra::Vector3<f64>) -> Mask {
-        let (w, h) = (surface.width(), surface.height());
-        let horizontal = s.x.hypot(s.y);
-        if horizontal < 1e-9 {
-            return Grid::new(w, h, false);
-        }
-        let (dc, dr, dz) = (s.x / horizontal, -s.y / horizontal, s.z / horizontal);
-        let zmax = highest(surface);
-        Grid::from_fn(w, h, |col, row| {
-            if !*surface.mask.get(col, row) {
-                return false;
-            }
-            let z0 = *surface.depth.get(col, row) + 0.5;
-            let mut k = 0u32;
-            loop {
-                let t = 1.0 + 0.5 * k as f64;
-                let (x, y, z) = (col as f64 + dc * t, row as f64 + dr * t, z0 + dz * t);
-                if x < 0.0 || y < 0.0 || x > (w - 1) as f64 || y > (h - 1) as f64 || z > zmax {
-                    return false;
-                }
-                if height_at(surface, x, y).is_some_and(|surface_z| surface_z > z) {
-                    return true;
-                }
-                k += 1;
-            }
-        })
+        let caster = ShadowCaster {
+            levels: Vec::new(),
+            ..ShadowCaster::new(surface)
+        };
+        caster.cast(s)
     }
 
     proptest::proptest! {
