@@ -106,7 +106,7 @@ def main():
         prefix = "lib" if kind == "lib" else name
         tests += [(t, f"{prefix} {n}") for n, t in times.items()]
         names += [f"{prefix} {n}" for n in times]
-    wall, out = timed(["cargo", "test", "--release", "--doc", "--", "--list"])
+    _, out = timed(["cargo", "test", "--release", "--doc", "--", "--list"])
     doctests = [l[: -len(": test")] for l in out.splitlines() if l.endswith(": test")]
     wall, _ = timed(["cargo", "test", "--release", "--doc"])
     rows.append(("doctests (compiled and run)", len(doctests), wall))

@@ -141,12 +141,15 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
         albedo,
         ambient,
     };
+    // A light of some size replaces the hard shadow by its penumbra (image and shadow layer
+    // both), so the hard one is only cast for a point light.
+    let soft = p.cast_shadows && p.light_size > 0.0;
     let options = RenderOptions {
         background: 0.0,
-        cast_shadows: p.cast_shadows,
+        cast_shadows: p.cast_shadows && !soft,
     };
     let mut rendering = render(&surface, &reflectance, &options);
-    if p.cast_shadows && p.light_size > 0.0 {
+    if soft {
         soften_shadow(&surface, &mut rendering, s, p.light_size, ambient);
     }
     let peak = rendering.image.min_max().map_or(0.0, |m| m.1);
