@@ -2,10 +2,11 @@
 //! pytest suite (`python/tests`) inside `cargo test --release`, so the README's one test
 //! command covers it.
 //!
-//! Everything lives under `target/python/`: a virtual environment (`venv/`, with maturin,
-//! NumPy and pytest installed by pip), the wheel's own Cargo build (a separate target
-//! directory, so it never waits on the root build's lock, and incremental after the first
-//! build) and the wheel (`wheels/`). Where Python ≥ 3.9, its `venv` module or pip's packages
+//! A virtual environment (`target/python/venv/`, with maturin, NumPy and pytest installed by
+//! pip) and the wheel (`target/python/wheels/`). The wheel is compiled in the root's own target
+//! directory: its dependencies are the root crate's, at the versions of the root's lock file
+//! (python/Cargo.lock keeps them equal), so they are compiled once for both; `cargo test`
+//! releases the directory's lock before it runs the tests. Where Python ≥ 3.9, its `venv` module or pip's packages
 //! cannot be had (no network), the test says why on stderr and passes; with
 //! `SHADELAB_REQUIRE_PYTHON=1` (set by `.ci/run` once it has installed them) it fails instead.
 //! `SHADELAB_PYTHON` names the interpreter (default `python3`).
@@ -16,6 +17,14 @@ use std::process::{Command, Output};
 /// The repository root.
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The root build's target directory (`CARGO_TARGET_DIR` where set, as cargo reads it).
+fn cargo_target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) if !dir.is_empty() => root().join(dir),
+        _ => root().join("target"),
+    }
 }
 
 /// Skips with `why` (stderr), or fails when Python is required.
@@ -99,14 +108,14 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         }
     }
 
-    // The wheel, built incrementally in its own target directory.
+    // The wheel, built incrementally beside the root crate's release build.
     let wheels = dir.join("wheels");
     let _ = std::fs::remove_dir_all(&wheels);
     let build = Command::new(&py)
         .args(["-m", "maturin", "build", "--release", "--quiet", "--out"])
         .arg(&wheels)
         .current_dir(root.join("python"))
-        .env("CARGO_TARGET_DIR", &dir)
+        .env("CARGO_TARGET_DIR", cargo_target_dir())
         .env_remove("CARGO_BUILD_TARGET_DIR")
         .output()
         .expect("maturin runs");

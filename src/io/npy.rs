@@ -517,22 +517,70 @@ pub fn encode_text(shape: &[usize], texts: &[String]) -> Result<Vec<u8>> {
 /// The bytes of an `.npz` archive (a zip of `.npy` members, stored uncompressed with a fixed
 /// timestamp so that equal arrays give equal files), as `numpy.savez` writes it: member
 /// `NAME.npy` for each (name, `.npy` bytes).
+///
+/// The zip is written here (PKWARE's APPNOTE: a local header and the bytes of each member,
+/// then the central directory and its end record); stored members need nothing more than a
+/// CRC-32. Members and the archive stay under 4 GiB and 65,535 entries (no zip64).
 pub fn encode_npz(members: &[(String, Vec<u8>)]) -> Result<Vec<u8>> {
-    use npyz::zip::{write::FileOptions, CompressionMethod, DateTime, ZipWriter};
-    use std::io::Write;
-    let fail = |e: &dyn std::fmt::Display| Error::Compute(format!("cannot write .npz: {e}"));
-    let mut zip = ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let options = FileOptions::default()
-        .compression_method(CompressionMethod::Stored)
-        .last_modified_time(DateTime::default())
-        .large_file(false);
-    for (name, bytes) in members {
-        zip.start_file(npyz::npz::file_name_from_array_name(name), options)
-            .map_err(|e| fail(&e))?;
-        zip.write_all(bytes).map_err(|e| fail(&e))?;
+    let fail = |what: String| Error::Compute(format!("cannot write .npz: {what}"));
+    if members.len() > usize::from(u16::MAX) {
+        return Err(fail(format!("{} arrays (at most 65535)", members.len())));
     }
-    let cursor = zip.finish().map_err(|e| fail(&e))?;
-    Ok(cursor.into_inner())
+    let u32_of = |n: usize, what: &str| {
+        u32::try_from(n).map_err(|_| fail(format!("{what} is 4 GiB or more (no zip64)")))
+    };
+    // 1980-01-01 00:00:00 in MS-DOS time and date: zip's earliest timestamp.
+    const DOS_TIME: u16 = 0;
+    const DOS_DATE: u16 = (1 << 5) | 1;
+    let mut out = Vec::new();
+    let mut central = Vec::new();
+    for (name, bytes) in members {
+        let file_name = format!("{name}.npy");
+        let name_len = u16::try_from(file_name.len())
+            .map_err(|_| fail(format!("the array name '{name}' is too long")))?;
+        let size = u32_of(bytes.len(), &format!("array '{name}'"))?;
+        let offset = u32_of(out.len(), "the archive")?;
+        let crc = crc32fast::hash(bytes);
+        // Bit 11: the name is UTF-8.
+        let flags: u16 = if file_name.is_ascii() { 0 } else { 1 << 11 };
+        // The fields a local header shares with the central directory's entry (version 2.0
+        // needed to extract, as zip writers put it).
+        let mut common = Vec::with_capacity(26);
+        for half in [20u16, flags, 0, DOS_TIME, DOS_DATE] {
+            common.extend(half.to_le_bytes());
+        }
+        for word in [crc, size, size] {
+            common.extend(word.to_le_bytes());
+        }
+        common.extend(name_len.to_le_bytes());
+        common.extend(0u16.to_le_bytes()); // no extra field
+        out.extend(0x0403_4b50u32.to_le_bytes());
+        out.extend(&common);
+        out.extend(file_name.as_bytes());
+        out.extend(bytes);
+        central.extend(0x0201_4b50u32.to_le_bytes());
+        // Made by: Unix (3), zip 4.6.
+        central.extend(0x032eu16.to_le_bytes());
+        central.extend(&common);
+        central.extend(0u16.to_le_bytes()); // no comment
+        central.extend(0u16.to_le_bytes()); // disk 0
+        central.extend(0u16.to_le_bytes()); // internal attributes
+        central.extend((0o100644u32 << 16).to_le_bytes()); // a regular file, rw-r--r--
+        central.extend(offset.to_le_bytes());
+        central.extend(file_name.as_bytes());
+    }
+    let central_offset = u32_of(out.len(), "the archive")?;
+    let central_size = u32_of(central.len(), "the archive's directory")?;
+    out.extend(central);
+    out.extend(0x0605_4b50u32.to_le_bytes());
+    let entries = members.len() as u16;
+    for half in [0u16, 0, entries, entries] {
+        out.extend(half.to_le_bytes());
+    }
+    out.extend(central_size.to_le_bytes());
+    out.extend(central_offset.to_le_bytes());
+    out.extend(0u16.to_le_bytes()); // no comment
+    Ok(out)
 }
 
 /// Writes an image as an H×W float32 `.npy`.
@@ -712,5 +760,38 @@ mod tests {
         // shape (2, 3) stored column-major: [[0,1,2],[3,4,5]] → 0,3,1,4,2,5.
         let out = fortran_to_c(&[2, 3], &[0.0, 3.0, 1.0, 4.0, 2.0, 5.0]);
         assert_eq!(out, vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+    }
+
+    #[test]
+    fn npz_members_read_back_with_an_independent_zip_reader() {
+        use std::io::Read;
+        let sets = [
+            vec![],
+            vec![("img".to_string(), vec![1u8, 2, 3])],
+            vec![
+                (
+                    "a".to_string(),
+                    (0..1000).map(|i| (i % 251) as u8).collect(),
+                ),
+                ("ü".to_string(), b"xyz".to_vec()),
+                ("e".to_string(), vec![]),
+            ],
+        ];
+        for members in sets {
+            let bytes = encode_npz(&members).unwrap();
+            // Equal members give equal files (a fixed timestamp).
+            assert_eq!(bytes, encode_npz(&members).unwrap());
+            let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+            assert_eq!(zip.len(), members.len());
+            for (i, (name, data)) in members.iter().enumerate() {
+                let mut f = zip.by_index(i).unwrap();
+                assert_eq!(f.name(), format!("{name}.npy"));
+                assert_eq!(f.compression(), zip::CompressionMethod::Stored);
+                let mut back = Vec::new();
+                // The reader checks each member's CRC-32 as it reads.
+                f.read_to_end(&mut back).unwrap();
+                assert_eq!(&back, data);
+            }
+        }
     }
 }

@@ -99,7 +99,7 @@ fn a_mat_bundle_holds_the_image_mask_parameters_and_layers() {
 
 /// The raw bytes of each member of an `.npz`.
 fn npz_members(path: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut zip = npyz::zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
     let mut out = BTreeMap::new();
     for i in 0..zip.len() {
         let mut f = zip.by_index(i).unwrap();
