@@ -193,16 +193,42 @@ fn a_recorded_gamma_is_undone() {
         .fold(0.0, f64::max);
     // 16-bit codes of v^(1/2.2) decoded back: within a few codes of the linear render.
     assert!(worst < 2e-3, "largest difference {worst}");
-    // Without undoing it, the gamma-encoded mid-grey would be far off.
-    let raw = shadelab::io::read_gray(&d.join("gam.png"), 1 << 24)
+    let worst_against_lin = |img: &shadelab::Image| {
+        lin.data()
+            .iter()
+            .zip(img.data())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    };
+    // The PNG alone says its gamma (gAMA 1/2.2): read without its sidecar, it is linear too.
+    let alone = shadelab::io::read_gray(&d.join("gam.png"), 1 << 24)
         .unwrap()
         .0;
-    let raw_worst = lin
-        .data()
-        .iter()
-        .zip(raw.data())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    assert!(worst_against_lin(&alone) < 2e-3);
+    // A file from before the gAMA chunk (the same bytes without it): the sidecar's gamma is
+    // undone instead, once; read alone, the gamma-encoded mid-grey is far off.
+    let bytes = std::fs::read(d.join("gam.png")).unwrap();
+    let mut old = bytes[..8].to_vec();
+    let mut at = 8;
+    while at < bytes.len() {
+        let len = u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        if &bytes[at + 4..at + 8] != b"gAMA" {
+            old.extend(&bytes[at..at + 12 + len]);
+        }
+        at += 12 + len;
+    }
+    assert_eq!(
+        old.len(),
+        bytes.len() - 16,
+        "one gAMA chunk (4 bytes of data) taken out"
+    );
+    std::fs::write(d.join("old.png"), &old).unwrap();
+    std::fs::copy(d.join("gam.json"), d.join("old.json")).unwrap();
+    assert!(worst_against_lin(&load("old.png")) < 2e-3);
+    let raw = shadelab::io::read_gray(&d.join("old.png"), 1 << 24)
+        .unwrap()
+        .0;
+    let raw_worst = worst_against_lin(&raw);
     assert!(raw_worst > 0.1, "{raw_worst}");
     let _ = std::fs::remove_dir_all(&d);
 }

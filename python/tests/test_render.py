@@ -184,3 +184,11 @@ def test_default_size_is_height_width_like_describe(name):
     s = shadelab.render(name)
     assert s["visual_size"] == (h_deg, w_deg)
     assert s["img"].shape[:2] == (round(h_deg * d["default_ppd"]), round(w_deg * d["default_ppd"]))
+
+
+def test_a_picture_brighter_than_white_is_a_value_error_with_the_fix():
+    # The range rule (docs/display.md): 0..1, refused rather than clipped, as the CLI does.
+    with pytest.raises(ValueError, match=r"luminance reaches 1\.3\d+ .*set albedo=0\.\d+ ambient=0 specular=0\.\d+"):
+        shadelab.render("sphere", shape=64, brdf="blinn-phong")
+    stim = shadelab.render("sphere", shape=64, brdf="blinn-phong", albedo=0.7, specular=0.3)
+    assert 0.0 <= stim["img"].min() and stim["img"].max() <= 1.0

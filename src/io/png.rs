@@ -2,14 +2,13 @@
 
 use crate::error::{Error, Result};
 use crate::grid::{check_size, Grid, Image, Labels, Mask, RgbImage};
-use image::{codecs::png::PngEncoder, DynamicImage, ExtendedColorType, ImageEncoder, ImageReader};
+use image::{DynamicImage, ImageReader};
 use serde::Serialize;
 use std::path::Path;
 
 /// How colour input becomes luminance (stated in reports): the Rec. 709 / sRGB luminance
-/// weights applied to the stored channel values scaled to 0..1, without gamma decoding; alpha
-/// is ignored.
-pub const LUMINANCE_FORMULA: &str = "Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 weights on the stored values scaled to 0..1, no gamma decoding; alpha ignored)";
+/// weights applied to the linear channel values; alpha is ignored.
+pub const LUMINANCE_FORMULA: &str = "Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 weights on the linear values: the stored values scaled to 0..1, decoded only where the file's sRGB or gAMA chunk says how; alpha ignored)";
 
 /// Bits per channel of a written PNG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -35,7 +34,7 @@ pub struct GrayInfo {
 /// PNG or GIF is refused after 24 bytes, one declaring more than `max_pixels` before its body
 /// is read, and one longer than an image of its declared size can be
 /// ([`max_image_file_bytes`]) after that many bytes.
-fn decode(path: &Path, max_pixels: usize) -> Result<DynamicImage> {
+fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
     use std::io::Read;
     let mut file = super::open_file(path)?;
     let mut bytes = Vec::new();
@@ -93,9 +92,9 @@ fn max_image_file_bytes(w: u32, h: u32) -> u64 {
 
 /// Decodes an image held in memory; `source` names it in errors. The signature and declared
 /// size are checked (against `max_pixels`) before any pixel buffer is allocated.
-fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<DynamicImage> {
+fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
     declared_size(bytes).map_err(|m| Error::format(source, m))?;
-    check_png_palette(bytes).map_err(|m| Error::format(source, m))?;
+    let stored = walk_png_chunks(bytes).map_err(|m| Error::format(source, m))?;
     let open = || -> Result<ImageReader<std::io::Cursor<&[u8]>>> {
         let mut reader = ImageReader::new(std::io::Cursor::new(bytes));
         // As `ImageReader::open`: the extension names the format when the content does not.
@@ -121,18 +120,74 @@ fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Dynami
     let buffer = u64::from(w) * u64::from(h) * 8;
     limits.max_alloc = Some(limits.max_alloc.unwrap_or(0).max(buffer));
     reader.limits(limits);
-    reader
+    let image = reader
         .decode()
-        .map_err(|e| Error::format(source, format!("cannot decode image ({e})")))
+        .map_err(|e| Error::format(source, format!("cannot decode image ({e})")))?;
+    Ok((image, stored))
 }
 
-/// Walks the chunks of a PNG and refuses a palette (PLTE) whose length is not a positive
-/// multiple of 3 up to 768: the `png` crate (0.18) panics expanding such a palette. Anything else
-/// wrong with the chunks is left to the decoder.
-fn check_png_palette(bytes: &[u8]) -> std::result::Result<(), String> {
-    let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
-        return Ok(());
+/// How a picture's codes (scaled to 0..1) encode linear luminance, as its PNG chunks say.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stored {
+    /// No chunk says: the codes are taken as linear luminance.
+    Unstated,
+    /// A gAMA chunk: codes = luminance^file_gamma (1.0: linear, as shadelab writes).
+    FileGamma(f64),
+    /// An sRGB chunk: the sRGB transfer function.
+    Srgb,
+}
+
+impl Stored {
+    /// The linear value of a code scaled to 0..1.
+    pub fn linear(self, v: f64) -> f64 {
+        match self {
+            Stored::Unstated => v,
+            Stored::FileGamma(1.0) => v,
+            Stored::FileGamma(g) => v.powf(1.0 / g),
+            Stored::Srgb if v <= 0.04045 => v / 12.92,
+            Stored::Srgb => ((v + 0.055) / 1.055).powf(2.4),
+        }
+    }
+
+    /// What was done, in words, when the codes were not linear; `None` when they were.
+    fn note(self) -> Option<String> {
+        match self {
+            Stored::FileGamma(g) if g != 1.0 => Some(format!(
+                "decoded by the file's gAMA chunk ({g}): luminance = code^(1/{g})"
+            )),
+            Stored::Srgb => {
+                Some("decoded by the file's sRGB chunk (the sRGB transfer function)".into())
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Whether the PNG at `path` says how its codes encode luminance (an sRGB or gAMA chunk before
+/// its pixels), so that [`read_gray`] decodes them; false for anything unreadable or not a PNG
+/// (its reader reports those).
+pub fn states_its_encoding(path: &Path) -> bool {
+    use std::io::Read;
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
     };
+    // The chunks before the pixels: header, gAMA and text come first, well inside 1 MiB.
+    let mut head = Vec::new();
+    if file.take(1 << 20).read_to_end(&mut head).is_err() {
+        return false;
+    }
+    !matches!(walk_png_chunks(&head), Ok(Stored::Unstated) | Err(_))
+}
+
+/// Walks the chunks of a PNG before its pixels are decoded: reads how its codes encode
+/// luminance (sRGB, then gAMA, as PNG orders them), and refuses a palette (PLTE) whose length is
+/// not a positive multiple of 3 up to 768 (the `png` crate (0.18) panics expanding such a
+/// palette) and a gAMA of 0. Anything else wrong with the chunks is left to the decoder.
+fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Stored, String> {
+    let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
+        return Ok(Stored::Unstated);
+    };
+    let (mut gamma, mut srgb) = (None, false);
     while rest.len() >= 8 {
         let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
         let kind = &rest[4..8];
@@ -142,7 +197,19 @@ fn check_png_palette(bytes: &[u8]) -> std::result::Result<(), String> {
                  for each of 1 to 256 colours"
             ));
         }
-        if kind == b"IEND" {
+        if kind == b"sRGB" {
+            srgb = true;
+        }
+        if kind == b"gAMA" && length == 4 {
+            if let Some(d) = rest.get(8..12) {
+                let value = u32::from_be_bytes([d[0], d[1], d[2], d[3]]);
+                if value == 0 {
+                    return Err("corrupt PNG: its gAMA chunk says gamma 0".into());
+                }
+                gamma = Some(f64::from(value) / 100_000.0);
+            }
+        }
+        if kind == b"IDAT" || kind == b"IEND" {
             break;
         }
         // Chunk: length, type, data, CRC.
@@ -151,13 +218,20 @@ fn check_png_palette(bytes: &[u8]) -> std::result::Result<(), String> {
             None => break,
         }
     }
-    Ok(())
+    Ok(match (srgb, gamma) {
+        (true, _) => Stored::Srgb,
+        (false, Some(g)) => Stored::FileGamma(g),
+        (false, None) => Stored::Unstated,
+    })
 }
 
 /// Reads a PNG (or another format the `image` crate knows) as linear luminance 0..1.
 /// Grayscale is scaled by its maximum code; colour becomes luminance by [`LUMINANCE_FORMULA`].
+/// Codes are decoded by the file's sRGB or gAMA chunk where it has one ([`Stored`]): a PNG
+/// shadelab wrote with `--gamma` reads back as the linear values it was made from.
 pub fn read_gray(path: &Path, max_pixels: usize) -> Result<(Image, GrayInfo)> {
-    gray_from(decode(path, max_pixels)?)
+    let (image, stored) = decode(path, max_pixels)?;
+    gray_from(image, stored)
 }
 
 /// [`read_gray`] of an image held in memory; `source` names it in errors.
@@ -166,75 +240,86 @@ pub fn read_gray_from_bytes(
     source: &Path,
     max_pixels: usize,
 ) -> Result<(Image, GrayInfo)> {
-    gray_from(decode_bytes(bytes, source, max_pixels)?)
+    let (image, stored) = decode_bytes(bytes, source, max_pixels)?;
+    gray_from(image, stored)
 }
 
-fn gray_from(img: DynamicImage) -> Result<(Image, GrayInfo)> {
+fn gray_from(img: DynamicImage, stored: Stored) -> Result<(Image, GrayInfo)> {
     let color = img.color();
     let channels = color.channel_count();
     let bit_depth = (color.bits_per_pixel() / channels as u16) as u8;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let (data, conversion): (Vec<f64>, Option<String>) = match img {
+    let linear = |code: f64, max: f64| stored.linear(code / max);
+    let (data, channel_note): (Vec<f64>, Option<String>) = match img {
         DynamicImage::ImageLuma8(b) => (
-            b.into_raw().into_iter().map(|v| v as f64 / 255.0).collect(),
+            b.into_raw()
+                .into_iter()
+                .map(|v| linear(v.into(), 255.0))
+                .collect(),
             None,
         ),
         DynamicImage::ImageLuma16(b) => (
             b.into_raw()
                 .into_iter()
-                .map(|v| v as f64 / 65535.0)
+                .map(|v| linear(v.into(), 65535.0))
                 .collect(),
             None,
         ),
         DynamicImage::ImageLumaA8(b) => (
-            b.pixels().map(|p| p.0[0] as f64 / 255.0).collect(),
+            b.pixels().map(|p| linear(p.0[0].into(), 255.0)).collect(),
             Some("alpha ignored".into()),
         ),
         DynamicImage::ImageLumaA16(b) => (
-            b.pixels().map(|p| p.0[0] as f64 / 65535.0).collect(),
+            b.pixels().map(|p| linear(p.0[0].into(), 65535.0)).collect(),
             Some("alpha ignored".into()),
         ),
         other => {
             let rgb = other.into_rgb32f();
             (
                 rgb.pixels()
-                    .map(|p| crate::grid::luminance(p.0.map(f64::from)))
+                    .map(|p| crate::grid::luminance(p.0.map(|c| linear(c.into(), 1.0))))
                     .collect(),
                 Some(LUMINANCE_FORMULA.to_string()),
             )
         }
     };
+    let notes: Vec<String> = [stored.note(), channel_note]
+        .into_iter()
+        .flatten()
+        .collect();
     Ok((
         Grid::from_vec(w, h, data)?,
         GrayInfo {
             bit_depth,
             channels,
-            conversion,
+            conversion: (!notes.is_empty()).then(|| notes.join("; ")),
         },
     ))
 }
 
-/// Reads a colour image as linear RGB 0..1 (gray input is copied to the three channels).
+/// Reads a colour image as linear RGB 0..1 (gray input is copied to the three channels),
+/// decoded by the file's sRGB or gAMA chunk where it has one.
 pub fn read_rgb(path: &Path, max_pixels: usize) -> Result<RgbImage> {
-    let img = decode(path, max_pixels)?.into_rgb32f();
+    let (img, stored) = decode(path, max_pixels)?;
+    let img = img.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     Grid::from_vec(
         w,
         h,
         img.pixels()
-            .map(|p| [p.0[0] as f64, p.0[1] as f64, p.0[2] as f64])
+            .map(|p| p.0.map(|c| stored.linear(c.into())))
             .collect(),
     )
 }
 
 /// Reads a mask: any non-zero pixel (in any channel) is inside.
 pub fn read_mask(path: &Path, max_pixels: usize) -> Result<Mask> {
-    mask_from(decode(path, max_pixels)?)
+    mask_from(decode(path, max_pixels)?.0)
 }
 
 /// [`read_mask`] of an image held in memory; `source` names it in errors.
 pub fn read_mask_from_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Mask> {
-    mask_from(decode_bytes(bytes, source, max_pixels)?)
+    mask_from(decode_bytes(bytes, source, max_pixels)?.0)
 }
 
 fn mask_from(img: DynamicImage) -> Result<Mask> {
@@ -251,7 +336,7 @@ fn mask_from(img: DynamicImage) -> Result<Mask> {
 
 /// Reads a label map (8- or 16-bit grayscale codes 0..N).
 pub fn read_labels(path: &Path, max_pixels: usize) -> Result<Labels> {
-    let img = decode(path, max_pixels)?;
+    let img = decode(path, max_pixels)?.0;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let data = match img {
         DynamicImage::ImageLuma8(b) => b.into_raw().into_iter().map(u16::from).collect(),
@@ -299,21 +384,60 @@ pub fn display_rgba8(image: &RgbImage, gamma: Option<f64>) -> Result<Vec<u8>> {
         .collect())
 }
 
+/// What a stimulus PNG says about itself beside its pixels: how its codes encode linear
+/// luminance (a gAMA chunk) and text (iTXt chunks). Figures, colour maps and masks have none:
+/// their codes are display colours or labels, not light.
+#[derive(Debug, Clone, Copy)]
+struct SelfDescription<'a> {
+    /// The display gamma the codes were encoded with (v^(1/gamma)); `None`: linear.
+    gamma: Option<f64>,
+    /// Keyword and text of each iTXt chunk; `None`: a picture without chunks.
+    text: Option<&'a [(String, String)]>,
+}
+
+/// The gAMA chunk's value for codes encoded as v^(1/gamma): the file gamma 1/gamma, in
+/// hundred-thousandths (100000 for linear codes).
+pub fn png_gamma_chunk_value(gamma: Option<f64>) -> u32 {
+    (100_000.0 / gamma.unwrap_or(1.0)).round() as u32
+}
+
+/// Writes `bytes` (rows from the top, 16-bit samples big-endian) as a PNG of `color`;
+/// a luminance picture's gAMA and text chunks come from `described`. Deflate and filters as
+/// the `image` crate's default PNG encoder (fast, adaptive): masks keep their bytes.
 fn write_png(
     path: &Path,
-    w: usize,
-    h: usize,
+    (w, h): (usize, usize),
     bytes: &[u8],
-    color: ExtendedColorType,
+    (color, depth): (png::ColorType, png::BitDepth),
+    described: Option<SelfDescription<'_>>,
 ) -> Result<()> {
     let (w32, h32) = (
         u32::try_from(w).map_err(|_| Error::invalid("image too wide for PNG"))?,
         u32::try_from(h).map_err(|_| Error::invalid("image too tall for PNG"))?,
     );
+    let fail = |e: &dyn std::fmt::Display| Error::format(path, format!("cannot encode PNG ({e})"));
     super::write_atomic(path, |out| {
-        PngEncoder::new(out)
-            .write_image(bytes, w32, h32, color)
-            .map_err(|e| Error::format(path, format!("cannot encode PNG ({e})")))
+        let mut encoder = png::Encoder::new(out, w32, h32);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        encoder.set_compression(png::Compression::Fast);
+        encoder.set_filter(png::Filter::Adaptive);
+        if let Some(SelfDescription {
+            gamma,
+            text: Some(text),
+        }) = described
+        {
+            let value = png_gamma_chunk_value(gamma);
+            encoder.set_source_gamma(png::ScaledFloat::from_scaled(value));
+            for (keyword, text) in text {
+                encoder
+                    .add_itxt_chunk(keyword.clone(), text.clone())
+                    .map_err(|e| fail(&e))?;
+            }
+        }
+        let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
+        writer.write_image_data(bytes).map_err(|e| fail(&e))?;
+        writer.finish().map_err(|e| fail(&e))
     })
 }
 
@@ -329,19 +453,46 @@ fn check_gamma(gamma: Option<f64>) -> Result<()> {
 /// Writes a grayscale PNG of linear values 0..1 (clamped), optionally display-encoded with
 /// v^(1/gamma).
 pub fn write_gray(path: &Path, image: &Image, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    write_encoded(
-        path,
-        image,
-        depth,
+    let plain = SelfDescription { gamma, text: None };
+    write_encoded(path, image, depth, plain, png::ColorType::Grayscale)
+}
+
+/// [`write_gray`] of a stimulus: with the gAMA chunk of its encoding and iTXt chunks (keyword,
+/// text) that describe it.
+pub fn write_gray_described(
+    path: &Path,
+    image: &Image,
+    depth: BitDepth,
+    gamma: Option<f64>,
+    text: &[(String, String)],
+) -> Result<()> {
+    let described = SelfDescription {
         gamma,
-        (ExtendedColorType::L8, ExtendedColorType::L16),
-    )
+        text: Some(text),
+    };
+    write_encoded(path, image, depth, described, png::ColorType::Grayscale)
 }
 
 /// Writes an RGB PNG of linear values 0..1 (clamped), optionally display-encoded.
 pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    let colors = (ExtendedColorType::Rgb8, ExtendedColorType::Rgb16);
-    write_encoded(path, image, depth, gamma, colors)
+    let plain = SelfDescription { gamma, text: None };
+    write_encoded(path, image, depth, plain, png::ColorType::Rgb)
+}
+
+/// [`write_rgb`] of a stimulus: with the gAMA chunk of its encoding and iTXt chunks (keyword,
+/// text) that describe it.
+pub fn write_rgb_described(
+    path: &Path,
+    image: &RgbImage,
+    depth: BitDepth,
+    gamma: Option<f64>,
+    text: &[(String, String)],
+) -> Result<()> {
+    let described = SelfDescription {
+        gamma,
+        text: Some(text),
+    };
+    write_encoded(path, image, depth, described, png::ColorType::Rgb)
 }
 
 /// [`write_rgb`] of the `width` × `height` picture whose pixel at (column, row) is
@@ -356,8 +507,9 @@ pub fn write_rgb_fn(
 ) -> Result<()> {
     let pixel = &pixel;
     let values = (0..height).flat_map(|r| (0..width).flat_map(move |c| pixel(c, r)));
-    let colors = (ExtendedColorType::Rgb8, ExtendedColorType::Rgb16);
-    write_values(path, (width, height), values, depth, gamma, colors)
+    let described = SelfDescription { gamma, text: None };
+    let size = (width, height);
+    write_values(path, size, values, depth, described, png::ColorType::Rgb)
 }
 
 /// [`write_gray`] of the `width` × `height` picture whose value at (column, row) is
@@ -372,8 +524,16 @@ pub fn write_gray_fn(
 ) -> Result<()> {
     let value = &value;
     let values = (0..height).flat_map(|r| (0..width).map(move |c| value(c, r)));
-    let colors = (ExtendedColorType::L8, ExtendedColorType::L16);
-    write_values(path, (width, height), values, depth, gamma, colors)
+    let described = SelfDescription { gamma, text: None };
+    let size = (width, height);
+    write_values(
+        path,
+        size,
+        values,
+        depth,
+        described,
+        png::ColorType::Grayscale,
+    )
 }
 
 /// A pixel of linear values: one channel (gray) or three (RGB).
@@ -395,55 +555,62 @@ impl Channels for [f64; 3] {
 }
 
 /// Encodes `image` (channels interleaved, row-major) at `depth`, optionally display-encoded
-/// with v^(1/gamma), and writes it as a PNG of `colors.0` (8-bit) or `colors.1` (16-bit).
+/// with v^(1/gamma), and writes it as a PNG of `color` that says so.
 fn write_encoded<P: Channels>(
     path: &Path,
     image: &Grid<P>,
     depth: BitDepth,
-    gamma: Option<f64>,
-    colors: (ExtendedColorType, ExtendedColorType),
+    described: SelfDescription<'_>,
+    color: png::ColorType,
 ) -> Result<()> {
     let values = image.data().iter().flat_map(Channels::channels).copied();
     let size = (image.width(), image.height());
-    write_values(path, size, values, depth, gamma, colors)
+    write_values(path, size, values, depth, described, color)
 }
 
 /// Encodes `values` (channels interleaved, row-major, of a picture of `size` (width, height))
 /// at `depth`, optionally display-encoded with v^(1/gamma), and writes them as a PNG of
-/// `colors.0` (8-bit) or `colors.1` (16-bit).
+/// `color` with its gAMA chunk and text.
 fn write_values(
     path: &Path,
-    (width, height): (usize, usize),
+    size: (usize, usize),
     values: impl Iterator<Item = f64>,
     depth: BitDepth,
-    gamma: Option<f64>,
-    (eight, sixteen): (ExtendedColorType, ExtendedColorType),
+    described: SelfDescription<'_>,
+    color: png::ColorType,
 ) -> Result<()> {
+    let gamma = described.gamma;
     check_gamma(gamma)?;
-    let (bytes, color): (Vec<u8>, _) = match depth {
+    let (bytes, depth): (Vec<u8>, _) = match depth {
         BitDepth::Eight => (
             values.map(|v| encode(v, gamma, 255.0) as u8).collect(),
-            eight,
+            png::BitDepth::Eight,
         ),
         BitDepth::Sixteen => (
             values
-                .flat_map(|v| (encode(v, gamma, 65535.0) as u16).to_ne_bytes())
+                .flat_map(|v| (encode(v, gamma, 65535.0) as u16).to_be_bytes())
                 .collect(),
-            sixteen,
+            png::BitDepth::Sixteen,
         ),
     };
-    write_png(path, width, height, &bytes, color)
+    write_png(path, size, &bytes, (color, depth), Some(described))
 }
+
+/// Gray codes that are labels, not light (masks, label maps): no gAMA chunk.
+const CODES_8: (png::ColorType, png::BitDepth) = (png::ColorType::Grayscale, png::BitDepth::Eight);
+/// [`CODES_8`] in 16 bits.
+const CODES_16: (png::ColorType, png::BitDepth) =
+    (png::ColorType::Grayscale, png::BitDepth::Sixteen);
 
 /// Writes a label map: 8-bit when every label fits, else 16-bit; the codes are the labels.
 pub fn write_labels(path: &Path, labels: &Labels) -> Result<()> {
     let (w, h) = (labels.width(), labels.height());
     if labels.data().iter().all(|&l| l <= 255) {
         let bytes: Vec<u8> = labels.data().iter().map(|&l| l as u8).collect();
-        write_png(path, w, h, &bytes, ExtendedColorType::L8)
+        write_png(path, (w, h), &bytes, CODES_8, None)
     } else {
-        let bytes: Vec<u8> = labels.data().iter().flat_map(|l| l.to_ne_bytes()).collect();
-        write_png(path, w, h, &bytes, ExtendedColorType::L16)
+        let bytes: Vec<u8> = labels.data().iter().flat_map(|l| l.to_be_bytes()).collect();
+        write_png(path, (w, h), &bytes, CODES_16, None)
     }
 }
 
@@ -454,13 +621,8 @@ pub fn write_mask(path: &Path, mask: &Mask) -> Result<()> {
         .iter()
         .map(|&m| if m { 255 } else { 0 })
         .collect();
-    write_png(
-        path,
-        mask.width(),
-        mask.height(),
-        &bytes,
-        ExtendedColorType::L8,
-    )
+    let size = (mask.width(), mask.height());
+    write_png(path, size, &bytes, CODES_8, None)
 }
 
 #[cfg(test)]

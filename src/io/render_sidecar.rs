@@ -44,6 +44,9 @@ pub struct RenderSidecar {
     pub ambient: Option<f64>,
     /// The display gamma the values were encoded with (undone by [`RenderSidecar::linearise`]).
     pub gamma: Option<f64>,
+    /// The image file's own gAMA chunk says the gamma, so the reader undid it (and `gamma` is
+    /// `None`): files written since shadelab wrote the chunk.
+    pub gamma_decoded_by_file: bool,
     /// The PNG bit depth recorded (8 or 16), for reports.
     pub bit_depth: Option<u64>,
     /// Whether the values were mapped to -1..1 (PsychoPy's range; undone by
@@ -174,7 +177,14 @@ impl RenderSidecar {
         if value.get("program").and_then(Value::as_str) != Some("shadelab") {
             return Ok(Beside::Foreign(path));
         }
-        Ok(Beside::Ours(Box::new(Self::from_value(&path, &value)?)))
+        let mut sidecar = Self::from_value(&path, &value)?;
+        // A PNG whose own chunk states its encoding (every stimulus PNG since the gAMA chunk)
+        // is decoded by the reader: the recorded gamma is not undone a second time.
+        if sidecar.gamma.is_some() && super::png::states_its_encoding(image) {
+            sidecar.gamma = None;
+            sidecar.gamma_decoded_by_file = true;
+        }
+        Ok(Beside::Ours(Box::new(sidecar)))
     }
 
     /// Reads a sidecar file; an error unless it is a well-formed shadelab sidecar.
@@ -265,6 +275,7 @@ impl RenderSidecar {
             albedo: declared.albedo,
             ambient: declared.ambient,
             gamma,
+            gamma_decoded_by_file: false,
             bit_depth,
             psychopy_range,
             light: declared.light,
@@ -332,6 +343,9 @@ impl RenderSidecar {
         }
         if let Some(g) = self.gamma {
             parts.push(format!("gamma {} (undone)", round3(g)));
+        }
+        if self.gamma_decoded_by_file {
+            parts.push("gamma undone by the file's gAMA chunk".into());
         }
         if self.psychopy_range {
             parts.push("range -1..1 (mapped back to 0..1)".into());

@@ -260,9 +260,16 @@ fn write_all(
         Range::Psychopy => v * 2.0 - 1.0,
     };
     let image = set.staged(path)?;
+    let (depth, gamma) = (options.bit_depth, options.gamma);
     match (ext, &output.pixels) {
-        ("png", Pixels::Gray(img)) => io::write_gray(image, img, options.bit_depth, options.gamma)?,
-        ("png", Pixels::Rgb(img)) => io::write_rgb(image, img, options.bit_depth, options.gamma)?,
+        ("png", Pixels::Gray(img)) => {
+            let text = png_text(name, request, options);
+            io::write_gray_described(image, img, depth, gamma, &text)?
+        }
+        ("png", Pixels::Rgb(img)) => {
+            let text = png_text(name, request, options);
+            io::write_rgb_described(image, img, depth, gamma, &text)?
+        }
         ("npy", Pixels::Gray(img)) => io::write_image(image, &img.map(|&v| to_range(v)))?,
         ("npy", Pixels::Rgb(img)) => io::write_f32(
             image,
@@ -293,6 +300,68 @@ fn write_all(
     record("image", path);
     let value = sidecar_json(name, request, output, ext, options, files);
     io::write_json(set.staged(sidecar)?, &value)
+}
+
+/// How the file's values encode linear luminance, in words (the sidecar's `encoding`).
+fn encoding(format: &str, options: &ExportOptions) -> String {
+    match (format, options.gamma) {
+        ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
+        ("png", None) => "linear: code = round(v * max)".to_string(),
+        ("svg", _) => "vector; colours are linear values as percentages, 1 user unit = 1 pixel".to_string(),
+        ("mat" | "npz", _) => format!(
+            "{}; picture '{MAT_VARIABLE}' (H x W [x 3]) {}, with target_mask and every parameter as fields",
+            if format == "mat" { "MATLAB v5 bundle, doubles" } else { "NumPy npz bundle, float64" },
+            match options.range { Range::Unit => "linear 0..1", Range::Psychopy => "linear mapped to -1..1 (v*2-1)" }
+        ),
+        _ => match options.range {
+            Range::Unit => "float32, linear 0..1".to_string(),
+            Range::Psychopy => "float32, linear mapped to -1..1 (v*2-1)".to_string(),
+        },
+    }
+}
+
+/// The text a stimulus PNG carries (iTXt chunks), so that the file alone says what it is:
+/// `Software`, a one-line `Description`, and `shadelab`, the sidecar's record of the stimulus
+/// (name, parameters, seed, size triple, encoding) as JSON. Its gAMA chunk says the same
+/// encoding to viewers (1.0 for linear codes, 1/gamma for display-encoded ones).
+pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(String, String)> {
+    let g = &request.geometry;
+    let version = env!("CARGO_PKG_VERSION");
+    let bits = match options.bit_depth {
+        BitDepth::Eight => 8,
+        BitDepth::Sixteen => 16,
+    };
+    let light = match options.gamma {
+        Some(gamma) => format!("display-encoded luminance, code = round(v^(1/{gamma}) * max)"),
+        None => "linear luminance 0..1, code = round(v * max)".to_string(),
+    };
+    let description = format!(
+        "{name}: {light}, {bits}-bit; {} x {} px (height x width), {:.4} x {:.4} deg at {} ppd",
+        g.height,
+        g.width,
+        g.height_deg(),
+        g.width_deg(),
+        g.ppd
+    );
+    let record = json!({
+        "program": "shadelab",
+        "version": version,
+        "stimulus": name,
+        "parameters": request.params.to_json(),
+        "seed": request.seed,
+        "visual_size": [g.height_deg(), g.width_deg()],
+        "ppd": g.ppd,
+        "shape": [g.height, g.width],
+        "bit_depth": bits,
+        "gamma": options.gamma,
+        "encoding": encoding("png", options),
+        "range": "0..1",
+    });
+    vec![
+        ("Software".to_string(), format!("shadelab {version}")),
+        ("Description".to_string(), description),
+        ("shadelab".to_string(), record.to_string()),
+    ]
 }
 
 /// The sidecar of a rendered stimulus: program, version, conventions, stimulus, every
@@ -332,17 +401,7 @@ pub fn sidecar_json(
         "format": format,
         "bit_depth": if format == "png" { Value::from(match options.bit_depth { BitDepth::Eight => 8, BitDepth::Sixteen => 16 }) } else { Value::Null },
         "gamma": options.gamma,
-        "encoding": match (format, options.gamma) {
-            ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
-            ("png", None) => "linear: code = round(v * max)".to_string(),
-            ("svg", _) => "vector; colours are linear values as percentages, 1 user unit = 1 pixel".to_string(),
-            ("mat" | "npz", _) => format!(
-                "{}; picture '{MAT_VARIABLE}' (H x W [x 3]) {}, with target_mask and every parameter as fields",
-                if format == "mat" { "MATLAB v5 bundle, doubles" } else { "NumPy npz bundle, float64" },
-                match options.range { Range::Unit => "linear 0..1", Range::Psychopy => "linear mapped to -1..1 (v*2-1)" }
-            ),
-            _ => match options.range { Range::Unit => "float32, linear 0..1".to_string(), Range::Psychopy => "float32, linear mapped to -1..1 (v*2-1)".to_string() },
-        },
+        "encoding": encoding(format, options),
         "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },
         "md5_float64_rounded8": md5,
         "targets": output.targets.as_ref().map(|t| {

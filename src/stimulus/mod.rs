@@ -109,6 +109,17 @@ impl Pixels {
         }
     }
 
+    /// The smallest and largest value of any channel (NaN ignored).
+    pub fn extremes(&self) -> (f64, f64) {
+        let values: Box<dyn Iterator<Item = f64> + '_> = match self {
+            Pixels::Gray(i) => Box::new(i.data().iter().copied()),
+            Pixels::Rgb(i) => Box::new(i.data().iter().flatten().copied()),
+        };
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
+    }
+
     /// The luminance (Rec. 709 weights for colour).
     pub fn luminance(&self) -> Image {
         match self {
@@ -435,7 +446,64 @@ pub fn prepare(
     ))
 }
 
-/// Prepares and renders in one step.
+/// How far outside 0..1 a value may lie as floating-point rounding (1 ± 1e-9 is 65535 in
+/// 16 bits and exactly 1.0 in float32).
+const RANGE_ROUNDING: f64 = 1e-9;
+
+/// The range rule: a stimulus is linear luminance from the display's black (0) to its white
+/// (1), in every format. A picture that leaves 0..1 — a specular highlight, an ambient level
+/// that lifts a lit surface over white — is refused with its extreme and the scale that would
+/// fit it, never clipped or rescaled behind the user's back (docs/display.md).
+fn check_range(name: &str, params: &Params, pixels: &Pixels) -> Result<()> {
+    let (lo, hi) = pixels.extremes();
+    if lo.is_nan() || hi.is_nan() || (lo >= -RANGE_ROUNDING && hi <= 1.0 + RANGE_ROUNDING) {
+        return Ok(());
+    }
+    let count = |out: &dyn Fn(f64) -> bool| -> usize {
+        match pixels {
+            Pixels::Gray(i) => i.data().iter().filter(|&&v| out(v)).count(),
+            Pixels::Rgb(i) => i
+                .data()
+                .iter()
+                .filter(|p| p.iter().any(|&v| out(v)))
+                .count(),
+        }
+    };
+    if lo < -RANGE_ROUNDING {
+        let n = count(&|v| v < -RANGE_ROUNDING);
+        return Err(Error::invalid(format!(
+            "{name}: luminance reaches {lo:.4} ({n} pixels below 0, the display's black); raise the darkest parameter"
+        )));
+    }
+    let n = count(&|v| v > 1.0 + RANGE_ROUNDING);
+    // The light adds up linearly in these parameters: scaled by 1/peak they give the same
+    // picture with its peak at white.
+    let specular = params.get("brdf").ok().and_then(Value::as_str) == Some("blinn-phong");
+    let scaled: Vec<String> = ["albedo", "ambient", "specular"]
+        .into_iter()
+        .filter(|&p| p != "specular" || specular)
+        .filter_map(|p| Some((p, params.get(p).ok()?.as_f64()?)))
+        .map(|(p, v)| {
+            // Rounded down to 4 decimals, so that the peak lands at or just below 1.
+            let text = format!("{:.4}", (v / hi * 1e4).floor() / 1e4);
+            format!("{p}={}", text.trim_end_matches('0').trim_end_matches('.'))
+        })
+        .collect();
+    let fix = if scaled.is_empty() {
+        "lower the brightest parameter".to_string()
+    } else {
+        format!(
+            "set {} (the same picture with its peak at 1), or lower them",
+            scaled.join(" ")
+        )
+    };
+    Err(Error::invalid(format!(
+        "{name}: luminance reaches {hi:.4} ({n} pixels above 1, the display's white; a stimulus is 0..1 and is never clipped): {fix}"
+    )))
+}
+
+/// Prepares and renders in one step, and holds the picture to the range rule
+/// ([`check_range`]: 0..1, refused with the fix otherwise).
 pub fn generate(
     name: &str,
     given: &Map<String, Value>,
@@ -445,6 +513,7 @@ pub fn generate(
 ) -> Result<(Request, Output)> {
     let (stimulus, request) = prepare(name, given, size, seed, max_pixels)?;
     let output = stimulus.generate(&request)?;
+    check_range(name, &request.params, &output.pixels)?;
     Ok((request, output))
 }
 

@@ -9,6 +9,7 @@
 mod bad_input;
 mod bundles;
 mod conventions;
+mod display;
 mod face;
 mod figures;
 mod formats;
