@@ -154,6 +154,8 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(root.join("python").join("tests"))
         .current_dir(&dir)
+        // `shadelab.save` is compared byte for byte with the command line's `render`.
+        .env("SHADELAB_BIN", env!("CARGO_BIN_EXE_shadelab"))
         .output()
         .expect("pytest runs");
     let report = text(&pytest);

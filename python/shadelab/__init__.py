@@ -23,11 +23,13 @@ line's one-line message. The GIL is released while the library works.
 from __future__ import annotations
 
 import json
+from os import fspath as _fspath
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _shadelab
+from ._display import to_psychopy
 
 __all__ = [
     "Reconstruction",
@@ -36,8 +38,10 @@ __all__ = [
     "observer",
     "prior_sweep",
     "render",
+    "save",
     "solve",
     "stimuli",
+    "to_psychopy",
 ]
 
 __version__: str = _shadelab.__version__
@@ -302,6 +306,59 @@ class Reconstruction:
         state = "converged" if self.converged else "NOT converged"
         unit = self.report["solver"]["iteration_unit"]
         return f"<Reconstruction {h}×{w}, {state} after {self.iterations} {unit}>"
+
+
+def save(
+    stim: Dict[str, Any],
+    path: Union[str, "os.PathLike[str]"],
+    *,
+    bit_depth: int = 16,
+    gamma: Optional[float] = None,
+    range: str = "unit",
+    layers: bool = False,
+    force: bool = False,
+) -> List[str]:
+    """Writes a :func:`render` dict as ``shadelab render`` writes it, byte for byte.
+
+    The format follows ``path``'s extension (``.png`` 8- or 16-bit, ``.npy`` float32, ``.mat``
+    or ``.npz`` bundles, ``.svg`` for vector stimuli); the target mask (``NAME_mask.png``) and
+    the JSON sidecar with every parameter go beside it, and with ``layers=True`` the surface
+    layers. ``gamma`` display-encodes a PNG (recorded; its gAMA chunk says so too), ``range``
+    is ``"unit"`` (0..1) or ``"psychopy"`` (−1..1, float formats). The stimulus is rendered
+    again from its recorded name, parameters, seed, shape and ppd by the command line's own
+    pipeline and writer, so the files are those ``shadelab render`` writes. As there, a file
+    shadelab did not write is not replaced unless ``force=True``, and the set of files is
+    written whole or not at all. Returns the paths written.
+
+    >>> import tempfile, pathlib
+    >>> s = render("checkerboard", shape=(16, 24), ppd=8)
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     [pathlib.Path(p).name for p in save(s, pathlib.Path(d) / "c.png")]
+    ['c_mask.png', 'c.png', 'c.json']
+    """
+    try:
+        name, params = stim["stimulus"], stim["parameters"]
+        shape, ppd, seed = stim["shape"], stim["ppd"], stim["seed"]
+    except (KeyError, TypeError):
+        raise ValueError(
+            "save: stim must be a dict that shadelab.render returned (stimulus, parameters, "
+            "shape, ppd, seed)"
+        ) from None
+    return list(
+        _shadelab.save(
+            str(name),
+            _params_json(dict(params)),
+            float(ppd),
+            (int(shape[0]), int(shape[1])),
+            int(seed),
+            _fspath(path),
+            int(bit_depth),
+            _opt(float, gamma),
+            str(range),
+            bool(layers),
+            bool(force),
+        )
+    )
 
 
 def solve(

@@ -1,5 +1,6 @@
 """Type stubs of ``shadelab`` (see ``__init__.py`` for the documentation)."""
 
+import os
 from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
@@ -115,3 +116,18 @@ def lightness(
     seed: Optional[int] = ...,
     **params: Any,
 ) -> Tuple[npt.NDArray[np.float64], List[Dict[str, Any]]]: ...
+
+def to_psychopy(
+    stim: Union[Dict[str, Any], npt.ArrayLike], *, units: Literal["pix", "deg"] = "pix"
+) -> Dict[str, Any]: ...
+
+def save(
+    stim: Dict[str, Any],
+    path: Union[str, "os.PathLike[str]"],
+    *,
+    bit_depth: Literal[8, 16] = 16,
+    gamma: Optional[float] = None,
+    range: Literal["unit", "psychopy"] = "unit",
+    layers: bool = False,
+    force: bool = False,
+) -> List[str]: ...

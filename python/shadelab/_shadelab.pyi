@@ -76,3 +76,16 @@ def observer(
     ],
 ) -> str: ...
 def lightness(picture: PictureArgs, model: str) -> Tuple[npt.NDArray[np.float64], str]: ...
+def save(
+    name: str,
+    params_json: str,
+    ppd: float,
+    shape: Tuple[int, int],
+    seed: int,
+    out: str,
+    bit_depth: int,
+    gamma: Optional[float],
+    range: str,
+    layers: bool,
+    force: bool,
+) -> List[str]: ...

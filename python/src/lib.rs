@@ -259,6 +259,63 @@ fn render<'py>(
     Ok((text, img, mask, names, extra))
 }
 
+/// Renders a stimulus and writes it as `shadelab render` does (the picture in the format its
+/// extension names, its mask, its sidecar, with `layers` the surface layers): the same
+/// pipeline and writer, so the same bytes. Returns the paths written.
+#[pyfunction]
+#[pyo3(signature = (name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, layers, force))]
+#[allow(clippy::too_many_arguments)]
+fn save(
+    py: Python<'_>,
+    name: &str,
+    params_json: &str,
+    ppd: f64,
+    shape: (usize, usize),
+    seed: u64,
+    out: std::path::PathBuf,
+    bit_depth: u8,
+    gamma: Option<f64>,
+    range: &str,
+    layers: bool,
+    force: bool,
+) -> PyResult<Vec<String>> {
+    let mut config = pl::render::RenderConfig::new(name, out);
+    config.params = params_from(params_json)?;
+    config.size = size_request(None, Some(ppd), Some(shape));
+    config.seed = seed;
+    let export = &mut config.export;
+    export.bit_depth = match bit_depth {
+        8 => shadelab::io::BitDepth::Eight,
+        16 => shadelab::io::BitDepth::Sixteen,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "bit_depth {other}: a PNG is written with 8 or 16 bits"
+            )))
+        }
+    };
+    export.range = match range {
+        "unit" => shadelab::stimulus::Range::Unit,
+        "psychopy" => shadelab::stimulus::Range::Psychopy,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "range '{other}': unit (0..1) or psychopy (-1..1)"
+            )))
+        }
+    };
+    export.gamma = gamma;
+    export.layers = layers;
+    export.force = force;
+    let written = run_released(py, || {
+        config.validate()?;
+        let report = pl::render::run(&config, &NoProgress)?;
+        pl::render::write(&config, &report)
+    })?;
+    Ok(written
+        .into_iter()
+        .map(|p| p.display().to_string())
+        .collect())
+}
+
 /// Solves an image for shape: (normals, depth, f, g, report JSON).
 #[pyfunction]
 #[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter, saturation))]
@@ -465,6 +522,7 @@ fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stimuli, m)?)?;
     m.add_function(wrap_pyfunction!(describe, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(prior_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(observer, m)?)?;

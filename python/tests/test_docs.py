@@ -23,6 +23,12 @@ def test_module_docstrings_run():
     result = doctest.testmod(shadelab, optionflags=FLAGS, verbose=False)
     assert result.attempted > 5
     assert result.failed == 0
+    # Functions defined in the package's private modules and exported by name.
+    display = doctest.testmod(
+        shadelab._display, extraglobs={"shadelab": shadelab}, optionflags=FLAGS, verbose=False
+    )
+    assert display.attempted >= 3
+    assert display.failed == 0
 
 
 def test_readme_python_example_runs(capsys):

@@ -1,6 +1,9 @@
 """render, stimuli and describe: stimupy-style dicts in (height, width) order."""
 
 import json
+import os
+import pathlib
+import subprocess
 
 import numpy as np
 import pytest
@@ -192,3 +195,48 @@ def test_a_picture_brighter_than_white_is_a_value_error_with_the_fix():
         shadelab.render("sphere", shape=64, brdf="blinn-phong")
     stim = shadelab.render("sphere", shape=64, brdf="blinn-phong", albedo=0.7, specular=0.3)
     assert 0.0 <= stim["img"].min() and stim["img"].max() <= 1.0
+
+
+def test_save_writes_what_the_command_line_writes(tmp_path):
+    # The same pipeline and writer as `shadelab render`: the same bytes, picture, mask and
+    # sidecar (tests/python.rs names the command line's binary in SHADELAB_BIN).
+    cli = os.environ.get("SHADELAB_BIN")
+    if not cli:
+        pytest.skip("SHADELAB_BIN is not set (cargo test sets it to the shadelab binary)")
+    s = shadelab.render("sphere", shape=(40, 60), ppd=20, light="tilt=30,slant=40")
+    (tmp_path / "py").mkdir()
+    (tmp_path / "cli").mkdir()
+    for name, extra in [("s.png", {}), ("e.png", {"bit_depth": 8, "gamma": 2.2}), ("f.npy", {"range": "psychopy"})]:
+        written = shadelab.save(s, tmp_path / "py" / name, **extra)
+        flags = []
+        if "bit_depth" in extra:
+            flags += ["--bit-depth", "8", "--gamma", "2.2"]
+        if "range" in extra:
+            flags += ["--range", "psychopy"]
+        subprocess.run(
+            [cli, "--quiet", "render", "sphere", "--size", "60x40", "--ppd", "20",
+             "--light", "tilt=30,slant=40", *flags, "--out", str(tmp_path / "cli" / name)],
+            check=True,
+        )
+        assert sorted(os.listdir(tmp_path / "cli")) == sorted(os.listdir(tmp_path / "py"))
+        for path in written:
+            p = pathlib.Path(path)
+            assert p.read_bytes() == (tmp_path / "cli" / p.name).read_bytes(), p.name
+
+
+def test_save_refuses_bad_options_and_keeps_a_foreign_file(tmp_path):
+    s = shadelab.render("checkerboard", shape=(16, 24), ppd=8)
+    with pytest.raises(ValueError, match="bit_depth 12"):
+        shadelab.save(s, tmp_path / "c.png", bit_depth=12)
+    with pytest.raises(ValueError, match="range 'half'"):
+        shadelab.save(s, tmp_path / "c.png", range="half")
+    with pytest.raises(ValueError, match="psychopy"):
+        shadelab.save(s, tmp_path / "c.png", range="psychopy")
+    with pytest.raises(ValueError, match="render returned"):
+        shadelab.save({"img": s["img"]}, tmp_path / "c.png")
+    mine = tmp_path / "c.png"
+    mine.write_bytes(b"the user's own file")
+    with pytest.raises((ValueError, OSError)):
+        shadelab.save(s, mine)
+    assert mine.read_bytes() == b"the user's own file"
+    assert sorted(os.listdir(tmp_path)) == ["c.png"]

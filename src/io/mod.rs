@@ -26,8 +26,8 @@ pub use npy::{
 pub use output_set::{remove_dead_temporaries, OutputSet};
 pub use png::{
     display_rgba8, read_gray, read_gray_from_bytes, read_labels, read_mask, read_mask_from_bytes,
-    read_rgb, write_gray, write_gray_described, write_gray_fn, write_labels, write_mask, write_rgb,
-    write_rgb_described, write_rgb_fn, BitDepth, GrayInfo, LUMINANCE_FORMULA,
+    read_rgb, write_gray, write_gray_fn, write_labels, write_mask, write_rgb, write_rgb_fn,
+    write_stimulus, BitDepth, GrayInfo, PngPicture, LUMINANCE_FORMULA,
 };
 pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight};
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};

@@ -227,7 +227,7 @@ fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Stored, String> {
 
 /// Reads a PNG (or another format the `image` crate knows) as linear luminance 0..1.
 /// Grayscale is scaled by its maximum code; colour becomes luminance by [`LUMINANCE_FORMULA`].
-/// Codes are decoded by the file's sRGB or gAMA chunk where it has one ([`Stored`]): a PNG
+/// Codes are decoded by the file's sRGB or gAMA chunk where it has one (`Stored`): a PNG
 /// shadelab wrote with `--gamma` reads back as the linear values it was made from.
 pub fn read_gray(path: &Path, max_pixels: usize) -> Result<(Image, GrayInfo)> {
     let (image, stored) = decode(path, max_pixels)?;
@@ -457,33 +457,27 @@ pub fn write_gray(path: &Path, image: &Image, depth: BitDepth, gamma: Option<f64
     write_encoded(path, image, depth, plain, png::ColorType::Grayscale)
 }
 
-/// [`write_gray`] of a stimulus: with the gAMA chunk of its encoding and iTXt chunks (keyword,
-/// text) that describe it.
-pub fn write_gray_described(
-    path: &Path,
-    image: &Image,
-    depth: BitDepth,
-    gamma: Option<f64>,
-    text: &[(String, String)],
-) -> Result<()> {
-    let described = SelfDescription {
-        gamma,
-        text: Some(text),
-    };
-    write_encoded(path, image, depth, described, png::ColorType::Grayscale)
-}
-
 /// Writes an RGB PNG of linear values 0..1 (clamped), optionally display-encoded.
 pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
     let plain = SelfDescription { gamma, text: None };
     write_encoded(path, image, depth, plain, png::ColorType::Rgb)
 }
 
-/// [`write_rgb`] of a stimulus: with the gAMA chunk of its encoding and iTXt chunks (keyword,
-/// text) that describe it.
-pub fn write_rgb_described(
+/// A stimulus picture for [`write_stimulus`]: one channel or three.
+#[derive(Debug, Clone, Copy)]
+pub enum PngPicture<'a> {
+    /// Gray: luminance.
+    Gray(&'a Image),
+    /// Linear RGB.
+    Rgb(&'a RgbImage),
+}
+
+/// Writes a stimulus as [`write_gray`] or [`write_rgb`] do, with the gAMA chunk of its
+/// encoding (1.0 for linear codes, 1/gamma for display-encoded ones) and iTXt chunks
+/// (keyword, text) that say what it is.
+pub fn write_stimulus(
     path: &Path,
-    image: &RgbImage,
+    picture: PngPicture<'_>,
     depth: BitDepth,
     gamma: Option<f64>,
     text: &[(String, String)],
@@ -492,7 +486,12 @@ pub fn write_rgb_described(
         gamma,
         text: Some(text),
     };
-    write_encoded(path, image, depth, described, png::ColorType::Rgb)
+    match picture {
+        PngPicture::Gray(image) => {
+            write_encoded(path, image, depth, described, png::ColorType::Grayscale)
+        }
+        PngPicture::Rgb(image) => write_encoded(path, image, depth, described, png::ColorType::Rgb),
+    }
 }
 
 /// [`write_rgb`] of the `width` × `height` picture whose pixel at (column, row) is

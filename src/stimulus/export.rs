@@ -262,13 +262,13 @@ fn write_all(
     let image = set.staged(path)?;
     let (depth, gamma) = (options.bit_depth, options.gamma);
     match (ext, &output.pixels) {
-        ("png", Pixels::Gray(img)) => {
+        ("png", pixels) => {
+            let picture = match pixels {
+                Pixels::Gray(img) => io::PngPicture::Gray(img),
+                Pixels::Rgb(img) => io::PngPicture::Rgb(img),
+            };
             let text = png_text(name, request, options);
-            io::write_gray_described(image, img, depth, gamma, &text)?
-        }
-        ("png", Pixels::Rgb(img)) => {
-            let text = png_text(name, request, options);
-            io::write_rgb_described(image, img, depth, gamma, &text)?
+            io::write_stimulus(image, picture, depth, gamma, &text)?
         }
         ("npy", Pixels::Gray(img)) => io::write_image(image, &img.map(|&v| to_range(v)))?,
         ("npy", Pixels::Rgb(img)) => io::write_f32(
@@ -326,7 +326,7 @@ fn encoding(format: &str, options: &ExportOptions) -> String {
 /// encoding to viewers (1.0 for linear codes, 1/gamma for display-encoded ones).
 pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(String, String)> {
     let g = &request.geometry;
-    let version = env!("CARGO_PKG_VERSION");
+    let version = io::PROGRAM_VERSION;
     let bits = match options.bit_depth {
         BitDepth::Eight => 8,
         BitDepth::Sixteen => 16,
@@ -343,24 +343,20 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
         g.width_deg(),
         g.ppd
     );
-    let record = json!({
-        "program": "shadelab",
-        "version": version,
-        "stimulus": name,
-        "parameters": request.params.to_json(),
-        "seed": request.seed,
-        "visual_size": [g.height_deg(), g.width_deg()],
-        "ppd": g.ppd,
-        "shape": [g.height, g.width],
-        "bit_depth": bits,
-        "gamma": options.gamma,
-        "encoding": encoding("png", options),
-        "range": "0..1",
-    });
+    let mut record = stimulus_record(name, request);
+    record.extend([
+        ("bit_depth".to_string(), Value::from(bits)),
+        ("gamma".to_string(), json!(options.gamma)),
+        (
+            "encoding".to_string(),
+            Value::from(encoding("png", options)),
+        ),
+        ("range".to_string(), Value::from("0..1")),
+    ]);
     vec![
         ("Software".to_string(), format!("shadelab {version}")),
         ("Description".to_string(), description),
-        ("shadelab".to_string(), record.to_string()),
+        ("shadelab".to_string(), Value::Object(record).to_string()),
     ]
 }
 
@@ -376,7 +372,6 @@ pub fn sidecar_json(
     options: &ExportOptions,
     files: Map<String, Value>,
 ) -> Value {
-    let g = &request.geometry;
     let (channels, md5) = match &output.pixels {
         Pixels::Gray(img) => (1, io::image_md5(img)),
         Pixels::Rgb(img) => (
@@ -388,15 +383,8 @@ pub fn sidecar_json(
             )),
         ),
     };
-    json!({
-        "program": "shadelab",
-        "version": io::PROGRAM_VERSION,
-        "stimulus": name,
-        "parameters": request.params.to_json(),
-        "seed": request.seed,
-        "visual_size": [g.height_deg(), g.width_deg()],
-        "ppd": g.ppd,
-        "shape": [g.height, g.width],
+    let mut sidecar = stimulus_record(name, request);
+    let Value::Object(rest) = json!({
         "channels": channels,
         "format": format,
         "bit_depth": if format == "png" { Value::from(match options.bit_depth { BitDepth::Eight => 8, BitDepth::Sixteen => 16 }) } else { Value::Null },
@@ -410,5 +398,28 @@ pub fn sidecar_json(
         "notes": output.notes,
         "files": files,
         "conventions": io::conventions_json(),
-    })
+    }) else {
+        unreachable!("json! of an object literal is an object")
+    };
+    sidecar.extend(rest);
+    Value::Object(sidecar)
+}
+
+/// What a stimulus is, as its sidecar and its PNG's text both record it: program, version,
+/// stimulus, every parameter, seed and the size triple (stimupy's order, height first).
+fn stimulus_record(name: &str, request: &Request) -> Map<String, Value> {
+    let g = &request.geometry;
+    let Value::Object(record) = json!({
+        "program": "shadelab",
+        "version": io::PROGRAM_VERSION,
+        "stimulus": name,
+        "parameters": request.params.to_json(),
+        "seed": request.seed,
+        "visual_size": [g.height_deg(), g.width_deg()],
+        "ppd": g.ppd,
+        "shape": [g.height, g.width],
+    }) else {
+        unreachable!("json! of an object literal is an object")
+    };
+    record
 }

@@ -503,7 +503,7 @@ fn check_range(name: &str, params: &Params, pixels: &Pixels) -> Result<()> {
 }
 
 /// Prepares and renders in one step, and holds the picture to the range rule
-/// ([`check_range`]: 0..1, refused with the fix otherwise).
+/// (0..1, refused with the fix otherwise: docs/display.md).
 pub fn generate(
     name: &str,
     given: &Map<String, Value>,

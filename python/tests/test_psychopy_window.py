@@ -1,0 +1,157 @@
+"""shadelab stimuli in a real PsychoPy window (docs/display.md, docs/python.md).
+
+The window runs on Xvfb; the frame is read back from PsychoPy's back buffer. Skips with the
+reason when PsychoPy (with pyglet) or Xvfb is missing, unless ``SHADELAB_REQUIRE_PSYCHOPY=1``
+(set by ``.ci/run`` once ``.ci/psychopy.sh`` has installed them), where it fails instead.
+"""
+
+import os
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import shadelab
+
+SIDE = 400  # the window, in pixels
+
+
+def _unavailable(why):
+    if os.environ.get("SHADELAB_REQUIRE_PSYCHOPY") == "1":
+        pytest.fail(f"PsychoPy window test cannot run, and SHADELAB_REQUIRE_PSYCHOPY=1: {why}")
+    pytest.skip(why)
+
+
+@pytest.fixture(scope="module")
+def window():
+    """A PsychoPy window (SIDE × SIDE pixels, black) on its own Xvfb display."""
+    xvfb = shutil.which("Xvfb")
+    if xvfb is None:
+        _unavailable("no Xvfb on PATH (Debian: apt-get install xvfb)")
+    try:
+        import psychopy  # noqa: F401  (before a display: only the packages)
+        import pyglet  # noqa: F401
+    except ImportError as e:
+        _unavailable(f"PsychoPy is not installed ({e}); .ci/psychopy.sh installs it")
+    # Xvfb picks a free display number and writes it to the pipe.
+    read, write = os.pipe()
+    server = subprocess.Popen(
+        [xvfb, "-displayfd", str(write), "-screen", "0", "640x480x24", "-nolisten", "tcp"],
+        pass_fds=(write,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write)
+    with os.fdopen(read) as pipe:
+        number = pipe.readline().strip()
+    if not number:
+        server.kill()
+        _unavailable("Xvfb did not start")
+    previous = os.environ.get("DISPLAY")
+    os.environ["DISPLAY"] = f":{number}"
+    try:
+        from psychopy import logging, visual
+
+        logging.console.setLevel(logging.ERROR)
+        win = visual.Window(
+            size=(SIDE, SIDE),
+            units="pix",
+            color=(-1, -1, -1),
+            allowGUI=False,
+            fullscr=False,
+            checkTiming=False,
+            winType="pyglet",
+        )
+        yield visual, win
+        win.close()
+    finally:
+        if previous is None:
+            os.environ.pop("DISPLAY", None)
+        else:
+            os.environ["DISPLAY"] = previous
+        server.terminate()
+        server.wait(timeout=10)
+
+
+def _frame(win):
+    """The back buffer as an H×W array of red codes, row 0 the top row of the window."""
+    frame = np.asarray(win._getFrame(buffer="back"))
+    win.clearBuffer()
+    return frame[..., 0].astype(int)
+
+
+def test_the_frame_reads_top_row_first(window):
+    # The read-back itself, checked against PsychoPy's own coordinates (y up): a white square
+    # drawn above the centre is in the top half of the frame.
+    visual, win = window
+    visual.Rect(win, width=20, height=20, pos=(0, 150), fillColor=(1, 1, 1), lineWidth=0).draw()
+    rows = np.nonzero(_frame(win).max(axis=1) > 128)[0]
+    assert rows.size and rows.max() < SIDE // 2, rows
+
+
+def test_to_psychopy_shows_the_stimulus_upright_with_its_codes(window):
+    visual, win = window
+    stim = shadelab.render("sphere", shape=(100, 120), light="above")
+    img = stim["img"]
+    kw = shadelab.to_psychopy(stim)
+    visual.ImageStim(win, **kw).draw()
+    frame = _frame(win)
+    # Centred, one image pixel per screen pixel: rows 150..249, columns 140..259.
+    top, left = (SIDE - 100) // 2, (SIDE - 120) // 2
+    shown = frame[top : top + 100, left : left + 120]
+    outside = np.delete(frame, np.s_[top : top + 100], axis=0)
+    assert outside.max() == 0, "nothing drawn outside the stimulus"
+    # Light from above: the sphere's upper half is the brighter, on screen as in the array.
+    assert img[:50].mean() > 2 * img[50:].mean()
+    assert shown[:50].mean() > 2 * shown[50:].mean()
+    # Pixel for pixel: PsychoPy maps −1..1 to the 8-bit codes 0..255 (Xvfb has no gamma
+    # ramp), so the codes are round(255 · img) to within one step.
+    diff = np.abs(shown - np.round(255 * img))
+    assert diff.max() <= 1, f"largest difference {diff.max()} codes"
+
+
+def test_an_array_given_as_it_is_is_upside_down(window):
+    # The trap to_psychopy avoids (docs/python.md): PsychoPy draws an array's first row at
+    # the bottom. Should PsychoPy ever flip arrays itself, this fails and the docs must change.
+    visual, win = window
+    stim = shadelab.render("sphere", shape=(100, 120), light="above")
+    visual.ImageStim(win, image=stim["img"] * 2 - 1, size=(120, 100), units="pix").draw()
+    frame = _frame(win)
+    top, left = (SIDE - 100) // 2, (SIDE - 120) // 2
+    shown = frame[top : top + 100, left : left + 120]
+    assert shown[50:].mean() > 2 * shown[:50].mean(), "the lit side lands at the bottom"
+    assert np.abs(shown[::-1] - np.round(255 * stim["img"])).max() <= 1
+
+
+@pytest.mark.parametrize(
+    "bad, units, match",
+    [
+        (np.full((4, 4), 1.5), "pix", r"reaches 1\.5"),
+        (np.full((4, 4), np.nan), "pix", "NaN"),
+        (np.zeros((4, 4, 2)), "pix", "H×W or H×W×3"),
+        (np.zeros((0, 4)), "pix", "empty"),
+        (np.zeros((4, 4)), "cm", "unknown units 'cm'"),
+        (np.zeros((4, 4)), "deg", "needs a render dict"),
+        (np.zeros((4, 4), dtype=np.int32), "pix", "int32 pictures are not read"),
+    ],
+)
+def test_to_psychopy_refuses_what_it_cannot_show(bad, units, match):
+    with pytest.raises(ValueError, match=match):
+        shadelab.to_psychopy(bad, units=units)
+
+
+def test_to_psychopy_sizes_in_degrees_are_width_then_height():
+    stim = shadelab.render("checkerboard", visual_size=(2, 3), ppd=10)
+    kw = shadelab.to_psychopy(stim, units="deg")
+    assert kw["size"] == (3.0, 2.0) and kw["units"] == "deg"
+    assert kw["image"].dtype == np.float32
+    assert (kw["image"] == np.flipud(np.float32(stim["img"] * 2 - 1))).all()
+
+
+def test_to_psychopy_reads_integer_codes_as_the_command_line_does():
+    codes = np.array([[0, 255], [51, 102]], dtype=np.uint8)
+    kw = shadelab.to_psychopy(codes)
+    assert (kw["image"] == np.flipud(np.float32(codes / 255.0 * 2 - 1))).all()
+    wide = np.array([[0, 65535]], dtype=np.uint16)
+    assert (shadelab.to_psychopy(wide)["image"] == np.float32([[-1.0, 1.0]])).all()
