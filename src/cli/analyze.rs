@@ -48,7 +48,7 @@ pub fn run(command: Command, global: &Global) -> CliResult {
 /// Where the picture comes from: a file or a stimulus rendered on the spot.
 #[derive(Debug, clap::Args)]
 pub struct Source {
-    /// The image: an 8/16-bit PNG (linear values) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value); a shadelab sidecar
+    /// The image: an 8/16-bit PNG (linear values; decoded where its sRGB or gAMA chunk says so) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance); a shadelab sidecar
     /// beside it (IMAGE.json) gives its target mask and names, ppd, albedo, ambient, gamma and
     /// true light (flags given win). Or give --stimulus or --spec.
     pub image: Option<PathBuf>,

@@ -16,7 +16,7 @@ use std::time::Instant;
 /// Arguments of `solve`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The image: an 8/16-bit PNG (linear luminance) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value).
+    /// The image: an 8/16-bit PNG (linear luminance; decoded where its sRGB or gAMA chunk says so) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance).
     pub image: PathBuf,
     /// The light: x,y,z or tilt=T,slant=S or a name, with z > 0; or `estimate` to estimate it
     /// (and the albedo) from the image.

@@ -48,14 +48,21 @@ pub fn read_luminance(path: &Path, max_pixels: usize) -> Result<(Image, serde_js
             (image, serde_json::to_value(info).unwrap_or_default())
         }
         "npy" => {
-            let (image, scale) = read_luminance_npy(path, max_pixels)?;
-            let info = match scale {
+            let (image, scale, rgb) = read_luminance_npy(path, max_pixels)?;
+            let mut info = match scale {
                 Some(scale) => serde_json::json!({
                     "format": format!("npy {}", scale.dtype),
                     "conversion": scale.note(),
                 }),
                 None => serde_json::json!({ "format": "npy float" }),
             };
+            if rgb {
+                let conversion = match info["conversion"].as_str() {
+                    Some(scaled) => format!("{scaled}; {LUMINANCE_FORMULA}"),
+                    None => LUMINANCE_FORMULA.to_string(),
+                };
+                info["conversion"] = conversion.into();
+            }
             (image, info)
         }
         other => {

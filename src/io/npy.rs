@@ -372,16 +372,30 @@ pub fn read_image_from_bytes(bytes: &[u8], path: &Path, max_pixels: usize) -> Re
 
 /// Reads an H×W `.npy` picture as luminance: floats and booleans as they are, uint8 and uint16
 /// divided by the largest value of their type, other integers refused ([`npy_scale`]; the
-/// scale is given back). The range is not checked
-/// here: [`read_luminance`](super::read_luminance) does it for every picture.
-pub fn read_luminance_npy(path: &Path, max_pixels: usize) -> Result<(Image, Option<IntegerScale>)> {
-    let array = read_array(path, max_pixels)?;
+/// scale is given back). An H×W×3 array is linear RGB and becomes luminance by
+/// [`LUMINANCE_FORMULA`](super::LUMINANCE_FORMULA), as an RGB PNG does (the third value says
+/// so). The range is not checked here: [`read_luminance`](super::read_luminance) does it for
+/// every picture.
+pub fn read_luminance_npy(
+    path: &Path,
+    max_pixels: usize,
+) -> Result<(Image, Option<IntegerScale>, bool)> {
+    let mut array = read_array(path, max_pixels)?;
     let scale = npy_scale(&array.dtype).map_err(|why| Error::format(path, why))?;
-    let mut image = image_from(array, path, max_pixels)?;
     if let Some(scale) = &scale {
-        image.data_mut().iter_mut().for_each(|v| *v /= scale.max);
+        array.data.iter_mut().for_each(|v| *v /= scale.max);
     }
-    Ok((image, scale))
+    if let [h, w, 3] = array.shape[..] {
+        check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
+        check_finite(path, &array.data, w, 3)?;
+        let luminance = array
+            .data
+            .chunks_exact(3)
+            .map(|p| crate::grid::luminance([p[0], p[1], p[2]]))
+            .collect();
+        return Ok((Grid::from_vec(w, h, luminance)?, scale, true));
+    }
+    Ok((image_from(array, path, max_pixels)?, scale, false))
 }
 
 fn image_from(a: NpyArray, path: &Path, max_pixels: usize) -> Result<Image> {
@@ -390,7 +404,7 @@ fn image_from(a: NpyArray, path: &Path, max_pixels: usize) -> Result<Image> {
         _ => {
             return Err(Error::format(
                 path,
-                format!("expected a 2-D H×W array, found shape {:?}", a.shape),
+                format!("expected a 2-D H×W array (or H×W×3 RGB where a picture is read as luminance), found shape {:?}", a.shape),
             ))
         }
     };
@@ -716,13 +730,13 @@ mod tests {
         // As an array, the values as stored; as a picture, divided by 65535.
         let array = read_array(&d.join("u2.npy"), 100).unwrap();
         assert_eq!((array.dtype.as_str(), array.data[5]), ("<u2", 65000.0));
-        let (image, scale) = read_luminance_npy(&d.join("u2.npy"), 100).unwrap();
+        let (image, scale, _) = read_luminance_npy(&d.join("u2.npy"), 100).unwrap();
         assert_eq!(scale.unwrap().max, 65535.0);
         assert_eq!(image.data()[5], 65000.0 / 65535.0);
         assert_eq!(npy_file_scale(&d.join("u2.npy")).unwrap().dtype, "uint16");
         let u1: Vec<u8> = vec![0, 51, 102, 153, 204, 255];
         std::fs::write(d.join("u1.npy"), npy("|u1", "(2, 3)", &u1)).unwrap();
-        let (image, _) = read_luminance_npy(&d.join("u1.npy"), 100).unwrap();
+        let (image, _, _) = read_luminance_npy(&d.join("u1.npy"), 100).unwrap();
         assert_eq!(image.data(), &[0.0, 0.2, 0.4, 0.6, 0.8, 1.0]);
         let i1: Vec<u8> = vec![0, 1, 2, 3, 4, 5];
         std::fs::write(d.join("i1.npy"), npy("|i1", "(2, 3)", &i1)).unwrap();
@@ -734,6 +748,36 @@ mod tests {
         // Floats: no scale, no note.
         write_image(&d.join("f.npy"), &Grid::new(3, 2, 0.5)).unwrap();
         assert_eq!(npy_file_scale(&d.join("f.npy")), None);
+    }
+
+    #[test]
+    fn an_rgb_array_is_read_as_luminance_like_an_rgb_png() {
+        let d = scratch("rgb");
+        // 1×2 pixels: pure green, and grey 0.5.
+        let values = [0.0, 1.0, 0.0, 0.5, 0.5, 0.5];
+        write_f32(&d.join("c.npy"), &[1, 2, 3], values.iter().copied()).unwrap();
+        let (image, scale, rgb) = read_luminance_npy(&d.join("c.npy"), 100).unwrap();
+        assert!(rgb && scale.is_none());
+        assert_eq!((image.width(), image.height()), (2, 1));
+        assert!(
+            (image.get(0, 0) - 0.7152).abs() < 1e-6,
+            "{}",
+            image.get(0, 0)
+        );
+        assert!((image.get(1, 0) - 0.5).abs() < 1e-6);
+        let (_, info) = super::super::read_luminance(&d.join("c.npy"), 100).unwrap();
+        assert!(info["conversion"].as_str().unwrap().contains("Rec. 709"));
+        // Codes: uint8 scaled first, then weighted; a 4-channel array is still refused.
+        let mut bytes = npy_header("|u1", &[1, 1, 3]).unwrap();
+        bytes.extend([255u8, 255, 255]);
+        std::fs::write(d.join("u.npy"), &bytes).unwrap();
+        let (image, _, _) = read_luminance_npy(&d.join("u.npy"), 100).unwrap();
+        assert!((image.get(0, 0) - 1.0).abs() < 1e-12);
+        write_f32(&d.join("a.npy"), &[1, 1, 4], [0.0; 4].into_iter()).unwrap();
+        let e = read_luminance_npy(&d.join("a.npy"), 100)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("H×W×3 RGB"), "{e}");
     }
 
     #[test]
