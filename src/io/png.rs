@@ -669,6 +669,57 @@ mod tests {
         assert!(info.conversion.unwrap().contains("0.2126"));
     }
 
+    /// An 8-bit gray PNG of `codes` (one row) with the chunks `chunk` sets, by the `png` crate.
+    fn tagged(path: &Path, codes: &[u8], chunk: impl FnOnce(&mut png::Encoder<'_, std::fs::File>)) {
+        let file = std::fs::File::create(path).unwrap();
+        let mut encoder = png::Encoder::new(file, codes.len() as u32, 1);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        chunk(&mut encoder);
+        encoder
+            .write_header()
+            .unwrap()
+            .write_image_data(codes)
+            .unwrap();
+    }
+
+    #[test]
+    fn srgb_and_gamma_chunks_decode_the_codes_and_no_chunk_leaves_them_linear() {
+        let d = scratch("chunks");
+        let codes = [0u8, 10, 128, 255];
+        let scaled = codes.map(|c| f64::from(c) / 255.0);
+        tagged(&d.join("srgb.png"), &codes, |e| {
+            e.set_source_srgb(png::SrgbRenderingIntent::Perceptual)
+        });
+        tagged(&d.join("gama.png"), &codes, |e| {
+            e.set_source_gamma(png::ScaledFloat::from_scaled(45_455))
+        });
+        tagged(&d.join("none.png"), &codes, |_| {});
+        let read = |name: &str| read_gray(&d.join(name), DEFAULT_MAX_PIXELS).unwrap();
+        // IEC 61966-2-1: linear below 0.04045 (code 10: 0.0392 / 12.92), a 2.4 power above.
+        let (srgb, info) = read("srgb.png");
+        assert!(info.conversion.unwrap().contains("sRGB"));
+        assert_eq!(*srgb.get(0, 0), 0.0);
+        assert!((srgb.get(1, 0) - scaled[1] / 12.92).abs() < 1e-12);
+        assert!(
+            (srgb.get(2, 0) - 0.215861).abs() < 1e-6,
+            "{}",
+            srgb.get(2, 0)
+        );
+        assert_eq!(*srgb.get(3, 0), 1.0);
+        // gAMA 0.45455: code = L^0.45455, so L = code^(1/0.45455).
+        let (gama, _) = read("gama.png");
+        for (i, s) in scaled.iter().enumerate() {
+            assert!((gama.get(i, 0) - s.powf(1.0 / 0.45455)).abs() < 1e-12);
+        }
+        let (none, info) = read("none.png");
+        assert_eq!(none.data(), &scaled[..]);
+        assert!(info.conversion.is_none());
+        assert!(
+            states_its_encoding(&d.join("gama.png")) && !states_its_encoding(&d.join("none.png"))
+        );
+    }
+
     #[test]
     fn the_writers_from_a_function_write_the_grids_bytes() {
         let d = scratch("fn");
