@@ -19,6 +19,16 @@ pub enum BitDepth {
     Sixteen,
 }
 
+impl BitDepth {
+    /// Bits per channel: 8 or 16.
+    pub fn bits(self) -> u8 {
+        match self {
+            BitDepth::Eight => 8,
+            BitDepth::Sixteen => 16,
+        }
+    }
+}
+
 /// What was read from a PNG and how it was converted.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GrayInfo {

@@ -327,10 +327,7 @@ fn encoding(format: &str, options: &ExportOptions) -> String {
 pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(String, String)> {
     let g = &request.geometry;
     let version = io::PROGRAM_VERSION;
-    let bits = match options.bit_depth {
-        BitDepth::Eight => 8,
-        BitDepth::Sixteen => 16,
-    };
+    let bits = options.bit_depth.bits();
     let light = match options.gamma {
         Some(gamma) => format!("display-encoded luminance, code = round(v^(1/{gamma}) * max)"),
         None => "linear luminance 0..1, code = round(v * max)".to_string(),
@@ -387,7 +384,7 @@ pub fn sidecar_json(
     let Value::Object(rest) = json!({
         "channels": channels,
         "format": format,
-        "bit_depth": if format == "png" { Value::from(match options.bit_depth { BitDepth::Eight => 8, BitDepth::Sixteen => 16 }) } else { Value::Null },
+        "bit_depth": if format == "png" { Value::from(options.bit_depth.bits()) } else { Value::Null },
         "gamma": options.gamma,
         "encoding": encoding(format, options),
         "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },
