@@ -50,6 +50,7 @@ pub mod boundary;
 pub mod cancel;
 pub mod colormap;
 mod conjugate_gradients;
+pub mod display;
 mod error;
 pub mod evaluation;
 pub mod gallery;

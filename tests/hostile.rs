@@ -537,22 +537,24 @@ fn odd_but_valid_images_are_read_as_documented() {
     let (g, info) = shadelab::io::read_gray(&i.join("graya16.png"), max).unwrap();
     assert_eq!(info.channels, 2);
     assert_eq!(*g.get(7, 2), value(7, 2, 0) * 257.0 / 65535.0);
-    // RGBA and 16-bit RGB: Rec. 709 luminance of the stored values, alpha ignored.
+    // RGBA and 16-bit RGB: Rec. 709 luminance of the stored values, alpha ignored (read as
+    // linear: by default an 8-bit picture without a gamma chunk is sRGB, tests/photographs.rs).
+    let linear = shadelab::io::InputEncoding::Linear;
     for (file, scale) in [("rgba.png", 255.0), ("rgb16.png", 65535.0 / 257.0)] {
-        let (y, _) = shadelab::io::read_gray(&i.join(file), max).unwrap();
+        let (y, _) = shadelab::io::read_gray_as(&i.join(file), max, linear).unwrap();
         let lum =
             (0.2126 * value(4, 9, 0) + 0.7152 * value(4, 9, 1) + 0.0722 * value(4, 9, 2)) / scale;
         assert!((y.get(4, 9) - lum).abs() < 1e-6, "{file}: {}", y.get(4, 9));
     }
     // Palette: the index looks up the colour.
-    let rgb = shadelab::io::read_rgb(&i.join("palette.png"), max).unwrap();
+    let rgb = shadelab::io::read_rgb_as(&i.join("palette.png"), max, linear).unwrap();
     let v = value(2, 3, 0);
     let expect = [v / 255.0, (v / 2.0).floor() / 255.0, (255.0 - v) / 255.0];
     for (got, want) in rgb.get(2, 3).iter().zip(expect) {
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
     }
     // 1×1.
-    let (one, _) = shadelab::io::read_gray(&i.join("one.png"), max).unwrap();
+    let (one, _) = shadelab::io::read_gray_as(&i.join("one.png"), max, linear).unwrap();
     assert_eq!(one.data(), &[128.0 / 255.0]);
 }
 

@@ -128,7 +128,9 @@ fn solve_writes_the_outputs_and_recovers_a_sphere() {
     let (png, info) = io::read_gray(&result.join("depth.png"), 1 << 20).unwrap();
     assert_eq!(info.bit_depth, 16);
     assert!((png.get(32, 32) - centre / r["depth_range"][1].as_f64().unwrap()).abs() < 1e-4);
-    let rgb = io::read_rgb(&result.join("normals.png"), 1 << 20).unwrap();
+    // The normal map's codes are (n + 1) / 2, not light: read as they are.
+    let linear = io::InputEncoding::Linear;
+    let rgb = io::read_rgb_as(&result.join("normals.png"), 1 << 20, linear).unwrap();
     assert!((rgb.get(0, 0)[2] - 1.0).abs() < 1e-9 && (rgb.get(0, 0)[0] - 0.5).abs() < 0.01);
     let obj = std::fs::read_to_string(result.join("surface.obj")).unwrap();
     let vertices = obj.lines().filter(|l| l.starts_with("v ")).count();

@@ -34,6 +34,12 @@ class Reconstruction:
 
 def stimuli() -> Dict[str, str]: ...
 def describe(name: str) -> Dict[str, Any]: ...
+# A display file's path (shadelab's display JSON, a PsychoPy monitor file, a photometer CSV) or
+# a dict of the display JSON; a luminance mapping (lo, hi) in cd/m², "LO,HI" or
+# {"background": B, "michelson": C}.
+DisplaySpec = Union[str, "os.PathLike[str]", Dict[str, Any]]
+LuminanceSpec = Union[Tuple[float, float], str, Dict[str, float]]
+
 def render(
     name: str,
     *,
@@ -43,6 +49,11 @@ def render(
     light: Optional[LightSpec] = ...,
     seed: Optional[int] = ...,
     layers: bool = ...,
+    bit_depth: Optional[Literal[8, 16]] = ...,
+    gamma: Optional[float] = ...,
+    range: Literal["unit", "psychopy"] = ...,
+    display: Optional[DisplaySpec] = ...,
+    luminance: Optional[LuminanceSpec] = ...,
     **params: Any,
 ) -> Dict[str, Any]: ...
 def solve(
@@ -118,16 +129,21 @@ def lightness(
 ) -> Tuple[npt.NDArray[np.float64], List[Dict[str, Any]]]: ...
 
 def to_psychopy(
-    stim: Union[Dict[str, Any], npt.ArrayLike], *, units: Literal["pix", "deg"] = "pix"
+    stim: Union[Dict[str, Any], npt.ArrayLike],
+    *,
+    units: Literal["pix", "deg"] = "pix",
+    codes: Optional[bool] = None,
 ) -> Dict[str, Any]: ...
 
 def save(
     stim: Dict[str, Any],
     path: Union[str, "os.PathLike[str]"],
     *,
-    bit_depth: Literal[8, 16] = 16,
+    bit_depth: Optional[Literal[8, 16]] = None,
     gamma: Optional[float] = None,
-    range: Literal["unit", "psychopy"] = "unit",
+    range: Optional[Literal["unit", "psychopy"]] = None,
+    display: Optional[DisplaySpec] = None,
+    luminance: Optional[LuminanceSpec] = None,
     layers: bool = False,
     force: bool = False,
 ) -> List[str]: ...

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any, Dict, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
 _UNITS = ("pix", "deg")
 
 
-def to_psychopy(stim: Any, *, units: str = "pix") -> Dict[str, Any]:
+def to_psychopy(stim: Any, *, units: str = "pix", codes: Optional[bool] = None) -> Dict[str, Any]:
     """The keyword arguments of PsychoPy's ``visual.ImageStim`` that show ``stim`` upright.
 
     ``stim`` is a :func:`render` dict (or a bare H×W or H×W×3 array of linear luminance 0..1,
@@ -17,6 +17,10 @@ def to_psychopy(stim: Any, *, units: str = "pix") -> Dict[str, Any]:
     and mapped to PsychoPy's −1..1 (float32), ``size`` in PsychoPy's (width, height) order and
     ``units`` (``"pix"``: one image pixel per screen pixel; ``"deg"``: the stimulus's
     ``visual_size``, for a window whose monitor knows its distance and width).
+
+    An H×W×3 picture stays 0..1: PsychoPy maps a gray array's −1..1 to black..white but draws
+    an RGB float array's 0..1 as it is (its image shader; measured in a window: 0.5686 → code
+    145, where −1..1 would give 200).
 
     Why the flip: PsychoPy uploads a NumPy array as it is, and OpenGL puts a texture's first
     row at the bottom of the screen (PsychoPy flips image files, not arrays). Unflipped, a
@@ -28,6 +32,13 @@ def to_psychopy(stim: Any, *, units: str = "pix") -> Dict[str, Any]:
     is the display's black to white in luminance. Values outside 0..1 or not finite are a
     ``ValueError`` (shadelab's stimuli never leave 0..1).
 
+    A dict rendered for a display (``render(..., display=...)``) is shown by its ``codes``
+    instead (``codes=None`` chooses so; ``codes=False`` shows the linear ``img``): each code c
+    becomes c / top · 2 − 1, so that a window *without* gamma correction (the display's own
+    response, which the codes already invert) puts exactly those codes in the frame buffer —
+    8-bit codes in an 8-bit window, 10-bit ones in a window opened with ``bpc=10``; bit-stolen
+    codes are RGB. The test reads them back from a real window, code for code.
+
     >>> s = shadelab.render("sphere", shape=(48, 64), light="above")
     >>> kw = to_psychopy(s)
     >>> kw["size"], kw["units"], kw["image"].shape
@@ -38,6 +49,17 @@ def to_psychopy(stim: Any, *, units: str = "pix") -> Dict[str, Any]:
     if units not in _UNITS:
         raise ValueError(f"to_psychopy: unknown units {units!r} (valid: pix, deg)")
     is_dict = isinstance(stim, dict)
+    shown = is_dict and isinstance(stim.get("display"), dict) and "codes" in stim
+    if codes and not shown:
+        raise ValueError("to_psychopy: codes=True needs a dict rendered with display=...")
+    if shown and codes is not False:
+        top = float(2 ** int(stim["display"]["bit_depth"]) - 1)
+        values = np.asarray(stim["codes"], dtype=np.float64) / top
+        return {
+            "image": _texture(values),
+            "size": _size(stim, values.shape, units),
+            "units": units,
+        }
     img = np.asarray(stim["img"] if is_dict else stim)
     if img.dtype.kind not in "fiub" or img.ndim not in (2, 3) or (img.ndim == 3 and img.shape[2] != 3):
         raise ValueError(
@@ -66,14 +88,22 @@ def to_psychopy(stim: Any, *, units: str = "pix") -> Dict[str, Any]:
             f"to_psychopy: the picture reaches {lo:.4g}..{hi:.4g} ({out} values outside); "
             "linear luminance is 0..1"
         )
-    height, width = img.shape[:2]
-    size: Tuple[float, float]
+    return {"image": _texture(img), "size": _size(stim, img.shape, units), "units": units}
+
+
+def _texture(values: np.ndarray) -> np.ndarray:
+    """Linear 0..1 as the array ``ImageStim`` shows: flipped top to bottom; a gray H×W array
+    mapped to −1..1 (PsychoPy's signed luminance texture), an H×W×3 one left 0..1 (PsychoPy
+    draws RGB float arrays through its image shader as they are, checked in a window)."""
+    signed = values * 2.0 - 1.0 if values.ndim == 2 else values
+    return np.ascontiguousarray(np.flipud(signed), dtype=np.float32)
+
+
+def _size(stim: Any, shape: Tuple[int, ...], units: str) -> Tuple[float, float]:
+    """PsychoPy's (width, height): the picture's pixels, or the dict's visual size."""
     if units == "pix":
-        size = (width, height)
-    else:
-        if not is_dict or "visual_size" not in stim:
-            raise ValueError("to_psychopy: units='deg' needs a render dict (its visual_size)")
-        vh, vw = stim["visual_size"]
-        size = (float(vw), float(vh))
-    image = np.ascontiguousarray(np.flipud(img * 2.0 - 1.0), dtype=np.float32)
-    return {"image": image, "size": size, "units": units}
+        return (shape[1], shape[0])
+    if not isinstance(stim, dict) or "visual_size" not in stim:
+        raise ValueError("to_psychopy: units='deg' needs a render dict (its visual_size)")
+    vh, vw = stim["visual_size"]
+    return (float(vw), float(vh))

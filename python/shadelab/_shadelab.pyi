@@ -18,12 +18,18 @@ def render(
     shape: Optional[Tuple[int, int]],
     seed: int,
     layers: bool,
+    bit_depth: Optional[int],
+    gamma: Optional[float],
+    range: str,
+    display: Optional[str],
+    display_json: Optional[str],
+    luminance: Optional[str],
 ) -> Tuple[
     str,
     npt.NDArray[np.float64],
     Optional[npt.NDArray[np.uint16]],
     str,
-    Dict[str, npt.NDArray[np.float64]],
+    Dict[str, Any],
 ]: ...
 def solve(
     image: npt.NDArray[np.float64],
@@ -86,6 +92,9 @@ def save(
     bit_depth: int,
     gamma: Optional[float],
     range: str,
+    display: Optional[str],
+    display_json: Optional[str],
+    luminance: Optional[str],
     layers: bool,
     force: bool,
 ) -> List[str]: ...

@@ -205,7 +205,7 @@ fn describe(name: &str) -> PyResult<String> {
 
 /// Renders a stimulus: (report JSON, img, target_mask or None, target names one a line, layers dict).
 #[pyfunction]
-#[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers))]
+#[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers, bit_depth, gamma, range, display, display_json, luminance))]
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -216,6 +216,12 @@ fn render<'py>(
     shape: Option<(usize, usize)>,
     seed: u64,
     layers: bool,
+    bit_depth: Option<u8>,
+    gamma: Option<f64>,
+    range: &str,
+    display: Option<std::path::PathBuf>,
+    display_json: Option<String>,
+    luminance: Option<String>,
 ) -> PyResult<(
     String,
     Bound<'py, PyAny>,
@@ -227,12 +233,54 @@ fn render<'py>(
     config.params = params_from(params_json)?;
     config.size = size_request(visual_size, ppd, shape);
     config.seed = seed;
-    let report = run_released(py, || pl::render::run(&config, &NoProgress))?;
+    let display = (display, display_json);
+    config.export = export_options(bit_depth.unwrap_or(16), gamma, range, display, luminance)?;
+    let export = config.export.clone();
+    let (report, shown) = run_released(py, || {
+        let report = pl::render::run(&config, &NoProgress)?;
+        let shown = shadelab::stimulus::shown_on_display(name, &report.output, &export)?;
+        Ok((report, shown))
+    })?;
     let text = json_text(&report)?;
     let output = report.output;
+    let extra = PyDict::new(py);
+    // What a file of these options holds: a display's codes and the cd/m² they show, or the
+    // PNG codes of a bit depth or gamma asked for.
+    if let (Some(mut shown), Some(display)) = (shown, &export.display) {
+        let (w, h) = output.pixels.size();
+        let codes = std::mem::take(&mut shown.codes);
+        let codes = if shown.channels == 3 {
+            Array3::from_shape_vec((h, w, 3), codes).map(|a| a.into_pyarray(py).into_any())
+        } else {
+            Array2::from_shape_vec((h, w), codes).map(|a| a.into_pyarray(py).into_any())
+        }
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        extra.set_item("codes", codes)?;
+        extra.set_item("luminance_cd_m2", image_array(py, shown.luminance.clone()))?;
+        let mut record = display.to_json();
+        record["luminance"] = shown.mapping.to_json();
+        let (max, rms) = shown.error();
+        record["luminance_error_cd_m2"] = serde_json::json!({"max": max, "rms": rms});
+        if let Some(t) = &output.targets {
+            record["targets"] = shown
+                .targets(&t.labels, &t.names)
+                .into_iter()
+                .map(|(n, l, w)| serde_json::json!({"name": n, "luminance_cd_m2": l, "weber_vs_background": w}))
+                .collect();
+        }
+        extra.set_item("display_json", record.to_string())?;
+    } else if export.gamma.is_some() || bit_depth.is_some() {
+        if let Pixels::Gray(i) = &output.pixels {
+            let codes = shadelab::io::stimulus_codes(i.data(), export.bit_depth, export.gamma)
+                .map_err(to_py)?;
+            let grid = Grid::from_vec(i.width(), i.height(), codes).map_err(to_py)?;
+            extra.set_item("codes", image_array(py, grid))?;
+        }
+    }
+    let range = config.export.range;
     let img = match output.pixels {
-        Pixels::Gray(i) => image_array(py, i).into_any(),
-        Pixels::Rgb(i) => rgb_array(py, i).into_any(),
+        Pixels::Gray(i) => image_array(py, i.map(|&v| range.apply(v))).into_any(),
+        Pixels::Rgb(i) => rgb_array(py, i.map(|p| p.map(|v| range.apply(v)))).into_any(),
     };
     // The names as one text, a name a line (split by the Python layer): one string to hand
     // over instead of one per target (a 32 × 32 checkerboard has 1024).
@@ -240,7 +288,6 @@ fn render<'py>(
         Some(t) => (Some(image_array(py, t.labels)), t.names.join("\n")),
         None => (None, String::new()),
     };
-    let extra = PyDict::new(py);
     if layers {
         let Some(s) = output.surface else {
             return Err(PyValueError::new_err(format!(
@@ -259,31 +306,21 @@ fn render<'py>(
     Ok((text, img, mask, names, extra))
 }
 
-/// Renders a stimulus and writes it as `shadelab render` does (the picture in the format its
-/// extension names, its mask, its sidecar, with `layers` the surface layers): the same
-/// pipeline and writer, so the same bytes. Returns the paths written.
-#[pyfunction]
-#[pyo3(signature = (name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, layers, force))]
-#[allow(clippy::too_many_arguments)]
-fn save(
-    py: Python<'_>,
-    name: &str,
-    params_json: &str,
-    ppd: f64,
-    shape: (usize, usize),
-    seed: u64,
-    out: std::path::PathBuf,
+/// The export options of Python's `render`/`save` keywords, checked as the command line's
+/// flags are: a bit depth of 8 or 16, a range `unit` or `psychopy`, a display from a file or
+/// a dict's JSON (relative names resolve against the working folder), a luminance `LO,HI` or
+/// `background=B,michelson=C`.
+fn export_options(
     bit_depth: u8,
     gamma: Option<f64>,
     range: &str,
-    layers: bool,
-    force: bool,
-) -> PyResult<Vec<String>> {
-    let mut config = pl::render::RenderConfig::new(name, out);
-    config.params = params_from(params_json)?;
-    config.size = size_request(None, Some(ppd), Some(shape));
-    config.seed = seed;
-    let export = &mut config.export;
+    (display, display_json): (Option<std::path::PathBuf>, Option<String>),
+    luminance: Option<String>,
+) -> PyResult<shadelab::stimulus::ExportOptions> {
+    let mut export = shadelab::stimulus::ExportOptions {
+        gamma,
+        ..Default::default()
+    };
     export.bit_depth = match bit_depth {
         8 => shadelab::io::BitDepth::Eight,
         16 => shadelab::io::BitDepth::Sixteen,
@@ -302,7 +339,68 @@ fn save(
             )))
         }
     };
-    export.gamma = gamma;
+    if let Some(g) = gamma {
+        if !(g.is_finite() && g > 0.0 && g <= 10.0) {
+            return Err(PyValueError::new_err(format!("gamma {g} must be in (0, 10]")));
+        }
+    }
+    export.display = match (display, display_json) {
+        (Some(path), _) => Some(shadelab::io::read_display(&path).map_err(to_py)?),
+        (None, Some(text)) => {
+            let value: Value = serde_json::from_str(&text)
+                .map_err(|e| PyValueError::new_err(format!("display: {e}")))?;
+            Some(shadelab::io::display_from_value(&value, std::path::Path::new(".")).map_err(to_py)?)
+        }
+        (None, None) => None,
+    };
+    if let Some(text) = luminance {
+        export.luminance = Some(
+            text.parse()
+                .map_err(|e: Error| PyValueError::new_err(format!("luminance: {e}")))?,
+        );
+    }
+    if export.display.is_some() && (gamma.is_some() || bit_depth != 16 || range != "unit") {
+        return Err(PyValueError::new_err(
+            "display: a display's model sets the codes; give it without gamma, bit_depth or range",
+        ));
+    }
+    if export.luminance.is_some() && export.display.is_none() {
+        return Err(PyValueError::new_err(
+            "luminance: a luminance in cd/m² needs a display (its model turns cd/m² into codes)",
+        ));
+    }
+    Ok(export)
+}
+
+/// Renders a stimulus and writes it as `shadelab render` does (the picture in the format its
+/// extension names, its mask, its sidecar, with `layers` the surface layers): the same
+/// pipeline and writer, so the same bytes. Returns the paths written.
+#[pyfunction]
+#[pyo3(signature = (name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, display, display_json, luminance, layers, force))]
+#[allow(clippy::too_many_arguments)]
+fn save(
+    py: Python<'_>,
+    name: &str,
+    params_json: &str,
+    ppd: f64,
+    shape: (usize, usize),
+    seed: u64,
+    out: std::path::PathBuf,
+    bit_depth: u8,
+    gamma: Option<f64>,
+    range: &str,
+    display: Option<std::path::PathBuf>,
+    display_json: Option<String>,
+    luminance: Option<String>,
+    layers: bool,
+    force: bool,
+) -> PyResult<Vec<String>> {
+    let mut config = pl::render::RenderConfig::new(name, out);
+    config.params = params_from(params_json)?;
+    config.size = size_request(None, Some(ppd), Some(shape));
+    config.seed = seed;
+    config.export = export_options(bit_depth, gamma, range, (display, display_json), luminance)?;
+    let export = &mut config.export;
     export.layers = layers;
     export.force = force;
     let written = run_released(py, || {

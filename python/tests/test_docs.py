@@ -20,9 +20,15 @@ def test_docs_python_md_examples_run():
 
 
 def test_module_docstrings_run():
+    # The package's own docstring, and its functions' (defined in its private module).
     result = doctest.testmod(shadelab, optionflags=FLAGS, verbose=False)
-    assert result.attempted > 5
+    assert result.attempted >= 2
     assert result.failed == 0
+    api = doctest.testmod(
+        shadelab._api, extraglobs={"shadelab": shadelab}, optionflags=FLAGS, verbose=False
+    )
+    assert api.attempted > 5
+    assert api.failed == 0
     # Functions defined in the package's private modules and exported by name.
     display = doctest.testmod(
         shadelab._display, extraglobs={"shadelab": shadelab}, optionflags=FLAGS, verbose=False
@@ -42,3 +48,10 @@ def test_readme_python_example_runs(capsys):
         exec(compile(block, str(readme), "exec"), {})
     printed = capsys.readouterr().out
     assert "(128, 128) (4.0, 4.0) True (128, 128, 3)" in printed
+
+
+def test_the_namespace_is_the_api():
+    # What a user sees with dir() and tab completion: the functions, no imports or helpers.
+    public = sorted(n for n in dir(shadelab) if not n.startswith("_"))
+    assert public == sorted(shadelab.__all__), public
+    assert isinstance(shadelab.__version__, str)

@@ -111,6 +111,20 @@ def test_to_psychopy_shows_the_stimulus_upright_with_its_codes(window):
     assert diff.max() <= 1, f"largest difference {diff.max()} codes"
 
 
+def test_an_rgb_stimulus_is_shown_with_its_codes(window):
+    # PsychoPy draws an H×W×3 float array as 0..1, a gray one as −1..1: to_psychopy hands each
+    # the range PsychoPy reads, so both show round(255 · img).
+    visual, win = window
+    stim = shadelab.render("checker-shadow", shape=(100, 120))
+    rgb = np.repeat(stim["img"][..., None], 3, axis=2) * np.array([1.0, 0.8, 0.6])
+    visual.ImageStim(win, **shadelab.to_psychopy(rgb)).draw()
+    frame = np.asarray(win._getFrame(buffer="back")).astype(int)
+    win.clearBuffer()
+    top, left = (SIDE - 100) // 2, (SIDE - 120) // 2
+    shown = frame[top : top + 100, left : left + 120]
+    assert np.abs(shown - np.round(255 * rgb)).max() <= 1
+
+
 def test_an_array_given_as_it_is_is_upside_down(window):
     # The trap to_psychopy avoids (docs/python.md): PsychoPy draws an array's first row at
     # the bottom. Should PsychoPy ever flip arrays itself, this fails and the docs must change.
@@ -122,6 +136,56 @@ def test_an_array_given_as_it_is_is_upside_down(window):
     shown = frame[top : top + 100, left : left + 120]
     assert shown[50:].mean() > 2 * shown[:50].mean(), "the lit side lands at the bottom"
     assert np.abs(shown[::-1] - np.round(255 * stim["img"])).max() <= 1
+
+
+LAB = {"name": "lab", "gamma": 2.2, "black_cd_m2": 0.5, "white_cd_m2": 120}
+
+
+@pytest.mark.parametrize("quantise", ["plain", "bit-stealing"])
+def test_a_displays_codes_reach_the_frame_buffer_code_for_code(window, quantise):
+    # A stimulus for a calibrated display (docs/display.md): the codes of its inverse model,
+    # in an uncorrected window (Xvfb has no gamma ramp), land in the frame buffer unchanged.
+    visual, win = window
+    stim = shadelab.render(
+        "sphere",
+        shape=(100, 120),
+        light="above",
+        display=dict(LAB, quantise=quantise),
+        luminance=(5, 100),
+    )
+    kw = shadelab.to_psychopy(stim)
+    visual.ImageStim(win, **kw).draw()
+    frame = np.asarray(win._getFrame(buffer="back")).astype(int)
+    win.clearBuffer()
+    top, left = (SIDE - 100) // 2, (SIDE - 120) // 2
+    shown = frame[top : top + 100, left : left + 120]
+    codes = stim["codes"].astype(int)
+    if codes.ndim == 2:
+        codes = np.repeat(codes[..., None], 3, axis=2)
+    assert (shown == codes).all(), f"{int((shown != codes).sum())} codes differ"
+    assert shown[:50].mean() > shown[50:].mean(), "upright: lit from above"
+
+
+def test_psychopys_own_inverse_gamma_agrees_with_the_display_codes():
+    # PsychoPy's inverse of its eq. 4 model (calibTools.gammaInvFun, which Monitor.linearizeLums
+    # calls per gun; its luminance-only path fails for eq. 4 in 2026.2.5, passing b=None) for
+    # the luminances asked of the display, against the codes shadelab chose from the monitor
+    # file PsychoPy wrote: the nearest code to PsychoPy's continuous one.
+    try:
+        from psychopy.monitors import calibTools
+    except ImportError as e:
+        _unavailable(f"PsychoPy is not installed ({e})")
+    here = os.path.dirname(os.path.abspath(__file__))
+    path = os.path.join(here, "..", "..", "tests", "data", "psychopy-monitor-labcrt.json")
+    stim = shadelab.render("sphere", shape=(64, 64), light="above", display=path, luminance=(2, 100))
+    lo, hi = 0.4, 118.0  # the monitor file's newest calibration: [0.4, 118, 2.2, 0, 0.1, 0]
+    wanted = (2 + stim["img"] * 98).ravel()
+    theirs = calibTools.gammaInvFun((wanted - lo) / (hi - lo), lo, hi, 2.2, b=0.1, eq=4) * 255
+    ours = stim["codes"].ravel().astype(float)
+    # The nearest code in luminance is within half a code of PsychoPy's continuous code, up to
+    # the curvature of the response over one code (below 0.01 code here).
+    assert np.abs(ours - theirs).max() <= 0.51, np.abs(ours - theirs).max()
+    assert len(np.unique(stim["codes"])) > 100
 
 
 @pytest.mark.parametrize(

@@ -206,13 +206,29 @@ def test_save_writes_what_the_command_line_writes(tmp_path):
     s = shadelab.render("sphere", shape=(40, 60), ppd=20, light="tilt=30,slant=40")
     (tmp_path / "py").mkdir()
     (tmp_path / "cli").mkdir()
-    for name, extra in [("s.png", {}), ("e.png", {"bit_depth": 8, "gamma": 2.2}), ("f.npy", {"range": "psychopy"})]:
-        written = shadelab.save(s, tmp_path / "py" / name, **extra)
+    lab = tmp_path / "lab.json"
+    lab.write_text(json.dumps(dict(LAB, quantise="bit-stealing")))
+    shown = shadelab.render(
+        "sphere", shape=(40, 60), ppd=20, light="tilt=30,slant=40", display=str(lab), luminance=(5, 90)
+    )
+    for name, extra in [
+        ("s.png", {}),
+        ("e.png", {"bit_depth": 8, "gamma": 2.2}),
+        ("f.npy", {"range": "psychopy"}),
+        ("d.png", {"display": None}),
+    ]:
+        if "display" in extra:
+            # The display and luminance that render was given, taken from the dict.
+            written = shadelab.save(shown, tmp_path / "py" / name)
+        else:
+            written = shadelab.save(s, tmp_path / "py" / name, **extra)
         flags = []
         if "bit_depth" in extra:
             flags += ["--bit-depth", "8", "--gamma", "2.2"]
         if "range" in extra:
             flags += ["--range", "psychopy"]
+        if "display" in extra:
+            flags += ["--display", str(lab), "--luminance", "5,90"]
         subprocess.run(
             [cli, "--quiet", "render", "sphere", "--size", "60x40", "--ppd", "20",
              "--light", "tilt=30,slant=40", *flags, "--out", str(tmp_path / "cli" / name)],
@@ -222,6 +238,58 @@ def test_save_writes_what_the_command_line_writes(tmp_path):
         for path in written:
             p = pathlib.Path(path)
             assert p.read_bytes() == (tmp_path / "cli" / p.name).read_bytes(), p.name
+
+
+LAB = {"name": "lab", "gamma": 2.2, "black_cd_m2": 0.5, "white_cd_m2": 120}
+
+
+def test_render_for_a_display_gives_codes_and_candelas():
+    s = shadelab.render("bumps", shape=(60, 80), display=LAB, luminance={"background": 40, "michelson": 0.5})
+    codes, cd = s["codes"], s["luminance_cd_m2"]
+    assert codes.shape == (60, 80) and codes.dtype == np.uint16 and codes.max() <= 255
+    # The model, evaluated here: each code's luminance is what luminance_cd_m2 says, and it is
+    # within half a step of what was asked (0.5 -> 40 cd/m², contrast 0.5: 20..60 cd/m²).
+    model = lambda c: 0.5 + 119.5 * (c / 255.0) ** 2.2  # noqa: E731
+    assert np.allclose(cd, model(codes.astype(float)), rtol=0, atol=1e-9)
+    wanted = 40 * (1 + 0.5 * (2 * s["img"] - 1))
+    step = model(codes + 1.0) - model(codes - 1.0)
+    assert (np.abs(cd - wanted) <= 0.5 * step + 1e-9).all()
+    assert s["img"].min() >= 0 and s["img"].max() <= 1, "img stays the linear stimulus"
+    targets = {t["name"]: t for t in s["display"]["targets"]}
+    for label, name in enumerate(s["target_names"], start=1):
+        mean = float(cd[s["target_mask"] == label].mean())
+        assert abs(targets[name]["luminance_cd_m2"] - mean) < 1e-9
+        assert abs(targets[name]["weber_vs_background"] - (mean - 40) / 40) < 1e-12
+    assert s["display"]["luminance"]["black_cd_m2"] == pytest.approx(20.0)
+
+
+def test_render_range_bit_depth_and_gamma_as_the_command_line():
+    s = shadelab.render("sphere", shape=(20, 30), light="above", range="psychopy", bit_depth=8, gamma=2.2)
+    linear = shadelab.render("sphere", shape=(20, 30), light="above")["img"]
+    assert np.array_equal(s["img"], linear * 2 - 1)
+    assert np.array_equal(s["codes"], np.round(linear ** (1 / 2.2) * 255).astype(np.uint16))
+    assert s["export"] == {"bit_depth": 8, "gamma": 2.2, "range": "psychopy", "display": None, "luminance": None}
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        ({"display": LAB, "luminance": (1, 500)}, ValueError, "outside what the display 'lab' shows"),
+        ({"display": LAB, "gamma": 2.0}, ValueError, "without gamma, bit_depth or range"),
+        ({"luminance": (1, 50)}, ValueError, "needs a display"),
+        ({"display": dict(LAB, gama=1)}, ValueError, "unknown key 'gama'"),
+        ({"display": dict(LAB, quantise="bit-stealing", bit_depth=10)}, ValueError, "8-bit"),
+        ({"display": 3}, ValueError, "display file's path or a dict"),
+        ({"display": "no-such-display.json"}, FileNotFoundError, "no-such-display.json"),
+        ({"display": LAB, "luminance": {"background": 40}}, ValueError, "'background' and 'michelson'"),
+        ({"display": LAB, "luminance": {"background": 40, "michelson": 2}}, ValueError, "Michelson"),
+        ({"gamma": 0.0}, ValueError, "gamma 0"),
+        ({"bit_depth": 10}, ValueError, "bit_depth 10"),
+    ],
+)
+def test_render_refuses_display_options_it_cannot_honour(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        shadelab.render("sphere", shape=(16, 16), **kwargs)
 
 
 def test_save_refuses_bad_options_and_keeps_a_foreign_file(tmp_path):

@@ -34,21 +34,30 @@ pub enum Command {
     Outline(outline::Args),
 }
 
-/// Runs `analyze`.
+/// Runs `analyze`; the note that an 8-bit picture without a gamma chunk (or a JPEG) was
+/// decoded as sRGB is said once, after the analysis succeeded (a refusal stays one line).
 pub fn run(command: Command, global: &Global) -> CliResult {
-    match command {
+    let result = match command {
         Command::Lightness(a) => lightness::run(a, global),
         Command::Fading(a) => fading::run(a, global),
         Command::PriorSweep(a) => prior_sweep::run(a, global),
         Command::Observer(a) => observer::run(a, global),
         Command::Outline(a) => outline::run(a, global),
+    };
+    let note = INPUT_NOTE.lock().ok().and_then(|mut n| n.take());
+    if result.is_ok() {
+        super::flags::say_input_note(&Output::new(global), note);
     }
+    result
 }
+
+/// The input note of the picture the running analysis reads ([`Source::to_library`] sets it).
+static INPUT_NOTE: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
 
 /// Where the picture comes from: a file or a stimulus rendered on the spot.
 #[derive(Debug, clap::Args)]
 pub struct Source {
-    /// The image: an 8/16-bit PNG (linear values; decoded where its sRGB or gAMA chunk says so) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance); a shadelab sidecar
+    /// The image: an 8/16-bit PNG, a JPEG or a 16-bit TIFF (decoded as --input-gamma says) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance); a shadelab sidecar
     /// beside it (IMAGE.json) gives its target mask and names, ppd, albedo, ambient, gamma and
     /// true light (flags given win). Or give --stimulus or --spec.
     pub image: Option<PathBuf>,
@@ -73,6 +82,8 @@ pub struct Source {
     /// the stimulus's own target mask).
     #[arg(long, value_name = "PNG")]
     pub mask: Option<PathBuf>,
+    #[arg(long, value_name = "auto|srgb|linear|G", default_value = "auto", help = super::flags::INPUT_GAMMA_HELP)]
+    pub input_gamma: String,
 }
 
 impl Source {
@@ -87,9 +98,10 @@ impl Source {
         }
         if self.image.is_none() && self.stimulus.is_none() && self.spec.is_none() {
             return Err(CliError::usage(
-                "give an IMAGE (.png or .npy), --stimulus NAME or --spec FILE.json",
+                "give an IMAGE (.png, .jpg, .tif or .npy), --stimulus NAME or --spec FILE.json",
             ));
         }
+        super::flags::input_gamma(&self.input_gamma)?;
         Ok(())
     }
 
@@ -106,14 +118,19 @@ impl Source {
             ppd: self.ppd,
             mask: self.mask.clone(),
             max_pixels: global.max_pixels,
+            input_encoding: super::flags::input_gamma(&self.input_gamma)?,
             ..Default::default()
         };
         let out = Output::new(global);
+        if let Ok(mut note) = INPUT_NOTE.lock() {
+            *note = source.input_note();
+        }
         // A sidecar that cannot be read is reported when the picture is (after the image).
         for line in source.notes().unwrap_or_default() {
             out.note(
                 line.replace("the given ppd", "--ppd")
-                    .replace("the given mask", "--mask"),
+                    .replace("the given mask", "--mask")
+                    .replace("the given input gamma", "--input-gamma"),
             );
         }
         Ok(source)

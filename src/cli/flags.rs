@@ -118,6 +118,21 @@ impl AnalysisFlags {
     }
 }
 
+/// The help of `--input-gamma`, shared by every command that reads a picture.
+pub const INPUT_GAMMA_HELP: &str = "How the picture's codes encode luminance: auto (a PNG's sRGB or gAMA chunk; without one, a 16-bit PNG, a TIFF, a .npy and shadelab's own pictures are linear, and an 8-bit PNG or a JPEG is decoded as sRGB, with a note), srgb, linear, or G, the file's gamma (luminance = code^G, 0.1 to 10); anything but auto overrides the file's chunk and a sidecar's gamma";
+
+/// The encoding `--input-gamma` names.
+pub fn input_gamma(text: &str) -> Result<shadelab::io::InputEncoding, CliError> {
+    text.parse().map_err(|e| usage("--input-gamma", e))
+}
+
+/// Says once, on stderr, that an untagged 8-bit picture or a JPEG is decoded as sRGB.
+pub fn say_input_note(out: &super::output::Output, note: Option<String>) {
+    if let Some(line) = note {
+        out.note(format!("note: {line}"));
+    }
+}
+
 /// Angles in degrees from `START:STOP:STEP` or a list, for `flag`.
 pub fn angles(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
     Ok(shadelab::analysis::parse_angles(text, flag)?)

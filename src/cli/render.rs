@@ -63,6 +63,15 @@ pub struct Args {
     /// sidecar's].
     #[arg(long, value_name = "unit|psychopy", value_parser = ["unit", "psychopy"])]
     pub range: Option<String>,
+    /// A display (PNG output): its codes are written through its model, the sidecar records
+    /// each target's cd/m². FILE: shadelab's display JSON, a PsychoPy monitor file or a
+    /// photometer CSV (code,luminance); see docs/display.md.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["gamma", "bit_depth", "range"])]
+    pub display: Option<PathBuf>,
+    /// The cd/m² the stimulus's 0..1 is shown at, with --display: LO,HI or
+    /// background=B,michelson=C [default: the display's black to white].
+    #[arg(long, value_name = "LO,HI", requires = "display")]
+    pub luminance: Option<String>,
     /// Output file: .png (16-bit by default), .npy (float32), .mat (MATLAB v5) or .npz (NumPy) bundles of img, target_mask and every parameter, or .svg (vector stimuli); the sidecar goes beside it as .json.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -149,6 +158,15 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         Some(_) => export.range = Range::Unit,
         None => {}
     }
+    if let Some(path) = &args.display {
+        export.display = Some(shadelab::io::read_display(path)?);
+    }
+    if let Some(text) = &args.luminance {
+        let mapping = text
+            .parse()
+            .map_err(|e| super::flags::usage("--luminance", e))?;
+        export.luminance = Some(mapping);
+    }
     export.layers |= args.layers;
     export.force = global.force;
     // A value given as a flag that the output's format cannot take is named by its flag.
@@ -161,6 +179,17 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         export
             .check_gamma(&config.out)
             .map_err(|e| super::flags::usage("--gamma", e))?;
+    }
+    if args.display.is_some() {
+        // The display and the format first, then the luminance asked of it.
+        let luminance = export.luminance.take();
+        export
+            .check_display(&config.out)
+            .map_err(|e| super::flags::usage("--display", e))?;
+        export.luminance = luminance;
+        export
+            .check_display(&config.out)
+            .map_err(|e| super::flags::usage("--luminance", e))?;
     }
     config.max_pixels = global.max_pixels;
     render_to(&config, global)

@@ -1,6 +1,6 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
-use super::flags::{usage, SolverFlags};
+use super::flags::{input_gamma, say_input_note, usage, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
 use shadelab::io::AtomicDir;
@@ -16,8 +16,10 @@ use std::time::Instant;
 /// Arguments of `solve`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The image: an 8/16-bit PNG (linear luminance; decoded where its sRGB or gAMA chunk says so) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance).
+    /// The image: an 8/16-bit PNG, a JPEG or a 16-bit TIFF (decoded as --input-gamma says) or an H×W .npy (float 0..1, or uint8/uint16 scaled by their largest value; H×W×3 RGB becomes luminance).
     pub image: PathBuf,
+    #[arg(long, value_name = "auto|srgb|linear|G", default_value = "auto", help = super::flags::INPUT_GAMMA_HELP)]
+    pub input_gamma: String,
     /// The light: x,y,z or tilt=T,slant=S or a name, with z > 0; or `estimate` to estimate it
     /// (and the albedo) from the image.
     #[arg(long, value_name = "L|estimate", allow_hyphen_values = true)]
@@ -80,7 +82,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     for line in solve::sidecar_notes(&config) {
         out.note(
             line.replace("the given mask", "--mask")
-                .replace("give a mask", "give --mask"),
+                .replace("give a mask", "give --mask")
+                .replace("the given input gamma", "--input-gamma"),
         );
     }
     // Claim the output folder before the long part, so an unwritable one fails at once.
@@ -98,6 +101,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         other => CliError::from(other),
     })?;
     let target = folder.commit()?;
+    // Said once the picture was read and solved: a refusal stays one line.
+    say_input_note(
+        &out,
+        shadelab::io::assumed_srgb_note(&config.image, config.input_encoding),
+    );
     let solver = &report.solver;
     let unit = solver.iteration_unit;
     if !solver.converged {
@@ -157,6 +165,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
 
 /// The library configuration from the flags; every flag is checked before any file is read.
 fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
+    let input_encoding = input_gamma(&args.input_gamma)?;
     let method: Method = args.method.parse()?;
     let mut solve = SolveOptions::for_method(method);
     args.solver.apply(&mut solve)?;
@@ -184,6 +193,7 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
     let boundary = args.boundary.parse().map_err(|e| usage("--boundary", e))?;
     Ok(SolveConfig {
         image: args.image.clone(),
+        input_encoding,
         mask: args.mask.clone(),
         light,
         boundary,

@@ -15,7 +15,7 @@ use super::holes::{fill_enclosed_holes, FilledDepth};
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask, DEFAULT_MAX_PIXELS, LUMINANCE_WEIGHTS};
-use crate::io;
+use crate::io::{self, InputEncoding};
 use crate::light::Light;
 use crate::surface::{Mesh, Surface};
 use nalgebra::{Rotation3, Vector3};
@@ -217,7 +217,7 @@ pub struct NormalSet {
 pub fn diligent_object(data: &Path, object: &str) -> Result<NormalSet> {
     let dir = data.join("diligent_normals").join(object);
     let (map_path, mask_path) = (dir.join("normal_map.png"), dir.join("mask.png"));
-    let rgb = io::read_rgb(&map_path, DEFAULT_MAX_PIXELS)?;
+    let rgb = io::read_rgb_as(&map_path, DEFAULT_MAX_PIXELS, InputEncoding::Linear)?;
     let mask = io::read_mask(&mask_path, DEFAULT_MAX_PIXELS)?;
     same_size(&rgb, &mask, &map_path, &mask_path)?;
     let decoded = rgb.map(|v| Vector3::new(2.0 * v[0] - 1.0, 2.0 * v[1] - 1.0, 2.0 * v[2] - 1.0));
@@ -292,7 +292,8 @@ pub fn ball(data: &Path, images: &[String]) -> Result<Ball> {
             ));
         }
         let path = dir.join(&file);
-        let rgb = io::read_rgb(&path, DEFAULT_MAX_PIXELS)?;
+        // 16-bit linear photographs (DiLiGenT's calibration divides them by the light).
+        let rgb = io::read_rgb_as(&path, DEFAULT_MAX_PIXELS, InputEncoding::Linear)?;
         same_size(&rgb, &mask, &path, &mask_path)?;
         // Calibrated: each channel divided by the light's intensity_rgb, then the crate's
         // Rec. 709 luminance weights.
@@ -342,7 +343,9 @@ pub fn beethoven(data: &Path) -> Result<Beethoven> {
             ));
         }
         let path = dir.join(&file);
-        let (image, _) = io::read_gray(&path, DEFAULT_MAX_PIXELS)?;
+        // 8-bit codes without a gamma chunk that are linear measurements, not sRGB: said
+        // explicitly, since the default rule decodes such a picture as sRGB.
+        let (image, _) = io::read_gray_as(&path, DEFAULT_MAX_PIXELS, InputEncoding::Linear)?;
         same_size(&image, &mask, &path, &mask_path)?;
         photos.push(Photo {
             name: name.to_string(),

@@ -1,5 +1,7 @@
-//! PNG input and output (8- and 16-bit, grayscale and RGB) through the `image` crate.
+//! PNG input and output (8- and 16-bit, grayscale and RGB) through the `image` crate, which
+//! also reads GIF, JPEG and TIFF pictures (JPEG and TIFF with the `photos` feature).
 
+use super::encoding::{Decoding, InputEncoding};
 use crate::error::{Error, Result};
 use crate::grid::{check_size, Grid, Image, Labels, Mask, RgbImage};
 use image::{DynamicImage, ImageReader};
@@ -8,7 +10,7 @@ use std::path::Path;
 
 /// How colour input becomes luminance (stated in reports): the Rec. 709 / sRGB luminance
 /// weights applied to the linear channel values; alpha is ignored.
-pub const LUMINANCE_FORMULA: &str = "Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 weights on the linear values: the stored values scaled to 0..1, decoded only where the file's sRGB or gAMA chunk says how; alpha ignored)";
+pub const LUMINANCE_FORMULA: &str = "Y = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 weights on the linear values: the stored values scaled to 0..1, decoded as the file's chunk or the input encoding says; alpha ignored)";
 
 /// Bits per channel of a written PNG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -40,11 +42,13 @@ pub struct GrayInfo {
     pub conversion: Option<String>,
 }
 
-/// Reads the image at `path`, its signature and declared size first: a file that is not a
-/// PNG or GIF is refused after 24 bytes, one declaring more than `max_pixels` before its body
-/// is read, and one longer than an image of its declared size can be
-/// ([`max_image_file_bytes`]) after that many bytes.
-fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
+/// Reads the picture at `path`, its signature and declared size first: a file that is not a
+/// PNG, GIF, JPEG or TIFF is refused after 24 bytes, a PNG or GIF declaring more than
+/// `max_pixels` before its body is read, and one longer than an image of its declared size can
+/// be ([`max_image_file_bytes`]) after that many bytes. A JPEG or TIFF says its size further in
+/// (after its metadata, or at its end): it is read up to the bytes of the largest picture
+/// `max_pixels` allows, and its size is checked before any pixel buffer is allocated.
+fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Facts)> {
     use std::io::Read;
     let mut file = super::open_file(path)?;
     let mut bytes = Vec::new();
@@ -52,10 +56,14 @@ fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
         .take(HEAD_BYTES as u64)
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
-    let (w, h) = declared_size(&bytes).map_err(|m| Error::format(path, m))?;
-    check_size(w as usize, h as usize, max_pixels)
-        .map_err(|e| Error::format(path, e.to_string()))?;
-    let cap = max_image_file_bytes(w, h);
+    let cap = match declared_size(&bytes, path).map_err(|m| Error::format(path, m))? {
+        Some((w, h)) => {
+            check_size(w as usize, h as usize, max_pixels)
+                .map_err(|e| Error::format(path, e.to_string()))?;
+            max_image_file_bytes(w, h)
+        }
+        None => largest_file_bytes(max_pixels),
+    };
     file.take(cap.saturating_add(1).saturating_sub(bytes.len() as u64))
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
@@ -66,45 +74,91 @@ fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
 }
 
 /// The bytes read before anything else: enough for the PNG signature and IHDR chunk's size
-/// (24), or the GIF signature and screen size (10).
+/// (24), the GIF signature and screen size (10), and the JPEG and TIFF signatures.
 const HEAD_BYTES: usize = 24;
 
 /// The PNG signature.
 const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 
-/// The width and height a PNG (IHDR) or GIF (logical screen) declares in its first
-/// [`HEAD_BYTES`] bytes; an error for anything else.
-fn declared_size(head: &[u8]) -> std::result::Result<(u32, u32), String> {
-    let be = |at: usize| u32::from_be_bytes([head[at], head[at + 1], head[at + 2], head[at + 3]]);
+/// The kind of a picture file, by its signature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Format {
+    Png,
+    Gif,
+    Jpeg,
+    Tiff,
+}
+
+/// The format whose signature `head` starts with.
+fn format_of(head: &[u8]) -> Option<Format> {
     if head.starts_with(PNG_SIGNATURE) {
-        if head.len() < HEAD_BYTES || &head[12..16] != b"IHDR" {
-            return Err("corrupt PNG: it does not begin with its header (IHDR) chunk".into());
-        }
-        Ok((be(16), be(20)))
+        Some(Format::Png)
     } else if head.starts_with(b"GIF87a") || head.starts_with(b"GIF89a") {
-        if head.len() < 10 {
-            return Err("corrupt GIF: the file ends inside its header".into());
-        }
-        let le = |at: usize| u32::from(u16::from_le_bytes([head[at], head[at + 1]]));
-        Ok((le(6), le(8)))
+        Some(Format::Gif)
+    } else if head.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        Some(Format::Jpeg)
+    } else if head.starts_with(b"II*\0") || head.starts_with(b"MM\0*") {
+        Some(Format::Tiff)
     } else {
-        Err("not a PNG image (the file does not start with the PNG signature)".into())
+        None
+    }
+}
+
+/// The width and height a PNG (IHDR) or GIF (logical screen) declares in its first
+/// [`HEAD_BYTES`] bytes; `None` for a JPEG or TIFF (they say it further in); an error for
+/// anything else, naming the format `source`'s extension promises.
+fn declared_size(head: &[u8], source: &Path) -> std::result::Result<Option<(u32, u32)>, String> {
+    let be = |at: usize| u32::from_be_bytes([head[at], head[at + 1], head[at + 2], head[at + 3]]);
+    match format_of(head) {
+        Some(Format::Png) => {
+            if head.len() < HEAD_BYTES || &head[12..16] != b"IHDR" {
+                return Err("corrupt PNG: it does not begin with its header (IHDR) chunk".into());
+            }
+            Ok(Some((be(16), be(20))))
+        }
+        Some(Format::Gif) => {
+            if head.len() < 10 {
+                return Err("corrupt GIF: the file ends inside its header".into());
+            }
+            let le = |at: usize| u32::from(u16::from_le_bytes([head[at], head[at + 1]]));
+            Ok(Some((le(6), le(8))))
+        }
+        Some(Format::Jpeg | Format::Tiff) => Ok(None),
+        None => Err(match super::extension(source).as_str() {
+            "jpg" | "jpeg" => "not a JPEG image (the file does not start with the JPEG signature)",
+            "tif" | "tiff" => "not a TIFF image (the file does not start with a TIFF signature)",
+            _ => "not a PNG image (the file does not start with the PNG signature)",
+        }
+        .into()),
     }
 }
 
 /// The most bytes a PNG or GIF of `w`×`h` pixels is read to: twice its largest raw size
 /// (RGBA at 16 bits and a filter byte a row; deflate at worst stores blocks with 5 bytes each)
-/// plus 16 MiB for other chunks (text, colour profiles).
+/// plus 16 MiB for other chunks (text, colour profiles). A JPEG or TIFF of that size is held to
+/// the same bound once its size is known.
 fn max_image_file_bytes(w: u32, h: u32) -> u64 {
     let raw = u64::from(w) * u64::from(h) * 8 + u64::from(h);
     raw.saturating_mul(2).saturating_add(16 << 20)
 }
 
+/// The most bytes read of a file whose size is not in its first bytes (JPEG, TIFF): those of
+/// the largest picture `max_pixels` allows, one row of `max_pixels` pixels.
+fn largest_file_bytes(max_pixels: usize) -> u64 {
+    max_image_file_bytes(u32::try_from(max_pixels).unwrap_or(u32::MAX), 1)
+}
+
 /// Decodes an image held in memory; `source` names it in errors. The signature and declared
 /// size are checked (against `max_pixels`) before any pixel buffer is allocated.
-fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<(DynamicImage, Stored)> {
-    declared_size(bytes).map_err(|m| Error::format(source, m))?;
-    let stored = walk_png_chunks(bytes).map_err(|m| Error::format(source, m))?;
+fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<(DynamicImage, Facts)> {
+    declared_size(bytes, source).map_err(|m| Error::format(source, m))?;
+    let facts = picture_facts(bytes, source).map_err(|m| Error::format(source, m))?;
+    if !cfg!(feature = "photos") && matches!(facts.format, Format::Jpeg | Format::Tiff) {
+        return Err(Error::format(
+            source,
+            "JPEG and TIFF pictures need shadelab built with its `photos` feature",
+        ));
+    }
     let open = || -> Result<ImageReader<std::io::Cursor<&[u8]>>> {
         let mut reader = ImageReader::new(std::io::Cursor::new(bytes));
         // As `ImageReader::open`: the extension names the format when the content does not.
@@ -120,26 +174,83 @@ fn decode_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<(Dynam
         .map_err(|e| Error::format(source, format!("not a readable image ({e})")))?;
     check_size(w as usize, h as usize, max_pixels)
         .map_err(|e| Error::format(source, e.to_string()))?;
+    if matches!(facts.format, Format::Jpeg | Format::Tiff) {
+        let cap = max_image_file_bytes(w, h);
+        if bytes.len() as u64 > cap {
+            return Err(super::too_long(source, cap));
+        }
+    }
+    if facts.format == Format::Jpeg {
+        check_jpeg_complete(bytes).map_err(|m| Error::format(source, m))?;
+    }
     let mut reader = open()?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(w);
     limits.max_image_height = Some(h);
     // The size was checked against `max_pixels` above; the decoder's own allocation cap
     // (512 MiB by default) must not stop what `--max-pixels` allows: the largest pixel is RGBA
-    // at 16 bits, 8 bytes.
-    let buffer = u64::from(w) * u64::from(h) * 8;
+    // at 16 bits, 8 bytes (RGBA in 32-bit floats, 16, in a TIFF).
+    let per_pixel = if facts.format == Format::Tiff { 16 } else { 8 };
+    let buffer = u64::from(w) * u64::from(h) * per_pixel;
     limits.max_alloc = Some(limits.max_alloc.unwrap_or(0).max(buffer));
     reader.limits(limits);
     let image = reader
         .decode()
         .map_err(|e| Error::format(source, format!("cannot decode image ({e})")))?;
-    Ok((image, stored))
+    Ok((image, facts))
+}
+
+/// Refuses a JPEG that ends before its end-of-image marker (a truncated download or copy):
+/// the decoder would fill the missing part with gray and say nothing. Walks the marker
+/// segments and the entropy-coded data of every scan to the EOI marker.
+fn check_jpeg_complete(bytes: &[u8]) -> std::result::Result<(), String> {
+    let truncated =
+        || "corrupt JPEG: the file ends before its end-of-image marker (truncated)".to_string();
+    let mut i = 2; // after SOI
+    loop {
+        // Bytes between segments (which decoders skip) and fill bytes before a marker code.
+        while bytes.get(i).is_some_and(|&b| b != 0xFF) {
+            i += 1;
+        }
+        while bytes.get(i + 1) == Some(&0xFF) {
+            i += 1;
+        }
+        let Some(&code) = bytes.get(i + 1) else {
+            return Err(truncated());
+        };
+        i += 2;
+        match code {
+            0xD9 => return Ok(()),
+            0x00 | 0x01 | 0xD0..=0xD8 => continue,
+            _ => {
+                let Some(length) = bytes.get(i..i + 2) else {
+                    return Err(truncated());
+                };
+                i += usize::from(u16::from_be_bytes([length[0], length[1]]));
+                if i > bytes.len() {
+                    return Err(truncated());
+                }
+                if code == 0xDA {
+                    // A scan's data: up to the first marker that is not a stuffed 0xFF 0x00 or
+                    // a restart marker.
+                    loop {
+                        match (bytes.get(i), bytes.get(i + 1)) {
+                            (None, _) | (Some(0xFF), None) => return Err(truncated()),
+                            (Some(0xFF), Some(0x00 | 0xD0..=0xD7)) => i += 2,
+                            (Some(0xFF), Some(_)) => break,
+                            _ => i += 1,
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// How a picture's codes (scaled to 0..1) encode linear luminance, as its PNG chunks say.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Stored {
-    /// No chunk says: the codes are taken as linear luminance.
+    /// No chunk says.
     Unstated,
     /// A gAMA chunk: codes = luminance^file_gamma (1.0: linear, as shadelab writes).
     FileGamma(f64),
@@ -147,30 +258,162 @@ pub enum Stored {
     Srgb,
 }
 
-impl Stored {
-    /// The linear value of a code scaled to 0..1.
-    pub fn linear(self, v: f64) -> f64 {
-        match self {
-            Stored::Unstated => v,
-            Stored::FileGamma(1.0) => v,
-            Stored::FileGamma(g) => v.powf(1.0 / g),
-            Stored::Srgb if v <= 0.04045 => v / 12.92,
-            Stored::Srgb => ((v + 0.055) / 1.055).powf(2.4),
-        }
-    }
+/// What a picture file says of itself before its pixels: its format, how its codes encode
+/// luminance (a PNG's chunks), its bits per sample (a PNG's header) and whether shadelab wrote
+/// it (a PNG's `Software` text, or a shadelab sidecar beside it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Facts {
+    format: Format,
+    stored: Stored,
+    bits: u8,
+    by_shadelab: bool,
+}
 
-    /// What was done, in words, when the codes were not linear; `None` when they were.
-    fn note(self) -> Option<String> {
-        match self {
-            Stored::FileGamma(g) if g != 1.0 => Some(format!(
-                "decoded by the file's gAMA chunk ({g}): luminance = code^(1/{g})"
-            )),
-            Stored::Srgb => {
-                Some("decoded by the file's sRGB chunk (the sRGB transfer function)".into())
+/// The facts of the picture whose first bytes (at least its signature; for a PNG, all of it
+/// or its chunks before the pixels) are `bytes`, read from `source`.
+fn picture_facts(bytes: &[u8], source: &Path) -> std::result::Result<Facts, String> {
+    let format = format_of(bytes).unwrap_or(Format::Png);
+    let chunks = walk_png_chunks(bytes)?;
+    Ok(Facts {
+        format,
+        stored: chunks.stored,
+        bits: match format {
+            Format::Png => chunks.bits,
+            // A TIFF's depth is in its directory; its rule does not depend on it.
+            Format::Gif | Format::Jpeg | Format::Tiff => 8,
+        },
+        by_shadelab: chunks.by_shadelab || beside_a_shadelab_sidecar(source),
+    })
+}
+
+/// Whether a shadelab sidecar (`"program": "shadelab"`) lies beside `image`: a picture
+/// shadelab rendered before its PNGs carried a gAMA chunk, whose codes are linear (or
+/// encoded with the gamma the sidecar records, which the reader of the sidecar undoes).
+fn beside_a_shadelab_sidecar(image: &Path) -> bool {
+    let path = super::render_sidecar::sidecar_path(image);
+    if path == image || !path.is_file() {
+        return false;
+    }
+    super::read_bytes(&path)
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .is_some_and(|v| v.get("program").and_then(serde_json::Value::as_str) == Some("shadelab"))
+}
+
+/// The decoding of a picture, its words for a report, and the note to say where the codes
+/// were assumed to be sRGB.
+#[derive(Debug, Clone, PartialEq)]
+struct Resolved {
+    decoding: Decoding,
+    conversion: Option<String>,
+    assumed: bool,
+}
+
+/// The words of the note when an untagged 8-bit picture is decoded as sRGB.
+const ASSUMED_SRGB: &str = "8-bit picture without a gamma chunk decoded as sRGB, the web's and \
+                            cameras' default (--input-gamma linear to read the codes as luminance)";
+
+/// How the picture of `facts` is decoded under `encoding` (docs/display.md, "Photographs and
+/// other pictures").
+fn resolve(facts: &Facts, encoding: InputEncoding) -> Resolved {
+    let said = |conversion: Option<String>, decoding| Resolved {
+        decoding,
+        conversion,
+        assumed: false,
+    };
+    if let Some(decoding) = encoding.explicit() {
+        let overridden = match facts.stored {
+            Stored::Srgb if decoding != Decoding::Srgb => Some("the file's sRGB chunk".to_string()),
+            Stored::FileGamma(g) if Decoding::Power(1.0 / g) != decoding => {
+                Some(format!("the file's gAMA chunk ({g})"))
             }
             _ => None,
-        }
+        };
+        let what = match decoding {
+            Decoding::Linear => "codes read as linear luminance (--input-gamma linear)".to_string(),
+            Decoding::Srgb => "decoded as sRGB (--input-gamma srgb)".to_string(),
+            Decoding::Power(g) => format!("decoded as luminance = code^{g} (--input-gamma {g})"),
+        };
+        let conversion = match overridden {
+            Some(chunk) => Some(format!("{what}, overriding {chunk}")),
+            // Linear codes read as linear: nothing was done.
+            None if decoding.is_identity() => None,
+            None => Some(what),
+        };
+        return said(conversion, decoding);
     }
+    match facts.stored {
+        Stored::Srgb => said(
+            Some("decoded by the file's sRGB chunk (the sRGB transfer function)".into()),
+            Decoding::Srgb,
+        ),
+        Stored::FileGamma(g) if g != 1.0 => said(
+            Some(format!(
+                "decoded by the file's gAMA chunk ({g}): luminance = code^(1/{g})"
+            )),
+            Decoding::Power(1.0 / g),
+        ),
+        Stored::FileGamma(_) => said(None, Decoding::Linear),
+        Stored::Unstated if facts.format == Format::Tiff => said(
+            Some(
+                "a TIFF has no gamma chunk: its codes are read as linear luminance \
+                 (--input-gamma srgb or G to decode them)"
+                    .into(),
+            ),
+            Decoding::Linear,
+        ),
+        Stored::Unstated if facts.by_shadelab || facts.bits > 8 => said(None, Decoding::Linear),
+        Stored::Unstated => Resolved {
+            decoding: Decoding::Srgb,
+            conversion: Some(ASSUMED_SRGB.into()),
+            assumed: true,
+        },
+    }
+}
+
+/// The note to say once where `path` is read under `encoding` as an 8-bit picture (PNG or GIF
+/// without a gamma chunk, or a JPEG) that shadelab did not write, decoded as sRGB:
+/// `"photo.jpg: 8-bit picture without a gamma chunk decoded as sRGB, …"`. `None` for anything
+/// else, and for a file that cannot be read (its reader says why).
+pub fn assumed_srgb_note(path: &Path, encoding: InputEncoding) -> Option<String> {
+    use std::io::Read;
+    if encoding.is_explicit() {
+        return None;
+    }
+    let file = std::fs::File::open(path).ok()?;
+    // The whole file (as much as a reader takes of it), so that a truncated one, whose reader
+    // will refuse it, gets no note before its error.
+    let mut bytes = Vec::new();
+    let cap = largest_file_bytes(crate::grid::DEFAULT_MAX_PIXELS);
+    file.take(cap).read_to_end(&mut bytes).ok()?;
+    let format = format_of(&bytes)?;
+    let facts = picture_facts(&bytes, path).ok()?;
+    let whole = match format {
+        Format::Png => png_is_whole(&bytes),
+        Format::Jpeg => check_jpeg_complete(&bytes).is_ok(),
+        Format::Gif => bytes.ends_with(b";"),
+        Format::Tiff => true,
+    };
+    (whole && resolve(&facts, encoding).assumed)
+        .then(|| format!("{}: {ASSUMED_SRGB}", path.display()))
+}
+
+/// Whether a PNG's chunks follow one another up to its IEND chunk (the file is not cut short).
+fn png_is_whole(bytes: &[u8]) -> bool {
+    let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
+        return false;
+    };
+    while rest.len() >= 8 {
+        let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
+        let Some(next) = rest.get(length.saturating_add(12)..) else {
+            return false;
+        };
+        if &rest[4..8] == b"IEND" {
+            return true;
+        }
+        rest = next;
+    }
+    false
 }
 
 /// Whether the PNG at `path` says how its codes encode luminance (an sRGB or gAMA chunk before
@@ -186,21 +429,44 @@ pub fn states_its_encoding(path: &Path) -> bool {
     if file.take(1 << 20).read_to_end(&mut head).is_err() {
         return false;
     }
-    !matches!(walk_png_chunks(&head), Ok(Stored::Unstated) | Err(_))
+    walk_png_chunks(&head).is_ok_and(|c| c.stored != Stored::Unstated)
+}
+
+/// What a PNG's chunks before its pixels say.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Chunks {
+    /// How its codes encode luminance.
+    stored: Stored,
+    /// Bits per sample (IHDR); 8 for what is not a PNG.
+    bits: u8,
+    /// A `Software` text chunk (iTXt or tEXt) that starts with "shadelab".
+    by_shadelab: bool,
 }
 
 /// Walks the chunks of a PNG before its pixels are decoded: reads how its codes encode
-/// luminance (sRGB, then gAMA, as PNG orders them), and refuses a palette (PLTE) whose length is
-/// not a positive multiple of 3 up to 768 (the `png` crate (0.18) panics expanding such a
-/// palette) and a gAMA of 0. Anything else wrong with the chunks is left to the decoder.
-fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Stored, String> {
+/// luminance (sRGB, then gAMA, as PNG orders them), its bit depth and whether shadelab wrote
+/// it, and refuses a palette (PLTE) whose length is not a positive multiple of 3 up to 768 (the
+/// `png` crate (0.18) panics expanding such a palette) and a gAMA of 0. Anything else wrong
+/// with the chunks is left to the decoder.
+fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Chunks, String> {
+    let mut chunks = Chunks {
+        stored: Stored::Unstated,
+        bits: 8,
+        by_shadelab: false,
+    };
     let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
-        return Ok(Stored::Unstated);
+        return Ok(chunks);
     };
     let (mut gamma, mut srgb) = (None, false);
     while rest.len() >= 8 {
         let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
         let kind = &rest[4..8];
+        let data = rest.get(8..8usize.saturating_add(length));
+        if kind == b"IHDR" {
+            if let Some(&bits) = data.and_then(|d| d.get(8)) {
+                chunks.bits = bits;
+            }
+        }
         if kind == b"PLTE" && (length == 0 || length % 3 != 0 || length > 768) {
             return Err(format!(
                 "corrupt PNG: its palette (PLTE) is {length} bytes long, which is not 3 bytes \
@@ -219,6 +485,9 @@ fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Stored, String> {
                 gamma = Some(f64::from(value) / 100_000.0);
             }
         }
+        if kind == b"iTXt" || kind == b"tEXt" {
+            chunks.by_shadelab |= data.is_some_and(|d| software_is_shadelab(kind, d));
+        }
         if kind == b"IDAT" || kind == b"IEND" {
             break;
         }
@@ -228,20 +497,57 @@ fn walk_png_chunks(bytes: &[u8]) -> std::result::Result<Stored, String> {
             None => break,
         }
     }
-    Ok(match (srgb, gamma) {
+    chunks.stored = match (srgb, gamma) {
         (true, _) => Stored::Srgb,
         (false, Some(g)) => Stored::FileGamma(g),
         (false, None) => Stored::Unstated,
-    })
+    };
+    Ok(chunks)
 }
 
-/// Reads a PNG (or another format the `image` crate knows) as linear luminance 0..1.
-/// Grayscale is scaled by its maximum code; colour becomes luminance by [`LUMINANCE_FORMULA`].
-/// Codes are decoded by the file's sRGB or gAMA chunk where it has one (`Stored`): a PNG
-/// shadelab wrote with `--gamma` reads back as the linear values it was made from.
+/// Whether a tEXt or uncompressed iTXt chunk's `data` is the keyword `Software` with a text
+/// that starts with "shadelab" (as [`write_stimulus`]'s callers write it).
+fn software_is_shadelab(kind: &[u8], data: &[u8]) -> bool {
+    let Some(text) = data.strip_prefix(b"Software\0") else {
+        return false;
+    };
+    let text = if kind == b"iTXt" {
+        // Compression flag and method, then the language tag and the translated keyword.
+        match text {
+            [0, _, rest @ ..] => {
+                let mut parts = rest.splitn(3, |&b| b == 0);
+                match (parts.next(), parts.next(), parts.next()) {
+                    (Some(_), Some(_), Some(text)) => text,
+                    _ => return false,
+                }
+            }
+            _ => return false,
+        }
+    } else {
+        text
+    };
+    text.starts_with(b"shadelab")
+}
+
+/// Reads a picture (PNG, GIF, JPEG or TIFF) as linear luminance 0..1, decoded by the default
+/// rule ([`InputEncoding::Auto`]); see [`read_gray_as`].
 pub fn read_gray(path: &Path, max_pixels: usize) -> Result<(Image, GrayInfo)> {
-    let (image, stored) = decode(path, max_pixels)?;
-    gray_from(image, stored)
+    read_gray_as(path, max_pixels, InputEncoding::Auto)
+}
+
+/// Reads a picture (PNG, GIF, JPEG or TIFF) as linear luminance 0..1, its codes decoded as
+/// `encoding` says (with [`InputEncoding::Auto`]: by a PNG's sRGB or gAMA chunk; linear for a
+/// 16-bit PNG, a TIFF or a picture shadelab wrote; sRGB for an 8-bit PNG or GIF without a
+/// chunk and for a JPEG, said in [`GrayInfo::conversion`]). Grayscale is scaled by its maximum
+/// code; colour becomes luminance by [`LUMINANCE_FORMULA`].
+pub fn read_gray_as(
+    path: &Path,
+    max_pixels: usize,
+    encoding: InputEncoding,
+) -> Result<(Image, GrayInfo)> {
+    encoding.validate()?;
+    let (image, facts) = decode(path, max_pixels)?;
+    gray_from(image, &resolve(&facts, encoding))
 }
 
 /// [`read_gray`] of an image held in memory; `source` names it in errors.
@@ -250,16 +556,17 @@ pub fn read_gray_from_bytes(
     source: &Path,
     max_pixels: usize,
 ) -> Result<(Image, GrayInfo)> {
-    let (image, stored) = decode_bytes(bytes, source, max_pixels)?;
-    gray_from(image, stored)
+    let (image, facts) = decode_bytes(bytes, source, max_pixels)?;
+    gray_from(image, &resolve(&facts, InputEncoding::Auto))
 }
 
-fn gray_from(img: DynamicImage, stored: Stored) -> Result<(Image, GrayInfo)> {
+fn gray_from(img: DynamicImage, resolved: &Resolved) -> Result<(Image, GrayInfo)> {
     let color = img.color();
     let channels = color.channel_count();
     let bit_depth = (color.bits_per_pixel() / channels as u16) as u8;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let linear = |code: f64, max: f64| stored.linear(code / max);
+    let decoding = resolved.decoding;
+    let linear = |code: f64, max: f64| decoding.linear(code / max);
     let (data, channel_note): (Vec<f64>, Option<String>) = match img {
         DynamicImage::ImageLuma8(b) => (
             b.into_raw()
@@ -293,7 +600,7 @@ fn gray_from(img: DynamicImage, stored: Stored) -> Result<(Image, GrayInfo)> {
             )
         }
     };
-    let notes: Vec<String> = [stored.note(), channel_note]
+    let notes: Vec<String> = [resolved.conversion.clone(), channel_note]
         .into_iter()
         .flatten()
         .collect();
@@ -307,17 +614,25 @@ fn gray_from(img: DynamicImage, stored: Stored) -> Result<(Image, GrayInfo)> {
     ))
 }
 
-/// Reads a colour image as linear RGB 0..1 (gray input is copied to the three channels),
-/// decoded by the file's sRGB or gAMA chunk where it has one.
+/// Reads a colour picture as linear RGB 0..1 (gray input is copied to the three channels),
+/// decoded by the default rule ([`InputEncoding::Auto`]); see [`read_rgb_as`].
 pub fn read_rgb(path: &Path, max_pixels: usize) -> Result<RgbImage> {
-    let (img, stored) = decode(path, max_pixels)?;
+    read_rgb_as(path, max_pixels, InputEncoding::Auto)
+}
+
+/// Reads a colour picture as linear RGB 0..1 (gray input is copied to the three channels), its
+/// codes decoded as `encoding` says (see [`read_gray_as`]).
+pub fn read_rgb_as(path: &Path, max_pixels: usize, encoding: InputEncoding) -> Result<RgbImage> {
+    encoding.validate()?;
+    let (img, facts) = decode(path, max_pixels)?;
+    let decoding = resolve(&facts, encoding).decoding;
     let img = img.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     Grid::from_vec(
         w,
         h,
         img.pixels()
-            .map(|p| p.0.map(|c| stored.linear(c.into())))
+            .map(|p| p.0.map(|c| decoding.linear(c.into())))
             .collect(),
     )
 }
@@ -362,6 +677,28 @@ pub fn read_labels(path: &Path, max_pixels: usize) -> Result<Labels> {
 }
 
 /// Encodes a linear value 0..1 (clamped; NaN becomes 0) with an optional display gamma.
+/// The codes a stimulus PNG holds for linear `values` at `depth`, display-encoded with
+/// v^(1/gamma) when `gamma` is given: what [`write_stimulus`] writes, for a caller that shows
+/// them itself (the Python module's `codes`). Fails on a gamma outside (0, 10].
+///
+/// ```
+/// use shadelab::io::{stimulus_codes, BitDepth};
+/// assert_eq!(stimulus_codes(&[0.0, 0.5, 1.0], BitDepth::Eight, None)?, [0, 128, 255]);
+/// assert_eq!(stimulus_codes(&[0.25], BitDepth::Sixteen, Some(2.0))?, [32768]);
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+pub fn stimulus_codes(values: &[f64], depth: BitDepth, gamma: Option<f64>) -> Result<Vec<u16>> {
+    check_gamma(gamma)?;
+    let max = match depth {
+        BitDepth::Eight => 255.0,
+        BitDepth::Sixteen => 65535.0,
+    };
+    Ok(values
+        .iter()
+        .map(|&v| encode(v, gamma, max) as u16)
+        .collect())
+}
+
 fn encode(v: f64, gamma: Option<f64>, max: f64) -> f64 {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     let v = match gamma {
@@ -403,6 +740,10 @@ struct SelfDescription<'a> {
     gamma: Option<f64>,
     /// Keyword and text of each iTXt chunk; `None`: a picture without chunks.
     text: Option<&'a [(String, String)]>,
+    /// The codes are a display's (its bits per channel): no gAMA chunk (they follow its
+    /// measured response, not a power), and an sBIT chunk where its bits are fewer than the
+    /// file's.
+    display_bits: Option<u8>,
 }
 
 /// The gAMA chunk's value for codes encoded as v^(1/gamma): the file gamma 1/gamma, in
@@ -432,13 +773,21 @@ fn write_png(
         encoder.set_depth(depth);
         encoder.set_compression(png::Compression::Fast);
         encoder.set_filter(png::Filter::Adaptive);
+        let mut sbit = None;
         if let Some(SelfDescription {
             gamma,
             text: Some(text),
+            display_bits,
         }) = described
         {
-            let value = png_gamma_chunk_value(gamma);
-            encoder.set_source_gamma(png::ScaledFloat::from_scaled(value));
+            match display_bits {
+                None => {
+                    let value = png_gamma_chunk_value(gamma);
+                    encoder.set_source_gamma(png::ScaledFloat::from_scaled(value));
+                }
+                Some(bits) if bits != 8 && bits != 16 => sbit = Some(bits),
+                Some(_) => {}
+            }
             for (keyword, text) in text {
                 encoder
                     .add_itxt_chunk(keyword.clone(), text.clone())
@@ -446,6 +795,12 @@ fn write_png(
             }
         }
         let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
+        if let Some(bits) = sbit {
+            let channels = if color == png::ColorType::Rgb { 3 } else { 1 };
+            writer
+                .write_chunk(png::chunk::ChunkType(*b"sBIT"), &vec![bits; channels])
+                .map_err(|e| fail(&e))?;
+        }
         writer.write_image_data(bytes).map_err(|e| fail(&e))?;
         writer.finish().map_err(|e| fail(&e))
     })
@@ -463,13 +818,21 @@ fn check_gamma(gamma: Option<f64>) -> Result<()> {
 /// Writes a grayscale PNG of linear values 0..1 (clamped), optionally display-encoded with
 /// v^(1/gamma).
 pub fn write_gray(path: &Path, image: &Image, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    let plain = SelfDescription { gamma, text: None };
+    let plain = SelfDescription {
+        gamma,
+        text: None,
+        display_bits: None,
+    };
     write_encoded(path, image, depth, plain, png::ColorType::Grayscale)
 }
 
 /// Writes an RGB PNG of linear values 0..1 (clamped), optionally display-encoded.
 pub fn write_rgb(path: &Path, image: &RgbImage, depth: BitDepth, gamma: Option<f64>) -> Result<()> {
-    let plain = SelfDescription { gamma, text: None };
+    let plain = SelfDescription {
+        gamma,
+        text: None,
+        display_bits: None,
+    };
     write_encoded(path, image, depth, plain, png::ColorType::Rgb)
 }
 
@@ -495,6 +858,7 @@ pub fn write_stimulus(
     let described = SelfDescription {
         gamma,
         text: Some(text),
+        display_bits: None,
     };
     match picture {
         PngPicture::Gray(image) => {
@@ -502,6 +866,62 @@ pub fn write_stimulus(
         }
         PngPicture::Rgb(image) => write_encoded(path, image, depth, described, png::ColorType::Rgb),
     }
+}
+
+/// A display's codes (see [`crate::display::Display::show`]): row-major, `channels` (1 gray,
+/// 3 RGB) per pixel, each 0..2^bits − 1.
+#[derive(Debug, Clone, Copy)]
+pub struct DisplayCodes<'a> {
+    /// The codes.
+    pub codes: &'a [u16],
+    /// Channels per pixel: 1 or 3.
+    pub channels: usize,
+    /// The display's bits per channel: 8, 10 or 16.
+    pub bits: u8,
+}
+
+/// Writes a display's codes as a PNG of `size` (width, height) with iTXt chunks (keyword,
+/// text): 8-bit codes in an 8-bit file, 16-bit codes in a 16-bit one, 10-bit codes in a 16-bit
+/// file by PNG's bit replication (code · 64 + code / 16; round(v · 1023) of the 16-bit value
+/// read back is the code) with an sBIT chunk of 10. No gAMA chunk: the codes follow the display's measured response, not a power law.
+pub fn write_display_codes(
+    path: &Path,
+    size: (usize, usize),
+    codes: DisplayCodes<'_>,
+    text: &[(String, String)],
+) -> Result<()> {
+    let color = match codes.channels {
+        1 => png::ColorType::Grayscale,
+        3 => png::ColorType::Rgb,
+        n => return Err(Error::invalid(format!("{n} channels of display codes"))),
+    };
+    let described = SelfDescription {
+        gamma: None,
+        text: Some(text),
+        display_bits: Some(codes.bits),
+    };
+    let (bytes, depth): (Vec<u8>, _) = match codes.bits {
+        8 => (
+            codes.codes.iter().map(|&c| c.min(255) as u8).collect(),
+            png::BitDepth::Eight,
+        ),
+        10 => (
+            codes
+                .codes
+                .iter()
+                .flat_map(|&c| {
+                    let c = c.min(1023);
+                    ((c << 6) | (c >> 4)).to_be_bytes()
+                })
+                .collect(),
+            png::BitDepth::Sixteen,
+        ),
+        _ => (
+            codes.codes.iter().flat_map(|c| c.to_be_bytes()).collect(),
+            png::BitDepth::Sixteen,
+        ),
+    };
+    write_png(path, size, &bytes, (color, depth), Some(described))
 }
 
 /// [`write_rgb`] of the `width` × `height` picture whose pixel at (column, row) is
@@ -516,7 +936,11 @@ pub fn write_rgb_fn(
 ) -> Result<()> {
     let pixel = &pixel;
     let values = (0..height).flat_map(|r| (0..width).flat_map(move |c| pixel(c, r)));
-    let described = SelfDescription { gamma, text: None };
+    let described = SelfDescription {
+        gamma,
+        text: None,
+        display_bits: None,
+    };
     let size = (width, height);
     write_values(path, size, values, depth, described, png::ColorType::Rgb)
 }
@@ -533,7 +957,11 @@ pub fn write_gray_fn(
 ) -> Result<()> {
     let value = &value;
     let values = (0..height).flat_map(|r| (0..width).map(move |c| value(c, r)));
-    let described = SelfDescription { gamma, text: None };
+    let described = SelfDescription {
+        gamma,
+        text: None,
+        display_bits: None,
+    };
     let size = (width, height);
     write_values(
         path,
@@ -670,7 +1098,9 @@ mod tests {
         let d = scratch("gamma");
         let img = Grid::new(2, 2, 0.25);
         write_gray(&d.join("g.png"), &img, BitDepth::Eight, Some(2.0)).unwrap();
-        let (back, _) = read_gray(&d.join("g.png"), DEFAULT_MAX_PIXELS).unwrap();
+        // A plain PNG has no chunk: its codes, read as they are.
+        let linear = InputEncoding::Linear;
+        let (back, _) = read_gray_as(&d.join("g.png"), DEFAULT_MAX_PIXELS, linear).unwrap();
         assert_eq!(back.get(0, 0) * 255.0, 128.0); // 0.25^(1/2) = 0.5 → 127.5 → 128
         let rgb = Grid::new(2, 1, [1.0, 0.0, 0.0]);
         write_rgb(&d.join("c.png"), &rgb, BitDepth::Sixteen, None).unwrap();
@@ -694,7 +1124,7 @@ mod tests {
     }
 
     #[test]
-    fn srgb_and_gamma_chunks_decode_the_codes_and_no_chunk_leaves_them_linear() {
+    fn srgb_and_gamma_chunks_decode_the_codes_and_no_chunk_is_srgb_unless_linear_is_said() {
         let d = scratch("chunks");
         let codes = [0u8, 10, 128, 255];
         let scaled = codes.map(|c| f64::from(c) / 255.0);
@@ -722,7 +1152,20 @@ mod tests {
         for (i, s) in scaled.iter().enumerate() {
             assert!((gama.get(i, 0) - s.powf(1.0 / 0.45455)).abs() < 1e-12);
         }
+        // No chunk: an 8-bit picture shadelab did not write is sRGB by default (said), and
+        // its codes as they are when asked for linear.
         let (none, info) = read("none.png");
+        assert_eq!(none.data(), srgb.data());
+        assert!(info
+            .conversion
+            .unwrap()
+            .contains("without a gamma chunk decoded as sRGB"));
+        let (none, info) = read_gray_as(
+            &d.join("none.png"),
+            DEFAULT_MAX_PIXELS,
+            InputEncoding::Linear,
+        )
+        .unwrap();
         assert_eq!(none.data(), &scaled[..]);
         assert!(info.conversion.is_none());
         assert!(

@@ -3,6 +3,7 @@
 //! resolution, the albedo and ambient level it was rendered with, how its values were encoded
 //! (display gamma, value range) and its true light. The writer is [`crate::stimulus::write_output`].
 
+use crate::display::{Display, Luminance};
 use crate::error::{Error, Result};
 use crate::light::Light;
 use serde::Serialize;
@@ -52,6 +53,10 @@ pub struct RenderSidecar {
     /// Whether the values were mapped to -1..1 (PsychoPy's range; undone by
     /// [`RenderSidecar::linearise`]).
     pub psychopy_range: bool,
+    /// The display whose codes the file holds and the luminance its 0..1 was shown at (undone
+    /// by [`RenderSidecar::linearise`]: code → cd/m² → 0..1).
+    #[serde(skip)]
+    pub display: Option<(Display, Luminance)>,
     /// The light the picture was rendered under (`notes.light_vector`, else
     /// `parameters.light`).
     pub light: Option<TrueLight>,
@@ -260,6 +265,14 @@ impl RenderSidecar {
                 )))
             }
         };
+        let display = match (value.get("display"), value.get("luminance")) {
+            (None | Some(Value::Null), _) => None,
+            (Some(d), Some(l)) => Some((
+                Display::from_record(d).map_err(|e| bad(e.to_string()))?,
+                Luminance::from_record(l).map_err(|e| bad(e.to_string()))?,
+            )),
+            (Some(_), None) => return Err(bad("a display without its luminance".into())),
+        };
         let parameters = value.get("parameters").cloned().unwrap_or(json!({}));
         let notes = value.get("notes").cloned().unwrap_or(json!({}));
         let declared = Declared::from_record(&parameters, &notes).map_err(bad)?;
@@ -278,6 +291,7 @@ impl RenderSidecar {
             gamma_decoded_by_file: false,
             bit_depth,
             psychopy_range,
+            display,
             light: declared.light,
             parameters,
             silhouette: notes
@@ -307,6 +321,14 @@ impl RenderSidecar {
         } else {
             v
         };
+        if let Some((display, mapping)) = &self.display {
+            // The code (10-bit codes are stored in 16 bits by bit replication), its luminance,
+            // and where that lies between the cd/m² of 0 and 1 (within half a step of the
+            // stimulus's value, so clamped to 0..1 at the ends).
+            let code = (v.clamp(0.0, 1.0) * f64::from(display.top_code())).round() as u16;
+            let (lo, hi) = mapping.span();
+            return ((display.code_luminance(code) - lo) / (hi - lo)).clamp(0.0, 1.0);
+        }
         match self.gamma {
             Some(g) => v.max(0.0).powf(g),
             None => v,
@@ -343,6 +365,12 @@ impl RenderSidecar {
         }
         if let Some(g) = self.gamma {
             parts.push(format!("gamma {} (undone)", round3(g)));
+        }
+        if let Some((display, _)) = &self.display {
+            parts.push(format!(
+                "codes of the display '{}' (undone)",
+                display.name()
+            ));
         }
         if self.gamma_decoded_by_file {
             parts.push("gamma undone by the file's gAMA chunk".into());

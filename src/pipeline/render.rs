@@ -322,6 +322,14 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
         Some("-1..1") => stimulus::Range::Psychopy,
         Some(_) => return Err(bad("range")),
     };
+    let display = match v.get("display") {
+        None | Some(Value::Null) => None,
+        Some(d) => Some(crate::display::Display::from_record(d)?),
+    };
+    let luminance = match v.get("luminance") {
+        Some(l) if display.is_some() => Some(crate::display::Luminance::from_record(l)?),
+        _ => None,
+    };
     let layers = v
         .get("files")
         .and_then(Value::as_object)
@@ -339,6 +347,8 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
             gamma,
             range,
             layers,
+            display,
+            luminance,
             ..ExportOptions::default()
         },
         ..RenderConfig::new(stimulus, out)

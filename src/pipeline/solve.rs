@@ -96,8 +96,12 @@ impl std::fmt::Display for BoundarySource {
 /// Everything a solve needs, as plain values.
 #[derive(Debug, Clone)]
 pub struct SolveConfig {
-    /// An 8/16-bit PNG (linear luminance) or a float H×W `.npy`.
+    /// An 8/16-bit PNG, a JPEG, a TIFF or an H×W `.npy`, decoded as
+    /// [`input_encoding`](Self::input_encoding) says.
     pub image: PathBuf,
+    /// How the image's codes encode luminance (default [`io::InputEncoding::Auto`]: as the file
+    /// says, see [`io::read_gray_as`]).
+    pub input_encoding: io::InputEncoding,
     /// The object's mask (PNG, nonzero = inside); `None` is the whole image.
     pub mask: Option<PathBuf>,
     /// The light, given or estimated.
@@ -157,6 +161,7 @@ impl SolveConfig {
     pub fn new(image: impl Into<PathBuf>, light: LightChoice) -> SolveConfig {
         SolveConfig {
             image: image.into(),
+            input_encoding: io::InputEncoding::Auto,
             mask: None,
             light,
             boundary: BoundarySource::Named(Boundary::Occluding),
@@ -174,6 +179,7 @@ impl SolveConfig {
     pub fn validate(&self) -> Result<()> {
         self.options.validate()?;
         self.saturation.validate()?;
+        self.input_encoding.validate()?;
         if let Some(a) = self.albedo {
             crate::reconstruct::check_albedo(a)?;
         }
@@ -392,11 +398,13 @@ struct Solved {
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
-    let (mut image, image_info) = io::read_luminance(&config.image, config.max_pixels)?;
+    let (mut image, image_info) =
+        io::read_luminance_as(&config.image, config.max_pixels, config.input_encoding)?;
     // A shadelab render's sidecar: its values made linear again and its ambient level taken
     // off (the solve's reflectance has no ambient term), its target mask as the object's.
     let beside = RenderSidecar::beside(&config.image)?;
-    let sidecar = beside.sidecar().cloned();
+    let sidecar =
+        (beside.sidecar().cloned()).map(|s| super::source::without_gamma(s, config.input_encoding));
     if let Some(s) = &sidecar {
         let ambient = s.ambient.unwrap_or(0.0);
         image = image.map(|&v| (s.linearise(v) - ambient).max(0.0));
@@ -503,6 +511,7 @@ fn solve_loaded(
 pub fn sidecar_notes(config: &SolveConfig) -> Vec<String> {
     let source = super::PictureSource {
         image: Some(config.image.clone()),
+        input_encoding: config.input_encoding,
         mask: config.mask.clone(),
         ..Default::default()
     };

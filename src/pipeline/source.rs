@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels};
-use crate::io::{self, Beside, Declared, RenderSidecar};
+use crate::io::{self, Beside, Declared, InputEncoding, RenderSidecar};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
 use serde_json::{json, Map, Value};
@@ -21,9 +21,14 @@ pub const IN_MEMORY: &str = "<array>";
 /// Plain values naming a picture: exactly one of `image`, `stimulus`, `spec` and `pixels`.
 #[derive(Debug, Clone, Default)]
 pub struct PictureSource {
-    /// An 8/16-bit PNG (linear values) or a float H×W `.npy`; a shadelab sidecar beside it is
-    /// read (see the module's documentation).
+    /// An 8/16-bit PNG, a JPEG, a TIFF or an H×W `.npy`, decoded as
+    /// [`input_encoding`](Self::input_encoding) says; a shadelab sidecar beside it is read (see
+    /// the module's documentation).
     pub image: Option<PathBuf>,
+    /// How the image file's codes encode luminance (default [`InputEncoding::Auto`]: as the
+    /// file says, see [`io::read_gray_as`]); an explicit one overrides the file's chunk and a
+    /// sidecar's recorded gamma.
+    pub input_encoding: InputEncoding,
     /// A stimulus spec or a shadelab sidecar, rendered in memory as `render` would.
     pub spec: Option<PathBuf>,
     /// A stimulus to render (see [`crate::stimulus::names`]), analysed with its own targets.
@@ -86,8 +91,10 @@ impl PictureSource {
         files
     }
 
-    /// Checks what needs no file: a positive resolution and exactly one source.
+    /// Checks what needs no file: a positive resolution, the input encoding and exactly one
+    /// source.
     pub fn check(&self) -> Result<()> {
+        self.input_encoding.validate()?;
         if let Some(p) = self.ppd {
             if !(p.is_finite() && p > 0.0) {
                 return Err(Error::invalid(format!(
@@ -130,6 +137,12 @@ impl PictureSource {
         Ok(self.notes_on(&self.beside()?))
     }
 
+    /// The note to say once when the image is an 8-bit picture without a gamma chunk (or a
+    /// JPEG) that is decoded as sRGB by the default rule ([`io::assumed_srgb_note`]).
+    pub fn input_note(&self) -> Option<String> {
+        io::assumed_srgb_note(self.image.as_deref()?, self.input_encoding)
+    }
+
     /// [`notes`](Self::notes) on a sidecar already read by [`beside`](Self::beside).
     pub fn notes_on(&self, beside: &Beside) -> Vec<String> {
         let mut lines = Vec::new();
@@ -146,6 +159,12 @@ impl PictureSource {
             )),
             Beside::Ours(s) => {
                 lines.push(s.summary());
+                if let (Some(g), true) = (s.gamma, self.input_encoding.is_explicit()) {
+                    lines.push(format!(
+                        "the given input gamma {} replaces the sidecar's gamma {g}",
+                        self.input_encoding
+                    ));
+                }
                 if let (Some(given), Some(own)) = (self.ppd, s.ppd.filter(|&p| Some(p) != self.ppd))
                 {
                     lines.push(format!(
@@ -216,14 +235,26 @@ impl PictureSource {
         let mut request = None;
         let mut picture = match (&self.image, &self.stimulus) {
             (Some(path), _) => {
-                let mut pixels = if colour && io::extension(path) == "png" {
-                    Pixels::Rgb(io::read_rgb(path, max_pixels)?)
+                let encoding = self.input_encoding;
+                // Other extensions go to read_luminance, whose error lists those it reads.
+                let picture_file = matches!(
+                    io::extension(path).as_str(),
+                    "png" | "jpg" | "jpeg" | "tif" | "tiff"
+                );
+                let (mut pixels, info) = if colour && picture_file {
+                    let rgb = io::read_rgb_as(path, max_pixels, encoding)?;
+                    (Pixels::Rgb(rgb), Value::Null)
                 } else {
-                    Pixels::Gray(io::read_luminance(path, max_pixels)?.0)
+                    let (gray, info) = io::read_luminance_as(path, max_pixels, encoding)?;
+                    (Pixels::Gray(gray), info)
                 };
                 // The image is read first: a broken image is reported before its sidecar.
                 let beside = RenderSidecar::beside(path)?;
-                let sidecar = beside.sidecar();
+                let sidecar = beside
+                    .sidecar()
+                    .cloned()
+                    .map(|s| without_gamma(s, encoding));
+                let sidecar = sidecar.as_ref();
                 if let Some(s) = sidecar {
                     pixels = match pixels {
                         Pixels::Gray(i) => Pixels::Gray(i.map(|&v| s.linearise(v))),
@@ -232,6 +263,14 @@ impl PictureSource {
                 }
                 check_pixel_values(&pixels, &path.display().to_string())?;
                 let mut origin = json!({ "image": path.display().to_string() });
+                // How the codes were decoded, where the user said or the default rule assumed
+                // sRGB (a picture that says its own encoding is recorded as before).
+                if encoding.is_explicit() || self.input_note().is_some() {
+                    origin["input_encoding"] = encoding.to_string().into();
+                    if let Some(conversion) = info.get("conversion") {
+                        origin["conversion"] = conversion.clone();
+                    }
+                }
                 let mut picture = Picture {
                     pixels,
                     ppd: self.ppd,
@@ -341,6 +380,15 @@ impl PictureSource {
             _ => pixels.clone(),
         })
     }
+}
+
+/// The sidecar `sidecar` as a picture read under `encoding` takes it: an explicit encoding
+/// replaces the display gamma it records (which is then not undone a second time).
+pub fn without_gamma(mut sidecar: RenderSidecar, encoding: InputEncoding) -> RenderSidecar {
+    if encoding.is_explicit() {
+        sidecar.gamma = None;
+    }
+    sidecar
 }
 
 /// A rendered stimulus as a picture, with its targets and what it declares.

@@ -82,10 +82,7 @@ pub fn fields(
     output: &Output,
     options: &super::ExportOptions,
 ) -> Vec<(String, Field)> {
-    let to_range = |v: f64| match options.range {
-        Range::Unit => v,
-        Range::Psychopy => v * 2.0 - 1.0,
-    };
+    let to_range = |v: f64| options.range.apply(v);
     let g = &request.geometry;
     let mut out: Vec<(String, Field)> = Vec::new();
     let img = match &output.pixels {

@@ -3,7 +3,9 @@
 //! the target mask, the ground-truth layers and a JSON sidecar recording every parameter.
 
 use super::{Output, Pixels, Request};
+use crate::display::{Display, Luminance, Shown};
 use crate::error::{Error, Result};
+use crate::grid::Grid;
 use crate::io::{self, BitDepth};
 use serde_json::{json, Map, Value};
 use std::fs;
@@ -16,6 +18,16 @@ pub enum Range {
     Unit,
     /// PsychoPy's −1..1 (v·2 − 1), for float formats.
     Psychopy,
+}
+
+impl Range {
+    /// A linear value 0..1 in this range.
+    pub fn apply(self, v: f64) -> f64 {
+        match self {
+            Range::Unit => v,
+            Range::Psychopy => v * 2.0 - 1.0,
+        }
+    }
 }
 
 /// How to write a stimulus.
@@ -31,6 +43,12 @@ pub struct ExportOptions {
     pub layers: bool,
     /// Replace an existing file that shadelab did not write.
     pub force: bool,
+    /// Write the codes of this display (PNG only): the stimulus shown through its inverse
+    /// response at the luminances of `luminance`, at the display's bit depth.
+    pub display: Option<Display>,
+    /// The cd/m² the stimulus's 0..1 is shown at (with `display`; default: the display's black
+    /// to white).
+    pub luminance: Option<Luminance>,
 }
 
 impl Default for ExportOptions {
@@ -41,6 +59,8 @@ impl Default for ExportOptions {
             range: Range::Unit,
             layers: false,
             force: false,
+            display: None,
+            luminance: None,
         }
     }
 }
@@ -74,7 +94,46 @@ impl ExportOptions {
         }
         self.check_range(path)?;
         self.check_gamma(path)?;
+        self.check_display(path)?;
         Ok(ext)
+    }
+
+    /// A display's codes for a file named `path`: PNG only, not display-encoded by a gamma as
+    /// well; a luminance mapping only with a display, inside what it shows.
+    pub fn check_display(&self, path: &Path) -> Result<()> {
+        match (&self.display, self.luminance) {
+            (None, Some(_)) => Err(Error::invalid(
+                "a luminance in cd/m² needs a display (its model turns cd/m² into codes)",
+            )),
+            (None, None) => Ok(()),
+            (Some(display), luminance) => {
+                if io::extension(path) != "png" {
+                    return Err(Error::invalid(format!(
+                        "a display's codes are written as PNG, not .{} (float formats stay linear \
+                         0..1; the sidecar of a PNG records the cd/m²)",
+                        io::extension(path)
+                    )));
+                }
+                if self.gamma.is_some() {
+                    return Err(Error::invalid(
+                        "a display's model replaces a display gamma: give one or the other",
+                    ));
+                }
+                let probe = Grid::new(1, 1, 0.0);
+                display.show(&probe, luminance.unwrap_or(display.full_range()))?;
+                Ok(())
+            }
+        }
+    }
+
+    /// The bits per channel of the PNG written: the display's (10 in 16-bit codes) or
+    /// `bit_depth`.
+    pub fn png_bits(&self) -> u8 {
+        match &self.display {
+            Some(d) if d.bits() == 8 => 8,
+            Some(_) => 16,
+            None => self.bit_depth.bits(),
+        }
     }
 
     /// The range for a file named `path`: psychopy's −1..1 only in float formats.
@@ -255,13 +314,25 @@ fn write_all(
             }
         }
     }
-    let to_range = |v: f64| match options.range {
-        Range::Unit => v,
-        Range::Psychopy => v * 2.0 - 1.0,
-    };
+    let to_range = |v: f64| options.range.apply(v);
     let image = set.staged(path)?;
     let (depth, gamma) = (options.bit_depth, options.gamma);
+    let shown = shown_on_display(name, output, options)?;
     match (ext, &output.pixels) {
+        ("png", _) if shown.is_some() => {
+            let (shown, display) = (shown.as_ref(), options.display.as_ref());
+            let (Some(shown), Some(display)) = (shown, display) else {
+                unreachable!("a display's codes are shown on a display")
+            };
+            let size = output.pixels.size();
+            let text = png_text(name, request, options);
+            let codes = io::DisplayCodes {
+                codes: &shown.codes,
+                channels: shown.channels,
+                bits: display.bits(),
+            };
+            io::write_display_codes(image, size, codes, &text)?
+        }
         ("png", pixels) => {
             let picture = match pixels {
                 Pixels::Gray(img) => io::PngPicture::Gray(img),
@@ -298,12 +369,48 @@ fn write_all(
         _ => return Err(Error::invalid(format!("unknown output format '.{ext}'"))),
     }
     record("image", path);
-    let value = sidecar_json(name, request, output, ext, options, files);
+    let value = sidecar_json(name, request, output, ext, options, files, shown.as_ref());
     io::write_json(set.staged(sidecar)?, &value)
+}
+
+/// What the display of `options` shows of a gray stimulus (`None` without a display).
+pub fn shown_on_display(
+    name: &str,
+    output: &Output,
+    options: &ExportOptions,
+) -> Result<Option<Shown>> {
+    let Some(display) = &options.display else {
+        return Ok(None);
+    };
+    match &output.pixels {
+        Pixels::Gray(img) => {
+            let mapping = options.luminance.unwrap_or(display.full_range());
+            display.show(img, mapping).map(Some)
+        }
+        Pixels::Rgb(_) => Err(Error::invalid(format!(
+            "{name} is a colour picture; a display's model applies to gray stimuli"
+        ))),
+    }
 }
 
 /// How the file's values encode linear luminance, in words (the sidecar's `encoding`).
 fn encoding(format: &str, options: &ExportOptions) -> String {
+    if let (Some(d), "png") = (&options.display, format) {
+        let (lo, hi) = options.luminance.unwrap_or(d.full_range()).span();
+        let stored = if d.bits() == 10 {
+            "; 10-bit codes in 16 bits by bit replication (code * 64 + code / 16, sBIT 10)"
+        } else {
+            ""
+        };
+        return format!(
+            "display codes of '{}' ({}-bit, {}): v shown at {lo} + v * {} cd/m² through the \
+             display's inverse response{stored}",
+            d.name(),
+            d.bits(),
+            d.quantise().name(),
+            hi - lo
+        );
+    }
     match (format, options.gamma) {
         ("png", Some(g)) => format!("display-encoded: code = round(v^(1/{g}) * max)"),
         ("png", None) => "linear: code = round(v * max)".to_string(),
@@ -327,10 +434,19 @@ fn encoding(format: &str, options: &ExportOptions) -> String {
 pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(String, String)> {
     let g = &request.geometry;
     let version = io::PROGRAM_VERSION;
-    let bits = options.bit_depth.bits();
-    let light = match options.gamma {
-        Some(gamma) => format!("display-encoded luminance, code = round(v^(1/{gamma}) * max)"),
-        None => "linear luminance 0..1, code = round(v * max)".to_string(),
+    let bits = options.png_bits();
+    let light = match (&options.display, options.gamma) {
+        (Some(d), _) => {
+            let (lo, hi) = options.luminance.unwrap_or(d.full_range()).span();
+            format!(
+                "codes of the display '{}' (not luminance) showing 0..1 at {lo}..{hi} cd/m²",
+                d.name()
+            )
+        }
+        (None, Some(gamma)) => {
+            format!("display-encoded luminance, code = round(v^(1/{gamma}) * max)")
+        }
+        (None, None) => "linear luminance 0..1, code = round(v * max)".to_string(),
     };
     let description = format!(
         "{name}: {light}, {bits}-bit; {} x {} px (height x width), {:.4} x {:.4} deg at {} ppd",
@@ -350,6 +466,11 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
         ),
         ("range".to_string(), Value::from("0..1")),
     ]);
+    if let Some(d) = &options.display {
+        let mapping = options.luminance.unwrap_or(d.full_range());
+        record.insert("display".to_string(), d.to_json());
+        record.insert("luminance".to_string(), mapping.to_json());
+    }
     vec![
         ("Software".to_string(), format!("shadelab {version}")),
         ("Description".to_string(), description),
@@ -368,6 +489,7 @@ pub fn sidecar_json(
     format: &str,
     options: &ExportOptions,
     files: Map<String, Value>,
+    shown: Option<&Shown>,
 ) -> Value {
     let (channels, md5) = match &output.pixels {
         Pixels::Gray(img) => (1, io::image_md5(img)),
@@ -384,7 +506,7 @@ pub fn sidecar_json(
     let Value::Object(rest) = json!({
         "channels": channels,
         "format": format,
-        "bit_depth": if format == "png" { Value::from(options.bit_depth.bits()) } else { Value::Null },
+        "bit_depth": if format == "png" { Value::from(options.png_bits()) } else { Value::Null },
         "gamma": options.gamma,
         "encoding": encoding(format, options),
         "range": match options.range { Range::Unit => "0..1", Range::Psychopy => "-1..1" },
@@ -399,6 +521,30 @@ pub fn sidecar_json(
         unreachable!("json! of an object literal is an object")
     };
     sidecar.extend(rest);
+    if let (Some(d), Some(shown)) = (&options.display, shown) {
+        let (max, rms) = shown.error();
+        sidecar.insert("display".into(), d.to_json());
+        sidecar.insert("luminance".into(), shown.mapping.to_json());
+        sidecar.insert(
+            "luminance_error_cd_m2".into(),
+            json!({"max": max, "rms": rms}),
+        );
+        if let Some(t) = &output.targets {
+            let shown = shown.targets(&t.labels, &t.names);
+            if let Some(Value::Array(items)) = sidecar.get_mut("targets") {
+                for item in items.iter_mut() {
+                    let name = item.get("name").and_then(Value::as_str).map(str::to_string);
+                    if let Some((_, l, weber)) = shown.iter().find(|s| Some(&s.0) == name.as_ref())
+                    {
+                        item["luminance_cd_m2"] = json!(l);
+                        if let Some(w) = weber {
+                            item["weber_vs_background"] = json!(w);
+                        }
+                    }
+                }
+            }
+        }
+    }
     Value::Object(sidecar)
 }
 

@@ -28,7 +28,7 @@ mod strips;
 mod surfaces;
 mod svg;
 
-pub use export::{write_output, ExportOptions, Range};
+pub use export::{shown_on_display, write_output, ExportOptions, Range};
 
 // The typed interface: one parameter struct and one function per stimulus.
 pub use boundary_strips::{boundary_strips, BoundaryStripsParams, StripShading};

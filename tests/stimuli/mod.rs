@@ -10,6 +10,7 @@ mod bad_input;
 mod bundles;
 mod conventions;
 mod display;
+mod display_model;
 mod face;
 mod figures;
 mod formats;

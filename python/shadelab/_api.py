@@ -1,0 +1,604 @@
+"""The package's Python half: each public function turns Python values into the compiled
+module's arguments and its results into dicts and arrays (see ``shadelab``'s docstring)."""
+
+from __future__ import annotations
+
+import json
+import os as _os
+from os import fspath as _fspath
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _shadelab
+
+__version__: str = _shadelab.__version__
+
+# The keys every `render` dict has besides the stimulus's parameters (these win on a clash).
+_RENDER_KEYS = ("img", "target_mask", "target_names", "visual_size", "ppd", "shape")
+
+
+# The last target-name text and its names. Renders in a loop (an experiment's trials, a
+# parameter sweep) usually repeat their targets, and a checkerboard has one per check: the
+# names are then made once and each call's list shares them instead of splitting again.
+_last_names: Tuple[str, Tuple[str, ...]] = ("", ())
+
+
+def _target_names(text: str) -> List[str]:
+    """The names of the "\\n"-joined ``text`` the compiled module hands over, as a new list."""
+    global _last_names
+    if text != _last_names[0]:
+        _last_names = (text, tuple(text.split("\n")) if text else ())
+    return list(_last_names[1])
+
+
+def _pair(value: Any, what: str, kind: type) -> Optional[Tuple[Any, Any]]:
+    """A (height, width) pair from a pair or a single number (square), as stimupy takes them."""
+    if value is None:
+        return None
+    if np.ndim(value) == 0:
+        return (kind(value), kind(value))
+    items = list(np.asarray(value).ravel())
+    if len(items) != 2:
+        raise ValueError(f"{what} must be a number or a (height, width) pair, not {value!r}")
+    if kind is int and any(float(v) != int(v) for v in items):
+        raise ValueError(f"{what} must be whole pixels, not {value!r}")
+    return (kind(items[0]), kind(items[1]))
+
+
+def _light_text(light: Any) -> str:
+    """A light as the library reads it: ``x,y,z``, ``tilt=T,slant=S``, a name or ``estimate``."""
+    if isinstance(light, str):
+        return light
+    values = np.asarray(light, dtype=float).ravel()
+    if values.size != 3:
+        raise ValueError(
+            f"light must be an (x, y, z) vector, 'tilt=T,slant=S', a name or 'estimate', not {light!r}"
+        )
+    return ",".join(repr(float(v)) for v in values)
+
+
+def _params_json(params: Dict[str, Any]) -> str:
+    """Parameter values as JSON (NumPy scalars and arrays become plain numbers and lists)."""
+
+    def plain(v: Any) -> Any:
+        if isinstance(v, np.generic):
+            return v.item()
+        if isinstance(v, (np.ndarray, tuple)):
+            return np.asarray(v).tolist() if isinstance(v, np.ndarray) else list(v)
+        raise TypeError(f"parameter value {v!r} is not a number, string or boolean")
+
+    try:
+        return json.dumps(params, default=plain)
+    except (TypeError, ValueError) as e:
+        raise ValueError(str(e)) from None
+
+
+def _float_image(image: Any, what: str, colour: bool) -> np.ndarray:
+    """A float64 H×W (or, with `colour`, H×W×3) array from any real-valued array, read the
+    way the command line reads a ``.npy`` picture (docs/conventions.md): uint8 and uint16
+    divided by 255 and 65535 (as a PNG's codes), other integer types refused, floats and
+    booleans as they are; the library then refuses values outside 0..1."""
+    a = np.asarray(image)
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{what}: unsupported dtype {a.dtype} (need a real number type)")
+    if a.dtype.kind in "iu":
+        if a.dtype.kind != "u" or a.dtype.itemsize > 2:
+            raise ValueError(
+                f"{what}: {a.dtype.name} pictures are refused: only uint8 and uint16 integers "
+                "have a largest value that means white (save 8- or 16-bit codes as uint8 or "
+                "uint16, or luminance 0..1 as float)"
+            )
+        a = a.astype(np.float64) / float(np.iinfo(a.dtype).max)
+    if a.ndim == 3 and a.shape[2] == 1:
+        a = a[:, :, 0]
+    if not (a.ndim == 2 or (colour and a.ndim == 3 and a.shape[2] == 3)):
+        need = "H×W or H×W×3" if colour else "2-D H×W"
+        raise ValueError(f"{what}: expected a {need} array, found shape {a.shape}")
+    if a.size == 0:
+        raise ValueError(f"{what}: the array is empty (shape {a.shape})")
+    return a.astype(np.float64, copy=False)
+
+
+def _labels(mask: Any, what: str) -> Optional[np.ndarray]:
+    """Target labels (0 = background, 1..N = targets) as uint16, or None."""
+    if mask is None:
+        return None
+    a = np.asarray(mask)
+    if a.ndim != 2:
+        raise ValueError(f"{what}: expected a 2-D H×W array, found shape {a.shape}")
+    if a.dtype.kind == "b":
+        return a.astype(np.uint16)
+    if a.dtype.kind not in "iuf" or (a.size and (a.min() < 0 or a.max() > 65535)):
+        raise ValueError(f"{what}: labels must be whole numbers 0..65535 (0 = background)")
+    if a.dtype.kind == "f" and not np.all(a == np.round(a)):
+        raise ValueError(f"{what}: labels must be whole numbers 0..65535 (0 = background)")
+    return a.astype(np.uint16, copy=False)
+
+
+def _opt(kind: type, value: Any) -> Any:
+    """`value` as `kind`, or None."""
+    return None if value is None else kind(value)
+
+
+def _picture_args(
+    picture: Any, colour: bool, params: Dict[str, Any], seed: Any, ppd: Any, shape: Any, mask: Any
+) -> Tuple[Any, ...]:
+    """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
+    the stimulus's parameters, seed, ppd, shape (height, width) and target labels."""
+    if isinstance(picture, str):
+        image, stimulus = None, picture
+    else:
+        image, stimulus = _float_image(picture, "image", colour), None
+    return (
+        image,
+        stimulus,
+        _params_json(params),
+        _opt(int, seed),
+        _opt(float, ppd),
+        _pair(shape, "shape", int),
+        _labels(mask, "mask"),
+    )
+
+
+def _display_arg(display: Any) -> Tuple[Optional[str], Optional[str]]:
+    """A display as (file path, None), (None, JSON text of a dict) or (None, None)."""
+    if display is None:
+        return None, None
+    if isinstance(display, dict):
+        return None, json.dumps(display)
+    if isinstance(display, (str, _os.PathLike)):
+        return _fspath(display), None
+    raise ValueError(
+        f"display: a display file's path or a dict of the display JSON, not {type(display).__name__}"
+    )
+
+
+def _luminance_arg(luminance: Any) -> Optional[str]:
+    """A luminance mapping as the command line's ``--luminance`` text."""
+    if luminance is None:
+        return None
+    if isinstance(luminance, str):
+        return luminance
+    if isinstance(luminance, dict):
+        keys = sorted(luminance)
+        if keys != ["background", "michelson"]:
+            raise ValueError(
+                f"luminance: a dict has 'background' and 'michelson', not {keys}"
+            )
+        return f"background={float(luminance['background'])!r},michelson={float(luminance['michelson'])!r}"
+    pair = _pair(luminance, "luminance", float)
+    if pair is None or not isinstance(luminance, (tuple, list)):
+        raise ValueError("luminance: (lo, hi) in cd/m² or {'background': B, 'michelson': C}")
+    return f"{pair[0]!r},{pair[1]!r}"
+
+
+def _assumptions(domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any) -> Tuple[Any, ...]:
+    """What the perception analyses assume, as the compiled module takes it."""
+    return (str(domain), str(boundary), float(slant), _opt(float, albedo), _opt(float, ambient))
+
+
+def _floats(values: Optional[Sequence[float]]) -> Optional[List[float]]:
+    return None if values is None else [float(v) for v in values]
+
+
+def stimuli() -> Dict[str, str]:
+    """Every stimulus and surface that :func:`render` knows, with a one-line description.
+
+    >>> "checkerboard" in stimuli()
+    True
+    """
+    return dict(_shadelab.stimuli())
+
+
+def describe(name: str) -> Dict[str, Any]:
+    """A stimulus's parameters: for each, its default, range and doc; and its default size.
+
+    >>> d = describe("checkerboard")
+    >>> d["params"]["check"]["default"], d["default_visual_size"], d["default_ppd"]
+    (1.0, (8.0, 8.0), 32.0)
+    """
+    raw = json.loads(_shadelab.describe(name))
+    return {
+        "name": raw["name"],
+        "summary": raw["summary"],
+        "default_visual_size": tuple(raw["default_visual_size"]),
+        "default_ppd": raw["default_ppd"],
+        "params": {
+            p["name"]: {"default": p["default"], "range": p["range"], "doc": p["doc"]}
+            for p in raw["params"]
+        },
+    }
+
+
+def render(
+    name: str,
+    *,
+    visual_size: Any = None,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    light: Any = None,
+    seed: Optional[int] = None,
+    layers: bool = False,
+    bit_depth: Optional[int] = None,
+    gamma: Optional[float] = None,
+    range: str = "unit",
+    display: Any = None,
+    luminance: Any = None,
+    **params: Any,
+) -> Dict[str, Any]:
+    """Renders a stimulus as a stimupy-style dict.
+
+    ``visual_size`` (degrees) and ``shape`` (pixels) are ``(height, width)`` or one number for
+    a square; with ``ppd`` any two fix the third and what is missing takes the stimulus's
+    defaults (:func:`describe`). ``light`` is an ``(x, y, z)`` vector, ``"tilt=T,slant=S"`` or a
+    name (``above``, ``left``, …); other keyword arguments are the stimulus's parameters.
+
+    The dict holds ``img`` (float64, H×W or H×W×3, linear 0..1), ``target_mask`` (uint16,
+    0 = background, 1..n = the targets), ``target_names``, ``visual_size`` and ``shape``
+    ``(height, width)``, ``ppd``, ``stimulus``, ``seed``, ``notes`` (facts the stimulus
+    recorded) and every resolved parameter by name (and all of them again under
+    ``parameters``); with ``layers=True`` also ``depth``, ``normals`` (H×W×3) and ``shading``
+    (and ``albedo`` where the surface varies it), which take the place of parameters of the
+    same name. The numbers are those the command line writes.
+
+    How it is shown, as ``shadelab render``'s flags (docs/display.md), recorded in the dict's
+    ``export`` so that :func:`save` writes it so: ``range="psychopy"`` gives ``img`` in
+    PsychoPy's −1..1; ``bit_depth`` (8 or 16) and ``gamma`` add ``codes``, the PNG's codes
+    (uint16); ``display`` (a display file: shadelab's display JSON, a PsychoPy monitor file or a
+    photometer CSV, or a dict of the display JSON) with ``luminance`` (``(lo, hi)`` cd/m² of 0
+    and 1, or ``{"background": B, "michelson": C}``; default the display's black to white) adds
+    ``codes`` (the display's codes, H×W, or H×W×3 with bit-stealing), ``luminance_cd_m2`` (what
+    the display shows, H×W) and ``display`` (the display, the luminance mapping, the error and
+    each target's cd/m²).
+
+    >>> s = render("sphere", shape=(48, 64), light="tilt=30,slant=40", layers=True)
+    >>> s["img"].shape, s["normals"].shape, s["target_names"]
+    ((48, 64), (48, 64, 3), ['object'])
+    >>> lab = {"name": "lab", "gamma": 2.2, "black_cd_m2": 0.5, "white_cd_m2": 120}
+    >>> c = render("sphere", shape=(48, 64), display=lab, luminance=(10, 90))
+    >>> c["codes"].dtype, round(float(c["luminance_cd_m2"].max()), 1) <= 90.5
+    (dtype('uint16'), True)
+    """
+    if light is not None:
+        params["light"] = _light_text(light)
+    display_path, display_json = _display_arg(display)
+    report_json, img, target_mask, names, extra = _shadelab.render(
+        name,
+        _params_json(params),
+        _pair(visual_size, "visual_size", float),
+        None if ppd is None else float(ppd),
+        _pair(shape, "shape", int),
+        0 if seed is None else int(seed),
+        bool(layers),
+        _opt(int, bit_depth),
+        _opt(float, gamma),
+        str(range),
+        display_path,
+        display_json,
+        _luminance_arg(luminance),
+    )
+    shown = extra.pop("display_json", None)
+    codes = extra.pop("codes", None)
+    luminance_cd = extra.pop("luminance_cd_m2", None)
+    report = json.loads(report_json)
+    geometry = report["geometry"]
+    height, width, resolution = geometry["height"], geometry["width"], geometry["ppd"]
+    out: Dict[str, Any] = dict(report["parameters"])
+    out.update(
+        img=img,
+        target_mask=target_mask
+        if target_mask is not None
+        else np.zeros((height, width), dtype=np.uint16),
+        target_names=_target_names(names),
+        visual_size=(height / resolution, width / resolution),
+        ppd=resolution,
+        shape=(height, width),
+        stimulus=report["stimulus"],
+        seed=report["seed"],
+        notes=report["notes"],
+        parameters=dict(report["parameters"]),
+        export=dict(
+            bit_depth=bit_depth,
+            gamma=gamma,
+            range=str(range),
+            display=display,
+            luminance=luminance,
+        ),
+    )
+    if codes is not None:
+        out["codes"] = codes
+    if shown is not None:
+        out["luminance_cd_m2"] = luminance_cd
+        out["display"] = json.loads(shown)
+    if layers:
+        out.update(extra)
+        # Where the library keeps no separate shading, the shading is the image itself.
+        out.setdefault("shading", img)
+    return out
+
+
+class Reconstruction:
+    """What :func:`solve` recovered: ``normals`` (H×W×3, unit, x right, y up, z toward the
+    viewer), ``depth`` (H×W, pixels toward the viewer, lowest masked point 0), the
+    stereographic gradients ``f`` and ``g`` (H×W), whether the solver ``converged``, its
+    ``iterations``, and the ``report`` dict (what the command line writes as report.json)."""
+
+    __slots__ = ("normals", "depth", "f", "g", "converged", "iterations", "report")
+
+    def __init__(
+        self,
+        normals: np.ndarray,
+        depth: np.ndarray,
+        f: np.ndarray,
+        g: np.ndarray,
+        report: Dict[str, Any],
+    ) -> None:
+        self.normals = normals
+        self.depth = depth
+        self.f = f
+        self.g = g
+        self.report = report
+        self.converged: bool = bool(report["solver"]["converged"])
+        self.iterations: int = int(report["solver"]["iterations"])
+
+    def __repr__(self) -> str:
+        h, w = self.depth.shape
+        state = "converged" if self.converged else "NOT converged"
+        unit = self.report["solver"]["iteration_unit"]
+        return f"<Reconstruction {h}×{w}, {state} after {self.iterations} {unit}>"
+
+
+def save(
+    stim: Dict[str, Any],
+    path: Union[str, "os.PathLike[str]"],
+    *,
+    bit_depth: Optional[int] = None,
+    gamma: Optional[float] = None,
+    range: Optional[str] = None,
+    display: Any = None,
+    luminance: Any = None,
+    layers: bool = False,
+    force: bool = False,
+) -> List[str]:
+    """Writes a :func:`render` dict as ``shadelab render`` writes it, byte for byte.
+
+    The format follows ``path``'s extension (``.png`` 8- or 16-bit, ``.npy`` float32, ``.mat``
+    or ``.npz`` bundles, ``.svg`` for vector stimuli); the target mask (``NAME_mask.png``) and
+    the JSON sidecar with every parameter go beside it, and with ``layers=True`` the surface
+    layers. ``gamma`` display-encodes a PNG (recorded; its gAMA chunk says so too), ``range``
+    is ``"unit"`` (0..1) or ``"psychopy"`` (−1..1, float formats), ``display`` and
+    ``luminance`` write a display's codes (PNG; see :func:`render`); each not given is taken
+    from the dict's ``export`` (what :func:`render` was asked for), else 16 bits, linear,
+    0..1, no display. The stimulus is rendered
+    again from its recorded name, parameters, seed, shape and ppd by the command line's own
+    pipeline and writer, so the files are those ``shadelab render`` writes. As there, a file
+    shadelab did not write is not replaced unless ``force=True``, and the set of files is
+    written whole or not at all. Returns the paths written.
+
+    >>> import tempfile, pathlib
+    >>> s = render("checkerboard", shape=(16, 24), ppd=8)
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     [pathlib.Path(p).name for p in save(s, pathlib.Path(d) / "c.png")]
+    ['c_mask.png', 'c.png', 'c.json']
+    """
+    try:
+        name, params = stim["stimulus"], stim["parameters"]
+        shape, ppd, seed = stim["shape"], stim["ppd"], stim["seed"]
+    except (KeyError, TypeError):
+        raise ValueError(
+            "save: stim must be a dict that shadelab.render returned (stimulus, parameters, "
+            "shape, ppd, seed)"
+        ) from None
+    asked = stim.get("export") or {}
+    if bit_depth is None:
+        bit_depth = asked.get("bit_depth") or 16
+    if gamma is None:
+        gamma = asked.get("gamma")
+    if range is None:
+        range = asked.get("range") or "unit"
+    if display is None:
+        display = asked.get("display")
+        if luminance is None:
+            luminance = asked.get("luminance")
+    display_path, display_json = _display_arg(display)
+    return list(
+        _shadelab.save(
+            str(name),
+            _params_json(dict(params)),
+            float(ppd),
+            (int(shape[0]), int(shape[1])),
+            int(seed),
+            _fspath(path),
+            int(bit_depth),
+            _opt(float, gamma),
+            str(range),
+            display_path,
+            display_json,
+            _luminance_arg(luminance),
+            bool(layers),
+            bool(force),
+        )
+    )
+
+
+def solve(
+    image: Any,
+    *,
+    light: Any,
+    mask: Any = None,
+    boundary: str = "occluding",
+    albedo: Union[float, str, None] = None,
+    lam: float = 1.0,
+    method: str = "multigrid",
+    tol: float = 1e-6,
+    max_iter: Optional[int] = None,
+    saturation: Union[float, str, None] = "auto",
+) -> Reconstruction:
+    """Recovers shape from one H×W image of linear luminance (``shadelab solve``).
+
+    ``light`` is an ``(x, y, z)`` vector toward the light, ``"tilt=T,slant=S"``, a name, or
+    ``"estimate"`` (estimated from the image with the albedo). ``mask``: nonzero = the object
+    (default: the whole image). ``boundary``: ``occluding``, ``flat``, ``free``, ``limb``
+    (occluding where the outline's shading allows a limb, else the outward direction at the
+    slant the shading gives) or the path of an H×W×3 ``.npy`` of rim normals. ``albedo``: default 1, or the estimate when the light is
+    estimated; or ``"estimate"``: the library's albedo rule (the bright tail of the brightness
+    on the mask extrapolated, as ``solve --albedo estimate`` and ``eval``), so the answer does
+    not depend on how the image was scaled; ``report["parameters"]["albedo_estimate"]`` gives
+    it. ``saturation``: where the image was clipped, its pixels at or above that brightness
+    carrying no brightness term (``"auto"``, the default: the clipped plateau the albedo
+    estimate finds; ``"none"`` or ``None``: no pixel; or a level in the image's units);
+    ``report["solver"]["clipped"]`` counts them. ``lam``, ``method`` (``multigrid``,
+    ``jacobi``, ``literal``, ``integrable``, ``integrable-lm``), ``tol`` and ``max_iter`` are
+    the solver's settings.
+
+    >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
+    >>> r = solve(s["img"], light=(0.3, 0.4, 0.866), mask=s["target_mask"])
+    >>> r.converged, r.normals.shape, r.depth.shape
+    (True, (64, 64, 3), (64, 64))
+    """
+    img = _float_image(image, "image", colour=False)
+    inside = None
+    if mask is not None:
+        m = np.asarray(mask)
+        if m.ndim != 2:
+            raise ValueError(f"mask: expected a 2-D H×W array, found shape {m.shape}")
+        inside = m != 0
+    estimate = isinstance(albedo, str)
+    if estimate and albedo != "estimate":
+        raise ValueError(f"albedo: {albedo!r} is neither a number nor 'estimate'")
+    normals, depth, f, g, report_json = _shadelab.solve(
+        img,
+        inside,
+        _light_text(light),
+        str(boundary),
+        None if albedo is None or estimate else float(albedo),
+        estimate,
+        float(lam),
+        str(method),
+        float(tol),
+        None if max_iter is None else int(max_iter),
+        "none" if saturation is None else str(saturation),
+    )
+    return Reconstruction(normals, depth, f, g, json.loads(report_json))
+
+
+def prior_sweep(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    mask: Any = None,
+    tilts: Optional[Sequence[float]] = None,
+    binding: Union[None, str, float] = None,
+    domain: str = "auto",
+    boundary: str = "flat",
+    slant: float = 45.0,
+    albedo: Optional[float] = None,
+    ambient: Optional[float] = None,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Dict[str, Any]:
+    """How the picture reads under each assumed light tilt (``shadelab analyze prior-sweep``).
+
+    ``picture`` is a stimulus name (rendered with ``params``, ``seed``, ``ppd`` and ``shape``
+    ``(height, width)``, and read with its own targets) or an image array; ``mask`` gives an
+    array's target labels (0 = background). ``domain`` is what is solved: ``"auto"`` (the
+    default, as the CLI: the targets of an object on a backdrop such as the sphere or the hollow
+    mask, the whole picture otherwise), ``"image"``, ``"tokens"`` or a PNG mask's path. ``tilts`` in degrees (0 = from above, +90 = from the
+    left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
+    light. Returns the report (what sweep.json holds) with two arrays added: ``tilts`` and
+    ``convexities`` (tokens × tilts, positive convex, negative concave).
+
+    >>> r = prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0, 180])
+    >>> r["convexities"].shape == (len(r["tokens"]), 2)
+    True
+    """
+    report_json, tilt_array, convexity = _shadelab.prior_sweep(
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        _floats(tilts),
+        _opt(str, binding),
+    )
+    report = json.loads(report_json)
+    report["tilts"] = tilt_array
+    report["convexities"] = convexity
+    return report
+
+
+def observer(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    shape: Any = None,
+    mask: Any = None,
+    prior_tilt: Optional[float] = None,
+    kappas: Optional[Sequence[float]] = None,
+    convexity_bias: Optional[float] = None,
+    noise: Optional[float] = None,
+    rotations: Optional[Sequence[float]] = None,
+    tilts: Optional[Sequence[float]] = None,
+    domain: str = "auto",
+    boundary: str = "flat",
+    slant: float = 45.0,
+    albedo: Optional[float] = None,
+    ambient: Optional[float] = None,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Dict[str, Any]:
+    """A Bayesian observer's percepts of the picture at each rotation
+    (``shadelab analyze observer``): the report, as observer.json holds it.
+
+    ``picture``, ``ppd``, ``shape``, ``mask``, ``domain``, ``boundary``, ``slant``, ``albedo``,
+    ``ambient``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
+    and ``kappas`` describe the von Mises prior over the light's tilt, ``convexity_bias`` the
+    log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
+    judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
+    """
+    report_json = _shadelab.observer(
+        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        (
+            _opt(float, prior_tilt),
+            _floats(kappas),
+            _opt(float, convexity_bias),
+            _opt(float, noise),
+            _floats(rotations),
+            _floats(tilts),
+        ),
+    )
+    return json.loads(report_json)
+
+
+def lightness(
+    picture: Any,
+    *,
+    ppd: Optional[float] = None,
+    model: str = "odog",
+    mask: Any = None,
+    targets: bool = False,
+    seed: Optional[int] = None,
+    **params: Any,
+) -> Any:
+    """A lightness model's output for the picture (``shadelab analyze lightness``), H×W.
+
+    ``picture`` is an image array (gray H×W, or RGB H×W×3 taken as its luminance) or a
+    stimulus name (rendered at ``ppd`` with ``params`` and ``seed``). ``ppd`` is required for
+    an array when the model works in degrees (every model but ``retinex``).
+    ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. With ``mask`` (target
+    labels, 0 = background) or ``targets=True`` (a stimulus's own targets), returns
+    ``(output, target_means)``: one dict per target with its ``label``, ``name``, ``pixels``,
+    mean ``luminance`` and mean model ``output``.
+
+    >>> out = lightness("checker-shadow", ppd=16, model="retinex")
+    >>> out.ndim
+    2
+    """
+    out, report_json = _shadelab.lightness(
+        _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
+    )
+    if mask is None and not targets:
+        return out
+    report = json.loads(report_json)
+    means = report["targets"][0]["targets"] if report["targets"] else []
+    return out, means
