@@ -129,17 +129,7 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .find(|p| p.extension().is_some_and(|e| e == "whl"))
         .expect("maturin wrote a wheel");
-    let install = Command::new(&py)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "--no-deps",
-            "--force-reinstall",
-        ])
-        .arg(&wheel)
+    let install = pip_install(&py, &["--no-deps", "--force-reinstall"], &wheel)
         .output()
         .expect("pip runs");
     assert!(
@@ -149,22 +139,8 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         text(&install)
     );
 
-    // The suite, from outside python/ so that `import shadelab` is the installed wheel.
-    let pytest = Command::new(&py)
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
-        .arg(root.join("python").join("tests"))
-        .current_dir(&dir)
-        // `shadelab.save` is compared byte for byte with the command line's `render`.
-        .env("SHADELAB_BIN", env!("CARGO_BIN_EXE_shadelab"))
-        .output()
-        .expect("pytest runs");
-    let report = text(&pytest);
-    assert!(
-        pytest.status.success(),
-        "the pytest suite failed:\n{report}"
-    );
-    let summary = report.lines().rev().find(|l| l.contains("passed"));
-    eprintln!("python: {}", summary.unwrap_or("pytest passed"));
+    let summary = pytest_suite(&py, &dir, &mut |_| {});
+    eprintln!("python: {summary}");
 
     the_wheel_installs_and_passes_without_rust(&python, &dir, &wheel);
 }
@@ -211,16 +187,7 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
         .expect("venv runs");
     assert!(made.status.success(), "{}", text(&made));
     let py = venv_python(&clean);
-    let pip = Command::new(&py)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "numpy",
-            "pytest",
-        ])
+    let pip = pip_install(&py, &["numpy"], Path::new("pytest"))
         .env("PATH", &path)
         .output()
         .expect("pip runs");
@@ -230,17 +197,7 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
             text(&pip).trim().lines().last().unwrap_or("")
         ));
     }
-    let install = Command::new(&py)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "--only-binary",
-            ":all:",
-        ])
-        .arg(wheel)
+    let install = pip_install(&py, &["--only-binary", ":all:"], wheel)
         .env("PATH", &path)
         .env_remove("CARGO_HOME")
         .env_remove("RUSTUP_HOME")
@@ -278,26 +235,50 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
         counts[0] >= 5 && counts[2] > 1000,
         "metadata: {said}"
     );
-    let pytest = Command::new(&py)
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+    let summary = pytest_suite(&py, dir, &mut |cmd| {
+        // PsychoPy lives in the build venv only; here its window test says why it skips.
+        cmd.env("PATH", &path)
+            .env_remove("SHADELAB_REQUIRE_PSYCHOPY");
+    });
+    eprintln!(
+        "python, clean venv without Rust: {bytes} bytes wheel, {}; {summary}",
+        lines[0]
+    );
+}
+
+/// `py -m pip install --quiet` with `options` and then `what` (a wheel or a package name).
+fn pip_install(py: &Path, options: &[&str], what: &Path) -> Command {
+    let mut cmd = Command::new(py);
+    cmd.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+    ])
+    .args(options)
+    .arg(what);
+    cmd
+}
+
+/// Runs the pytest suite with `py` from `dir` (outside python/, so that `import shadelab` is
+/// the installed wheel), `adjust` setting its environment; fails with pytest's report unless
+/// it passes, and returns pytest's summary line.
+fn pytest_suite(py: &Path, dir: &Path, adjust: &mut dyn FnMut(&mut Command)) -> String {
+    let mut cmd = Command::new(py);
+    cmd.args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(root().join("python").join("tests"))
         .current_dir(dir)
-        .env("PATH", &path)
-        .env("SHADELAB_BIN", env!("CARGO_BIN_EXE_shadelab"))
-        // PsychoPy lives in the build venv only; here its window test says why it skips.
-        .env_remove("SHADELAB_REQUIRE_PSYCHOPY")
-        .output()
-        .expect("pytest runs");
+        // `shadelab.save` is compared byte for byte with the command line's `render`.
+        .env("SHADELAB_BIN", env!("CARGO_BIN_EXE_shadelab"));
+    adjust(&mut cmd);
+    let pytest = cmd.output().expect("pytest runs");
     let report = text(&pytest);
     assert!(
         pytest.status.success(),
-        "the suite failed against the installed wheel:\n{report}"
+        "the pytest suite failed with {}:\n{report}",
+        py.display()
     );
     let summary = report.lines().rev().find(|l| l.contains("passed"));
-    eprintln!(
-        "python, clean venv without Rust: {} bytes wheel, {}; {}",
-        bytes,
-        lines[0],
-        summary.unwrap_or("pytest passed")
-    );
+    summary.unwrap_or("pytest passed").to_string()
 }

@@ -51,6 +51,19 @@ fn linear(d: &Path, args: &[&str]) -> Vec<f64> {
     array.data
 }
 
+/// Renders `stimulus` (name and flags) for the display file `display` at `luminance` to `out`.
+fn on_display(d: &Path, stimulus: &[&str], display: &str, luminance: &str, out: &str) {
+    let mut args = vec!["render"];
+    args.extend_from_slice(stimulus);
+    args.extend(["--display", display, "--luminance", luminance, "--out", out]);
+    let run = shadelab(d, &args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
 const DISPLAY_8: &str =
     r#"{"name": "lab", "bit_depth": 8, "gamma": 2.2, "black_cd_m2": 0.5, "white_cd_m2": 120}"#;
 
@@ -63,22 +76,7 @@ fn each_code_shows_its_pixel_within_half_a_step_at_8_10_and_16_bits() {
     for bits in [8u8, 10, 16] {
         let json = DISPLAY_8.replace("\"bit_depth\": 8", &format!("\"bit_depth\": {bits}"));
         std::fs::write(d.join("lab.json"), json).unwrap();
-        let mut args = vec!["render"];
-        args.extend_from_slice(&stimulus);
-        args.extend([
-            "--display",
-            "lab.json",
-            "--luminance",
-            "2,100",
-            "--out",
-            "s.png",
-        ]);
-        let out = shadelab(&d, &args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        on_display(&d, &stimulus, "lab.json", "2,100", "s.png");
         let (codes, channels, file_bits, sbit, gamma) = samples(&d.join("s.png"));
         assert_eq!(channels, 1);
         assert_eq!(
@@ -143,21 +141,12 @@ fn the_sidecar_records_each_targets_luminance_and_the_file_reads_back_as_the_sti
     std::fs::write(d.join("lab.json"), DISPLAY_8).unwrap();
     let stimulus = ["bumps", "--size", "160x120"];
     let truth = linear(&d, &stimulus);
-    let mut args = vec!["render"];
-    args.extend_from_slice(&stimulus);
-    args.extend([
-        "--display",
+    on_display(
+        &d,
+        &stimulus,
         "lab.json",
-        "--luminance",
         "background=40,michelson=0.5",
-        "--out",
         "b.png",
-    ]);
-    let out = shadelab(&d, &args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let side = sidecar(&d.join("b.json"));
     assert_eq!(side["luminance"]["black_cd_m2"], 20.0);
