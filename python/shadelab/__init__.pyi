@@ -133,6 +133,8 @@ def to_psychopy(
     *,
     units: Literal["pix", "deg"] = "pix",
     codes: Optional[bool] = None,
+    display: Optional[DisplaySpec] = None,
+    luminance: Optional[LuminanceSpec] = None,
 ) -> Dict[str, Any]: ...
 
 def save(

@@ -9,7 +9,14 @@ import numpy as np
 _UNITS = ("pix", "deg")
 
 
-def to_psychopy(stim: Any, *, units: str = "pix", codes: Optional[bool] = None) -> Dict[str, Any]:
+def to_psychopy(
+    stim: Any,
+    *,
+    units: str = "pix",
+    codes: Optional[bool] = None,
+    display: Any = None,
+    luminance: Any = None,
+) -> Dict[str, Any]:
     """The keyword arguments of PsychoPy's ``visual.ImageStim`` that show ``stim`` upright.
 
     ``stim`` is a :func:`render` dict (or a bare H×W or H×W×3 array of linear luminance 0..1,
@@ -37,7 +44,10 @@ def to_psychopy(stim: Any, *, units: str = "pix", codes: Optional[bool] = None) 
     becomes c / top · 2 − 1, so that a window *without* gamma correction (the display's own
     response, which the codes already invert) puts exactly those codes in the frame buffer —
     8-bit codes in an 8-bit window, 10-bit ones in a window opened with ``bpc=10``; bit-stolen
-    codes are RGB. The test reads them back from a real window, code for code.
+    codes are RGB. The test reads them back from a real window, code for code. ``display=``
+    (and ``luminance=``, as :func:`render` takes them) renders a dict again for that display
+    first: ``to_psychopy(s, display="lab.json")`` is ``to_psychopy(render(..., display=...))``
+    of the same stimulus.
 
     >>> s = shadelab.render("sphere", shape=(48, 64), light="above")
     >>> kw = to_psychopy(s)
@@ -49,6 +59,22 @@ def to_psychopy(stim: Any, *, units: str = "pix", codes: Optional[bool] = None) 
     if units not in _UNITS:
         raise ValueError(f"to_psychopy: unknown units {units!r} (valid: pix, deg)")
     is_dict = isinstance(stim, dict)
+    if display is not None:
+        if not is_dict or "stimulus" not in stim:
+            raise ValueError("to_psychopy: display= needs a dict that shadelab.render returned")
+        from ._api import render
+
+        stim = render(
+            stim["stimulus"],
+            shape=stim["shape"],
+            ppd=stim["ppd"],
+            seed=stim["seed"],
+            display=display,
+            luminance=luminance,
+            **stim["parameters"],
+        )
+    elif luminance is not None:
+        raise ValueError("to_psychopy: luminance= needs display=")
     shown = is_dict and isinstance(stim.get("display"), dict) and "codes" in stim
     if codes and not shown:
         raise ValueError("to_psychopy: codes=True needs a dict rendered with display=...")

@@ -164,6 +164,10 @@ def test_a_displays_codes_reach_the_frame_buffer_code_for_code(window, quantise)
         codes = np.repeat(codes[..., None], 3, axis=2)
     assert (shown == codes).all(), f"{int((shown != codes).sum())} codes differ"
     assert shown[:50].mean() > shown[50:].mean(), "upright: lit from above"
+    # The same, asked of a plain render: to_psychopy renders it again for the display.
+    plain = shadelab.render("sphere", shape=(100, 120), light="above")
+    again = shadelab.to_psychopy(plain, display=dict(LAB, quantise=quantise), luminance=(5, 100))
+    assert np.array_equal(again["image"], kw["image"])
 
 
 def test_psychopys_own_inverse_gamma_agrees_with_the_display_codes():
@@ -219,3 +223,12 @@ def test_to_psychopy_reads_integer_codes_as_the_command_line_does():
     assert (kw["image"] == np.flipud(np.float32(codes / 255.0 * 2 - 1))).all()
     wide = np.array([[0, 65535]], dtype=np.uint16)
     assert (shadelab.to_psychopy(wide)["image"] == np.float32([[-1.0, 1.0]])).all()
+
+
+def test_to_psychopy_for_a_display_needs_a_render_dict():
+    with pytest.raises(ValueError, match="display= needs a dict"):
+        shadelab.to_psychopy(np.zeros((4, 4)), display=LAB)
+    with pytest.raises(ValueError, match="luminance= needs display="):
+        shadelab.to_psychopy(shadelab.render("sphere", shape=(8, 8)), luminance=(5, 100))
+    with pytest.raises(ValueError, match="codes=True needs"):
+        shadelab.to_psychopy(shadelab.render("sphere", shape=(8, 8)), codes=True)
