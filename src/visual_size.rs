@@ -90,8 +90,26 @@ impl SizeRequest {
         self.shape = Some(shape);
     }
 
+    /// The visual size asked for, (height, width), when whole pixels made `geometry` smaller
+    /// (shape from visual size and ppd, rounded down as stimupy does); `None` when it is what
+    /// was asked or no visual size was given with the ppd.
+    ///
+    /// ```
+    /// use shadelab::SizeRequest;
+    /// let size = SizeRequest { visual_size: Some((3.3, 5.1)), ppd: Some(31.7), shape: None };
+    /// let g = size.resolve((1.0, 1.0), 1.0, 1 << 24).unwrap();
+    /// assert_eq!((g.height, g.width), (104, 161)); // stimupy's shape
+    /// assert_eq!(size.rounded_visual_size(&g), Some((3.3, 5.1)));
+    /// ```
+    pub fn rounded_visual_size(&self, geometry: &Geometry) -> Option<(f64, f64)> {
+        let (v, _) = (self.visual_size?, self.ppd?);
+        let made = (geometry.height_deg(), geometry.width_deg());
+        let off = |a: f64, b: f64| (a - b).abs() > 1e-9 * a.abs().max(1.0);
+        (self.shape.is_none() && (off(v.0, made.0) || off(v.1, made.1))).then_some(v)
+    }
+
     /// Resolves the triple (all pairs (height, width)). Visual size and ppd give the shape
-    /// (round(visual size × ppd)); ppd and shape give the visual size; a shape without a ppd
+    /// ([`whole_pixels`]: rounded down, as stimupy); ppd and shape give the visual size; a shape without a ppd
     /// takes the largest ppd at which the visual size (`default_visual_size` when none is
     /// given) fits it, the rest of the shape being field; all three must agree to within half
     /// a pixel. Without a shape, `default_ppd` and then `default_visual_size` fill in.
@@ -150,9 +168,22 @@ fn fit_ppd(visual: (f64, f64), shape: (usize, usize)) -> f64 {
     (shape.0 as f64 / visual.0).min(shape.1 as f64 / visual.1)
 }
 
+/// Whole pixels of `degrees` at `ppd` as stimupy makes them: the product rounded to 10
+/// decimals (so that 0.29 × 100 is 29, not 28), then rounded down (3.3° × 31.7 ppd = 104.61 →
+/// 104 px): a stimulus never exceeds the visual size asked for.
+pub fn whole_pixels(degrees: f64, ppd: f64) -> f64 {
+    let product = degrees * ppd;
+    let near = product.round();
+    if (product - near).abs() <= 1e-10 * near.abs().max(1.0) {
+        near
+    } else {
+        product.floor()
+    }
+}
+
 fn round_shape(visual: (f64, f64), ppd: f64) -> Result<(usize, usize)> {
-    let h = (visual.0 * ppd).round();
-    let w = (visual.1 * ppd).round();
+    let h = whole_pixels(visual.0, ppd);
+    let w = whole_pixels(visual.1, ppd);
     if !(w >= 1.0 && h >= 1.0 && w < 1e9 && h < 1e9) {
         return Err(Error::invalid(format!(
             "visual size {}x{}° (height x width) at {ppd} ppd gives {h}x{w} pixels",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os as _os
+import warnings
 from os import fspath as _fspath
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -74,11 +75,45 @@ def _params_json(params: Dict[str, Any]) -> str:
         raise ValueError(str(e)) from None
 
 
+def _ppd(ppd: Any) -> Optional[float]:
+    """A ppd as stimupy takes it, a number or a (vertical, horizontal) pair; shadelab's pixels
+    are square, so a pair's two values must agree."""
+    if ppd is None:
+        return None
+    if isinstance(ppd, (tuple, list, np.ndarray)):
+        values = [float(v) for v in np.asarray(ppd, dtype=float).ravel()]
+        if len(values) != 2:
+            raise ValueError(f"ppd: a number or a (vertical, horizontal) pair, not {ppd!r}")
+        if values[0] != values[1]:
+            raise ValueError(
+                f"ppd: {values[0]} vertical and {values[1]} horizontal differ; shadelab's "
+                "pixels are square (one ppd for both axes)"
+            )
+        return values[0]
+    return float(ppd)
+
+
+def _stimupy_dict(picture: Any) -> Optional[Dict[str, Any]]:
+    """A stimupy-style dict (``img``, optional ``target_mask`` and ``ppd``) given as a picture,
+    or None."""
+    if isinstance(picture, dict):
+        if "img" not in picture:
+            raise ValueError(
+                "image: a dict is taken as stimupy's (or shadelab's render): it needs 'img'"
+            )
+        return picture
+    return None
+
+
 def _float_image(image: Any, what: str, colour: bool) -> np.ndarray:
     """A float64 H×W (or, with `colour`, H×W×3) array from any real-valued array, read the
     way the command line reads a ``.npy`` picture (docs/conventions.md): uint8 and uint16
     divided by 255 and 65535 (as a PNG's codes), other integer types refused, floats and
-    booleans as they are; the library then refuses values outside 0..1."""
+    booleans as they are; the library then refuses values outside 0..1. A stimupy-style dict
+    gives its ``img``."""
+    given = _stimupy_dict(image)
+    if given is not None:
+        image = given["img"]
     a = np.asarray(image)
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{what}: unsupported dtype {a.dtype} (need a real number type)")
@@ -130,12 +165,19 @@ def _picture_args(
         image, stimulus = None, picture
     else:
         image, stimulus = _float_image(picture, "image", colour), None
+        # A stimupy dict brings its geometry and targets; arguments given win.
+        given = _stimupy_dict(picture)
+        if given is not None:
+            ppd = given.get("ppd") if ppd is None else ppd
+            if mask is None and given.get("target_mask") is not None:
+                labels = np.asarray(given["target_mask"])
+                mask = labels if labels.any() else None
     return (
         image,
         stimulus,
         _params_json(params),
         _opt(int, seed),
-        _opt(float, ppd),
+        _ppd(ppd),
         _pair(shape, "shape", int),
         _labels(mask, "mask"),
     )
@@ -267,7 +309,7 @@ def render(
         name,
         _params_json(params),
         _pair(visual_size, "visual_size", float),
-        None if ppd is None else float(ppd),
+        _ppd(ppd),
         _pair(shape, "shape", int),
         0 if seed is None else int(seed),
         bool(layers),
@@ -282,6 +324,8 @@ def render(
     codes = extra.pop("codes", None)
     luminance_cd = extra.pop("luminance_cd_m2", None)
     report = json.loads(report_json)
+    for line in report.get("warnings", []):
+        warnings.warn(line, stacklevel=2)
     geometry = report["geometry"]
     height, width, resolution = geometry["height"], geometry["width"], geometry["ppd"]
     out: Dict[str, Any] = dict(report["parameters"])
@@ -582,7 +626,8 @@ def lightness(
 ) -> Any:
     """A lightness model's output for the picture (``shadelab analyze lightness``), H×W.
 
-    ``picture`` is an image array (gray H×W, or RGB H×W×3 taken as its luminance) or a
+    ``picture`` is an image array (gray H×W, or RGB H×W×3 taken as its luminance), a
+    stimupy-style dict (its ``img``, with its ``target_mask`` and ``ppd`` unless given) or a
     stimulus name (rendered at ``ppd`` with ``params`` and ``seed``). ``ppd`` is required for
     an array when the model works in degrees (every model but ``retinex``).
     ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. With ``mask`` (target
@@ -597,7 +642,9 @@ def lightness(
     out, report_json = _shadelab.lightness(
         _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
     )
-    if mask is None and not targets:
+    given = _stimupy_dict(picture)
+    from_dict = given is not None and np.asarray(given.get("target_mask", 0)).any()
+    if mask is None and not targets and not from_dict:
         return out
     report = json.loads(report_json)
     means = report["targets"][0]["targets"] if report["targets"] else []

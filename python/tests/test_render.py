@@ -86,8 +86,20 @@ def test_checkerboard_equals_stimupy(size, ppd, check):
     np.testing.assert_array_equal(s["img"], expected)
 
 
+def _stimupy():
+    """stimupy itself; the test skips saying why where it is not installed, unless
+    SHADELAB_REQUIRE_STIMUPY=1 (set by .ci/run once it installed it), where it fails."""
+    try:
+        import stimupy
+    except ImportError as e:
+        if os.environ.get("SHADELAB_REQUIRE_STIMUPY") == "1":
+            pytest.fail(f"stimupy cannot be imported, and SHADELAB_REQUIRE_STIMUPY=1: {e}")
+        pytest.skip("stimupy is not installed (pip install stimupy==1.2.0)")
+    return stimupy
+
+
 def test_checkerboard_against_stimupy_itself():
-    stimupy = pytest.importorskip("stimupy", reason="stimupy is not installed (pip install stimupy)")
+    _stimupy()
     from stimupy.stimuli.checkerboards import checkerboard
 
     theirs = checkerboard(visual_size=(4, 6), ppd=10, check_visual_size=(1, 1),
@@ -95,6 +107,64 @@ def test_checkerboard_against_stimupy_itself():
     ours = shadelab.render("checkerboard", visual_size=(4, 6), ppd=10)
     assert ours["shape"] == tuple(theirs["shape"])
     np.testing.assert_array_equal(ours["img"], theirs["img"])
+
+
+def stimupy_shape(visual_size, ppd):
+    """stimupy 1.2's rule (stimupy.utils.resolution.resolve_1D), written out: the product
+    rounded to 10 decimals, then rounded down to whole pixels."""
+    return tuple(int(np.floor(np.round(v * ppd, 10))) for v in visual_size)
+
+
+GRID = [((h, w), ppd) for h, w in [(3.3, 5.1), (0.29, 1.0), (2.0, 7.77), (4.0, 4.0)]
+        for ppd in [10, 16, 31.7, 37.3, 100]]
+
+
+@pytest.mark.parametrize("visual_size,ppd", GRID)
+def test_shape_from_visual_size_is_stimupys(visual_size, ppd):
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        s = shadelab.render("checkerboard", visual_size=visual_size, ppd=ppd)
+    expected = stimupy_shape(visual_size, ppd)
+    assert s["shape"] == expected
+    exact = all(abs(v * ppd - round(v * ppd)) < 1e-9 for v in visual_size)
+    said = [str(w.message) for w in caught if "rounded down to whole pixels" in str(w.message)]
+    assert len(said) == (0 if exact else 1), said
+    stimupy = _stimupy()
+    from stimupy.utils import resolution
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        shape, _, _ = resolution.resolve(visual_size=visual_size, ppd=ppd)
+    assert s["shape"] == (shape.height, shape.width), stimupy.__version__
+
+
+def test_3_3_by_5_1_degrees_at_31_7_ppd_warns_as_stimupy():
+    with pytest.warns(UserWarning, match=r"3.3x5.1 deg .* at 31.7 ppd is 104x161 px"):
+        s = shadelab.render("checkerboard", visual_size=(3.3, 5.1), ppd=31.7)
+    assert s["shape"] == (104, 161)
+    assert s["notes"]["visual_size_rounded"]["asked_visual_size"] == [3.3, 5.1]
+
+
+def test_ppd_as_stimupys_pair():
+    a = shadelab.render("checkerboard", visual_size=(2, 3), ppd=(10, 10))
+    assert a["shape"] == (20, 30) and a["ppd"] == 10
+    with pytest.raises(ValueError, match="pixels are square"):
+        shadelab.render("checkerboard", visual_size=(2, 3), ppd=(10, 12))
+
+
+def test_a_stimupy_dict_is_taken_as_a_picture():
+    # A dict with img, target_mask and ppd (stimupy's habit) stands for an image with its mask
+    # and resolution: the same numbers as the array with them given by hand.
+    s = shadelab.render("checker-shadow", ppd=16)
+    theirs = {"img": s["img"], "target_mask": s["target_mask"], "ppd": (16, 16)}
+    out_dict, means_dict = shadelab.lightness(theirs, model="odog")
+    out_hand, means_hand = shadelab.lightness(s["img"], mask=s["target_mask"], ppd=16, model="odog")
+    np.testing.assert_array_equal(out_dict, out_hand)
+    assert means_dict == means_hand and [m["label"] for m in means_dict] == [1, 2]
+    with pytest.raises(ValueError, match="needs 'img'"):
+        shadelab.lightness({"image": s["img"]}, model="retinex")
 
 
 def test_layers_of_a_surface():

@@ -202,6 +202,9 @@ pub fn render_to(config: &RenderConfig, global: &Global) -> CliResult {
     let report = render::run(config, &NoProgress)?;
     let files = render::write(config, &report)?;
     let out = super::output::Output::new(global);
+    for w in &report.warnings {
+        out.warn(w);
+    }
     for f in files {
         out.note(format!("wrote {}", f.display()));
     }

@@ -155,6 +155,10 @@ pub struct RenderReport {
     pub geometry: Geometry,
     /// Facts the stimulus recorded (e.g. the shared value of the checker squares).
     pub notes: Map<String, Value>,
+    /// What the user should know though nothing failed, one line each: a visual size that
+    /// whole pixels made smaller (stimupy's rounding down).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// The resolved request.
     #[serde(skip)]
     pub request: Request,
@@ -175,12 +179,19 @@ pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderRepor
     );
     progress.finish();
     let (request, output) = rendered?;
+    let warnings = config
+        .size
+        .rounded_visual_size(&request.geometry)
+        .map(|asked| stimulus::rounded_warning(&config.stimulus, &request.geometry, asked))
+        .into_iter()
+        .collect();
     Ok(RenderReport {
         stimulus: config.stimulus.clone(),
         parameters: request.params.to_json(),
         seed: request.seed,
         geometry: request.geometry,
         notes: output.notes.clone(),
+        warnings,
         request,
         output,
     })

@@ -512,9 +512,39 @@ pub fn generate(
     max_pixels: usize,
 ) -> Result<(Request, Output)> {
     let (stimulus, request) = prepare(name, given, size, seed, max_pixels)?;
-    let output = stimulus.generate(&request)?;
+    let mut output = stimulus.generate(&request)?;
     check_range(name, &request.params, &output.pixels)?;
+    if let Some(asked) = size.rounded_visual_size(&request.geometry) {
+        let g = &request.geometry;
+        output.notes.insert(
+            ROUNDED_NOTE.into(),
+            serde_json::json!({
+                "asked_visual_size": [asked.0, asked.1],
+                "visual_size": [g.height_deg(), g.width_deg()],
+                "shape": [g.height, g.width],
+            }),
+        );
+    }
     Ok((request, output))
+}
+
+/// The note of a render whose visual size whole pixels made smaller (stimupy's rounding
+/// down), recorded in the sidecar's notes; the command line and Python say it as a warning.
+pub const ROUNDED_NOTE: &str = "visual_size_rounded";
+
+/// The warning a render with [`ROUNDED_NOTE`] gives, in one line.
+pub fn rounded_warning(name: &str, g: &Geometry, asked: (f64, f64)) -> String {
+    format!(
+        "{name}: visual size {}x{} deg (height x width) at {} ppd is {}x{} px, rounded down to \
+         whole pixels as stimupy does: {:.4}x{:.4} deg",
+        asked.0,
+        asked.1,
+        g.ppd,
+        g.height,
+        g.width,
+        g.height_deg(),
+        g.width_deg()
+    )
 }
 
 #[cfg(test)]

@@ -262,3 +262,59 @@ fn a_sidecar_in_the_old_form_still_renders_and_size_rescales_a_sidecar() {
     assert_eq!(big["ppd"], 12.0);
     assert_eq!(big["shape"], serde_json::json!([120, 168]));
 }
+
+#[test]
+fn a_visual_size_is_rounded_down_to_whole_pixels_as_stimupy_and_said() {
+    // stimupy 1.2: 3.3° × 31.7 ppd = 104.61 px → 104, 5.1° → 161.67 → 161; the visual size
+    // becomes 104 / 31.7 = 3.281°, with a warning.
+    let d = scratch("conv-rounding");
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "checkerboard",
+            "--visual-size",
+            "5.1x3.3",
+            "--ppd",
+            "31.7",
+            "--out",
+            "c.png",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: checkerboard: visual size 3.3x5.1 deg (height x width) at 31.7 ppd is 104x161 px, rounded down"),
+        "{err}"
+    );
+    let side: Value = serde_json::from_slice(&std::fs::read(d.join("c.json")).unwrap()).unwrap();
+    assert_eq!(side["shape"], serde_json::json!([104, 161]));
+    assert_eq!(
+        side["notes"]["visual_size_rounded"]["asked_visual_size"],
+        serde_json::json!([3.3, 5.1])
+    );
+    // A whole number of pixels: no warning, no note.
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "checkerboard",
+            "--visual-size",
+            "6x4",
+            "--ppd",
+            "10",
+            "--out",
+            "w.png",
+        ],
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let side: Value = serde_json::from_slice(&std::fs::read(d.join("w.json")).unwrap()).unwrap();
+    assert!(side["notes"].get("visual_size_rounded").is_none());
+    // 0.29° × 100 ppd is 29 px (28.999999999999996 before the product is rounded to 10 decimals).
+    assert_eq!(shadelab::visual_size::whole_pixels(0.29, 100.0), 29.0);
+    assert_eq!(shadelab::visual_size::whole_pixels(3.3, 31.7), 104.0);
+}
