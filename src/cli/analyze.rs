@@ -37,6 +37,8 @@ pub enum Command {
 /// Runs `analyze`; the note that an 8-bit picture without a gamma chunk (or a JPEG) was
 /// decoded as sRGB is said once, after the analysis succeeded (a refusal stays one line).
 pub fn run(command: Command, global: &Global) -> CliResult {
+    // The picture's note, read from its header before the analysis (which consumes it).
+    let note = command.source().input_note();
     let result = match command {
         Command::Lightness(a) => lightness::run(a, global),
         Command::Fading(a) => fading::run(a, global),
@@ -44,15 +46,24 @@ pub fn run(command: Command, global: &Global) -> CliResult {
         Command::Observer(a) => observer::run(a, global),
         Command::Outline(a) => outline::run(a, global),
     };
-    let note = INPUT_NOTE.lock().ok().and_then(|mut n| n.take());
     if result.is_ok() {
         super::flags::say_input_note(&Output::new(global), note);
     }
     result
 }
 
-/// The input note of the picture the running analysis reads ([`Source::to_library`] sets it).
-static INPUT_NOTE: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+impl Command {
+    /// Where the subcommand's picture comes from.
+    fn source(&self) -> &Source {
+        match self {
+            Command::Lightness(a) => a.source(),
+            Command::Fading(a) => a.source(),
+            Command::PriorSweep(a) => a.source(),
+            Command::Observer(a) => a.source(),
+            Command::Outline(a) => a.source(),
+        }
+    }
+}
 
 /// Where the picture comes from: a file or a stimulus rendered on the spot.
 #[derive(Debug, clap::Args)]
@@ -122,9 +133,6 @@ impl Source {
             ..Default::default()
         };
         let out = Output::new(global);
-        if let Ok(mut note) = INPUT_NOTE.lock() {
-            *note = source.input_note();
-        }
         // A sidecar that cannot be read is reported when the picture is (after the image).
         for line in source.notes().unwrap_or_default() {
             out.note(
@@ -148,6 +156,16 @@ impl Source {
     }
 
     /// The files named, as the library's source (no parameters parsed, nothing printed).
+    /// The note that the image's codes were taken as sRGB, where they were (see
+    /// [`PictureSource::input_note`]); `None` for a bad --input-gamma (refused by the run).
+    fn input_note(&self) -> Option<String> {
+        PictureSource {
+            input_encoding: super::flags::input_gamma(&self.input_gamma).ok()?,
+            ..self.library_source()
+        }
+        .input_note()
+    }
+
     fn library_source(&self) -> PictureSource {
         PictureSource {
             image: self.image.clone(),

@@ -78,6 +78,13 @@ pub struct Args {
     out: std::path::PathBuf,
 }
 
+impl Args {
+    /// Where the picture comes from.
+    pub fn source(&self) -> &super::Source {
+        &self.source
+    }
+}
+
 /// Runs `analyze fading`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     // The flags an image needs, named as flags (the library's messages name no flag).

@@ -20,6 +20,13 @@ pub struct Args {
     out: std::path::PathBuf,
 }
 
+impl Args {
+    /// Where the picture comes from.
+    pub fn source(&self) -> &super::Source {
+        &self.source
+    }
+}
+
 /// Runs `analyze lightness`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let models = LightnessConfig::parse_models(&args.model)?;

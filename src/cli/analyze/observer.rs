@@ -63,6 +63,13 @@ pub struct Args {
     out: PathBuf,
 }
 
+impl Args {
+    /// Where the picture comes from.
+    pub fn source(&self) -> &super::Source {
+        &self.picture.source
+    }
+}
+
 /// Runs `analyze observer`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();

@@ -51,6 +51,13 @@ pub struct Args {
     out: PathBuf,
 }
 
+impl Args {
+    /// Where the picture comes from.
+    pub fn source(&self) -> &super::Source {
+        &self.source
+    }
+}
+
 /// Runs `analyze outline`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();

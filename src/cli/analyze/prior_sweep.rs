@@ -32,6 +32,13 @@ pub struct Args {
     out: PathBuf,
 }
 
+impl Args {
+    /// Where the picture comes from.
+    pub fn source(&self) -> &super::Source {
+        &self.picture.source
+    }
+}
+
 /// Runs `analyze prior-sweep`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
