@@ -56,11 +56,11 @@ impl Command {
     /// Where the subcommand's picture comes from.
     fn source(&self) -> &Source {
         match self {
-            Command::Lightness(a) => a.source(),
-            Command::Fading(a) => a.source(),
-            Command::PriorSweep(a) => a.source(),
-            Command::Observer(a) => a.source(),
-            Command::Outline(a) => a.source(),
+            Command::Lightness(a) => &a.source,
+            Command::Fading(a) => &a.source,
+            Command::PriorSweep(a) => &a.picture.source,
+            Command::Observer(a) => &a.picture.source,
+            Command::Outline(a) => &a.source,
         }
     }
 }

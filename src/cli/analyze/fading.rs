@@ -16,7 +16,7 @@ use shadelab::pipeline::fading::{self, FadingConfig};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    source: Source,
+    pub source: Source,
     /// Adaptation time constant τ in seconds.
     #[arg(
         long,
@@ -76,13 +76,6 @@ pub struct Args {
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: std::path::PathBuf,
-}
-
-impl Args {
-    /// Where the picture comes from.
-    pub fn source(&self) -> &super::Source {
-        &self.source
-    }
 }
 
 /// Runs `analyze fading`.

@@ -11,20 +11,13 @@ use shadelab::pipeline::lightness::{self, LightnessConfig};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    source: Source,
+    pub source: Source,
     /// The model: odog, lodog, flodog, retinex, or all (each in turn).
     #[arg(long, value_name = "odog|lodog|flodog|retinex|all")]
     model: String,
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: std::path::PathBuf,
-}
-
-impl Args {
-    /// Where the picture comes from.
-    pub fn source(&self) -> &super::Source {
-        &self.source
-    }
 }
 
 /// Runs `analyze lightness`.

@@ -19,7 +19,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    picture: PictureArgs,
+    pub picture: PictureArgs,
     /// Mean of the von Mises prior over light tilt, degrees (+26 = 26° left of vertical).
     #[arg(long, value_name = "DEG", default_value_t = DEFAULT_PRIOR_TILT_DEG, allow_hyphen_values = true)]
     prior_tilt: f64,
@@ -61,13 +61,6 @@ pub struct Args {
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-}
-
-impl Args {
-    /// Where the picture comes from.
-    pub fn source(&self) -> &super::Source {
-        &self.picture.source
-    }
 }
 
 /// Runs `analyze observer`.

@@ -17,7 +17,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    source: Source,
+    pub source: Source,
     /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
     #[arg(
         long,
@@ -49,13 +49,6 @@ pub struct Args {
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-}
-
-impl Args {
-    /// Where the picture comes from.
-    pub fn source(&self) -> &super::Source {
-        &self.source
-    }
 }
 
 /// Runs `analyze outline`.

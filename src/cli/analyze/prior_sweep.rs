@@ -18,7 +18,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    picture: PictureArgs,
+    pub picture: PictureArgs,
     /// Assumed light tilts, degrees: START:STOP:STEP (STOP excluded) or a list; 0 = from
     /// above, +90 = from the left.
     #[arg(long, value_name = "START:STOP:STEP", default_value = DEFAULT_TILTS, allow_hyphen_values = true)]
@@ -30,13 +30,6 @@ pub struct Args {
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-}
-
-impl Args {
-    /// Where the picture comes from.
-    pub fn source(&self) -> &super::Source {
-        &self.picture.source
-    }
 }
 
 /// Runs `analyze prior-sweep`.
