@@ -236,9 +236,10 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
         "metadata: {said}"
     );
     let summary = pytest_suite(&py, dir, &mut |cmd| {
-        // PsychoPy lives in the build venv only; here its window test says why it skips.
+        // PsychoPy and stimupy live in the build venv only; here their tests say why they skip.
         cmd.env("PATH", &path)
-            .env_remove("SHADELAB_REQUIRE_PSYCHOPY");
+            .env_remove("SHADELAB_REQUIRE_PSYCHOPY")
+            .env_remove("SHADELAB_REQUIRE_STIMUPY");
     });
     eprintln!(
         "python, clean venv without Rust: {bytes} bytes wheel, {}; {summary}",
