@@ -29,6 +29,7 @@
 
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels};
+use serde::Serialize;
 use serde_json::{json, Value};
 
 /// The Rec. 709 luminance weights of R, G and B: what each channel adds to a gray's luminance
@@ -324,10 +325,24 @@ pub struct Shown {
     pub mapping: Luminance,
 }
 
+/// What a display shows of one target.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TargetLuminance {
+    /// Its label in the target mask.
+    pub label: u16,
+    /// Its name.
+    pub name: String,
+    /// The mean luminance shown over its pixels, cd/m².
+    pub luminance_cd_m2: f64,
+    /// (L − background) / background, where the mapping has a background.
+    pub weber_vs_background: Option<f64>,
+}
+
 impl Shown {
-    /// The luminance shown in each target (mean over its pixels, cd/m²), with its Weber
-    /// contrast against the background where the mapping has one: (name, cd/m², Weber).
-    pub fn targets(&self, labels: &Labels, names: &[String]) -> Vec<(String, f64, Option<f64>)> {
+    /// The luminance shown in each target that has pixels (mean over them, cd/m²), with its
+    /// Weber contrast against the background where the mapping has one; `names[l - 1]` names
+    /// label `l`.
+    pub fn targets(&self, labels: &Labels, names: &[String]) -> Vec<TargetLuminance> {
         let mut sums = vec![(0.0, 0usize); names.len()];
         for (&l, &v) in labels.data().iter().zip(self.luminance.data()) {
             if l >= 1 && (l as usize) <= names.len() {
@@ -336,16 +351,32 @@ impl Shown {
                 s.1 += 1;
             }
         }
-        names
-            .iter()
-            .zip(sums)
-            .filter(|(_, (_, n))| *n > 0)
-            .map(|(name, (sum, n))| {
+        (1u16..)
+            .zip(names.iter().zip(sums))
+            .filter(|(_, (_, (_, n)))| *n > 0)
+            .map(|(label, (name, (sum, n)))| {
                 let mean = sum / n as f64;
-                let weber = self.mapping.background().map(|b| (mean - b) / b);
-                (name.clone(), mean, weber)
+                TargetLuminance {
+                    label,
+                    name: name.clone(),
+                    luminance_cd_m2: mean,
+                    weber_vs_background: self.mapping.background().map(|b| (mean - b) / b),
+                }
             })
             .collect()
+    }
+
+    /// The mapping and the error, as a sidecar records them: `luminance` and
+    /// `luminance_error_cd_m2` (`max`, `rms`).
+    pub fn to_json(&self) -> serde_json::Map<String, Value> {
+        let (max, rms) = self.error();
+        let mut record = serde_json::Map::new();
+        record.insert("luminance".into(), self.mapping.to_json());
+        record.insert(
+            "luminance_error_cd_m2".into(),
+            json!({"max": max, "rms": rms}),
+        );
+        record
     }
 
     /// The error of the luminance shown against the luminance wanted: (largest, root mean
@@ -478,9 +509,8 @@ impl Display {
         code as u16
     }
 
-    /// The codes that show `stimulus` (linear 0..1) at the luminances `mapping` asks for, and
-    /// what they show. The mapping must lie within the display's black and white.
-    pub fn show(&self, stimulus: &Image, mapping: Luminance) -> Result<Shown> {
+    /// Checks that `mapping` is well formed and within the display's black and white.
+    pub fn check_mapping(&self, mapping: Luminance) -> Result<()> {
         mapping.check().map_err(Error::invalid)?;
         let (lo, hi) = mapping.span();
         let (black, white) = self.black_white();
@@ -492,6 +522,14 @@ impl Display {
                 self.name
             )));
         }
+        Ok(())
+    }
+
+    /// The codes that show `stimulus` (linear 0..1) at the luminances `mapping` asks for, and
+    /// what they show. The mapping must lie within the display's black and white.
+    pub fn show(&self, stimulus: &Image, mapping: Luminance) -> Result<Shown> {
+        self.check_mapping(mapping)?;
+        let (lo, hi) = mapping.span();
         let wanted = stimulus.map(|&v| lo + v * (hi - lo));
         let (w, h) = (stimulus.width(), stimulus.height());
         let (codes, channels, luminance): (Vec<u16>, usize, Vec<f64>) = match self.quantise {

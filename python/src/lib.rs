@@ -258,15 +258,12 @@ fn render<'py>(
         extra.set_item("codes", codes)?;
         extra.set_item("luminance_cd_m2", image_array(py, shown.luminance.clone()))?;
         let mut record = display.to_json();
-        record["luminance"] = shown.mapping.to_json();
-        let (max, rms) = shown.error();
-        record["luminance_error_cd_m2"] = serde_json::json!({"max": max, "rms": rms});
+        if let Value::Object(fields) = &mut record {
+            fields.extend(shown.to_json());
+        }
         if let Some(t) = &output.targets {
-            record["targets"] = shown
-                .targets(&t.labels, &t.names)
-                .into_iter()
-                .map(|(n, l, w)| serde_json::json!({"name": n, "luminance_cd_m2": l, "weber_vs_background": w}))
-                .collect();
+            record["targets"] = serde_json::to_value(shown.targets(&t.labels, &t.names))
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         }
         extra.set_item("display_json", record.to_string())?;
     } else if export.gamma.is_some() || bit_depth.is_some() {
@@ -339,11 +336,6 @@ fn export_options(
             )))
         }
     };
-    if let Some(g) = gamma {
-        if !(g.is_finite() && g > 0.0 && g <= 10.0) {
-            return Err(PyValueError::new_err(format!("gamma {g} must be in (0, 10]")));
-        }
-    }
     export.display = match (display, display_json) {
         (Some(path), _) => Some(shadelab::io::read_display(&path).map_err(to_py)?),
         (None, Some(text)) => {
@@ -359,16 +351,13 @@ fn export_options(
                 .map_err(|e: Error| PyValueError::new_err(format!("luminance: {e}")))?,
         );
     }
+    // The command line refuses these together by its flags.
     if export.display.is_some() && (gamma.is_some() || bit_depth != 16 || range != "unit") {
         return Err(PyValueError::new_err(
             "display: a display's model sets the codes; give it without gamma, bit_depth or range",
         ));
     }
-    if export.luminance.is_some() && export.display.is_none() {
-        return Err(PyValueError::new_err(
-            "luminance: a luminance in cd/m² needs a display (its model turns cd/m² into codes)",
-        ));
-    }
+    export.check_display_options().map_err(to_py)?;
     Ok(export)
 }
 

@@ -93,7 +93,7 @@ fn from_json(path: &Path, stem: &str, value: &Value) -> Result<Display> {
     {
         return psychopy_monitor(stem, map, None, 8, Quantise::Plain);
     }
-    const KEYS: [&str; 10] = [
+    const KEYS: [&str; 12] = [
         "name",
         "bit_depth",
         "quantise",
@@ -104,14 +104,12 @@ fn from_json(path: &Path, stem: &str, value: &Value) -> Result<Display> {
         "equation",
         "table",
         "psychopy_monitor",
+        "calibration",
+        "channel_weights",
     ];
-    if let Some(k) = map.keys().find(|k| {
-        !KEYS.contains(&k.as_str())
-            && k.as_str() != "calibration"
-            && k.as_str() != "channel_weights"
-    }) {
+    if let Some(k) = map.keys().find(|k| !KEYS.contains(&k.as_str())) {
         return Err(bad(format!(
-            "unknown key '{k}' (valid: {}, calibration, channel_weights)",
+            "unknown key '{k}' (valid: {})",
             KEYS.join(", ")
         )));
     }

@@ -237,10 +237,8 @@ impl PictureSource {
             (Some(path), _) => {
                 let encoding = self.input_encoding;
                 // Other extensions go to read_luminance, whose error lists those it reads.
-                let picture_file = matches!(
-                    io::extension(path).as_str(),
-                    "png" | "jpg" | "jpeg" | "tif" | "tiff"
-                );
+                let ext = io::extension(path);
+                let picture_file = ext != "npy" && io::PICTURE_EXTENSIONS.contains(&ext.as_str());
                 let (mut pixels, info) = if colour && picture_file {
                     let rgb = io::read_rgb_as(path, max_pixels, encoding)?;
                     (Pixels::Rgb(rgb), Value::Null)

@@ -5,7 +5,6 @@
 use super::{Output, Pixels, Request};
 use crate::display::{Display, Luminance, Shown};
 use crate::error::{Error, Result};
-use crate::grid::Grid;
 use crate::io::{self, BitDepth};
 use serde_json::{json, Map, Value};
 use std::fs;
@@ -98,32 +97,43 @@ impl ExportOptions {
         Ok(ext)
     }
 
-    /// A display's codes for a file named `path`: PNG only, not display-encoded by a gamma as
-    /// well; a luminance mapping only with a display, inside what it shows.
+    /// A display's codes for a file named `path`: PNG only, and the display options
+    /// themselves ([`check_display_options`](Self::check_display_options)).
     pub fn check_display(&self, path: &Path) -> Result<()> {
+        if self.display.is_some() && io::extension(path) != "png" {
+            return Err(Error::invalid(format!(
+                "a display's codes are written as PNG, not .{} (float formats stay linear \
+                 0..1; the sidecar of a PNG records the cd/m²)",
+                io::extension(path)
+            )));
+        }
+        self.check_display_options()
+    }
+
+    /// The display options, whatever the file: a luminance mapping only with a display and
+    /// inside what it shows; a display not display-encoded by a gamma as well.
+    pub fn check_display_options(&self) -> Result<()> {
         match (&self.display, self.luminance) {
             (None, Some(_)) => Err(Error::invalid(
                 "a luminance in cd/m² needs a display (its model turns cd/m² into codes)",
             )),
             (None, None) => Ok(()),
-            (Some(display), luminance) => {
-                if io::extension(path) != "png" {
-                    return Err(Error::invalid(format!(
-                        "a display's codes are written as PNG, not .{} (float formats stay linear \
-                         0..1; the sidecar of a PNG records the cd/m²)",
-                        io::extension(path)
-                    )));
-                }
-                if self.gamma.is_some() {
-                    return Err(Error::invalid(
-                        "a display's model replaces a display gamma: give one or the other",
-                    ));
-                }
-                let probe = Grid::new(1, 1, 0.0);
-                display.show(&probe, luminance.unwrap_or(display.full_range()))?;
-                Ok(())
-            }
+            (Some(_), _) if self.gamma.is_some() => Err(Error::invalid(
+                "a display's model replaces a display gamma: give one or the other",
+            )),
+            (Some(display), _) => display.check_mapping(self.mapping_on(display)),
         }
+    }
+
+    /// The cd/m² the stimulus's 0..1 is shown at: `luminance`, else the display's black to
+    /// white; `None` without a display.
+    pub fn mapping(&self) -> Option<Luminance> {
+        self.display.as_ref().map(|d| self.mapping_on(d))
+    }
+
+    /// [`mapping`](Self::mapping) on `display`.
+    fn mapping_on(&self, display: &Display) -> Luminance {
+        self.luminance.unwrap_or(display.full_range())
     }
 
     /// The bits per channel of the PNG written: the display's (10 in 16-bit codes) or
@@ -383,10 +393,7 @@ pub fn shown_on_display(
         return Ok(None);
     };
     match &output.pixels {
-        Pixels::Gray(img) => {
-            let mapping = options.luminance.unwrap_or(display.full_range());
-            display.show(img, mapping).map(Some)
-        }
+        Pixels::Gray(img) => display.show(img, options.mapping_on(display)).map(Some),
         Pixels::Rgb(_) => Err(Error::invalid(format!(
             "{name} is a colour picture; a display's model applies to gray stimuli"
         ))),
@@ -395,8 +402,8 @@ pub fn shown_on_display(
 
 /// How the file's values encode linear luminance, in words (the sidecar's `encoding`).
 fn encoding(format: &str, options: &ExportOptions) -> String {
-    if let (Some(d), "png") = (&options.display, format) {
-        let (lo, hi) = options.luminance.unwrap_or(d.full_range()).span();
+    if let (Some(d), Some(mapping), "png") = (&options.display, options.mapping(), format) {
+        let (lo, hi) = mapping.span();
         let stored = if d.bits() == 10 {
             "; 10-bit codes in 16 bits by bit replication (code * 64 + code / 16, sBIT 10)"
         } else {
@@ -435,18 +442,18 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
     let g = &request.geometry;
     let version = io::PROGRAM_VERSION;
     let bits = options.png_bits();
-    let light = match (&options.display, options.gamma) {
-        (Some(d), _) => {
-            let (lo, hi) = options.luminance.unwrap_or(d.full_range()).span();
+    let light = match (&options.display, options.mapping(), options.gamma) {
+        (Some(d), Some(mapping), _) => {
+            let (lo, hi) = mapping.span();
             format!(
                 "codes of the display '{}' (not luminance) showing 0..1 at {lo}..{hi} cd/m²",
                 d.name()
             )
         }
-        (None, Some(gamma)) => {
+        (_, _, Some(gamma)) => {
             format!("display-encoded luminance, code = round(v^(1/{gamma}) * max)")
         }
-        (None, None) => "linear luminance 0..1, code = round(v * max)".to_string(),
+        _ => "linear luminance 0..1, code = round(v * max)".to_string(),
     };
     let description = format!(
         "{name}: {light}, {bits}-bit; {} x {} px (height x width), {:.4} x {:.4} deg at {} ppd",
@@ -466,8 +473,7 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
         ),
         ("range".to_string(), Value::from("0..1")),
     ]);
-    if let Some(d) = &options.display {
-        let mapping = options.luminance.unwrap_or(d.full_range());
+    if let (Some(d), Some(mapping)) = (&options.display, options.mapping()) {
         record.insert("display".to_string(), d.to_json());
         record.insert("luminance".to_string(), mapping.to_json());
     }
@@ -522,25 +528,22 @@ pub fn sidecar_json(
     };
     sidecar.extend(rest);
     if let (Some(d), Some(shown)) = (&options.display, shown) {
-        let (max, rms) = shown.error();
         sidecar.insert("display".into(), d.to_json());
-        sidecar.insert("luminance".into(), shown.mapping.to_json());
-        sidecar.insert(
-            "luminance_error_cd_m2".into(),
-            json!({"max": max, "rms": rms}),
-        );
-        if let Some(t) = &output.targets {
-            let shown = shown.targets(&t.labels, &t.names);
-            if let Some(Value::Array(items)) = sidecar.get_mut("targets") {
-                for item in items.iter_mut() {
-                    let name = item.get("name").and_then(Value::as_str).map(str::to_string);
-                    if let Some((_, l, weber)) = shown.iter().find(|s| Some(&s.0) == name.as_ref())
-                    {
-                        item["luminance_cd_m2"] = json!(l);
-                        if let Some(w) = weber {
-                            item["weber_vs_background"] = json!(w);
-                        }
-                    }
+        sidecar.extend(shown.to_json());
+        // Each target's luminance beside its label and name.
+        let Some(t) = &output.targets else {
+            return Value::Object(sidecar);
+        };
+        let shown = shown.targets(&t.labels, &t.names);
+        // The sidecar's targets are labels 1..N in order.
+        if let Some(Value::Array(items)) = sidecar.get_mut("targets") {
+            for target in &shown {
+                let Some(item) = items.get_mut(usize::from(target.label) - 1) else {
+                    continue;
+                };
+                item["luminance_cd_m2"] = json!(target.luminance_cd_m2);
+                if let Some(w) = target.weber_vs_background {
+                    item["weber_vs_background"] = json!(w);
                 }
             }
         }
