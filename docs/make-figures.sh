@@ -138,16 +138,17 @@ echo "== experiments.md: the worked example (Mamassian & Goutcher's design, simu
 # The page's own pilot mode answers the trials (headless Chromium); without Chromium the same
 # model is simulated by the library (examples/fit_recovery.rs), with other random draws.
 shadelab experiment --out mg --repeats 20 >/dev/null
-if command -v chromium >/dev/null; then
+# The study runs on jsPsych, which `shadelab experiment` installs with npm (mg/node_modules).
+if command -v chromium >/dev/null && [[ -d mg/node_modules/jspsych ]]; then
   chromium --headless --no-sandbox --disable-gpu --virtual-time-budget=10000 --dump-dom \
     "file://$work/mg/index.html?simulate=tilt:26,kappa:2,convex:0.6,lapse:0.03,seed:1" 2>/dev/null |
     python3 -c 'import html, re, sys; print(html.unescape(re.search(r"<pre id=\"results\">(.*?)</pre>", sys.stdin.read(), re.S).group(1)), end="")' \
     >responses.csv
 else
-  echo "chromium not found: the worked example's responses come from the library instead" >&2
+  echo "chromium or jsPsych (npm) not found: the worked example's responses come from the library instead" >&2
   (cd "$root" && cargo run --quiet --release --example fit_recovery -- worked "$work/responses.csv")
 fi
-shadelab fit observer responses.csv --out mg-fit
+shadelab fit observer responses.csv --out mg-fit --design mg/design.json
 keep mg-fit/fit.png experiments-fit.png
 
 echo "== the tutorial (docs/tutorial.md): its own sh blocks, run as written"

@@ -124,12 +124,17 @@ pub fn builtin_presets() -> Result<Vec<Preset>> {
         .collect()
 }
 
-/// Every `*.json` spec in `dir`, sorted by file name.
+/// Every `*.json` spec in `dir`, sorted by file name; hidden files (an editor's `.x.json`,
+/// macOS's `._x.json`) are not presets and are passed over.
 pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
     let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let hidden = |p: &Path| {
+        p.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+    };
     let mut paths: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| io::extension(p) == "json")
+        .filter(|p| io::extension(p) == "json" && !hidden(p))
         .collect();
     paths.sort();
     if paths.is_empty() {
@@ -559,6 +564,19 @@ mod tests {
         out.pixels = Pixels::Gray(Grid::new(10, 10, 0.5));
         assert_eq!(thumbnail(&out).width(), 10);
         assert!(escape("<a & \"b\">").contains("&lt;a &amp; &quot;b&quot;&gt;"));
+    }
+
+    #[test]
+    fn hidden_files_are_not_presets() {
+        let dir = std::env::temp_dir().join(format!("shadelab-presets-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("disc.json"), r#"{"stimulus": "disc"}"#).unwrap();
+        std::fs::write(dir.join("._disc.json"), [0u8, 5, 22, 7]).unwrap();
+        std::fs::write(dir.join(".#disc.json"), "not json").unwrap();
+        let presets = load_presets(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        let names: Vec<String> = presets.unwrap().into_iter().map(|p| p.name).collect();
+        assert_eq!(names, ["disc"]);
     }
 
     #[test]

@@ -233,6 +233,7 @@ fn measured() -> Option<&'static Measured> {
                 "2",
                 "--ppd",
                 "16",
+                "--no-install",
             ]);
             for (name, gama) in [
                 ("ramp-gamma.png", 45_455),

@@ -1,15 +1,21 @@
 //! `shadelab experiment`: the design (every rotation repeated, a seeded order), the images (their
-//! bright side faces θ), refusals, the folder, the command line, and the page itself in headless
-//! Chromium: the pilot mode's CSV, a bad `simulate=`, no console errors, and screenshots of the
-//! instructions and of a trial, and the pilot's CSV fitted back by `shadelab fit observer` to the
-//! simulated prior (skipped, saying why, where Chromium is not installed).
+//! bright side faces θ), refusals, the folder, the command line, and the jsPsych study itself in
+//! headless Chromium: a participant pressing keys, the pilot mode's data fitted back by `shadelab
+//! fit observer` to the simulated prior, each participant's own order, the data POSTed to a real
+//! local server (and the download when it refuses), JATOS through a double of its `jatos`
+//! object, and a lab's own jsPsych page embedding the timeline. The browser tests skip, saying
+//! why, where Chromium is not installed or npm cannot install jsPsych (into target/jspsych/, once).
 
 use crate::chromium::{chromium, run, Server};
 use crate::cli::{assert_error, scratch, shadelab};
 use shadelab::pipeline::experiment::{self, Config, CSV_HEADER};
 use shadelab::NoProgress;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 /// The design's test trials per rotation.
@@ -134,6 +140,18 @@ fn bad_configs_are_refused_with_one_line() {
         (|c| c.keys.concave = 'f', "both 'f'"),
         (|c| c.keys.convex = 'F', "lower-case"),
         (|c| c.gamma = Some(0.0), "gamma"),
+        (
+            |c| c.save_url = Some("ftp://lab.example/save".into()),
+            "the save URL",
+        ),
+        (
+            |c| c.save_url = Some("https://lab.example/a b".into()),
+            "without spaces",
+        ),
+        (
+            |c| c.completion_url = Some("/done".into()),
+            "the completion URL",
+        ),
     ];
     for (change, needle) in cases {
         let mut config = Config::new("unused");
@@ -172,13 +190,24 @@ fn the_folder_is_whole_and_replaced_only_when_it_is_shadelabs() {
     let folder = experiment::write(&config, &report).unwrap().folder;
     for f in [
         "index.html",
+        "jatos.html",
         "experiment.js",
+        "shadelab-timeline.js",
         "experiment.css",
+        "package.json",
         "design.json",
         "README.md",
     ] {
         assert!(folder.join(f).is_file(), "{f}");
     }
+    // jsPsych comes from npm at pinned versions; not installed unless asked.
+    let package: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("package.json")).unwrap()).unwrap();
+    for (name, version, _) in experiment::JSPSYCH_PACKAGES {
+        assert_eq!(package["dependencies"][name], *version, "{package}");
+    }
+    assert_eq!(package["dependencies"]["jspsych"], "8.3.0");
+    assert!(!folder.join("node_modules").exists());
     let design: serde_json::Value =
         serde_json::from_slice(&std::fs::read(folder.join("design.json")).unwrap()).unwrap();
     assert_eq!(design["program"], "shadelab");
@@ -204,10 +233,19 @@ fn the_folder_is_whole_and_replaced_only_when_it_is_shadelabs() {
         serde_json::from_str::<serde_json::Value>(embedded).unwrap(),
         design
     );
-    // Nothing points outside the folder.
+    // Nothing points outside the folder: jsPsych from node_modules/, JATOS's script only in
+    // jatos.html.
     assert!(!page.contains("http://") && !page.contains("https://"));
+    assert!(page.contains("<script src=\"node_modules/jspsych/dist/index.browser.min.js\">"));
+    assert!(!page.contains("jatos.js"));
+    let jatos = std::fs::read_to_string(folder.join("jatos.html")).unwrap();
+    assert!(jatos.contains("<script src=\"jatos.js\"></script>"));
+    assert_eq!(
+        jatos.replace("<script src=\"jatos.js\"></script>\n", ""),
+        page
+    );
     let js = std::fs::read_to_string(folder.join("experiment.js")).unwrap();
-    assert!(!js.contains("http://") && !js.contains("https://") && !js.contains("fetch("));
+    assert!(!js.contains("http://") && !js.contains("https://"));
     // Written again: replaced (it is shadelab's); the same bytes.
     let before = std::fs::read(folder.join("design.json")).unwrap();
     experiment::write(&config, &report).unwrap();
@@ -249,6 +287,16 @@ fn the_command_line_writes_the_folder_and_refuses_bad_flags() {
             "20",
             "--seed",
             "9",
+            "--break-every",
+            "5",
+            "--save-url",
+            "https://lab.example/save",
+            "--save-format",
+            "csv",
+            "--prolific-code",
+            "C1234ABC",
+            "--counterbalance-keys",
+            "--no-install",
         ],
     );
     assert!(
@@ -269,6 +317,27 @@ fn the_command_line_writes_the_folder_and_refuses_bad_flags() {
     );
     assert_eq!(design["display"]["shape"], serde_json::json!([60, 120]));
     assert_eq!(design["seed"], 9);
+    assert_eq!(design["break_every"], 5);
+    assert_eq!(design["save_url"], "https://lab.example/save");
+    assert_eq!(design["save_format"], "csv");
+    assert_eq!(design["counterbalance_keys"], true);
+    assert_eq!(
+        design["completion_url"],
+        "https://app.prolific.com/submissions/complete?cc=C1234ABC"
+    );
+    assert!(!d.join("e/node_modules").exists());
+    for (flags, needle) in [
+        (&["--save-format", "xml"][..], "--save-format 'xml'"),
+        (&["--prolific-code", "no spaces"][..], "--prolific-code"),
+        (&["--save-url", "lab.example/save"][..], "--save-url"),
+        (
+            &["--completion-url", "javascript:alert(1)"][..],
+            "--completion-url",
+        ),
+    ] {
+        let args = [&["experiment", "--out", "x", "--no-install"][..], flags].concat();
+        assert_error(&shadelab(&d, &args), 2, needle);
+    }
     assert_error(
         &shadelab(&d, &["experiment", "--out", "x", "--keys", "fjk"]),
         2,
@@ -293,26 +362,132 @@ fn the_command_line_writes_the_folder_and_refuses_bad_flags() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A page that frames the experiment and plays a participant: fills in the consent, skips the
-/// calibration, then presses the space bar, F and J in turn every 100 ms until the end screen,
-/// and copies its `<pre id="results">` into its own DOM.
+/// `node_modules/` with the study's packages (its package.json, as `shadelab experiment` writes
+/// it), installed by npm once into target/jspsych/; `None` after saying why the calling test
+/// skips (no Chromium, no npm, no network).
+fn jspsych() -> Option<PathBuf> {
+    chromium()?;
+    static MODULES: OnceLock<Option<PathBuf>> = OnceLock::new();
+    let found = MODULES.get_or_init(|| {
+        let package = experiment::package_json();
+        let hash: String = {
+            use md5::{Digest, Md5};
+            Md5::digest(package.as_bytes())
+                .iter()
+                .take(6)
+                .map(|b| format!("{b:02x}"))
+                .collect()
+        };
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/jspsych");
+        let dir = root.join(&hash);
+        let modules = dir.join("node_modules");
+        if modules.join("jspsych/dist/index.browser.min.js").is_file() {
+            return Some(modules);
+        }
+        let temp = root.join(format!("{hash}.tmp-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&temp);
+        std::fs::create_dir_all(&temp).unwrap();
+        std::fs::write(temp.join("package.json"), &package).unwrap();
+        let out = std::process::Command::new("npm")
+            .args(["install", "--no-audit", "--no-fund", "--loglevel=error"])
+            .current_dir(&temp)
+            .output();
+        match out {
+            Ok(o) if o.status.success() => {
+                let _ = std::fs::rename(&temp, &dir);
+                let _ = std::fs::remove_dir_all(&temp);
+                Some(modules).filter(|m| m.join("jspsych").is_dir())
+            }
+            Ok(o) => {
+                eprintln!(
+                    "jsPsych test skipped: npm install failed: {}",
+                    String::from_utf8_lossy(&o.stderr)
+                        .lines()
+                        .next()
+                        .unwrap_or("")
+                );
+                None
+            }
+            Err(e) => {
+                eprintln!("jsPsych test skipped: npm is not available ({e})");
+                None
+            }
+        }
+    });
+    if found.is_none() {
+        eprintln!("jsPsych test skipped: jsPsych could not be installed (see above)");
+    }
+    found.clone()
+}
+
+/// Writes the experiment of `config` with jsPsych linked in (as `npm install` would put it).
+fn study(config: &Config, modules: &Path) -> (experiment::Report, PathBuf) {
+    let report = experiment::run(config, &NoProgress).unwrap();
+    let folder = experiment::write(config, &report).unwrap().folder;
+    std::os::unix::fs::symlink(modules, folder.join("node_modules")).unwrap();
+    (report, folder)
+}
+
+/// The text of the element `<tag id="id">` in a dumped DOM, unescaped.
+fn element(dom: &str, tag: &str, id: &str) -> Option<String> {
+    let open = format!("<{tag} id=\"{id}\"");
+    let start = dom.find(&open)?;
+    let start = start + dom[start..].find('>')? + 1;
+    let end = dom[start..].find(&format!("</{tag}>"))?;
+    Some(
+        dom[start..start + end]
+            .replace("&quot;", "\"")
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&amp;", "&"),
+    )
+}
+
+/// jsPsych's CSV as rows of named fields.
+fn rows(csv: &str) -> Vec<BTreeMap<String, String>> {
+    let table = shadelab::io::parse_csv(csv).unwrap();
+    let (_, header) = &table[0];
+    table[1..]
+        .iter()
+        .map(|(_, r)| header.iter().cloned().zip(r.iter().cloned()).collect())
+        .collect()
+}
+
+/// The bump/dimple trial rows of jsPsych data.
+fn trials(rows: &[BTreeMap<String, String>]) -> Vec<&BTreeMap<String, String>> {
+    rows.iter().filter(|r| r["shadelab"] == "trial").collect()
+}
+
+const ARGS: [&str; 4] = [
+    "--virtual-time-budget=30000",
+    "--dump-dom",
+    "--enable-logging=stderr",
+    "--v=0",
+];
+
+/// A page that frames the study and plays a participant: every 100 ms it clicks the screen's
+/// button if it has one, else presses the space bar, F or J in turn (keydown and keyup, where
+/// jsPsych listens), until the end screen, and copies its `<pre id="results">` out.
 const PARTICIPANT: &str = r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><link rel="icon" href="data:,"><title>participant</title></head><body>
 <pre id="result">pending</pre>
-<iframe id="page" src="index.html?participant=T1" style="width:1000px;height:800px"></iframe>
+<iframe id="page" src="index.html?participant=T1&fullscreen=0&calibration=none" style="width:1000px;height:800px"></iframe>
 <script>
 const frame = document.getElementById('page');
 frame.addEventListener('load', async () => {
   const w = frame.contentWindow, doc = frame.contentDocument;
   const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-  doc.getElementById('consent').checked = true;
-  doc.getElementById('start').click();
-  doc.getElementById('skip').click();
   for (let i = 0; i < 3000 && !doc.getElementById('results'); i++) {
     await sleep(100);
+    const button = doc.querySelector('.jspsych-btn');
+    if (button) { button.click(); continue; }
     const key = i % 3 === 0 ? ' ' : (i % 3 === 1 ? 'f' : 'j');
-    w.dispatchEvent(new w.KeyboardEvent('keydown', { key: key }));
+    const target = doc.querySelector('.jspsych-content-wrapper') || doc.body;
+    for (const type of ['keydown', 'keyup']) {
+      target.dispatchEvent(new w.KeyboardEvent(type, { key: key, bubbles: true }));
+    }
   }
+  await sleep(500);
   const r = doc.getElementById('results');
   document.getElementById('result').textContent = r ? r.textContent : 'no results';
 });
@@ -320,17 +495,15 @@ frame.addEventListener('load', async () => {
 "#;
 
 #[test]
-fn a_participant_answers_by_key_and_gets_the_csv_in_headless_chromium() {
-    if chromium().is_none() {
-        return;
-    }
+fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
+    let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-participant");
     let mut config = Config::new(d.join("e"));
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 2;
     config.practice = 1;
-    let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap().folder;
+    config.break_every = 3;
+    let (report, folder) = study(&config, &modules);
     let server = Server::start(&folder, &[("__participant.html", PARTICIPANT)]);
     let page = run(
         &server.url("__participant.html"),
@@ -344,131 +517,109 @@ fn a_participant_answers_by_key_and_gets_the_csv_in_headless_chromium() {
         Duration::from_secs(120),
     );
     assert!(page.console().is_empty(), "console: {:#?}", page.console());
-    let start = page.stdout.find("<pre id=\"result\">").unwrap() + "<pre id=\"result\">".len();
-    let text = &page.stdout[start..];
-    let csv = &text[..text.find("</pre>").unwrap()];
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some(CSV_HEADER), "{csv}");
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 9, "{csv}");
-    for (row, trial) in rows.iter().zip(&report.design.trials) {
-        assert_eq!(row[0], "T1");
-        assert_eq!(row[9], report.design.design_hash);
-        assert_eq!(
-            (row[1], row[2]),
-            (trial.trial.to_string().as_str(), trial.block)
-        );
-        assert_eq!(row[4].parse::<f64>().unwrap(), trial.rotation_deg);
-        let (response, key) = (row[5], row[7]);
+    let csv = element(&page.stdout, "pre", "result").unwrap();
+    let all = rows(&csv);
+    let shown = trials(&all);
+    assert_eq!(shown.len(), 9, "{csv}");
+    // Two breaks in 8 test trials, every 3 (none after the last).
+    let breaks: Vec<_> = all.iter().filter(|r| r["shadelab"] == "break").collect();
+    assert_eq!(breaks.len(), 2, "{csv}");
+    assert!(breaks.iter().all(|r| r["break"] == "true"));
+    let d_ = &report.design;
+    // The participant's order holds the design's trials, each once.
+    let mut seen: Vec<(String, String)> = shown
+        .iter()
+        .map(|r| (r["block"].clone(), r["rotation_deg"].clone()))
+        .collect();
+    let mut planned: Vec<(String, String)> = d_
+        .trials
+        .iter()
+        .map(|t| (t.block.to_string(), t.rotation_deg.to_string()))
+        .collect();
+    seen.sort();
+    planned.sort();
+    assert_eq!(seen, planned);
+    assert_eq!(shown[0]["block"], "practice");
+    assert_eq!(shown[0]["practice"], "true");
+    for (i, r) in shown.iter().enumerate() {
+        // The participant, their order, the display, the design: in every trial row.
+        assert_eq!(r["participant"], "T1");
+        assert_eq!(r["design_hash"], d_.design_hash);
+        assert_eq!(r["shadelab_trial"], (i + 1).to_string());
+        assert_eq!(r["trial_type"], "image-keyboard-response");
+        assert_eq!(r["ppd"], "32");
+        assert!(r["ppd_method"].starts_with("none"), "{r:?}");
+        assert_eq!(r["viewing_distance_cm"], "57");
+        assert!(r["user_agent"].contains("Chrome"), "{r:?}");
+        for k in [
+            "screen_width",
+            "screen_height",
+            "window_width",
+            "window_height",
+        ] {
+            assert!(r[k].parse::<u32>().unwrap() > 0, "{k}: {r:?}");
+        }
+        assert_eq!(r["fullscreen"], "false");
+        assert!(!r["order_seed"].is_empty());
+        assert_eq!(r["stimulus"], r["image"]);
+        let (response, judgement) = (r["response"].as_str(), r["judgement"].as_str());
         assert!(
-            (response, key) == ("convex", "f") || (response, key) == ("concave", "j"),
-            "{row:?}"
+            (response, judgement) == ("f", "convex") || (response, judgement) == ("j", "concave"),
+            "{r:?}"
         );
-        // Keys come every 100 ms and only F or J at most 200 ms after the onset answers.
-        let rt: f64 = row[6].parse().unwrap();
-        assert!((0.0..=1000.0).contains(&rt), "{row:?}");
+        // Keys come every 100 ms, so a trial is answered within about 300 ms of its onset.
+        let rt: f64 = r["rt"].parse().unwrap();
+        assert!((0.0..=1000.0).contains(&rt), "{r:?}");
     }
+    // The fit reads the data as they are: the key mapping from the rows.
+    std::fs::write(d.join("t1.csv"), &csv).unwrap();
+    let r = shadelab::pipeline::fit::read_responses(&d.join("t1.csv")).unwrap();
+    assert_eq!(r.participants.len(), 1);
+    assert_eq!(r.participants[0].0, "T1");
+    assert_eq!(r.participants[0].1.len(), 8);
+    assert_eq!(r.practice_rows, 1);
+    assert!(r.other_rows > 10, "{}", r.other_rows);
     drop(server);
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// The text of `<pre id="results">` in a dumped DOM.
-fn results(dom: &str) -> Option<String> {
-    let start = dom.find("<pre id=\"results\">")? + "<pre id=\"results\">".len();
-    let end = dom[start..].find("</pre>")?;
-    Some(
-        dom[start..start + end]
-            .replace("&quot;", "\"")
-            .replace("&lt;", "<")
-            .replace("&gt;", ">")
-            .replace("&amp;", "&"),
-    )
-}
-
-/// Where the bright side of the middle 300 × 300 pixels of a screenshot faces (tilt
-/// convention, degrees), as the library measures its images.
-fn bright_side_on_screen(path: &Path) -> f64 {
-    let (image, _) = shadelab::io::read_luminance(path, 1 << 24).unwrap();
-    let (cx, cy) = (image.width() / 2, image.height() / 2);
-    experiment::bright_side(&image, &|c, r| c.abs_diff(cx) < 150 && r.abs_diff(cy) < 150)
-        .unwrap_or_else(|| panic!("nothing shaded in the middle of {}", path.display()))
+/// The rotations of a pilot's test trials, in the order shown.
+fn order(dom: &str) -> Vec<String> {
+    let csv = element(dom, "pre", "results").unwrap_or_else(|| panic!("no results in {dom}"));
+    trials(&rows(&csv))
+        .iter()
+        .filter(|r| r["block"] == "test")
+        .map(|r| r["rotation_deg"].clone())
+        .collect()
 }
 
 #[test]
-fn the_page_pilots_the_design_in_headless_chromium() {
-    if chromium().is_none() {
-        return;
-    }
+fn the_pilot_is_fitted_back_and_each_participant_gets_their_own_order() {
+    let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-browser");
     let config = Config::new(d.join("e"));
-    let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap().folder;
+    let (report, folder) = study(&config, &modules);
     let server = Server::start(&folder, &[]);
-    let args = [
-        "--virtual-time-budget=10000",
-        "--dump-dom",
-        "--enable-logging=stderr",
-        "--v=0",
-    ];
     let timeout = Duration::from_secs(120);
+    let pilot = "index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1";
 
-    // The pilot: every trial answered by the model, the CSV in <pre id="results">.
-    let page = run(
-        &server.url("index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1"),
-        &d.join("profile-sim"),
-        &args,
-        timeout,
-    );
+    // The pilot: jsPsych's simulation mode, every trial answered by the model.
+    let page = run(&server.url(pilot), &d.join("profile-sim"), &ARGS, timeout);
     let console = page.console();
     assert!(console.is_empty(), "console: {console:#?}");
-    let csv = results(&page.stdout)
+    let csv = element(&page.stdout, "pre", "results")
         .unwrap_or_else(|| panic!("no <pre id=\"results\"> in:\n{}", page.stdout));
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some(CSV_HEADER));
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let all = rows(&csv);
+    let shown = trials(&all);
     let d_ = &report.design;
-    assert_eq!(rows.len(), d_.trials.len());
-    assert!(rows.iter().all(|r| r.len() == 10), "{rows:?}");
-    // Every row carries the design's hash (the output-folder rule: responses of an earlier
-    // design in the same folder are told apart).
-    assert!(
-        rows.iter().all(|r| r[9] == d_.design_hash),
-        "{rows:?} {}",
-        d_.design_hash
-    );
-    let mut convex: BTreeMap<i64, (usize, usize)> = BTreeMap::new();
-    for (row, trial) in rows.iter().zip(&d_.trials) {
-        // The page keeps the design's order, rotation and image.
-        assert_eq!(row[1], trial.trial.to_string());
-        assert_eq!(row[2], trial.block);
-        assert_eq!(row[3], "bumps");
-        assert_eq!(row[4].parse::<f64>().unwrap(), trial.rotation_deg);
-        assert_eq!(row[8], trial.image);
-        assert!(row[5] == "convex" || row[5] == "concave", "{row:?}");
-        assert_eq!(row[7], if row[5] == "convex" { "f" } else { "j" });
-        assert!(row[6].parse::<f64>().unwrap() > 0.0);
-        assert_eq!(row[0], "simulated-seed1");
-        if row[2] == "test" {
-            let e = convex.entry(trial.rotation_deg as i64).or_default();
-            e.0 += usize::from(row[5] == "convex");
-            e.1 += 1;
-        }
-    }
-    assert_eq!(convex.len(), 24, "every rotation present");
-    // Bumps are seen lit from near the prior (26°), dimples lit from the opposite side.
-    let share = |thetas: &[i64]| {
-        let (k, n) = thetas
-            .iter()
-            .map(|t| convex[t])
-            .fold((0, 0), |(a, b), (k, n)| (a + k, b + n));
-        k as f64 / n as f64
-    };
-    let (near, far) = (share(&[0, 15, 30, 45]), share(&[180, 195, 210, 225]));
-    assert!(
-        near > 0.85 && far < 0.3,
-        "P(convex) near 26° {near}, near 206° {far}"
-    );
-    // The loop closed: the page's CSV, fitted back by `shadelab fit observer`, recovers the
+    assert_eq!(shown.len(), d_.trials.len());
+    assert!(shown.iter().all(|r| r["participant"] == "simulated-seed1"));
+    assert!(shown
+        .iter()
+        .all(|r| r["simulated"] == "tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1"));
+    // Three breaks in 384 test trials (one every 96).
+    assert_eq!(all.iter().filter(|r| r["shadelab"] == "break").count(), 3);
+    // The loop closed: the page's data, fitted back by `shadelab fit observer`, recover the
     // simulated observer (384 test trials, the default design).
     std::fs::write(d.join("pilot.csv"), &csv).unwrap();
     let fitted = shadelab(
@@ -481,7 +632,9 @@ fn the_page_pilots_the_design_in_headless_chromium() {
             "--out",
             "fit",
             "--bootstrap",
-            "200",
+            "0",
+            "--design",
+            "e/design.json",
         ],
     );
     assert!(
@@ -491,33 +644,81 @@ fn the_page_pilots_the_design_in_headless_chromium() {
     );
     let fit: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("fit/fit.json")).unwrap()).unwrap();
-    let (tilt, tilt_ci) = (
-        &fit["prior_tilt_deg"]["value"],
-        &fit["prior_tilt_deg"]["ci95"],
-    );
-    let tilt = tilt.as_f64().unwrap();
-    assert!((tilt - 26.0).abs() < 10.0, "prior tilt {tilt}: {fit}");
-    // The design's promise (docs/experiments.md): the prior's direction to within ±10°. The
-    // interval is the bootstrap's, one seeded run; its coverage is measured in the recovery
-    // study, not here.
-    let (lo, hi) = (tilt_ci[0].as_f64().unwrap(), tilt_ci[1].as_f64().unwrap());
-    assert!(
-        lo < tilt && tilt < hi && hi - lo < 20.0,
-        "interval [{lo}, {hi}]"
-    );
-    let kappa = fit["prior_kappa"]["value"].as_f64().unwrap();
-    assert!((kappa / 2.0).ln().abs() < 0.5, "kappa {kappa}");
-    let pi = fit["convexity_prior"]["value"].as_f64().unwrap();
-    assert!((pi - 0.7).abs() < 0.12, "convexity prior {pi}");
+    let within = |key: &str, truth: f64| {
+        let v = fit[key]["value"].as_f64().unwrap();
+        let ci = &fit[key]["ci95"];
+        let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+        eprintln!("recovery: {key} simulated {truth}, fitted {v:.3} [{lo:.3}, {hi:.3}]");
+        assert!(
+            lo <= truth && truth <= hi,
+            "{key}: {truth} not in [{lo}, {hi}]"
+        );
+        v
+    };
+    let tilt = within("prior_tilt_deg", 26.0);
+    assert!((tilt - 26.0).abs() < 10.0, "prior tilt {tilt}");
+    within("prior_kappa", 2.0);
+    within("convexity_prior", 0.7);
     assert_eq!(fit["n_trials"], 384, "only the test trials are fitted");
-    // The same seed gives the same CSV; another seed other answers.
-    let again = run(
-        &server.url("index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1"),
-        &d.join("profile-sim2"),
-        &args,
+    let methods = std::fs::read_to_string(d.join("fit/methods.md")).unwrap();
+    assert!(
+        methods.contains("**Stimulus and apparatus.**")
+            && methods.contains("4 × 4 degrees")
+            && methods.contains("57 cm")
+            && methods.contains("jsPsych 8.3.0")
+            && methods.contains("participant's own random order"),
+        "{methods}"
+    );
+
+    // Each participant their own order: two ids two orders, the same id the same one, and
+    // each order the design's trials.
+    let a = order(
+        &run(
+            &server.url(&format!("{pilot}&participant=A")),
+            &d.join("p-a"),
+            &ARGS,
+            timeout,
+        )
+        .stdout,
+    );
+    let b = order(
+        &run(
+            &server.url(&format!("{pilot}&participant=B")),
+            &d.join("p-b"),
+            &ARGS,
+            timeout,
+        )
+        .stdout,
+    );
+    let a2 = order(
+        &run(
+            &server.url(&format!("{pilot}&participant=A")),
+            &d.join("p-a2"),
+            &ARGS,
+            timeout,
+        )
+        .stdout,
+    );
+    assert_eq!(a.len(), 384);
+    assert_eq!(a, a2, "the same participant, the same order");
+    assert_ne!(a, b, "two participants, two orders");
+    let (mut sa, mut sb) = (a.clone(), b.clone());
+    sa.sort();
+    sb.sort();
+    assert_eq!(sa, sb);
+    // Prolific's id stands in for a participant id.
+    let p = run(
+        &server.url(&format!("{pilot}&PROLIFIC_PID=A&STUDY_ID=S1&SESSION_ID=X9")),
+        &d.join("p-prolific"),
+        &ARGS,
         timeout,
     );
-    assert_eq!(results(&again.stdout).as_deref(), Some(csv.as_str()));
+    assert_eq!(order(&p.stdout), a, "PROLIFIC_PID=A is participant A");
+    let csv = element(&p.stdout, "pre", "results").unwrap();
+    let prolific = rows(&csv);
+    assert!(prolific
+        .iter()
+        .all(|r| r["prolific_pid"] == "A" && r["study_id"] == "S1" && r["session_id"] == "X9"));
 
     // Bad parameters: a message on the page, no results.
     for (query, needle) in [
@@ -525,61 +726,492 @@ fn the_page_pilots_the_design_in_headless_chromium() {
         ("simulate=tilt:26,kapa:2", "unknown parameter 'kapa'"),
         ("simulate=kappa:2", "give tilt"),
         ("simulate=tilt:x,kappa:2", "tilt 'x' must be"),
+        (
+            "simulate=tilt:26,kappa:2&save_format=xml",
+            "save_format 'xml'",
+        ),
+        ("participant=a%20b", "participant: use letters"),
     ] {
         let page = run(
             &server.url(&format!("index.html?{query}")),
             &d.join("profile-bad"),
-            &args,
+            &ARGS,
             timeout,
         );
         assert!(
-            page.stdout.contains("id=\"message\""),
-            "{query}: {}",
-            page.stdout
-        );
-        assert!(
-            page.stdout.contains(needle),
+            page.stdout.contains("id=\"message\"") && page.stdout.contains(needle),
             "{query}: '{needle}' not in {}",
             page.stdout
         );
-        assert!(results(&page.stdout).is_none(), "{query}");
+        assert!(element(&page.stdout, "pre", "results").is_none(), "{query}");
     }
 
-    // Screenshots: the instructions, and the first test trial as a participant sees it,
-    // its bright side facing the trial's rotation on screen.
+    // A screenshot of the first test trial as a participant sees it, its bright side facing
+    // the trial's rotation on screen.
     let shots = std::env::temp_dir().join("shadelab-experiment-screenshots");
     let _ = std::fs::create_dir_all(&shots);
-    for (query, name) in [("", "instructions.png"), ("?preview=trial", "trial.png")] {
-        let path = shots.join(name);
-        let _ = std::fs::remove_file(&path);
-        let shot = run(
-            &server.url(&format!("index.html{query}")),
-            &d.join(format!("profile-{name}")),
-            &[
-                "--virtual-time-budget=5000",
-                &format!("--screenshot={}", path.display()),
-                "--window-size=1200,900",
-                "--hide-scrollbars",
-                "--enable-logging=stderr",
-                "--v=0",
-            ],
-            timeout,
-        );
-        assert!(shot.console().is_empty(), "{name}: {:#?}", shot.console());
-        assert!(
-            path.exists(),
-            "no screenshot {}: {}",
-            path.display(),
-            shot.stderr
-        );
-    }
+    let path = shots.join("trial.png");
+    let _ = std::fs::remove_file(&path);
+    let shot = run(
+        &server.url("index.html?preview=trial"),
+        &d.join("profile-shot"),
+        &[
+            "--virtual-time-budget=5000",
+            &format!("--screenshot={}", path.display()),
+            "--window-size=1200,900",
+            "--hide-scrollbars",
+            "--enable-logging=stderr",
+            "--v=0",
+        ],
+        timeout,
+    );
+    assert!(shot.console().is_empty(), "{:#?}", shot.console());
+    assert!(path.exists(), "no screenshot: {}", shot.stderr);
     let first = d_.trials.iter().find(|t| t.block == "test").unwrap();
-    let on_screen = bright_side_on_screen(&shots.join("trial.png"));
+    let on_screen = bright_side_on_screen(&path);
     let off = (on_screen - first.rotation_deg + 540.0).rem_euclid(360.0) - 180.0;
     assert!(
         off.abs() < 15.0,
         "the first trial shows θ = {}, the screen's bright side faces {on_screen:.1}",
         first.rotation_deg
+    );
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Where the bright side of the middle 300 × 300 pixels of a screenshot faces (tilt
+/// convention, degrees), as the library measures its images.
+fn bright_side_on_screen(path: &Path) -> f64 {
+    let (image, _) = shadelab::io::read_luminance(path, 1 << 24).unwrap();
+    let (cx, cy) = (image.width() / 2, image.height() / 2);
+    experiment::bright_side(&image, &|c, r| c.abs_diff(cx) < 150 && r.abs_diff(cy) < 150)
+        .unwrap_or_else(|| panic!("nothing shaded in the middle of {}", path.display()))
+}
+
+/// A lab's data server on 127.0.0.1, until dropped: it answers CORS preflights, keeps every
+/// POST's content type and body, and serves `/done` (where a completion URL may point).
+struct Receiver {
+    port: u16,
+    posts: Arc<Mutex<Vec<(String, String)>>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Receiver {
+    fn start() -> Receiver {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        listener.set_nonblocking(true).unwrap();
+        let port = listener.local_addr().unwrap().port();
+        let posts = Arc::new(Mutex::new(Vec::new()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (kept, flag) = (posts.clone(), stop.clone());
+        let thread = std::thread::spawn(move || {
+            while !flag.load(Ordering::Relaxed) {
+                match listener.accept() {
+                    Ok((stream, _)) => {
+                        let _ = Receiver::answer(stream, &kept);
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                        std::thread::sleep(Duration::from_millis(5));
+                    }
+                    Err(_) => break,
+                }
+            }
+        });
+        Receiver {
+            port,
+            posts,
+            stop,
+            thread: Some(thread),
+        }
+    }
+
+    fn url(&self, path: &str) -> String {
+        format!("http://127.0.0.1:{}/{path}", self.port)
+    }
+
+    fn answer(
+        stream: std::net::TcpStream,
+        posts: &Mutex<Vec<(String, String)>>,
+    ) -> std::io::Result<()> {
+        stream.set_nonblocking(false)?;
+        stream.set_read_timeout(Some(Duration::from_secs(5)))?;
+        let mut reader = BufReader::new(stream.try_clone()?);
+        let mut request = String::new();
+        reader.read_line(&mut request)?;
+        let (mut length, mut content_type) = (0usize, String::new());
+        loop {
+            let mut line = String::new();
+            if reader.read_line(&mut line)? <= 2 {
+                break;
+            }
+            let lower = line.to_ascii_lowercase();
+            if let Some(v) = lower.strip_prefix("content-length:") {
+                length = v.trim().parse().unwrap_or(0);
+            }
+            if let Some(v) = lower.strip_prefix("content-type:") {
+                content_type = v.trim().to_string();
+            }
+        }
+        let cors = "Access-Control-Allow-Origin: *\r\nAccess-Control-Allow-Methods: POST\r\nAccess-Control-Allow-Headers: Content-Type\r\n";
+        let mut out = stream;
+        let method = request.split_whitespace().next().unwrap_or("");
+        let body = match method {
+            "POST" => {
+                let mut body = vec![0u8; length];
+                reader.read_exact(&mut body)?;
+                posts
+                    .lock()
+                    .unwrap()
+                    .push((content_type, String::from_utf8_lossy(&body).into_owned()));
+                "saved".to_string()
+            }
+            // The completion page tells the page framing the study where it arrived.
+            "GET" => "<!DOCTYPE html><html><head><link rel=\"icon\" href=\"data:,\"></head><body><p id=\"done\">back at the study site</p><script>parent.postMessage('completed ' + location.href, '*');</script></body></html>".to_string(),
+            _ => String::new(),
+        };
+        let status = if method == "OPTIONS" {
+            "204 No Content"
+        } else {
+            "200 OK"
+        };
+        write!(
+            out,
+            "HTTP/1.1 {status}\r\n{cors}Content-Type: text/html\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+            body.len()
+        )?;
+        out.flush()
+    }
+}
+
+impl Drop for Receiver {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// A page that frames the study (with this page's own query) and shows where the study sent
+/// the participant at the end (headless Chromium's `--dump-dom` never returns once the page
+/// itself goes elsewhere, so the frame goes instead).
+const FRAME: &str = r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><link rel="icon" href="data:,"><title>frame</title></head><body>
+<pre id="result">pending</pre>
+<iframe id="page"></iframe>
+<script>
+window.addEventListener('message', (e) => { document.getElementById('result').textContent = e.data; });
+document.getElementById('page').src = 'index.html' + location.search;
+</script></body></html>
+"#;
+
+#[test]
+fn the_data_reach_a_real_server_by_post_and_a_refused_one_falls_back_to_the_download() {
+    let Some(modules) = jspsych() else { return };
+    let d = scratch("experiment-save");
+    let receiver = Receiver::start();
+    // The default design (24 rotations x 16, 8 practice trials).
+    let mut config = Config::new(d.join("e"));
+    config.completion_url = Some(receiver.url("done?cc=C1234ABC"));
+    let (report, folder) = study(&config, &modules);
+    let server = Server::start(&folder, &[("__frame.html", FRAME)]);
+    let timeout = Duration::from_secs(120);
+    let simulate = "simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1";
+    let completed = format!("completed {}", receiver.url("done?cc=C1234ABC"));
+    let prolific = "PROLIFIC_PID=5f1a&STUDY_ID=st7&SESSION_ID=se9";
+
+    // JSON to the lab's server (cross-origin, as a separate data server is), then on to the
+    // completion URL.
+    let save = receiver.url("save");
+    let page = run(
+        &server.url(&format!(
+            "__frame.html?{simulate}&{prolific}&save_url={save}"
+        )),
+        &d.join("profile-json"),
+        &ARGS,
+        timeout,
+    );
+    assert!(page.console().is_empty(), "console: {:#?}", page.console());
+    assert_eq!(
+        element(&page.stdout, "pre", "result").as_deref(),
+        Some(completed.as_str()),
+        "not sent on to the completion URL"
+    );
+    let (kind, body) = receiver.posts.lock().unwrap()[0].clone();
+    assert_eq!(kind, "application/json");
+    let data: Vec<serde_json::Value> = serde_json::from_str(&body).unwrap();
+    let shown: Vec<&serde_json::Value> = data.iter().filter(|r| r["shadelab"] == "trial").collect();
+    assert_eq!(shown.len(), report.design.trials.len());
+    assert!(data.iter().all(|r| r["participant"] == "5f1a"
+        && r["prolific_pid"] == "5f1a"
+        && r["study_id"] == "st7"
+        && r["session_id"] == "se9"));
+    // The fit reads what the server received, and recovers the simulated prior.
+    std::fs::create_dir_all(d.join("data")).unwrap();
+    std::fs::write(d.join("data/5f1a.json"), &body).unwrap();
+    let mut fit = shadelab::pipeline::fit::Config::new(&d.join("data/5f1a.json"));
+    fit.options.bootstrap = 0;
+    let fitted = shadelab::pipeline::fit::run(&fit, &NoProgress).unwrap();
+    let ci = fitted.pooled.prior_tilt_deg.ci95.unwrap();
+    eprintln!(
+        "recovery (POSTed JSON, 384 trials): μ simulated 26, fitted {:.2} [{:.2}, {:.2}]; κ simulated 2, fitted {:.2} {:?}",
+        fitted.pooled.prior_tilt_deg.value, ci[0], ci[1], fitted.pooled.prior_kappa.value, fitted.pooled.prior_kappa.ci95
+    );
+    assert!(ci[0] <= 26.0 && 26.0 <= ci[1], "{ci:?}");
+    assert_eq!(fitted.pooled.n_trials, 384);
+
+    // CSV, as text/csv.
+    let page = run(
+        &server.url(&format!(
+            "__frame.html?{simulate}&participant=P2&save_url={save}&save_format=csv"
+        )),
+        &d.join("profile-csv"),
+        &ARGS,
+        timeout,
+    );
+    assert_eq!(
+        element(&page.stdout, "pre", "result").as_deref(),
+        Some(completed.as_str())
+    );
+    let (kind, body) = receiver.posts.lock().unwrap()[1].clone();
+    assert_eq!(kind, "text/csv");
+    std::fs::write(d.join("data/P2.csv"), &body).unwrap();
+    // The folder of both: one fit each, and the group.
+    let mut fit = shadelab::pipeline::fit::Config::new(&d.join("data"));
+    fit.options.bootstrap = 0;
+    let both = shadelab::pipeline::fit::run(&fit, &NoProgress).unwrap();
+    let ids: Vec<&str> = both
+        .participants
+        .iter()
+        .map(|p| p.participant.as_str())
+        .collect();
+    assert_eq!(ids, ["5f1a", "P2"], "in the order of the file names");
+    assert_eq!(both.group.as_ref().unwrap().participants, 2);
+
+    // A server that refuses (nothing listens on the port): tried, then the download, the
+    // participant told, and no redirect before they have it.
+    let closed = {
+        let l = TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let page = run(
+        &server.url(&format!(
+            "index.html?{simulate}&participant=P3&save_url=http://127.0.0.1:{closed}/save"
+        )),
+        &d.join("profile-refused"),
+        &ARGS,
+        timeout,
+    );
+    let status = element(&page.stdout, "p", "save-status").unwrap();
+    assert!(status.contains("could not be sent"), "{status}");
+    assert!(
+        page.stdout.contains("download=\"shadelab-P3.csv\""),
+        "{}",
+        page.stdout
+    );
+    assert!(!page.stdout.contains("id=\"done\""));
+    assert!(page
+        .stdout
+        .contains(&format!("href=\"{}\"", receiver.url("done?cc=C1234ABC"))));
+    let csv = element(&page.stdout, "pre", "results").unwrap();
+    assert_eq!(trials(&rows(&csv)).len(), report.design.trials.len());
+    assert_eq!(
+        receiver.posts.lock().unwrap().len(),
+        2,
+        "nothing more arrived"
+    );
+    drop(server);
+    drop(receiver);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A double of JATOS's `jatos` object (jatos.js, as JATOS serves it beside a study), shaped as
+/// its documented API: onLoad, urlQueryParameters, submitResultData (a Promise) and endStudy;
+/// it shows what it was given on the page.
+const JATOS_DOUBLE: &str = r#"
+window.jatos = {
+  urlQueryParameters: { PROLIFIC_PID: 'jatos-worker-1', simulate: 'tilt:26,kappa:2,seed:4' },
+  submitted: null,
+  onLoad(callback) { setTimeout(callback, 0); },
+  submitResultData(data) {
+    this.submitted = data;
+    return Promise.resolve();
+  },
+  endStudy(successful, message) {
+    const pre = document.createElement('pre');
+    pre.id = 'jatos-data';
+    pre.textContent = this.submitted;
+    const p = document.createElement('p');
+    p.id = 'jatos-ended';
+    p.textContent = `${successful} ${message}`;
+    document.body.replaceChildren(pre, p);
+  },
+};
+"#;
+
+#[test]
+fn under_jatos_the_data_go_to_submit_result_data_and_the_study_ends() {
+    let Some(modules) = jspsych() else { return };
+    let d = scratch("experiment-jatos");
+    let mut config = Config::new(d.join("e"));
+    config.rotations = vec![0.0, 90.0, 180.0, 270.0];
+    config.repeats = 2;
+    let (report, folder) = study(&config, &modules);
+    let server = Server::start(&folder, &[("jatos.js", JATOS_DOUBLE)]);
+    let page = run(
+        &server.url("jatos.html"),
+        &d.join("profile"),
+        &ARGS,
+        Duration::from_secs(120),
+    );
+    assert!(page.console().is_empty(), "console: {:#?}", page.console());
+    assert_eq!(
+        element(&page.stdout, "p", "jatos-ended").as_deref(),
+        Some("true shadelab study completed"),
+        "{}",
+        page.stdout
+    );
+    let data: Vec<serde_json::Value> =
+        serde_json::from_str(&element(&page.stdout, "pre", "jatos-data").unwrap()).unwrap();
+    let shown: Vec<_> = data.iter().filter(|r| r["shadelab"] == "trial").collect();
+    assert_eq!(shown.len(), report.design.trials.len());
+    // JATOS's own query parameters: the Prolific id is the participant.
+    assert!(shown.iter().all(|r| r["participant"] == "jatos-worker-1"));
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A lab's own jsPsych study: its consent and questionnaire around shadelab's timeline, the
+/// study's folder in a subfolder `shadelab/`, the design fetched from it, run in jsPsych's
+/// simulation mode; the lab's page shows its data as JSON.
+const LAB: &str = r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><link rel="icon" href="data:,"><title>our lab's study</title>
+<script src="node_modules/jspsych/dist/index.browser.min.js"></script>
+<script src="node_modules/@jspsych/plugin-preload/dist/index.browser.min.js"></script>
+<script src="node_modules/@jspsych/plugin-html-button-response/dist/index.browser.min.js"></script>
+<script src="node_modules/@jspsych/plugin-html-keyboard-response/dist/index.browser.min.js"></script>
+<script src="node_modules/@jspsych/plugin-image-keyboard-response/dist/index.browser.min.js"></script>
+<script src="shadelab/shadelab-timeline.js"></script>
+</head><body><script>
+(async () => {
+  const design = await (await fetch('shadelab/design.json')).json();
+  const jsPsych = initJsPsych({
+    on_finish: () => {
+      const pre = document.createElement('pre');
+      pre.id = 'lab-data';
+      pre.textContent = jsPsych.data.get().json();
+      document.body.replaceChildren(pre);
+    },
+  });
+  const consent = { type: jsPsychHtmlButtonResponse, stimulus: 'Our consent form', choices: ['Yes'], data: { lab: 'consent' } };
+  const questionnaire = { type: jsPsychHtmlButtonResponse, stimulus: 'Did the discs look like bumps?', choices: ['Mostly', 'Rarely'], data: { lab: 'questionnaire' } };
+  const shading = shadelabTimeline(design, {
+    participant: 'lab-007', jsPsych: jsPsych, imagePath: 'shadelab/',
+    simulate: shadelabTimeline.parseSimulate('tilt:26,kappa:2,seed:5'),
+  });
+  jsPsych.simulate([consent, shading, questionnaire], 'data-only');
+})();
+</script></body></html>
+"#;
+
+#[test]
+fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
+    let Some(modules) = jspsych() else { return };
+    let d = scratch("experiment-lab");
+    let lab = d.join("lab");
+    std::fs::create_dir_all(&lab).unwrap();
+    let mut config = Config::new(lab.join("shadelab"));
+    config.rotations = vec![0.0, 90.0, 180.0, 270.0];
+    config.repeats = 3;
+    config.practice = 1;
+    let report = experiment::run(&config, &NoProgress).unwrap();
+    experiment::write(&config, &report).unwrap();
+    std::os::unix::fs::symlink(&modules, lab.join("node_modules")).unwrap();
+    std::fs::write(lab.join("index.html"), LAB).unwrap();
+    let server = Server::start(&lab, &[]);
+    let page = run(
+        &server.url("index.html"),
+        &d.join("profile"),
+        &ARGS,
+        Duration::from_secs(120),
+    );
+    assert!(page.console().is_empty(), "console: {:#?}", page.console());
+    let json = element(&page.stdout, "pre", "lab-data")
+        .unwrap_or_else(|| panic!("the lab's study did not finish: {}", page.stdout));
+    let data: Vec<serde_json::Value> = serde_json::from_str(&json).unwrap();
+    assert_eq!(data.first().unwrap()["lab"], "consent");
+    assert_eq!(data.last().unwrap()["lab"], "questionnaire");
+    let shown: Vec<_> = data.iter().filter(|r| r["shadelab"] == "trial").collect();
+    assert_eq!(shown.len(), 13);
+    assert!(shown.iter().all(|r| r["participant"] == "lab-007"
+        && r["stimulus"]
+            .as_str()
+            .unwrap()
+            .starts_with("shadelab/images/")));
+    // The preload found every image under the lab's path.
+    let preload = data.iter().find(|r| r["shadelab"] == "preload").unwrap();
+    assert_eq!(preload["success"], true, "{preload}");
+    // And the lab's file fits as it is.
+    std::fs::write(d.join("lab.json"), &json).unwrap();
+    let r = shadelab::pipeline::fit::read_responses(&d.join("lab.json")).unwrap();
+    assert_eq!(r.participants[0].0, "lab-007");
+    assert_eq!(r.participants[0].1.len(), 12);
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn counterbalanced_keys_are_swapped_for_half_of_the_participants_and_read_back() {
+    let Some(modules) = jspsych() else { return };
+    let d = scratch("experiment-counterbalance");
+    let mut config = Config::new(d.join("e"));
+    config.rotations = vec![0.0, 90.0, 180.0, 270.0];
+    config.repeats = 3;
+    config.counterbalance_keys = true;
+    let (_, folder) = study(&config, &modules);
+    let server = Server::start(&folder, &[]);
+    let mut assignments = Vec::new();
+    for id in ["A", "B", "C", "D", "E", "F"] {
+        let page = run(
+            &server.url(&format!(
+                "index.html?simulate=tilt:26,kappa:2,seed:2&participant={id}"
+            )),
+            &d.join(format!("profile-{id}")),
+            &ARGS,
+            Duration::from_secs(120),
+        );
+        let csv = element(&page.stdout, "pre", "results").unwrap();
+        let all = rows(&csv);
+        let shown = trials(&all);
+        let keys = (
+            shown[0]["key_convex"].clone(),
+            shown[0]["key_concave"].clone(),
+        );
+        // One assignment per participant, and each answer's judgement by that assignment.
+        for r in &shown {
+            assert_eq!((r["key_convex"].clone(), r["key_concave"].clone()), keys);
+            let convex = r["response"] == keys.0;
+            assert_eq!(r["judgement"], if convex { "convex" } else { "concave" });
+        }
+        // The order seed's parity decides.
+        let odd = shown[0]["order_seed"].parse::<u64>().unwrap() % 2 == 1;
+        assert_eq!(keys.0 == "j", odd, "{id}: {keys:?}");
+        // The fit reads the judgements through each row's own keys.
+        std::fs::write(d.join(format!("{id}.csv")), &csv).unwrap();
+        let r = shadelab::pipeline::fit::read_responses(&d.join(format!("{id}.csv"))).unwrap();
+        let from_rows: Vec<bool> = shown
+            .iter()
+            .filter(|r| r["block"] == "test")
+            .map(|r| r["judgement"] == "convex")
+            .collect();
+        let read: Vec<bool> = r.participants[0].1.iter().map(|t| t.1).collect();
+        assert_eq!(read, from_rows);
+        assignments.push(keys.0);
+    }
+    assert!(
+        assignments.iter().any(|k| k == "f") && assignments.iter().any(|k| k == "j"),
+        "{assignments:?}"
     );
     drop(server);
     let _ = std::fs::remove_dir_all(&d);

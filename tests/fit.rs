@@ -156,6 +156,256 @@ fn participants_are_fitted_one_by_one() {
     assert_eq!(fit["design"]["participants"], 3);
 }
 
+/// jsPsych's data of one participant as CSV: a consent row, then per trial a fixation row and
+/// the trial's row with the key pressed (F = bump, J = dimple), as a lab's own study writes it.
+fn jspsych_csv(model: &ModelParams, seed: u64, participant: Option<&str>) -> String {
+    let plain = simulated_responses(model, &design(), 16, seed, "x");
+    let mut csv =
+        String::from("\"trial_type\",\"trial_index\",\"rotation_deg\",\"response\",\"rt\"");
+    if participant.is_some() {
+        csv.push_str(",\"participant\"");
+    }
+    csv.push_str("\r\n");
+    let who = participant.map(|p| format!(",\"{p}\"")).unwrap_or_default();
+    csv.push_str(&format!(
+        "\"html-button-response\",\"0\",\"null\",\"0\",\"1200\"{who}\r\n"
+    ));
+    for (i, line) in plain.lines().skip(1).enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        let key = if fields[5] == "convex" { "f" } else { "j" };
+        csv.push_str(&format!(
+            "\"html-keyboard-response\",\"{}\",\"null\",\"null\",\"null\"{who}\r\n\
+             \"image-keyboard-response\",\"{}\",\"{}\",\"{key}\",\"512\"{who}\r\n",
+            2 * i + 1,
+            2 * i + 2,
+            fields[4]
+        ));
+    }
+    csv
+}
+
+/// jsPsych data whose `response` is the key pressed: refused without the key mapping, naming
+/// the flag; fitted with `--keys`.
+#[test]
+fn key_presses_are_fitted_with_the_key_mapping() {
+    let dir = scratch("fit-keys");
+    let m = ModelParams {
+        tilt_deg: 26.0,
+        kappa: 2.0,
+        convexity_prior: 0.6,
+        lapse: 0.02,
+    };
+    std::fs::write(dir.join("p.csv"), jspsych_csv(&m, 4, None)).unwrap();
+    let out = shadelab(&dir, &["fit", "observer", "p.csv", "--out", "f"]);
+    assert_error(&out, 1, "line 4: unknown response 'f'");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("for key presses give --keys BUMP,DIMPLE")
+    );
+    assert_error(
+        &shadelab(
+            &dir,
+            &["fit", "observer", "p.csv", "--out", "f", "--keys", "fff"],
+        ),
+        2,
+        "--keys",
+    );
+    assert_error(
+        &shadelab(
+            &dir,
+            &["fit", "observer", "p.csv", "--out", "f", "--keys", "dk"],
+        ),
+        1,
+        "response 'f' is neither the bump key 'd' nor the dimple key 'k'",
+    );
+    let ok = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "fit",
+            "observer",
+            "p.csv",
+            "--out",
+            "f",
+            "--keys",
+            "F,J",
+            "--bootstrap",
+            "0",
+        ],
+    );
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let fit = read_json(&dir.join("f/fit.json"));
+    assert_eq!(fit["n_trials"], 384);
+    assert_eq!(
+        fit["design"]["other_rows"], 385,
+        "the consent and fixation rows"
+    );
+    let ci = &fit["prior_tilt_deg"]["ci95"];
+    assert!(
+        ci[0].as_f64().unwrap() <= 26.0 && 26.0 <= ci[1].as_f64().unwrap(),
+        "{fit}"
+    );
+}
+
+/// A folder of participants (jsPsych CSV and JSON, named by their files or their own column):
+/// one fit each, the pooled fit, the group's spread, a figure of every participant, and a
+/// Methods paragraph with the stimulus and apparatus from the design.json beside them.
+#[test]
+fn a_folder_of_participants_gets_a_fit_each_and_a_group_summary() {
+    let dir = scratch("fit-folder");
+    let data = dir.join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    let truths = [
+        ("p1", 10.0, 1),
+        ("p2", 30.0, 2),
+        ("p3", 40.0, 3),
+        ("p4", 20.0, 4),
+    ];
+    for (who, tilt, seed) in truths {
+        let m = ModelParams {
+            tilt_deg: tilt,
+            kappa: 2.5,
+            convexity_prior: 0.6,
+            lapse: 0.02,
+        };
+        match who {
+            // jsPsych's JSON (as JATOS stores it), with its own participant column.
+            "p3" => {
+                let rows: Vec<Value> = simulated_responses(&m, &design(), 16, seed, who)
+                    .lines()
+                    .skip(1)
+                    .map(|l| {
+                        let f: Vec<&str> = l.split(',').collect();
+                        serde_json::json!({
+                            "trial_type": "image-keyboard-response",
+                            "participant": "p3",
+                            "block": "test",
+                            "rotation_deg": f[4].parse::<f64>().unwrap(),
+                            "response": if f[5] == "convex" { "f" } else { "j" },
+                            "key_convex": "f",
+                            "key_concave": "j",
+                        })
+                    })
+                    .collect();
+                std::fs::write(data.join("session-3.json"), Value::from(rows).to_string()).unwrap();
+            }
+            // Named by the file.
+            _ => std::fs::write(data.join(format!("{who}.csv")), jspsych_csv(&m, seed, None))
+                .unwrap(),
+        }
+    }
+    // The experiment's design beside the data is read, not fitted.
+    let design_out = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "experiment",
+            "--out",
+            "e",
+            "--rotations",
+            "0:360:90",
+            "--repeats",
+            "1",
+            "--no-install",
+        ],
+    );
+    assert!(design_out.status.success());
+    std::fs::copy(dir.join("e/design.json"), data.join("design.json")).unwrap();
+    let run = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "fit",
+            "observer",
+            "data",
+            "--out",
+            "f",
+            "--keys",
+            "fj",
+            "--bootstrap",
+            "0",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let fit = read_json(&dir.join("f/fit.json"));
+    assert_eq!(fit["design"]["participants"], 4);
+    assert_eq!(fit["design"]["files"].as_array().unwrap().len(), 4);
+    assert_eq!(fit["n_trials"], 4 * 384);
+    let people = fit["participants"].as_array().unwrap();
+    let names: Vec<&str> = people
+        .iter()
+        .map(|p| p["participant"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["p1", "p2", "p4", "p3"], "in the order of the files");
+    for p in people {
+        let truth = truths.iter().find(|t| t.0 == p["participant"]).unwrap().1;
+        let v = p["prior_tilt_deg"]["value"].as_f64().unwrap();
+        let ci = &p["prior_tilt_deg"]["ci95"];
+        let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+        eprintln!(
+            "recovery: {} μ simulated {truth}, fitted {v:.2} [{lo:.2}, {hi:.2}]",
+            p["participant"]
+        );
+        assert!(lo <= truth && truth <= hi, "{p}");
+    }
+    // The group: the circular mean of the four near the mean of the truths (25°), their
+    // spread near that of the truths (SD 12.9°).
+    let g = &fit["group"];
+    assert_eq!(g["participants"], 4);
+    let mean = g["prior_tilt_mean_deg"].as_f64().unwrap();
+    assert!((mean - 25.0).abs() < 8.0, "{g}");
+    let ci = &g["prior_tilt_mean_ci95"];
+    assert!(
+        ci[0].as_f64().unwrap() < mean && mean < ci[1].as_f64().unwrap(),
+        "{g}"
+    );
+    assert!(g["prior_tilt_sd_deg"].as_f64().unwrap() < 30.0, "{g}");
+    assert!(dir.join("f/participants.png").is_file() && dir.join("f/participants.svg").is_file());
+    let methods = std::fs::read_to_string(dir.join("f/methods.md")).unwrap();
+    assert!(
+        methods.contains("**Group.** Across the 4 participants"),
+        "{methods}"
+    );
+    assert!(
+        methods.contains("**Stimulus and apparatus.** Each trial showed one shaded `bumps`")
+            && methods.contains("57 cm"),
+        "{methods}"
+    );
+    assert_eq!(fit["experiment"]["program"], "shadelab");
+    // A folder without data files, and a design that is not one, are refused in one line.
+    std::fs::create_dir_all(dir.join("empty")).unwrap();
+    assert_error(
+        &shadelab(&dir, &["fit", "observer", "empty", "--out", "g"]),
+        1,
+        "holds no data files",
+    );
+    assert_error(
+        &shadelab(
+            &dir,
+            &[
+                "fit",
+                "observer",
+                "data",
+                "--out",
+                "g",
+                "--keys",
+                "fj",
+                "--design",
+                "data/p1.csv",
+            ],
+        ),
+        1,
+        "p1.csv",
+    );
+}
+
 /// Data that cannot identify the model, or are not responses, are refused in one line.
 #[test]
 fn bad_responses_are_refused_in_one_line() {

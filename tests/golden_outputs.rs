@@ -171,6 +171,7 @@ const RUNS: &[&[&str]] = &[
         "2",
         "--ppd",
         "16",
+        "--no-install",
     ],
 ];
 

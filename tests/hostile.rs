@@ -885,7 +885,7 @@ fn render_refuses_bad_numbers_names_and_sizes() {
         ),
         (
             "render sphere --width 0 --height 5 --out o.png",
-            &["0x5", "empty"],
+            &["--width 0 --height 5", "at least 1 pixel"],
         ),
         ("render sphere --size nan --out o.png", &["--size", "nan"]),
         (

@@ -408,6 +408,7 @@ fn an_experiment_with_collected_responses_is_refused_unless_forced_and_they_stay
         "0",
         "--out",
         "exp",
+        "--no-install",
     ];
     ok(&shadelab(&d, &args), "experiment");
     let design: serde_json::Value =
@@ -419,7 +420,7 @@ fn an_experiment_with_collected_responses_is_refused_unless_forced_and_they_stay
         .unwrap()
         .ends_with(",design_hash"));
     // The runner writes each row's design hash from the design (the header and the field).
-    let js = std::fs::read_to_string(d.join("exp/experiment.js")).unwrap();
+    let js = std::fs::read_to_string(d.join("exp/shadelab-timeline.js")).unwrap();
     assert!(js.contains("design_hash: design.design_hash"), "{js}");
     // Written again with nothing collected: fine.
     ok(&shadelab(&d, &args), "experiment again");

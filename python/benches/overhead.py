@@ -56,7 +56,8 @@ def main():
     # In one process: the whole Python call against the compiled module's call alone (the
     # library's work and the arrays' handover), i.e. what the pure-Python layer adds.
     raw = times_ms(lambda: shadelab._shadelab.render("checkerboard", "{}", None, 32.0,
-                                                     (1024, 1024), 0, False))
+                                                     (1024, 1024), 0, False, None, None,
+                                                     "unit", None, None, None))
     full = times_ms(lambda: shadelab.render("checkerboard", shape=1024, ppd=32))
     tiny = times_ms(lambda: shadelab.render("checkerboard", shape=8, ppd=8))
     print(f"render 1024², Python layer alone: {1e3 * (np.min(full) - np.min(raw)):+.1f} µs (min), "

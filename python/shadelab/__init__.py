@@ -1,8 +1,11 @@
 """shadelab: shape-from-shading stimuli and analyses for vision science, as NumPy arrays.
 
-The functions here call the same library pipelines as the ``shadelab`` command line
-(``render``, ``solve``, ``analyze prior-sweep``, ``analyze observer``, ``analyze lightness``),
-in-process: no files, no subprocess. Conventions are stimupy's and NumPy's:
+Every command of the ``shadelab`` command line has its function here (``COMMANDS`` maps
+each command to it), calling the same library pipeline in-process: no subprocess. Analyses
+return typed results (:class:`PriorSweep`, :class:`Observer`, :class:`Lightness`,
+:class:`Fading`, :class:`Outline`, :class:`Study`, …) holding NumPy arrays and the command's
+report, each with ``to_dict()``, ``save(out)`` (the command line's output folder, by the same
+writer) and ``figures()`` (its figures as arrays). Conventions are stimupy's and NumPy's:
 
 * sizes are ``(height, width)``: ``visual_size`` in degrees of visual angle, ``shape`` in
   pixels, ``ppd`` pixels per degree (any two give the third);
@@ -32,17 +35,84 @@ from ._api import (
     solve,
     stimuli,
 )
+from ._commands import (
+    bench,
+    evaluate,
+    experiment,
+    fading,
+    fit_observer,
+    gallery,
+    outline,
+    study_merge,
+    study_run,
+)
 from ._display import to_psychopy
+from ._results import (
+    Bench,
+    Evaluation,
+    Experiment,
+    Fading,
+    Fit,
+    Gallery,
+    Lightness,
+    Observer,
+    Outline,
+    PriorSweep,
+    Result,
+    Study,
+)
+
+#: Each command of the ``shadelab`` command line and the function that is its twin here.
+COMMANDS = {
+    "render": render,
+    "list": stimuli,
+    "describe": describe,
+    "gallery": gallery,
+    "solve": solve,
+    "analyze lightness": lightness,
+    "analyze fading": fading,
+    "analyze prior-sweep": prior_sweep,
+    "analyze observer": observer,
+    "analyze outline": outline,
+    "bench": bench,
+    "study run": study_run,
+    "study merge": study_merge,
+    "eval": evaluate,
+    "experiment": experiment,
+    "fit observer": fit_observer,
+}
 
 __all__ = [
+    "COMMANDS",
+    "Bench",
+    "Evaluation",
+    "Experiment",
+    "Fading",
+    "Fit",
+    "Gallery",
+    "Lightness",
+    "Observer",
+    "Outline",
+    "PriorSweep",
     "Reconstruction",
+    "Result",
+    "Study",
+    "bench",
     "describe",
+    "evaluate",
+    "experiment",
+    "fading",
+    "fit_observer",
+    "gallery",
     "lightness",
     "observer",
+    "outline",
     "prior_sweep",
     "render",
     "save",
     "solve",
     "stimuli",
+    "study_merge",
+    "study_run",
     "to_psychopy",
 ]

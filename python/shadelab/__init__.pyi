@@ -1,7 +1,7 @@
 """Type stubs of ``shadelab`` (see ``__init__.py`` for the documentation)."""
 
 import os
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -15,22 +15,114 @@ LightSpec = Union[str, Tuple[float, float, float], Sequence[float], npt.NDArray[
 #: A stimulus name, or an image (H×W, or H×W×3 where colour is accepted) of linear luminance.
 PictureSpec = Union[str, npt.ArrayLike]
 
-class Reconstruction:
-    normals: npt.NDArray[np.float64]
-    depth: npt.NDArray[np.float64]
-    f: npt.NDArray[np.float64]
-    g: npt.NDArray[np.float64]
-    converged: bool
-    iterations: int
+PathLike = Union[str, "os.PathLike[str]"]
+
+class Result:
     report: Dict[str, Any]
-    def __init__(
-        self,
-        normals: npt.NDArray[np.float64],
-        depth: npt.NDArray[np.float64],
-        f: npt.NDArray[np.float64],
-        g: npt.NDArray[np.float64],
-        report: Dict[str, Any],
-    ) -> None: ...
+    command: str
+    def to_dict(self) -> Dict[str, Any]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    def __contains__(self, key: object) -> bool: ...
+    def __iter__(self) -> Iterator[str]: ...
+    def keys(self) -> List[str]: ...
+    def save(self, out: PathLike, *, force: bool = ...) -> str: ...
+    def figures(self) -> Dict[str, npt.NDArray[np.uint8]]: ...
+
+class PriorSweep(Result):
+    @property
+    def tilts(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def convexities(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def tokens(self) -> List[Dict[str, Any]]: ...
+
+class Observer(Result):
+    @property
+    def percepts(self) -> List[Dict[str, Any]]: ...
+    @property
+    def tokens(self) -> List[Dict[str, Any]]: ...
+
+class Lightness(Result):
+    @property
+    def output(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def targets(self) -> List[Dict[str, Any]]: ...
+
+class Fading(Result):
+    @property
+    def times(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def blurred(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def sharp(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def frames(self) -> npt.NDArray[np.float64]: ...
+
+class Outline(Result):
+    @property
+    def targets(self) -> List[Dict[str, Any]]: ...
+    @property
+    def layers(self) -> Dict[str, Dict[str, Any]]: ...
+
+class Study(Result):
+    results_csv: str
+    sweep_csv: str
+    folder: Optional[str]
+    @property
+    def results(self) -> Dict[str, npt.NDArray[Any]]: ...
+    @property
+    def sweep(self) -> Dict[str, npt.NDArray[Any]]: ...
+
+class Evaluation(Result):
+    table: str
+    folder: Optional[str]
+    @property
+    def cases(self) -> List[Dict[str, Any]]: ...
+    def mean_errors_deg(self) -> npt.NDArray[np.float64]: ...
+
+class Gallery(Result):
+    @property
+    def folder(self) -> str: ...
+    @property
+    def presets(self) -> List[Dict[str, Any]]: ...
+
+class Bench(Result):
+    table: str
+    @property
+    def rows(self) -> List[Dict[str, Any]]: ...
+
+class Experiment(Result):
+    folder: str
+    kept: List[str]
+    install_error: Optional[str]
+    @property
+    def design(self) -> Dict[str, Any]: ...
+
+class Fit(Result):
+    PARAMETERS: Tuple[str, ...]
+    @property
+    def pooled(self) -> Dict[str, Any]: ...
+    @property
+    def participants(self) -> List[Dict[str, Any]]: ...
+    @property
+    def group(self) -> Optional[Dict[str, Any]]: ...
+
+#: Each command of the ``shadelab`` command line and its Python twin.
+COMMANDS: Dict[str, Any]
+
+class Reconstruction(Result):
+    @property
+    def normals(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def depth(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def f(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def g(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def iterations(self) -> int: ...
 
 def stimuli() -> Dict[str, str]: ...
 def describe(name: str) -> Dict[str, Any]: ...
@@ -64,7 +156,9 @@ def solve(
     boundary: str = ...,
     albedo: Optional[Union[float, Literal["estimate"]]] = ...,
     lam: float = ...,
-    method: Literal["multigrid", "jacobi", "literal", "integrable", "integrable-lm"] = ...,
+    method: Literal[
+        "multigrid", "jacobi", "literal", "integrable", "integrable-lm", "nested-lm"
+    ] = ...,
     tol: float = ...,
     max_iter: Optional[int] = ...,
     saturation: Optional[Union[float, Literal["auto", "none"]]] = ...,
@@ -84,7 +178,7 @@ def prior_sweep(
     ambient: Optional[float] = ...,
     seed: Optional[int] = ...,
     **params: Any,
-) -> Dict[str, Any]: ...
+) -> PriorSweep: ...
 def observer(
     picture: PictureSpec,
     *,
@@ -104,29 +198,16 @@ def observer(
     ambient: Optional[float] = ...,
     seed: Optional[int] = ...,
     **params: Any,
-) -> Dict[str, Any]: ...
-@overload
-def lightness(
-    picture: PictureSpec,
-    *,
-    ppd: Optional[float] = ...,
-    model: str = ...,
-    mask: None = ...,
-    targets: Literal[False] = ...,
-    seed: Optional[int] = ...,
-    **params: Any,
-) -> npt.NDArray[np.float64]: ...
-@overload
+) -> Observer: ...
 def lightness(
     picture: PictureSpec,
     *,
     ppd: Optional[float] = ...,
     model: str = ...,
     mask: Optional[npt.ArrayLike] = ...,
-    targets: bool = ...,
     seed: Optional[int] = ...,
     **params: Any,
-) -> Tuple[npt.NDArray[np.float64], List[Dict[str, Any]]]: ...
+) -> Lightness: ...
 
 def to_psychopy(
     stim: Union[Dict[str, Any], npt.ArrayLike],
@@ -149,3 +230,97 @@ def save(
     layers: bool = False,
     force: bool = False,
 ) -> List[str]: ...
+
+Names = Union[str, Sequence[str]]
+
+def fading(
+    picture: PictureSpec = ...,
+    *,
+    ppd: Optional[float] = ...,
+    mask: Optional[npt.ArrayLike] = ...,
+    tau: Optional[float] = ...,
+    duration: Optional[float] = ...,
+    dt: Optional[float] = ...,
+    jitter: Optional[float] = ...,
+    jitter_seed: Optional[int] = ...,
+    dog_sigma: Optional[float] = ...,
+    border: Optional[float] = ...,
+    seed: Optional[int] = ...,
+    **params: Any,
+) -> Fading: ...
+def outline(
+    picture: PictureSpec,
+    *,
+    ppd: Optional[float] = ...,
+    shape: Optional[Union[int, Tuple[int, int]]] = ...,
+    mask: Optional[npt.ArrayLike] = ...,
+    light: Optional[LightSpec] = ...,
+    depth_scale: float = ...,
+    lam: float = ...,
+    seed: Optional[int] = ...,
+    **params: Any,
+) -> Outline: ...
+def study_run(spec: Union[PathLike, Dict[str, Any]], *, shard: Optional[str] = ...) -> Study: ...
+def study_merge(folders: Sequence[PathLike], out: PathLike, *, force: bool = ...) -> Study: ...
+def evaluate(
+    data: PathLike,
+    *,
+    out: Optional[PathLike] = ...,
+    force: bool = ...,
+    only: Optional[Names] = ...,
+    objects: Optional[Names] = ...,
+    ball_images: Optional[Names] = ...,
+    diligent_light: Optional[LightSpec] = ...,
+    boundary: Optional[str] = ...,
+    albedo_quantile: Optional[float] = ...,
+    ball_albedo_from_truth: bool = ...,
+    bunny_size: Optional[int] = ...,
+    methods: Optional[Names] = ...,
+    lam: Optional[float] = ...,
+    tol: Optional[float] = ...,
+    max_iter: Optional[int] = ...,
+) -> Evaluation: ...
+def gallery(out: PathLike, *, presets: Optional[PathLike] = ..., force: bool = ...) -> Gallery: ...
+def bench(
+    *,
+    sizes: Sequence[int] = ...,
+    shape: str = ...,
+    light: LightSpec = ...,
+    jacobi_up_to: int = ...,
+    reference: PathLike = ...,
+    reference_up_to: int = ...,
+    repeat: int = ...,
+) -> Bench: ...
+def experiment(
+    out: PathLike,
+    *,
+    stimulus: Optional[str] = ...,
+    rotations: Optional[Sequence[float]] = ...,
+    repeats: Optional[int] = ...,
+    practice: Optional[int] = ...,
+    slant: Optional[float] = ...,
+    visual_size: Optional[Size] = ...,
+    ppd: Optional[float] = ...,
+    viewing_distance: Optional[float] = ...,
+    seed: Optional[int] = ...,
+    keys: Optional[str] = ...,
+    break_every: Optional[int] = ...,
+    counterbalance_keys: bool = ...,
+    save_url: Optional[str] = ...,
+    save_format: Optional[Literal["json", "csv"]] = ...,
+    prolific_code: Optional[str] = ...,
+    completion_url: Optional[str] = ...,
+    install: bool = ...,
+    force: bool = ...,
+    **params: Any,
+) -> Experiment: ...
+def fit_observer(
+    responses: Union[PathLike, Dict[str, Any], Any],
+    *,
+    keys: Optional[str] = ...,
+    design: Optional[PathLike] = ...,
+    lapse: Optional[float] = ...,
+    nonparametric: bool = ...,
+    bootstrap: Optional[int] = ...,
+    seed: Optional[int] = ...,
+) -> Fit: ...

@@ -12,6 +12,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _shadelab
+from ._results import Lightness, Observer, PriorSweep, Result
 
 __version__: str = _shadelab.__version__
 
@@ -234,7 +235,8 @@ def stimuli() -> Dict[str, str]:
 
 
 def describe(name: str) -> Dict[str, Any]:
-    """A stimulus's parameters: for each, its default, range and doc; and its default size.
+    """A stimulus's parameters: for each, its default, range and doc; its default size; and
+    the stimupy parameter names it accepts (``stimupy_names``: stimupy's → shadelab's).
 
     >>> d = describe("checkerboard")
     >>> d["params"]["check"]["default"], d["default_visual_size"], d["default_ppd"]
@@ -250,6 +252,7 @@ def describe(name: str) -> Dict[str, Any]:
             p["name"]: {"default": p["default"], "range": p["range"], "doc": p["doc"]}
             for p in raw["params"]
         },
+        "stimupy_names": dict(raw["stimupy_names"]),
     }
 
 
@@ -362,13 +365,16 @@ def render(
     return out
 
 
-class Reconstruction:
+class Reconstruction(Result):
     """What :func:`solve` recovered: ``normals`` (H×W×3, unit, x right, y up, z toward the
     viewer), ``depth`` (H×W, pixels toward the viewer, lowest masked point 0), the
     stereographic gradients ``f`` and ``g`` (H×W), whether the solver ``converged``, its
-    ``iterations``, and the ``report`` dict (what the command line writes as report.json)."""
+    ``iterations``, and the ``report`` dict (what the command line writes as report.json).
+    ``save(out)`` writes the folder ``shadelab solve --out`` writes (normals, depth, figures),
+    ``figures()`` its figures as arrays, ``to_dict()`` the report with the arrays."""
 
-    __slots__ = ("normals", "depth", "f", "g", "converged", "iterations", "report")
+    __slots__ = ()
+    command = "solve"
 
     def __init__(
         self,
@@ -377,14 +383,33 @@ class Reconstruction:
         f: np.ndarray,
         g: np.ndarray,
         report: Dict[str, Any],
+        handle: Any = None,
     ) -> None:
-        self.normals = normals
-        self.depth = depth
-        self.f = f
-        self.g = g
-        self.report = report
-        self.converged: bool = bool(report["solver"]["converged"])
-        self.iterations: int = int(report["solver"]["iterations"])
+        super().__init__(report, {"normals": normals, "depth": depth, "f": f, "g": g}, handle)
+
+    @property
+    def normals(self) -> np.ndarray:
+        return self._arrays["normals"]
+
+    @property
+    def depth(self) -> np.ndarray:
+        return self._arrays["depth"]
+
+    @property
+    def f(self) -> np.ndarray:
+        return self._arrays["f"]
+
+    @property
+    def g(self) -> np.ndarray:
+        return self._arrays["g"]
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.report["solver"]["converged"])
+
+    @property
+    def iterations(self) -> int:
+        return int(self.report["solver"]["iterations"])
 
     def __repr__(self) -> str:
         h, w = self.depth.shape
@@ -421,7 +446,7 @@ def save(
     written whole or not at all. Returns the paths written.
 
     >>> import tempfile, pathlib
-    >>> s = render("checkerboard", shape=(16, 24), ppd=8)
+    >>> s = render("checkerboard", shape=(16, 24), ppd=8, targets="0,0")
     >>> with tempfile.TemporaryDirectory() as d:
     ...     [pathlib.Path(p).name for p in save(s, pathlib.Path(d) / "c.png")]
     ['c_mask.png', 'c.png', 'c.json']
@@ -493,7 +518,7 @@ def solve(
     carrying no brightness term (``"auto"``, the default: the clipped plateau the albedo
     estimate finds; ``"none"`` or ``None``: no pixel; or a level in the image's units);
     ``report["solver"]["clipped"]`` counts them. ``lam``, ``method`` (``multigrid``,
-    ``jacobi``, ``literal``, ``integrable``, ``integrable-lm``), ``tol`` and ``max_iter`` are
+    ``jacobi``, ``literal``, ``integrable``, ``integrable-lm``, ``nested-lm``), ``tol`` and ``max_iter`` are
     the solver's settings.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
@@ -511,7 +536,7 @@ def solve(
     estimate = isinstance(albedo, str)
     if estimate and albedo != "estimate":
         raise ValueError(f"albedo: {albedo!r} is neither a number nor 'estimate'")
-    normals, depth, f, g, report_json = _shadelab.solve(
+    normals, depth, f, g, report_json, handle = _shadelab.solve(
         img,
         inside,
         _light_text(light),
@@ -524,7 +549,7 @@ def solve(
         None if max_iter is None else int(max_iter),
         "none" if saturation is None else str(saturation),
     )
-    return Reconstruction(normals, depth, f, g, json.loads(report_json))
+    return Reconstruction(normals, depth, f, g, json.loads(report_json), handle)
 
 
 def prior_sweep(
@@ -542,7 +567,7 @@ def prior_sweep(
     ambient: Optional[float] = None,
     seed: Optional[int] = None,
     **params: Any,
-) -> Dict[str, Any]:
+) -> PriorSweep:
     """How the picture reads under each assumed light tilt (``shadelab analyze prior-sweep``).
 
     ``picture`` is a stimulus name (rendered with ``params``, ``seed``, ``ppd`` and ``shape``
@@ -551,23 +576,23 @@ def prior_sweep(
     default, as the CLI: the targets of an object on a backdrop such as the sphere or the hollow
     mask, the whole picture otherwise), ``"image"``, ``"tokens"`` or a PNG mask's path. ``tilts`` in degrees (0 = from above, +90 = from the
     left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
-    light. Returns the report (what sweep.json holds) with two arrays added: ``tilts`` and
-    ``convexities`` (tokens × tilts, positive convex, negative concave).
+    light. Returns a :class:`PriorSweep`: the report (what sweep.json holds) with two arrays,
+    ``tilts`` and ``convexities`` (tokens × tilts, positive convex, negative concave);
+    ``save(out)`` writes the command line's folder, ``figures()`` its plots as arrays.
 
     >>> r = prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0, 180])
     >>> r["convexities"].shape == (len(r["tokens"]), 2)
     True
     """
-    report_json, tilt_array, convexity = _shadelab.prior_sweep(
+    report_json, tilt_array, convexity, handle = _shadelab.prior_sweep(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
         _assumptions(domain, boundary, slant, albedo, ambient),
         _floats(tilts),
         _opt(str, binding),
     )
-    report = json.loads(report_json)
-    report["tilts"] = tilt_array
-    report["convexities"] = convexity
-    return report
+    return PriorSweep(
+        json.loads(report_json), {"tilts": tilt_array, "convexities": convexity}, handle
+    )
 
 
 def observer(
@@ -589,9 +614,10 @@ def observer(
     ambient: Optional[float] = None,
     seed: Optional[int] = None,
     **params: Any,
-) -> Dict[str, Any]:
+) -> Observer:
     """A Bayesian observer's percepts of the picture at each rotation
-    (``shadelab analyze observer``): the report, as observer.json holds it.
+    (``shadelab analyze observer``): an :class:`Observer` holding the report, as
+    observer.json holds it (``save(out)`` writes the command line's folder).
 
     ``picture``, ``ppd``, ``shape``, ``mask``, ``domain``, ``boundary``, ``slant``, ``albedo``,
     ``ambient``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
@@ -599,7 +625,7 @@ def observer(
     log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
     judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
     """
-    report_json = _shadelab.observer(
+    report_json, handle = _shadelab.observer(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
         _assumptions(domain, boundary, slant, albedo, ambient),
         (
@@ -611,7 +637,7 @@ def observer(
             _floats(tilts),
         ),
     )
-    return json.loads(report_json)
+    return Observer(json.loads(report_json), {}, handle)
 
 
 def lightness(
@@ -620,32 +646,26 @@ def lightness(
     ppd: Optional[float] = None,
     model: str = "odog",
     mask: Any = None,
-    targets: bool = False,
     seed: Optional[int] = None,
     **params: Any,
-) -> Any:
-    """A lightness model's output for the picture (``shadelab analyze lightness``), H×W.
+) -> Lightness:
+    """A lightness model's output for the picture (``shadelab analyze lightness``).
 
     ``picture`` is an image array (gray H×W, or RGB H×W×3 taken as its luminance), a
     stimupy-style dict (its ``img``, with its ``target_mask`` and ``ppd`` unless given) or a
     stimulus name (rendered at ``ppd`` with ``params`` and ``seed``). ``ppd`` is required for
     an array when the model works in degrees (every model but ``retinex``).
-    ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. With ``mask`` (target
-    labels, 0 = background) or ``targets=True`` (a stimulus's own targets), returns
-    ``(output, target_means)``: one dict per target with its ``label``, ``name``, ``pixels``,
-    mean ``luminance`` and mean model ``output``.
+    ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. Returns a
+    :class:`Lightness`: its ``output`` (H×W) and, where the picture has targets (``mask``:
+    target labels, 0 = background; a stimupy dict's ``target_mask``; a stimulus's own),
+    ``targets``: one dict per target with its ``label``, ``name``, ``pixels``, mean
+    ``luminance`` and mean model ``output``.
 
-    >>> out = lightness("checker-shadow", ppd=16, model="retinex")
-    >>> out.ndim
-    2
+    >>> r = lightness("checker-shadow", ppd=16, model="retinex")
+    >>> r.output.ndim, [t["name"] for t in r.targets]
+    (2, ['A', 'B'])
     """
-    out, report_json = _shadelab.lightness(
+    out, report_json, handle = _shadelab.lightness(
         _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
     )
-    given = _stimupy_dict(picture)
-    from_dict = given is not None and np.asarray(given.get("target_mask", 0)).any()
-    if mask is None and not targets and not from_dict:
-        return out
-    report = json.loads(report_json)
-    means = report["targets"][0]["targets"] if report["targets"] else []
-    return out, means
+    return Lightness(json.loads(report_json), {"output": out}, handle)

@@ -1,7 +1,7 @@
 """Type stubs of the compiled module ``shadelab._shadelab`` (called by ``shadelab``; use the
 functions of ``shadelab`` itself, which take and give dicts, tuples and NumPy arrays)."""
 
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -49,7 +49,14 @@ def solve(
     npt.NDArray[np.float64],
     npt.NDArray[np.float64],
     str,
+    ReportHandle,
 ]: ...
+class ReportHandle:
+    """A command's report kept by the compiled module: writes its output folder, decodes its
+    figures."""
+    def write(self, out: str, force: bool) -> str: ...
+    def figures(self) -> Dict[str, npt.NDArray[np.uint8]]: ...
+
 #: (image, stimulus name, parameters JSON, seed, ppd, shape (h, w), target labels)
 PictureArgs = Tuple[
     Optional[npt.NDArray[np.float64]],
@@ -68,7 +75,7 @@ def prior_sweep(
     assumptions: AssumptionArgs,
     tilts: Optional[List[float]],
     binding: Optional[str],
-) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64], ReportHandle]: ...
 def observer(
     picture: PictureArgs,
     assumptions: AssumptionArgs,
@@ -80,8 +87,10 @@ def observer(
         Optional[List[float]],
         Optional[List[float]],
     ],
-) -> str: ...
-def lightness(picture: PictureArgs, model: str) -> Tuple[npt.NDArray[np.float64], str]: ...
+) -> Tuple[str, ReportHandle]: ...
+def lightness(
+    picture: PictureArgs, model: str
+) -> Tuple[npt.NDArray[np.float64], str, ReportHandle]: ...
 def save(
     name: str,
     params_json: str,
@@ -98,3 +107,51 @@ def save(
     layers: bool,
     force: bool,
 ) -> List[str]: ...
+def fading(
+    picture: PictureArgs,
+    settings: Tuple[
+        Optional[float],
+        Optional[float],
+        Optional[float],
+        Optional[float],
+        Optional[int],
+        Optional[float],
+        Optional[float],
+    ],
+) -> Tuple[str, Dict[str, npt.NDArray[np.float64]], ReportHandle]: ...
+def outline(
+    picture: PictureArgs, light: Optional[str], depth_scale: float, lam: float
+) -> Tuple[str, Dict[str, Dict[str, Any]], ReportHandle]: ...
+def study_run(
+    spec_path: Optional[str], spec_json: Optional[str], shard: Optional[str]
+) -> Tuple[str, str, str, ReportHandle]: ...
+def study_merge(dirs: List[str], out: str, force: bool) -> Tuple[str, str, str, str]: ...
+def evaluate(
+    data: str,
+    out: Optional[str],
+    force: bool,
+    settings: Tuple[Any, ...],
+) -> Tuple[str, str, Optional[str]]: ...
+def gallery(out: str, presets: Optional[str], force: bool) -> str: ...
+def bench(
+    sizes: List[int],
+    shape: str,
+    light: str,
+    jacobi_up_to: int,
+    reference: str,
+    reference_up_to: int,
+    repeat: int,
+) -> Tuple[str, str]: ...
+def experiment(
+    out: str, stimulus: Optional[str], params_json: str, settings_json: str, force: bool
+) -> Tuple[str, str, List[str], Optional[str]]: ...
+def fit_observer(
+    responses: str,
+    text: Optional[str],
+    keys: Optional[str],
+    design: Optional[str],
+    lapse: Optional[float],
+    nonparametric: bool,
+    bootstrap: Optional[int],
+    seed: Optional[int],
+) -> Tuple[str, ReportHandle]: ...

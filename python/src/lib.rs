@@ -17,14 +17,26 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
+mod commands;
+mod reports;
+
+use reports::{Kind, ReportHandle};
+
 /// The library's error as the Python exception a Python user expects, with its one-line text.
-fn to_py(e: Error) -> PyErr {
+pub(crate) fn to_py(e: Error) -> PyErr {
     let text = e.to_string();
     match &e {
         Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
             PyFileNotFoundError::new_err(text)
         }
-        Error::Io { .. } | Error::NotOurs { .. } | Error::Locked { .. } => PyOSError::new_err(text),
+        // What the keyword remedies, as the command line names its flag.
+        Error::NotOurs { path, .. } if path.is_dir() => PyOSError::new_err(format!(
+            "{text}; pass force=True to write into it (every file shadelab did not write stays)"
+        )),
+        Error::NotOurs { .. } => {
+            PyOSError::new_err(format!("{text}; pass force=True to replace it"))
+        }
+        Error::Io { .. } | Error::Locked { .. } => PyOSError::new_err(text),
         Error::Compute(_) => PyRuntimeError::new_err(text),
         _ => PyValueError::new_err(text),
     }
@@ -42,7 +54,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 /// ([`shadelab::cancel`]) is raised, the work stops at its next check (an output being written
 /// is removed, never left half-written), the flag is lowered for the next call, and the
 /// handler's exception is raised in Python.
-fn run_released<T: Send>(
+pub(crate) fn run_released<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> Result<T, Error> + Send,
 ) -> PyResult<T> {
@@ -96,7 +108,7 @@ fn size_request(
 }
 
 /// A JSON object of parameters from its text (written by the Python layer's `json.dumps`).
-fn params_from(json: &str) -> PyResult<Map<String, Value>> {
+pub(crate) fn params_from(json: &str) -> PyResult<Map<String, Value>> {
     match serde_json::from_str(json) {
         Ok(Value::Object(map)) => Ok(map),
         _ => Err(PyValueError::new_err(
@@ -106,13 +118,16 @@ fn params_from(json: &str) -> PyResult<Map<String, Value>> {
 }
 
 /// JSON text of any report.
-fn json_text(value: &impl serde::Serialize) -> PyResult<String> {
+pub(crate) fn json_text(value: &impl serde::Serialize) -> PyResult<String> {
     serde_json::to_string(value)
         .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))
 }
 
 /// An H×W array owning the grid's buffer (no copy).
-fn image_array<'py, T: numpy::Element>(py: Python<'py>, grid: Grid<T>) -> Bound<'py, PyArray2<T>> {
+pub(crate) fn image_array<'py, T: numpy::Element>(
+    py: Python<'py>,
+    grid: Grid<T>,
+) -> Bound<'py, PyArray2<T>> {
     let (w, h) = (grid.width(), grid.height());
     Array2::from_shape_vec((h, w), grid.into_vec())
         .expect("a grid's buffer holds width × height values")
@@ -121,7 +136,7 @@ fn image_array<'py, T: numpy::Element>(py: Python<'py>, grid: Grid<T>) -> Bound<
 
 /// An H×W×3 array owning the grid's buffer (no copy: `[f64; 3]` per pixel is already three
 /// consecutive values).
-fn rgb_array<'py>(py: Python<'py>, grid: RgbImage) -> Bound<'py, PyArray3<f64>> {
+pub(crate) fn rgb_array<'py>(py: Python<'py>, grid: RgbImage) -> Bound<'py, PyArray3<f64>> {
     let (w, h) = (grid.width(), grid.height());
     Array3::from_shape_vec((h, w, 3), grid.into_vec().into_flattened())
         .expect("a grid's buffer holds width × height pixels")
@@ -275,7 +290,11 @@ fn render<'py>(
         }
     }
     let range = config.export.range;
+    // The library's buffer itself in the unit range (no copy); a new one in another range.
+    let unit = range == shadelab::stimulus::Range::Unit;
     let img = match output.pixels {
+        Pixels::Gray(i) if unit => image_array(py, i).into_any(),
+        Pixels::Rgb(i) if unit => rgb_array(py, i).into_any(),
         Pixels::Gray(i) => image_array(py, i.map(|&v| range.apply(v))).into_any(),
         Pixels::Rgb(i) => rgb_array(py, i.map(|p| p.map(|v| range.apply(v)))).into_any(),
     };
@@ -341,7 +360,10 @@ fn export_options(
         (None, Some(text)) => {
             let value: Value = serde_json::from_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("display: {e}")))?;
-            Some(shadelab::io::display_from_value(&value, std::path::Path::new(".")).map_err(to_py)?)
+            Some(
+                shadelab::io::display_from_value(&value, std::path::Path::new("."))
+                    .map_err(to_py)?,
+            )
         }
         (None, None) => None,
     };
@@ -426,6 +448,7 @@ fn solve<'py>(
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f64>>,
     String,
+    ReportHandle,
 )> {
     let image: Image = grid_from(image.as_array());
     let mask: Option<Mask> = mask.map(|m| grid_from(m.as_array()));
@@ -454,21 +477,23 @@ fn solve<'py>(
         pl::solve::run_image(&config, image, mask, &NoProgress)
     })?;
     let text = json_text(&run.report)?;
-    let solution = run.shape.solution;
+    // Copies for NumPy; the run itself stays with the handle, for its writer.
+    let solution = &run.shape.solution;
     let normals = normals_array(py, solution.normals());
-    Ok((
+    let arrays = (
         normals,
-        image_array(py, run.depth.depth),
-        image_array(py, solution.f),
-        image_array(py, solution.g),
-        text,
-    ))
+        image_array(py, run.depth.depth.clone()),
+        image_array(py, solution.f.clone()),
+        image_array(py, solution.g.clone()),
+    );
+    let handle = ReportHandle::new(Kind::Solve(Box::new(run)), Vec::new());
+    Ok((arrays.0, arrays.1, arrays.2, arrays.3, text, handle))
 }
 
 /// The picture of an analysis, as the Python layer passes it: an array or a stimulus name,
 /// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width) and target
 /// labels.
-type PictureArgs<'py> = (
+pub(crate) type PictureArgs<'py> = (
     Option<ArrayIn<'py>>,
     Option<String>,
     String,
@@ -482,7 +507,7 @@ type PictureArgs<'py> = (
 type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
 
 /// The library's description of a picture, and the rendered shape (the library's order).
-fn picture_source(
+pub(crate) fn picture_source(
     picture: PictureArgs<'_>,
 ) -> PyResult<(shadelab::PictureSource, Option<(usize, usize)>)> {
     let (image, stimulus, params_json, seed, ppd, shape, labels) = picture;
@@ -525,7 +550,12 @@ fn prior_sweep<'py>(
     assumptions: AssumptionArgs,
     tilts: Option<Vec<f64>>,
     binding: Option<&str>,
-) -> PyResult<(String, Bound<'py, PyAny>, Bound<'py, PyArray2<f64>>)> {
+) -> PyResult<(
+    String,
+    Bound<'py, PyAny>,
+    Bound<'py, PyArray2<f64>>,
+    ReportHandle,
+)> {
     let mut config =
         pl::prior_sweep::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
     if let Some(t) = tilts {
@@ -546,7 +576,11 @@ fn prior_sweep<'py>(
     let convexity = Array2::from_shape_vec((n, tilts.len()), rows)
         .expect("one convexity per token and tilt")
         .into_pyarray(py);
-    Ok((text, tilts.into_pyarray(py).into_any(), convexity))
+    let handle = ReportHandle::new(
+        Kind::PriorSweep(Box::new(report)),
+        config.picture.source.files(),
+    );
+    Ok((text, tilts.into_pyarray(py).into_any(), convexity, handle))
 }
 
 /// The observer's own settings: prior tilt, kappas, convexity bias, noise, rotations, tilts.
@@ -566,7 +600,7 @@ fn observer(
     picture: PictureArgs<'_>,
     assumptions: AssumptionArgs,
     settings: ObserverArgs,
-) -> PyResult<String> {
+) -> PyResult<(String, ReportHandle)> {
     let mut config =
         pl::observer::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
     let (prior_tilt, kappas, convexity_bias, noise, rotations, tilts) = settings;
@@ -580,7 +614,12 @@ fn observer(
         config.check()?;
         pl::observer::run(&config, &NoProgress)
     })?;
-    json_text(&report)
+    let text = json_text(&report)?;
+    let files = config.picture.source.files();
+    Ok((
+        text,
+        ReportHandle::new(Kind::Observer(Box::new(report)), files),
+    ))
 }
 
 /// A lightness model's output: (H×W output, report JSON).
@@ -589,17 +628,23 @@ fn lightness<'py>(
     py: Python<'py>,
     picture: PictureArgs<'py>,
     model: &str,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, String)> {
+) -> PyResult<(Bound<'py, PyArray2<f64>>, String, ReportHandle)> {
     let (source, _) = picture_source(picture)?;
     let model: shadelab::LightnessModel = model.parse().map_err(to_py)?;
     let config = pl::lightness::LightnessConfig::new(source, vec![model]).map_err(to_py)?;
-    let mut report = run_released(py, || pl::lightness::run(&config, &NoProgress))?;
+    let report = run_released(py, || pl::lightness::run(&config, &NoProgress))?;
     let text = json_text(&report)?;
     let (_, out) = report
         .images
-        .pop()
+        .first()
         .ok_or_else(|| PyRuntimeError::new_err("the lightness model gave no output"))?;
-    Ok((image_array(py, out), text))
+    let out = image_array(py, out.clone());
+    let files = config.source.files();
+    Ok((
+        out,
+        text,
+        ReportHandle::new(Kind::Lightness(Box::new(report)), files),
+    ))
 }
 
 /// The compiled module.
@@ -614,5 +659,15 @@ fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(prior_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(observer, m)?)?;
     m.add_function(wrap_pyfunction!(lightness, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::fading, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::outline, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::study_run, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::study_merge, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::gallery, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::bench, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::fit_observer, m)?)?;
+    m.add_class::<ReportHandle>()?;
     Ok(())
 }

@@ -55,8 +55,8 @@ def test_observer_bad_noise_is_a_value_error():
 
 def test_lightness_on_an_array_and_by_name_agree():
     s = shadelab.render("checker-shadow", ppd=16)
-    on_array = shadelab.lightness(s["img"], ppd=16, model="retinex")
-    by_name = shadelab.lightness("checker-shadow", ppd=16, model="retinex")
+    on_array = shadelab.lightness(s["img"], ppd=16, model="retinex").output
+    by_name = shadelab.lightness("checker-shadow", ppd=16, model="retinex").output
     assert on_array.shape == s["shape"]
     np.testing.assert_array_equal(on_array, by_name)
     assert owns_rust_buffer(on_array)
@@ -64,7 +64,8 @@ def test_lightness_on_an_array_and_by_name_agree():
 
 def test_lightness_target_means_with_a_mask():
     s = shadelab.render("checker-shadow", ppd=16)
-    out, means = shadelab.lightness(s["img"], ppd=16, mask=s["target_mask"])
+    r = shadelab.lightness(s["img"], ppd=16, mask=s["target_mask"])
+    out, means = r.output, r.targets
     assert [m["label"] for m in means] == [1, 2]
     for m in means:
         np.testing.assert_allclose(m["output"], out[s["target_mask"] == m["label"]].mean())
@@ -85,5 +86,10 @@ def test_lightness_unknown_model_is_a_value_error():
 def test_lightness_rgb_is_read_as_luminance():
     gray = np.linspace(0, 1, 256).reshape(16, 16)
     rgb = np.repeat(gray[:, :, None], 3, axis=2)
-    np.testing.assert_allclose(shadelab.lightness(rgb, ppd=8, model="retinex"),
-                               shadelab.lightness(gray, ppd=8, model="retinex"), atol=1e-12)
+    np.testing.assert_allclose(shadelab.lightness(rgb, ppd=8, model="retinex").output,
+                               shadelab.lightness(gray, ppd=8, model="retinex").output, atol=1e-12)
+
+
+def test_lightness_without_targets_has_none():
+    r = shadelab.lightness(np.linspace(0, 1, 256).reshape(16, 16), ppd=8, model="retinex")
+    assert r.targets == [] and r.output.shape == (16, 16)

@@ -55,3 +55,25 @@ def test_the_namespace_is_the_api():
     public = sorted(n for n in dir(shadelab) if not n.startswith("_"))
     assert public == sorted(shadelab.__all__), public
     assert isinstance(shadelab.__version__, str)
+
+
+def test_the_type_stubs_describe_the_api():
+    # __init__.pyi (what editors and type checkers read) names every public function with
+    # the parameters the function really takes, and every public class.
+    import ast
+    import inspect
+    import pathlib
+
+    stub = ast.parse((pathlib.Path(shadelab.__file__).parent / "__init__.pyi").read_text())
+    defs = {n.name: n for n in stub.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    assigned = {t.id for n in stub.body if isinstance(n, ast.AnnAssign) for t in [n.target]}
+    for name in shadelab.__all__:
+        obj = getattr(shadelab, name)
+        assert name in defs or name in assigned, f"{name} has no stub"
+        if inspect.isfunction(obj):
+            node = defs[name]
+            stubbed = [a.arg for a in node.args.posonlyargs + node.args.args + node.args.kwonlyargs]
+            if node.args.kwarg:
+                stubbed.append(node.args.kwarg.arg)
+            real = list(inspect.signature(obj).parameters)
+            assert stubbed == real, (name, stubbed, real)

@@ -107,6 +107,39 @@ def test_checkerboard_against_stimupy_itself():
     ours = shadelab.render("checkerboard", visual_size=(4, 6), ppd=10)
     assert ours["shape"] == tuple(theirs["shape"])
     np.testing.assert_array_equal(ours["img"], theirs["img"])
+    # No targets unless asked for: stimupy's target_mask is all zeros, and so is ours.
+    np.testing.assert_array_equal(ours["target_mask"], theirs["target_mask"])
+    assert not ours["target_mask"].any() and ours["target_names"] == []
+    # Targets named as stimupy's target_indices: the same mask and the same picture.
+    theirs = checkerboard(visual_size=(4, 6), ppd=10, check_visual_size=(1, 1),
+                          intensity_checks=(0.0, 1.0), target_indices=((1, 2), (3, 0)),
+                          intensity_target=0.25)
+    ours = shadelab.render("checkerboard", visual_size=(4, 6), ppd=10, targets="1,2;3,0",
+                           intensity_target=0.25)
+    np.testing.assert_array_equal(ours["target_mask"], theirs["target_mask"])
+    np.testing.assert_array_equal(ours["img"], theirs["img"])
+
+
+def test_stimupys_own_keywords_give_stimupys_stimulus():
+    # The same call, keyword for keyword, to stimupy and to shadelab (stimupy's names are
+    # aliases of shadelab's): the same picture, target mask and shape.
+    _stimupy()
+    from stimupy.stimuli.checkerboards import checkerboard
+
+    for kw in [
+        dict(visual_size=(4, 6), ppd=10, check_visual_size=(1, 1), intensity_checks=(0.0, 1.0)),
+        dict(visual_size=(3, 5), ppd=16, check_visual_size=0.5, intensity_checks=(0.2, 0.9),
+             target_indices=((1, 2), (3, 0), (0, 9)), intensity_target=0.4),
+    ]:
+        theirs, ours = checkerboard(**kw), shadelab.render("checkerboard", **kw)
+        assert ours["shape"] == tuple(theirs["shape"])
+        np.testing.assert_array_equal(ours["img"], theirs["img"])
+        np.testing.assert_array_equal(ours["target_mask"], theirs["target_mask"])
+    with pytest.raises(ValueError, match="square"):
+        shadelab.render("checkerboard", visual_size=(4, 6), ppd=10, check_visual_size=(1, 2))
+    with pytest.raises(ValueError, match="same parameter"):
+        shadelab.render("checkerboard", visual_size=(4, 6), ppd=10, check_visual_size=1, check=1)
+    assert shadelab.describe("checkerboard")["stimupy_names"]["check_visual_size"] == "check"
 
 
 def stimupy_shape(visual_size, ppd):
@@ -159,8 +192,10 @@ def test_a_stimupy_dict_is_taken_as_a_picture():
     # and resolution: the same numbers as the array with them given by hand.
     s = shadelab.render("checker-shadow", ppd=16)
     theirs = {"img": s["img"], "target_mask": s["target_mask"], "ppd": (16, 16)}
-    out_dict, means_dict = shadelab.lightness(theirs, model="odog")
-    out_hand, means_hand = shadelab.lightness(s["img"], mask=s["target_mask"], ppd=16, model="odog")
+    by_dict = shadelab.lightness(theirs, model="odog")
+    by_hand = shadelab.lightness(s["img"], mask=s["target_mask"], ppd=16, model="odog")
+    out_dict, means_dict = by_dict.output, by_dict.targets
+    out_hand, means_hand = by_hand.output, by_hand.targets
     np.testing.assert_array_equal(out_dict, out_hand)
     assert means_dict == means_hand and [m["label"] for m in means_dict] == [1, 2]
     with pytest.raises(ValueError, match="needs 'img'"):
@@ -203,14 +238,15 @@ def test_targets_of_checker_shadow():
 def test_target_names_are_each_calls_own_list():
     # Repeated renders share the name strings, never the list: changing one result's list
     # leaves the next result's alone, and other targets get their own names.
-    a = shadelab.render("checkerboard", shape=(16, 32), ppd=8)
-    assert a["target_names"][:3] == ["r0c0", "r0c1", "r0c2"]
-    assert len(a["target_names"]) == int(a["target_mask"].max()) == 8
+    named = "0,0;0,1;0,2;1,3"
+    a = shadelab.render("checkerboard", shape=(16, 32), ppd=8, targets=named)
+    assert a["target_names"] == ["r0c0", "r0c1", "r0c2", "r1c3"]
+    assert len(a["target_names"]) == int(a["target_mask"].max()) == 4
     a["target_names"].append("mine")
-    b = shadelab.render("checkerboard", shape=(16, 32), ppd=8)
+    b = shadelab.render("checkerboard", shape=(16, 32), ppd=8, targets=named)
     assert b["target_names"] == a["target_names"][:-1] and b["target_names"] is not a["target_names"]
     assert shadelab.render("checker-shadow", ppd=16)["target_names"] == ["A", "B"]
-    assert shadelab.render("checkerboard", shape=(16, 32), ppd=8)["target_names"] == b["target_names"]
+    assert shadelab.render("checkerboard", shape=(16, 32), ppd=8, targets=named)["target_names"] == b["target_names"]
 
 
 def test_same_numbers_as_the_cli_sidecar(tmp_path):

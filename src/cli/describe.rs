@@ -43,5 +43,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             p.doc
         );
     }
+    if !d.stimupy_names.is_empty() {
+        let _ = writeln!(text, "stimupy's names, also accepted:");
+        for (theirs, ours) in &d.stimupy_names {
+            let _ = writeln!(text, "  {theirs:<18} = {ours}");
+        }
+    }
     Output::new(global).results(&text, &d)
 }

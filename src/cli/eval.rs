@@ -4,7 +4,6 @@ use super::output::Output;
 use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
 use shadelab::boundary::Boundary;
 use shadelab::evaluation::{self, report, Config, Set};
-use shadelab::io::{self, AtomicDir, BitDepth};
 use shadelab::light::Light;
 use shadelab::solver::Method;
 use std::path::PathBuf;
@@ -80,7 +79,8 @@ fn methods_help() -> String {
         "The methods each case is solved with, a row each (comma separated): multigrid \
          (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid \
          solution), integrable-lm (the integrable method's energy minimised by \
-         Levenberg–Marquardt; slower), jacobi (Ikeuchi–Horn's fixed point, slowly; for \
+         Levenberg–Marquardt; slower), nested-lm (the same energy, solved coarse to fine; \
+         integrable-lm's accuracy in fewer steps), jacobi (Ikeuchi–Horn's fixed point, slowly; for \
          comparison) [default: {}]",
         defaults.join(",")
     )
@@ -126,35 +126,20 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         None => git_commit().unwrap_or_else(|| "unknown".into()),
     };
 
-    // Claim the output folder first, so an unwritable one fails before the long part.
-    let folder = match &args.out {
-        Some(out) => Some(
-            AtomicDir::create(out, report::REPORT_FILE, global.force)?.reads(&[&config.data])?,
-        ),
-        None => None,
+    let record = report::Record {
+        out: args.out.clone(),
+        force: global.force,
+        commit,
+        command: std::env::args().collect(),
     };
-    let bar = Bar::new(global.quiet);
-    let picture_dir = folder.as_ref().map(|f| f.path().to_path_buf());
-    let results =
-        evaluation::run(
-            &config,
-            picture_dir.is_some(),
-            &bar,
-            &mut |name, image| match &picture_dir {
-                Some(dir) => io::write_rgb(&dir.join(name), image, BitDepth::Eight, None),
-                None => Ok(()),
-            },
-        )?;
+    let (results, written) = report::run_into(&config, &record, &Bar::new(global.quiet))?;
     let out = Output::new(global);
-    if let Some(folder) = folder {
-        let command: Vec<String> = std::env::args().collect();
-        let seconds = started.elapsed().as_secs_f64();
-        report::write_summary(folder.path(), &config, &results, &commit, &command, seconds)?;
-        let target = folder.commit()?;
+    if let Some(target) = written {
         out.note(format!(
-            "wrote {}: {} cases, {seconds:.1} s",
+            "wrote {}: {} cases, {:.1} s",
             target.display(),
-            results.len()
+            results.len(),
+            started.elapsed().as_secs_f64()
         ));
     }
     out.results(&report::markdown_table(&results), &results)

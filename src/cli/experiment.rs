@@ -1,8 +1,10 @@
-//! `shadelab experiment --out DIR`: a self-contained browser experiment ("bump or dimple?").
+//! `shadelab experiment --out DIR`: a jsPsych 8 study ("bump or dimple?").
 
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
-use shadelab::pipeline::experiment::{run as build, write, Config};
+use shadelab::pipeline::experiment::{
+    prolific_completion_url, run as build, write, Config, Install, SaveFormat,
+};
 use shadelab::visual_size::parse_size;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -10,7 +12,7 @@ use std::time::Instant;
 /// Arguments of `experiment`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): index.html, experiment.js, experiment.css, design.json, README.md and images/.
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): index.html, jatos.html, experiment.js, shadelab-timeline.js, experiment.css, package.json, design.json, README.md and images/ (and node_modules/ from npm install).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// The stimulus shown (any with a light and one target, e.g. bumps, gaussian, sphere) [default: bumps, one bump].
@@ -46,6 +48,27 @@ pub struct Args {
     /// The two response keys, bump then dimple, e.g. fj [default: fj].
     #[arg(long, value_name = "BUMP,DIMPLE")]
     pub keys: Option<String>,
+    /// A break after every N test trials (0: none) [default: 96].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub break_every: Option<usize>,
+    /// Swap the two keys for half of the participants (by their order seed).
+    #[arg(long)]
+    pub counterbalance_keys: bool,
+    /// POST the data to this URL at the end (the page's save_url parameter overrides it); if that fails, the participant downloads them.
+    #[arg(long, value_name = "URL")]
+    pub save_url: Option<String>,
+    /// The POST's body: json (jsPsych's JSON) or csv [default: json].
+    #[arg(long, value_name = "FORMAT")]
+    pub save_format: Option<String>,
+    /// Send participants back to Prolific with this completion code once their data are saved.
+    #[arg(long, value_name = "CODE", conflicts_with = "completion_url")]
+    pub prolific_code: Option<String>,
+    /// Send participants to this URL once their data are saved.
+    #[arg(long, value_name = "URL")]
+    pub completion_url: Option<String>,
+    /// Do not run `npm install` in the folder (the README says the command).
+    #[arg(long)]
+    pub no_install: bool,
 }
 
 /// Runs `experiment`.
@@ -92,6 +115,31 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         config.keys.convex = convex.to_ascii_lowercase();
         config.keys.concave = concave.to_ascii_lowercase();
     }
+    if let Some(n) = args.break_every {
+        config.break_every = n;
+    }
+    config.counterbalance_keys = args.counterbalance_keys;
+    config.save_url = args.save_url.clone();
+    if let Some(f) = &args.save_format {
+        config.save_format = match f.as_str() {
+            "json" => SaveFormat::Json,
+            "csv" => SaveFormat::Csv,
+            _ => {
+                return Err(CliError::usage(format!(
+                    "--save-format '{f}' must be json or csv"
+                )))
+            }
+        };
+    }
+    if let Some(code) = &args.prolific_code {
+        config.completion_url = Some(
+            prolific_completion_url(code).map_err(|e| super::flags::usage("--prolific-code", e))?,
+        );
+    }
+    if let Some(url) = &args.completion_url {
+        config.completion_url = Some(url.clone());
+    }
+    config.install = !args.no_install;
     config.force = global.force;
     config.max_pixels = global.max_pixels;
     config.check().map_err(super::flags::setting)?;
@@ -114,11 +162,17 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             report.design.design_hash
         ));
     }
+    if let Install::Failed(why) = &written.install {
+        out.warn(format!(
+            "jsPsych is not installed ({why}): run `npm install` in {} before opening the study",
+            folder.display()
+        ));
+    }
     out.wrote(&folder, started.elapsed().as_secs_f64());
     let d = &report.design;
     out.results(
         &format!(
-            "{} trials ({} practice, {} rotations x {} repeats); open {}/index.html from a web server (python3 -m http.server), or pilot it with index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1",
+            "{} trials ({} practice, {} rotations x {} repeats); open {}/index.html from a web server (python3 -m http.server; jatos.html under JATOS), or pilot it with index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1",
             d.trials.len(),
             d.practice_trials,
             d.rotations_deg.len(),

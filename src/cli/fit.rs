@@ -6,7 +6,7 @@ use super::progress::Bar;
 use super::{CliResult, Global};
 use shadelab::analysis::fit::FitOptions;
 use shadelab::io::AtomicDir;
-use shadelab::pipeline::fit::{self as pipeline, Config, REPORT_FILE};
+use shadelab::pipeline::fit::{self as pipeline, Config, KeyMap, REPORT_FILE};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -21,11 +21,20 @@ pub enum Command {
 /// Arguments of `fit observer`.
 #[derive(Debug, clap::Args)]
 pub struct ObserverArgs {
-    /// The responses CSV (as `shadelab experiment` writes it): columns rotation_deg and
-    /// response (convex/concave or 1/0) at least; block (test rows are fitted) and
-    /// participant (one fit each, beside the pooled fit) when present.
+    /// The data: jsPsych's CSV or JSON as the `shadelab experiment` study saves it, a plain
+    /// responses CSV (columns rotation_deg and response: convex/concave or 1/0), or a folder of
+    /// such files (one or more participants each; a design.json in it is read as --design).
+    /// Rows without a rotation are skipped in jsPsych data, practice rows always; each
+    /// participant (the participant column, else the file's name) is fitted beside the pooled fit.
     responses: PathBuf,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): fit.json, fit.png, fit.svg, methods.md.
+    /// The keys for bump and dimple, when `response` holds the key pressed and the rows do not
+    /// say (e.g. fj, or arrowleft,arrowright).
+    #[arg(long, value_name = "BUMP,DIMPLE")]
+    keys: Option<String>,
+    /// The experiment's design.json, for the Methods paragraph's stimulus and apparatus.
+    #[arg(long, value_name = "FILE")]
+    design: Option<PathBuf>,
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): fit.json, fit.png, fit.svg, methods.md (and participants.png, .svg with several participants).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Parametric-bootstrap replicates for the percentile intervals given beside the profile-likelihood ones, and for the non-parametric prior's (0: none).
@@ -52,6 +61,10 @@ pub fn run(command: Command, global: &Global) -> CliResult {
 fn observer(args: ObserverArgs, global: &Global) -> CliResult {
     let started = Instant::now();
     let mut config = Config::new(&args.responses);
+    if let Some(k) = &args.keys {
+        config.keys = Some(KeyMap::parse(k).map_err(|e| super::flags::usage("--keys", e))?);
+    }
+    config.design = args.design.clone();
     config.options = FitOptions {
         lapse: args.lapse,
         nonparametric: args.nonparametric,
@@ -77,7 +90,18 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
     )?;
     let folder =
         AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&[&config.responses])?;
-    let report = pipeline::run(&config, &Bar::new(global.quiet))?;
+    let report = pipeline::run(&config, &Bar::new(global.quiet)).map_err(|e| {
+        let text = e.to_string();
+        // The library says what is missing; the command line names its flag.
+        if text.contains("give the keys for bump and dimple") {
+            super::CliError::from(anyhow::anyhow!(text.replace(
+                "give the keys for bump and dimple",
+                "give --keys BUMP,DIMPLE"
+            )))
+        } else {
+            e.into()
+        }
+    })?;
     report.write(folder.path())?;
     let target = folder.commit()?;
     let out = Output::new(global);

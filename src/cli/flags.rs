@@ -45,7 +45,7 @@ fn max_iter_help() -> String {
          cycles in the analyses, which repeat a solve that has not converged with Jacobi sweeps; \
          in solve and eval, {MULTIGRID_MAX_CYCLES} cycles for multigrid, {JACOBI_MAX_SWEEPS} \
          sweeps for jacobi and literal, {INTEGRABLE_MAX_ITER} iterations for integrable, \
-         {INTEGRABLE_LM_MAX_STEPS} steps for integrable-lm]"
+         {INTEGRABLE_LM_MAX_STEPS} steps for integrable-lm and nested-lm (on the finest grid)]"
     )
 }
 
@@ -166,6 +166,9 @@ const FIELD_FLAGS: &[(&str, &str)] = &[
     ("viewing_distance_cm", "--viewing-distance"),
     ("visual_size", "--visual-size"),
     ("keys", "--keys"),
+    ("break_every", "--break-every"),
+    ("save_url", "--save-url"),
+    ("completion_url", "--completion-url"),
 ];
 
 /// A bad setting, named by its flag.

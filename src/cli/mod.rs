@@ -78,7 +78,7 @@ enum Command {
     Study(study::Command),
     /// Measure the shape-from-shading engine on real data (bunny, Mozart, DiLiGenT, Beethoven).
     Eval(eval::Args),
-    /// Write a self-contained browser experiment (bump or dimple?) with a pilot mode.
+    /// Write a jsPsych 8 study (bump or dimple?) with a pilot mode, saving to JATOS, a server or a download.
     Experiment(experiment::Args),
     /// Fit models to responses: `fit observer` estimates a light prior, a convexity prior and
     /// a lapse rate from bump/dimple judgements.

@@ -131,6 +131,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         config.size.set_shape(parse_size::<usize>(s, "--size")?);
     }
     if let (Some(w), Some(h)) = (args.width, args.height) {
+        if w == 0 || h == 0 {
+            return Err(CliError::usage(format!(
+                "--width {w} --height {h}: both sides must be at least 1 pixel"
+            )));
+        }
         config.size.set_shape((h, w));
     }
     if let Some(v) = &args.visual_size {

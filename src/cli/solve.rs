@@ -57,12 +57,13 @@ pub struct Args {
     pub saturation: String,
     /// Iteration: multigrid (Jacobi's answer in a few cycles), jacobi (stable, slow), literal
     /// (R at the current value; unstable, for study), integrable (depth and gradients solved
-    /// together from the multigrid answer, Horn 1990: the normals of one surface) or
+    /// together from the multigrid answer, Horn 1990: the normals of one surface),
     /// integrable-lm (the same energy minimised by Levenberg–Marquardt steps: slower, and
-    /// closer on folded objects).
+    /// closer on folded objects) or nested-lm (integrable-lm's energy minimised coarse to fine,
+    /// each grid starting from its half-size grid's minimum: the same answer in fewer steps).
     #[arg(
         long,
-        value_name = "multigrid|jacobi|literal|integrable|integrable-lm",
+        value_name = "multigrid|jacobi|literal|integrable|integrable-lm|nested-lm",
         default_value = "multigrid"
     )]
     pub method: String,

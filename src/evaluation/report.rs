@@ -4,8 +4,11 @@ use super::case::CaseResult;
 use super::Config;
 use crate::error::Result;
 use crate::io;
+use crate::io::{AtomicDir, BitDepth};
+use crate::progress::Progress;
 use serde_json::json;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// The file that marks an output folder as written by the evaluation.
 pub const REPORT_FILE: &str = "evaluation.json";
@@ -39,6 +42,67 @@ pub fn write_summary(
         "seconds": seconds,
     });
     io::write_json(&dir.join(REPORT_FILE), &report)
+}
+
+/// Where and how [`run_into`] records an evaluation: the output folder (none: the results
+/// only), whether a folder shadelab did not write may be written into, and the commit and
+/// command line the summary names.
+#[derive(Debug, Clone, Default)]
+pub struct Record {
+    /// The output folder: the summary (`evaluation.md`, `evaluation.json`) and a picture per
+    /// row; `None` writes nothing.
+    pub out: Option<PathBuf>,
+    /// Write into a folder shadelab did not write (every other file in it stays).
+    pub force: bool,
+    /// The commit of the program that ran, as the summary states it.
+    pub commit: String,
+    /// The command line (or call) that ran, as the summary states it.
+    pub command: Vec<String>,
+}
+
+/// Runs the evaluation ([`super::run`]) and, with an output folder, writes it whole or not at
+/// all: the folder is claimed before the work (a folder that may not be replaced fails at
+/// once, and the data folder is never written into), each row's picture and the summary
+/// ([`write_summary`]) go into it, and it replaces the old one only when everything is
+/// written. Returns the results and the folder written.
+pub fn run_into(
+    config: &Config,
+    record: &Record,
+    progress: &dyn Progress,
+) -> Result<(Vec<CaseResult>, Option<PathBuf>)> {
+    let started = Instant::now();
+    let folder = match &record.out {
+        Some(out) => {
+            Some(AtomicDir::create(out, REPORT_FILE, record.force)?.reads(&[&config.data])?)
+        }
+        None => None,
+    };
+    let dir = folder.as_ref().map(|f| f.path().to_path_buf());
+    let results = super::run(
+        config,
+        dir.is_some(),
+        progress,
+        &mut |name, image| match &dir {
+            Some(dir) => io::write_rgb(&dir.join(name), image, BitDepth::Eight, None),
+            None => Ok(()),
+        },
+    )?;
+    let written = match folder {
+        Some(folder) => {
+            let seconds = started.elapsed().as_secs_f64();
+            write_summary(
+                folder.path(),
+                config,
+                &results,
+                &record.commit,
+                &record.command,
+                seconds,
+            )?;
+            Some(folder.commit()?)
+        }
+        None => None,
+    };
+    Ok((results, written))
 }
 
 /// The table's header: what each column means is in docs/evaluation.md.

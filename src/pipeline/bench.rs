@@ -19,6 +19,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+/// The largest side at which [`Method::NestedLm`] is timed: it takes about 35 s at 512² and
+/// several minutes at 1024² on a 2-core machine.
+pub const NESTED_LM_UP_TO: usize = 512;
+
 /// The shapes the bench renders.
 pub const BENCH_SHAPES: &[&str] = &["sphere", "vase"];
 
@@ -96,6 +100,15 @@ pub struct BenchRow {
     pub numpy: Option<Timing>,
     /// Mean angle between the multigrid and Jacobi normals, degrees.
     pub jacobi_difference_deg: Option<f64>,
+    /// The integrable energy minimised coarse to fine ([`Method::NestedLm`]), timed once, up
+    /// to [`NESTED_LM_UP_TO`].
+    pub nested_lm: Option<Timing>,
+    /// Its seconds over multigrid's.
+    pub nested_lm_vs_multigrid: Option<f64>,
+    /// Mean angle between its normals and the true ones, degrees.
+    pub nested_lm_error_deg: Option<f64>,
+    /// Mean angle between multigrid's normals and the true ones, degrees.
+    pub multigrid_error_deg: f64,
 }
 
 /// The bench's results.
@@ -161,8 +174,11 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
             };
             Reconstructor::new(size, size, options)
         };
-        let (mut multigrid_planner, mut jacobi_planner) =
-            (planner(Method::Multigrid)?, planner(Method::Jacobi)?);
+        let (mut multigrid_planner, mut jacobi_planner, mut nested_planner) = (
+            planner(Method::Multigrid)?,
+            planner(Method::Jacobi)?,
+            planner(Method::NestedLm)?,
+        );
         let time = |planner: &mut Reconstructor| -> Result<(Timing, Solution)> {
             let started = Instant::now();
             let shape = planner.solve(&problem, &crate::progress::NoProgress)?;
@@ -187,6 +203,13 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         let jacobi = (size <= config.jacobi_up_to)
             .then(|| time(&mut jacobi_planner))
             .transpose()?;
+        let nested = (size <= NESTED_LM_UP_TO)
+            .then(|| time(&mut nested_planner))
+            .transpose()?;
+        let truth = &surface.normals;
+        let error = |s: &Solution| -> Result<f64> {
+            Ok(angular_error(&s.normals(), truth, &surface.mask)?.mean_deg)
+        };
         let numpy = match &reference {
             Ok(r) if size <= config.reference_up_to => Some(r.run(&config.shape, size, &light)?),
             _ => None,
@@ -201,6 +224,10 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
                 .map(|e| e.mean_deg),
             jacobi: jacobi.map(|(t, _)| t),
             numpy,
+            nested_lm: nested.as_ref().map(|(t, _)| *t),
+            nested_lm_vs_multigrid: nested.as_ref().map(|(t, _)| t.seconds / multigrid.seconds),
+            nested_lm_error_deg: nested.as_ref().map(|(_, s)| error(s)).transpose()?,
+            multigrid_error_deg: error(&fast)?,
         });
         progress.advance(1);
     }
@@ -248,6 +275,11 @@ fn notes(config: &BenchConfig, reference: &std::result::Result<Reference, String
         }
         Err(why) => notes.push(format!("vs numpy-sor column skipped: {why}")),
     }
+    if config.sizes.iter().any(|&n| n > NESTED_LM_UP_TO) {
+        notes.push(format!(
+            "nested-lm is timed up to {NESTED_LM_UP_TO}² (it takes minutes above)"
+        ));
+    }
     if let Some(peak) = peak_memory_bytes() {
         notes.push(format!(
             "peak memory of this process: {:.1} MiB",
@@ -265,8 +297,16 @@ impl BenchReport {
             self.setup, self.threads
         );
         t += &format!(
-            "{:>6}  {:<10}  {:>16}  {:>10}  {:>10}  {:>13}  {:>12}\n",
-            "size", "method", "iterations", "seconds", "vs jacobi", "vs numpy-sor", "Δ jacobi (°)"
+            "{:>6}  {:<10}  {:>16}  {:>10}  {:>10}  {:>13}  {:>12}  {:>12}  {:>9}\n",
+            "size",
+            "method",
+            "iterations",
+            "seconds",
+            "vs jacobi",
+            "vs numpy-sor",
+            "Δ jacobi (°)",
+            "vs multigrid",
+            "error (°)"
         );
         let ratio = |a: Option<f64>, b: f64, digits: usize| match a {
             Some(a) => format!("{:.*}×", digits, a / b),
@@ -278,27 +318,54 @@ impl BenchReport {
                 .jacobi_difference_deg
                 .map(|d| format!("{d:.4}"))
                 .unwrap_or_else(|| "—".into());
+            let error = |e: f64| format!("{e:.3}");
             t += &row(
                 r.size,
                 "multigrid",
                 &r.multigrid,
                 "cycles",
-                &ratio(r.jacobi.map(|j| j.seconds), fast, 0),
-                &ratio(r.numpy.map(|n| n.seconds), fast, 0),
-                &difference,
+                [
+                    &ratio(r.jacobi.map(|j| j.seconds), fast, 0),
+                    &ratio(r.numpy.map(|n| n.seconds), fast, 0),
+                    &difference,
+                    "1×",
+                    &error(r.multigrid_error_deg),
+                ],
             );
+            if let (Some(n), Some(ratio), Some(e)) = (
+                &r.nested_lm,
+                r.nested_lm_vs_multigrid,
+                r.nested_lm_error_deg,
+            ) {
+                let ratio = format!("{ratio:.1}×");
+                t += &row(
+                    r.size,
+                    "nested-lm",
+                    n,
+                    "steps",
+                    ["—", "—", "—", &ratio, &error(e)],
+                );
+            }
             if let Some(j) = &r.jacobi {
                 let vs_numpy = ratio(r.numpy.map(|n| n.seconds), j.seconds, 1);
-                t += &row(r.size, "jacobi", j, "sweeps", "1×", &vs_numpy, "0");
+                t += &row(
+                    r.size,
+                    "jacobi",
+                    j,
+                    "sweeps",
+                    ["1×", &vs_numpy, "0", "—", "—"],
+                );
             }
             if let Some(n) = &r.numpy {
-                t += &row(r.size, "numpy-sor", n, "sweeps", "—", "1×", "—");
+                t += &row(r.size, "numpy-sor", n, "sweeps", ["—", "1×", "—", "—", "—"]);
             }
         }
         t += &format!(
             "\nmultigrid: best of {} runs; its iterations are cycles (W-cycles), the others' are \
              sweeps;\nΔ jacobi: mean angle between the multigrid and Jacobi normals over the \
-             unknowns.\n",
+             unknowns;\nnested-lm (the integrable energy minimised coarse to fine, its iterations \
+             the finest grid's steps): one run, its seconds over multigrid's in vs multigrid;\n\
+             error: mean angle between the normals and the true ones over the mask.\n",
             self.repeat
         );
         for note in &self.notes {
@@ -308,22 +375,18 @@ impl BenchReport {
     }
 }
 
-fn row(
-    size: usize,
-    method: &str,
-    t: &Timing,
-    unit: &str,
-    vs_jacobi: &str,
-    vs_numpy: &str,
-    diff: &str,
-) -> String {
+/// One line of the table: the size, the method, its timing and the last five columns (vs
+/// jacobi, vs numpy-sor, Δ jacobi, vs multigrid, error).
+fn row(size: usize, method: &str, t: &Timing, unit: &str, columns: [&str; 5]) -> String {
+    let [vs_jacobi, vs_numpy, diff, vs_multigrid, error] = columns;
     let iterations = format!(
         "{} {unit}{}",
         t.iterations,
         if t.converged { "" } else { " (not conv.)" }
     );
     format!(
-        "{size:>6}  {method:<10}  {iterations:>16}  {:>10.4}  {vs_jacobi:>10}  {vs_numpy:>13}  {diff:>12}\n",
+        "{size:>6}  {method:<10}  {iterations:>16}  {:>10.4}  {vs_jacobi:>10}  {vs_numpy:>13}  \
+         {diff:>12}  {vs_multigrid:>12}  {error:>9}\n",
         t.seconds
     )
 }

@@ -1,13 +1,22 @@
-//! `experiment` as a pipeline: a self-contained browser experiment that measures a person's
-//! light-from-above and convexity priors. One shaded bump per trial, its light turned to each
-//! rotation θ (the direction its bright side faces; tilt convention, 0 = up, +90 = left), a
-//! "bump or dimple?" key response, and the responses as a CSV that `shadelab fit observer`
-//! reads (`participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image`).
+//! `experiment` as a pipeline: a jsPsych 8 study that measures a person's light-from-above and
+//! convexity priors. One shaded bump per trial, its light turned to each rotation θ (the
+//! direction its bright side faces; tilt convention, 0 = up, +90 = left), a "bump or dimple?"
+//! key response, and jsPsych's own data (CSV or JSON, every row with the participant, the order
+//! seed, the display and the design's hash) that `shadelab fit observer` reads.
 //!
 //! [`run`] renders one image per rotation (with the render pipeline, so every image has its
-//! sidecar) and draws the seeded trial order; [`write()`] lands the folder whole: `index.html`
-//! (the design embedded), `experiment.js` (a plain-JavaScript runner, no libraries, no
-//! network), `experiment.css`, `design.json` (every trial), `README.md` and `images/`.
+//! sidecar) and lists the trials; [`write()`] lands the folder whole: `index.html` (the design
+//! embedded) and `jatos.html` (the same study for JATOS), `experiment.js` (the study around the
+//! trials: browser check, consent, fullscreen, calibration, saving to JATOS, to a server by POST
+//! or as a download, the Prolific completion), `shadelab-timeline.js` (the trials as a jsPsych
+//! timeline, `shadelabTimeline(design, options)`, which a lab can embed in its own study),
+//! `experiment.css`, `package.json` (jsPsych and its plugins at pinned versions, see
+//! [`JSPSYCH_PACKAGES`]), `design.json`, `README.md` and `images/`. With [`Config::install`] it
+//! runs `npm install` in the folder, so that it runs offline as a static site.
+//!
+//! Each participant gets their own order: the page shuffles the design's practice and test
+//! trials with a seed made of the design's seed and the participant id (`design.json`'s
+//! `trials` lists them in the order of the design's seed alone).
 //!
 //! ```
 //! use shadelab::pipeline::experiment::{run, write, Config};
@@ -39,7 +48,8 @@ use crate::stimulus::{self, ExportOptions, Output, Pixels, Request};
 use crate::visual_size::{Geometry, SizeRequest};
 use serde::Serialize;
 use serde_json::{Map, Value};
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 /// The file that marks a folder as a shadelab experiment (its `program` is `shadelab`).
 pub const MARKER: &str = "design.json";
@@ -68,8 +78,99 @@ pub const MAX_PRACTICE: usize = 100;
 
 /// The runner and its style sheet, copied into every experiment folder.
 const RUNNER_JS: &str = include_str!("../../assets/experiment/experiment.js");
+const TIMELINE_JS: &str = include_str!("../../assets/experiment/shadelab-timeline.js");
 const RUNNER_CSS: &str = include_str!("../../assets/experiment/experiment.css");
 const PAGE_HTML: &str = include_str!("../../assets/experiment/index.html");
+
+/// Default test trials between two breaks.
+pub const DEFAULT_BREAK_EVERY: usize = 96;
+
+/// The npm packages of the study, at the versions `package.json` pins, with the script each
+/// page loads (relative to `node_modules/`). jsPsych 8 and its plugins; never copied into
+/// shadelab's repository, installed into the study folder by `npm install`.
+pub const JSPSYCH_PACKAGES: &[(&str, &str, &str)] = &[
+    ("jspsych", "8.3.0", "jspsych/dist/index.browser.min.js"),
+    (
+        "@jspsych/plugin-preload",
+        "2.1.0",
+        "@jspsych/plugin-preload/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-browser-check",
+        "2.1.0",
+        "@jspsych/plugin-browser-check/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-html-button-response",
+        "2.1.0",
+        "@jspsych/plugin-html-button-response/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-html-keyboard-response",
+        "2.2.0",
+        "@jspsych/plugin-html-keyboard-response/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-image-keyboard-response",
+        "2.2.0",
+        "@jspsych/plugin-image-keyboard-response/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-fullscreen",
+        "2.1.0",
+        "@jspsych/plugin-fullscreen/dist/index.browser.min.js",
+    ),
+    (
+        "@jspsych/plugin-virtual-chinrest",
+        "3.1.0",
+        "@jspsych/plugin-virtual-chinrest/dist/index.browser.min.js",
+    ),
+];
+
+/// The columns shadelab adds to jsPsych's rows of a trial (beside jsPsych's own `response`,
+/// `rt`, `stimulus`, `trial_type`, `trial_index`, `time_elapsed`).
+pub const DATA_COLUMNS: &str = "shadelab,block,practice,break,shadelab_trial,rotation_deg,image,\
+     key_convex,key_concave,judgement,participant,order_seed,design_hash,stimulus_name,ppd,\
+     ppd_method,fullscreen,window_width,window_height,viewing_distance_cm,user_agent,\
+     screen_width,screen_height,prolific_pid,study_id,session_id,shadelab_version,simulated";
+
+/// The package.json of a study folder: jsPsych and its plugins at pinned versions.
+pub fn package_json() -> String {
+    let deps: Map<String, Value> = JSPSYCH_PACKAGES
+        .iter()
+        .map(|(name, version, _)| (name.to_string(), Value::from(*version)))
+        .collect();
+    let json = serde_json::json!({
+        "name": "shadelab-experiment",
+        "private": true,
+        "description": "A shadelab experiment (bump or dimple?) run by jsPsych 8",
+        "dependencies": deps,
+    });
+    serde_json::to_string_pretty(&json).unwrap_or_default() + "\n"
+}
+
+/// Prolific's completion URL for a completion `code` (letters and digits).
+pub fn prolific_completion_url(code: &str) -> Result<String> {
+    if code.is_empty() || code.len() > 64 || !code.chars().all(|c| c.is_ascii_alphanumeric()) {
+        return Err(Error::invalid(format!(
+            "the Prolific completion code '{code}' must be 1 to 64 letters or digits"
+        )));
+    }
+    Ok(format!(
+        "https://app.prolific.com/submissions/complete?cc={code}"
+    ))
+}
+
+/// How the page sends its data to a save URL.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SaveFormat {
+    /// jsPsych's JSON (an array of rows), `Content-Type: application/json`.
+    #[default]
+    Json,
+    /// jsPsych's CSV, `Content-Type: text/csv`.
+    Csv,
+}
 
 /// The response keys (lower-case letters or digits).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -144,6 +245,20 @@ pub struct Config {
     pub force: bool,
     /// The largest image made, in pixels.
     pub max_pixels: usize,
+    /// A break after every this many test trials (0: none).
+    pub break_every: usize,
+    /// Swap the two keys for half of the participants (chosen by their order seed).
+    pub counterbalance_keys: bool,
+    /// Where the page POSTs the data (`http(s)://…` or a path on the same host); the URL
+    /// parameter `save_url` overrides it. `None`: the participant downloads them.
+    pub save_url: Option<String>,
+    /// The body of that POST.
+    pub save_format: SaveFormat,
+    /// Where the page sends the participant once the data are saved (e.g. Prolific's, see
+    /// [`prolific_completion_url`]).
+    pub completion_url: Option<String>,
+    /// Run `npm install` in the written folder (when npm is on PATH) so that it runs as it is.
+    pub install: bool,
 }
 
 impl Config {
@@ -168,6 +283,12 @@ impl Config {
             out: out.into(),
             force: false,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
+            break_every: DEFAULT_BREAK_EVERY,
+            counterbalance_keys: false,
+            save_url: None,
+            save_format: SaveFormat::Json,
+            completion_url: None,
+            install: false,
         }
     }
 
@@ -277,6 +398,24 @@ impl Config {
                 });
             }
         }
+        if self.break_every > MAX_REPEATS * 360 {
+            return Err(BadSetting {
+                field: "break_every",
+                error: Error::invalid(format!(
+                    "a break every {} trials is more than the experiment can have",
+                    self.break_every
+                )),
+            });
+        }
+        if let Some(url) = &self.save_url {
+            field("save_url", check_url(url, "the save URL", true))?;
+        }
+        if let Some(url) = &self.completion_url {
+            field(
+                "completion_url",
+                check_url(url, "the completion URL", false),
+            )?;
+        }
         Ok(())
     }
 
@@ -296,6 +435,28 @@ impl Config {
         }
         Ok(())
     }
+}
+
+/// An absolute `http(s)://` URL (or, with `path_ok`, a path on the page's host) without
+/// spaces or quotes.
+fn check_url(url: &str, what: &str, path_ok: bool) -> Result<()> {
+    let absolute = url.starts_with("https://") || url.starts_with("http://");
+    let path = path_ok && url.starts_with('/') && !url.starts_with("//");
+    let clean = url.len() <= 2000
+        && url
+            .chars()
+            .all(|c| c.is_ascii_graphic() && !matches!(c, '"' | '\'' | '<' | '>' | '\\'));
+    if !(absolute || path) || !clean {
+        return Err(Error::invalid(format!(
+            "{what} '{url}' must be an http:// or https:// address{} without spaces or quotes",
+            if path_ok {
+                " (or a path on the page's host, /...)"
+            } else {
+                ""
+            }
+        )));
+    }
+    Ok(())
 }
 
 /// The parameters that make `name` one target: `bumps` with one bump, the others as they are.
@@ -391,8 +552,10 @@ pub struct ModelNote {
     pub convention: &'static str,
     /// The observer model.
     pub formula: &'static str,
-    /// The responses CSV's header.
+    /// The header of the plain responses CSV `fit observer` also reads.
     pub responses_csv: &'static str,
+    /// The columns shadelab adds to jsPsych's data rows ([`DATA_COLUMNS`]).
+    pub data_columns: &'static str,
 }
 
 /// Everything the page runs: `design.json`, also embedded in `index.html`.
@@ -428,8 +591,22 @@ pub struct Design {
     pub model: ModelNote,
     /// One image per rotation.
     pub images: Vec<ImageEntry>,
-    /// Every trial in presentation order: the practice trials, then the shuffled test trials.
+    /// Every trial: the practice trials, then the test trials, in the order of the design's
+    /// seed; the page shows each participant these in their own order (a seed made of the
+    /// design's seed and the participant id).
     pub trials: Vec<Trial>,
+    /// A break after every this many test trials (0: none).
+    pub break_every: usize,
+    /// Whether the keys are swapped for half of the participants.
+    pub counterbalance_keys: bool,
+    /// Where the page POSTs the data, if anywhere.
+    pub save_url: Option<String>,
+    /// The POST's body.
+    pub save_format: SaveFormat,
+    /// Where the participant goes once the data are saved.
+    pub completion_url: Option<String>,
+    /// The npm packages the page runs on, name to pinned version.
+    pub jspsych: BTreeMap<&'static str, &'static str>,
     /// The first 16 hex digits of the MD5 of this design as JSON (with this field empty):
     /// every response row carries it, so that responses collected under an earlier design in
     /// the same folder are told apart from the current design's.
@@ -614,9 +791,16 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             convention: CONVENTION,
             formula: MODEL,
             responses_csv: CSV_HEADER,
+            data_columns: DATA_COLUMNS,
         },
         images,
         trials,
+        break_every: config.break_every,
+        counterbalance_keys: config.counterbalance_keys,
+        save_url: config.save_url.clone(),
+        save_format: config.save_format,
+        completion_url: config.completion_url.clone(),
+        jspsych: JSPSYCH_PACKAGES.iter().map(|(n, v, _)| (*n, *v)).collect(),
         design_hash: String::new(),
     };
     let design = Design {
@@ -707,15 +891,85 @@ pub fn write(config: &Config, report: &Report) -> Result<Written> {
     let embedded = serde_json::to_string(&json)
         .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?
         .replace('<', "\\u003c");
-    let page = PAGE_HTML
-        .replace("{{BACKGROUND}}", &design.display.background)
-        .replace("{{DESIGN}}", &embedded);
+    let scripts: String = JSPSYCH_PACKAGES
+        .iter()
+        .map(|(_, _, script)| format!("<script src=\"node_modules/{script}\"></script>\n"))
+        .collect();
+    let page = |jatos: &str| {
+        PAGE_HTML
+            .replace("{{BACKGROUND}}", &design.display.background)
+            .replace("{{SCRIPTS}}", scripts.trim_end())
+            .replace("{{JATOS}}", jatos)
+            .replace("{{DESIGN}}", &embedded)
+    };
     io::write_text(&dir.path().join("experiment.js"), RUNNER_JS)?;
+    io::write_text(&dir.path().join("shadelab-timeline.js"), TIMELINE_JS)?;
     io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
+    io::write_text(&dir.path().join("package.json"), &package_json())?;
     io::write_text(&dir.path().join("README.md"), &readme(design))?;
-    io::write_text(&dir.path().join("index.html"), &page)?;
+    io::write_text(&dir.path().join("index.html"), &page(""))?;
+    // JATOS serves its jatos.js beside the study's files; a static host has none, so the
+    // JATOS page is a file of its own rather than a failing script in index.html.
+    io::write_text(
+        &dir.path().join("jatos.html"),
+        &page("<script src=\"jatos.js\"></script>\n"),
+    )?;
+    let install = if config.install {
+        npm_install(dir.path())
+    } else {
+        Install::NotAsked
+    };
     let (folder, kept) = dir.commit_keeping()?;
-    Ok(Written { folder, kept })
+    Ok(Written {
+        folder,
+        kept,
+        install,
+    })
+}
+
+/// Whether jsPsych was installed into the folder.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Install {
+    /// `npm install` ran: `node_modules/` holds jsPsych and its plugins.
+    Installed,
+    /// Not asked for ([`Config::install`] false).
+    NotAsked,
+    /// Asked for, but it could not be done: why (npm missing, no network); the README says the
+    /// one command to run.
+    Failed(String),
+}
+
+/// Runs `npm install` in `folder` (quietly, without audit), so that `node_modules/` holds the
+/// packages of its `package.json`.
+fn npm_install(folder: &Path) -> Install {
+    let out = std::process::Command::new("npm")
+        .args([
+            "install",
+            "--no-audit",
+            "--no-fund",
+            "--loglevel=error",
+            "--fetch-retries=1",
+        ])
+        .current_dir(folder)
+        .stdin(std::process::Stdio::null())
+        .output();
+    match out {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Install::Failed("npm is not on PATH".into())
+        }
+        Err(e) => Install::Failed(format!("npm could not start: {e}")),
+        Ok(o) if o.status.success() && folder.join("node_modules/jspsych").is_dir() => {
+            Install::Installed
+        }
+        Ok(o) => {
+            let text = String::from_utf8_lossy(&o.stderr);
+            let line = text
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("no message");
+            Install::Failed(format!("npm install failed ({}): {line}", o.status))
+        }
+    }
 }
 
 /// What [`write()`] did.
@@ -725,46 +979,73 @@ pub struct Written {
     pub folder: PathBuf,
     /// The files of the folder that shadelab did not write and kept (paths inside it).
     pub kept: Vec<PathBuf>,
+    /// Whether jsPsych was installed into it.
+    pub install: Install,
 }
 
 /// The lab's README for one experiment folder.
 fn readme(d: &Design) -> String {
     let rotations: Vec<String> = d.rotations_deg.iter().map(|r| format!("{r}")).collect();
+    let packages: Vec<String> = d.jspsych.iter().map(|(n, v)| format!("{n} {v}")).collect();
     format!(
         "# A shadelab experiment: bump or dimple?\n\n\
 Written by shadelab {version}. Each trial shows one shaded `{stimulus}` (lit at slant \
 {slant}°) turned so that its bright side faces θ (0 = up, +90 = left); the participant presses \
 **{convex}** for a bump (convex) and **{concave}** for a dimple (concave). {practice} practice \
-trials, then {test} test trials: the rotations {rotations} degrees, {repeats} times each, in the \
-seeded order of `design.json` (seed {seed}).\n\n\
+trials, then {test} test trials: the rotations {rotations} degrees, {repeats} times each{breaks}. \
+Each participant sees them in their own order, shuffled with a seed made of the design's seed \
+({seed}) and the participant id; the same id always gets the same order.\n\n\
+## Installing jsPsych (once)\n\n\
+The study runs on jsPsych 8 ({packages}), pinned in `package.json`. In this folder:\n\n\
+    npm install\n\n\
+(`shadelab experiment` runs it when npm is on PATH.) Then the folder is a static site that runs \
+offline: `node_modules/` holds everything the pages load.\n\n\
 ## Running it\n\n\
-The folder is self-contained (no network, no server code). Serve it from any static host, or \
-locally:\n\n\
-    python3 -m http.server 8000   # in this folder, then open http://localhost:8000/\n\n\
-`index.html?participant=ID` fills in the participant id. The page asks for consent and an id, \
-offers a screen calibration (a credit card held to the screen gives pixels per cm; with the \
-viewing distance of {distance} cm that gives pixels per degree, and the images are scaled to \
-{h}° × {w}°; skipped, each image pixel is one CSS pixel, {ppd} pixels per degree), runs the \
-practice and the test with a fixation cross ({fixation} ms) before each image and a progress \
-bar, and ends with the responses as a CSV to download and in `<pre id=\"results\">`.\n\n\
+- Locally: `python3 -m http.server 8000` in this folder, then open http://localhost:8000/.\n\
+- Any static host (a lab server, GitHub Pages, Pavlovia, Cognition.run): upload the folder \
+with `node_modules/`.\n\
+- JATOS: zip the folder (with `node_modules/`), import it as a study's assets and make \
+`jatos.html` the component's HTML file; the data go to JATOS (`jatos.submitResultData`) and \
+the study ends with `jatos.endStudy`.\n\
+- Prolific: give Prolific the study link with \
+`?PROLIFIC_PID={{{{%PROLIFIC_PID%}}}}&STUDY_ID={{{{%STUDY_ID%}}}}&SESSION_ID={{{{%SESSION_ID%}}}}`; the three ids are \
+saved in every row, and the participant id is PROLIFIC_PID. {completion}\n\n\
+URL parameters: `participant=ID` (the id, else PROLIFIC_PID, else one drawn by the page), \
+`save_url=URL` (POST the data there{save}), `save_format=json|csv`, `calibration=none` (no \
+card calibration: each image pixel is one CSS pixel, {ppd} pixels per degree), `fullscreen=0`.\n\n\
+The page checks the browser (phones and touch-only tablets are refused), asks for consent, \
+goes fullscreen, calibrates the screen with jsPsych's virtual chinrest (a credit card held to \
+the screen gives pixels per cm; with the viewing distance of {distance} cm, pixels per degree, \
+so the images are {h}° × {w}°), then runs the instructions, the practice and the test with a \
+fixation cross ({fixation} ms) before each image. At the end the data go to JATOS or to the \
+save URL (tried three times; if that fails the participant is told and downloads the file), \
+or else the participant downloads them.\n\n\
+## Embedding the trials in your own jsPsych study\n\n\
+`shadelab-timeline.js` defines `shadelabTimeline(design, options)`, which returns the \
+instructions, practice, test and breaks as a jsPsych timeline to put between your own trials \
+(see the comment at its top for the options):\n\n\
+    const design = await (await fetch('design.json')).json();\n\
+    jsPsych.run([consent, shadelabTimeline(design, {{ jsPsych }}), questionnaire]);\n\n\
 ## Checking the design first (pilot mode)\n\n\
-`index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1` answers every trial at once \
-from the observer model below (prior light tilt 26° left, concentration 2, convexity prior \
-0.7, lapse rate 0.02, random seed 1) and shows the CSV. `tilt` and `kappa` are required; \
-`convex` defaults to 0.5, `lapse` to 0, `seed` to 1. Fit it with `shadelab fit observer` to see \
-how well this design recovers a prior.\n\n\
-## The responses CSV\n\n\
-    {header}\n\n\
-One row per trial; `block` is `practice` or `test`, `rotation_deg` is θ, `response` is \
-`convex` or `concave`, `rt_ms` the reaction time from the image's onset (milliseconds), `key` \
-the key pressed, `image` the file shown.\n\n\
+`index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1` runs the study in jsPsych's \
+simulation mode, every trial answered from the observer model below (prior light tilt 26° \
+left, concentration 2, convexity prior 0.7, lapse rate 0.02, random seed 1), and shows the \
+data. `tilt` and `kappa` are required; `convex` defaults to 0.5, `lapse` to 0, `seed` to 1. \
+It works with the other parameters (e.g. `save_url`). Fit it with `shadelab fit observer` to \
+see how well this design recovers a prior.\n\n\
+## The data\n\n\
+jsPsych's own CSV or JSON, one row per screen. The trial rows carry `shadelab = trial` and \
+the columns {columns}; `response` is the key pressed, `judgement` convex or concave, `rt` \
+the reaction time from the image's onset (ms). `shadelab fit observer` reads the file (or a \
+folder of them) as it is.\n\n\
 ## The model\n\n\
 {model}\n\n\
 with θ = rotation_deg, vM a von Mises density, μ the prior's light tilt, κ its concentration, \
 π the convexity prior and λ the lapse rate.\n\n\
 ## Files\n\n\
-- `index.html`, `experiment.js` (the runner, plain JavaScript), `experiment.css`\n\
-- `design.json`: every trial in order, the seed, the display, the keys and this convention\n\
+- `index.html` (the study), `jatos.html` (the same under JATOS), `experiment.js` (the study \
+around the trials), `shadelab-timeline.js` (the trials), `experiment.css`, `package.json`\n\
+- `design.json`: every trial, the seed, the display, the keys and this convention\n\
 - `images/theta-DDD.png`: one image per rotation (8-bit, display gamma {gamma}), with its \
 shadelab sidecar (`.json`, every parameter: `shadelab render --spec` reproduces it) and target \
 mask (`_mask.png`)\n",
@@ -777,13 +1058,29 @@ mask (`_mask.png`)\n",
         test = d.test_trials,
         rotations = rotations.join(", "),
         repeats = d.repeats,
+        breaks = if d.break_every > 0 && d.break_every < d.test_trials {
+            format!(", with a break every {} trials", d.break_every)
+        } else {
+            String::new()
+        },
         seed = d.seed,
+        packages = packages.join(", "),
+        completion = match &d.completion_url {
+            Some(url) => format!("Once the data are saved the page goes to {url}."),
+            None => "Give `shadelab experiment --prolific-code CODE` to send participants back \
+                     to Prolific once their data are saved."
+                .into(),
+        },
+        save = match &d.save_url {
+            Some(url) => format!("; this design's own: {url}"),
+            None => String::new(),
+        },
         distance = d.display.viewing_distance_cm,
         h = d.display.visual_size.0,
         w = d.display.visual_size.1,
         ppd = d.display.ppd,
         fixation = d.timing.fixation_ms,
-        header = CSV_HEADER,
+        columns = DATA_COLUMNS,
         model = MODEL,
         gamma = d
             .display

@@ -32,10 +32,22 @@ pub const REPORT_FILE: &str = "fit.json";
 /// What to fit, as plain values.
 #[derive(Debug, Clone)]
 pub struct Config {
-    /// The responses CSV.
+    /// The responses: a CSV or JSON file (shadelab's responses CSV, or jsPsych's data as CSV
+    /// or JSON), or a folder of them (one or more participants each).
     pub responses: PathBuf,
     /// How to fit.
     pub options: FitOptions,
+    /// How key presses map to judgements, for data whose `response` column holds the key
+    /// pressed; `None`: the rows' own `judgement`, else their `key_convex`/`key_concave`, else
+    /// `response` as convex/concave/1/0.
+    pub keys: Option<KeyMap>,
+    /// The experiment's `design.json`, which the Methods paragraph describes (stimulus,
+    /// apparatus, order); `None`: a `design.json` in the responses folder, if any.
+    pub design: Option<PathBuf>,
+    /// The responses' text itself (CSV or jsPsych JSON, as a file would hold it), read by the
+    /// same parser instead of the file `responses`, which then only names the data in errors
+    /// and the report (e.g. a table handed over from Python).
+    pub text: Option<String>,
 }
 
 impl Config {
@@ -44,51 +56,173 @@ impl Config {
         Config {
             responses: responses.to_path_buf(),
             options: FitOptions::default(),
+            keys: None,
+            design: None,
+            text: None,
         }
     }
 }
 
-/// The trials read from a responses CSV.
+/// The keys that mean "bump" (convex) and "dimple" (concave), compared without regard to case.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct KeyMap {
+    /// The key for a bump.
+    pub convex: String,
+    /// The key for a dimple.
+    pub concave: String,
+}
+
+impl KeyMap {
+    /// Two different, non-empty keys.
+    pub fn new(convex: &str, concave: &str) -> Result<KeyMap> {
+        let (convex, concave) = (convex.trim().to_lowercase(), concave.trim().to_lowercase());
+        if convex.is_empty() || concave.is_empty() || convex == concave {
+            return Err(Error::invalid(format!(
+                "the keys for bump and dimple ('{convex}', '{concave}') must be two different keys"
+            )));
+        }
+        Ok(KeyMap { convex, concave })
+    }
+
+    /// `fj` (two single keys) or `BUMP,DIMPLE` (e.g. `arrowleft,arrowright`).
+    pub fn parse(text: &str) -> Result<KeyMap> {
+        match text.split_once(',') {
+            Some((a, b)) => KeyMap::new(a, b),
+            None => {
+                let chars: Vec<char> = text.trim().chars().collect();
+                match chars[..] {
+                    [a, b] => KeyMap::new(&a.to_string(), &b.to_string()),
+                    _ => Err(Error::invalid(format!(
+                        "the keys '{text}' must be two keys, bump then dimple (fj, or f,j)"
+                    ))),
+                }
+            }
+        }
+    }
+}
+
+/// The trials read from responses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Responses {
     /// Each participant's trials as (rotation in degrees, answered convex), in file order;
-    /// participants in order of first appearance (one unnamed participant, "", without a
-    /// `participant` column).
+    /// participants in order of first appearance (without a `participant` column: the file's
+    /// name when a folder is read, else one unnamed participant, "").
     pub participants: Vec<(String, Vec<(f64, bool)>)>,
     /// Practice rows left out.
     pub practice_rows: usize,
-    /// The file's columns.
+    /// The columns of the (first) file.
     pub columns: Vec<String>,
+    /// Rows of jsPsych data that are not bump/dimple trials (instructions, fixation, breaks,
+    /// a lab's own trials), left out.
+    pub other_rows: usize,
+    /// The files read.
+    pub files: Vec<PathBuf>,
 }
 
-/// Reads a responses CSV (at most [`io::MAX_TEXT_BYTES`], about a million trials).
+/// The extensions of the data files a folder is searched for.
+pub const DATA_EXTENSIONS: &[&str] = &["csv", "json", "txt"];
+
+/// Reads responses (a file, or a folder of files; at most [`io::MAX_TEXT_BYTES`] each).
 pub fn read_responses(path: &Path) -> Result<Responses> {
+    read_responses_with(path, None)
+}
+
+/// [`read_responses`] with a key mapping (see [`Config::keys`]).
+pub fn read_responses_with(path: &Path, keys: Option<&KeyMap>) -> Result<Responses> {
+    if !path.is_dir() {
+        let text = read_text(path)?;
+        let mut r = parse_data(&text, path, keys, "")?;
+        r.files = vec![path.to_path_buf()];
+        return Ok(r);
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(|e| Error::io(path, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && DATA_EXTENSIONS.contains(&io::extension(p).as_str()))
+        .filter(|p| !is_design(p))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(Error::format(
+            path,
+            "holds no data files (.csv, .json or .txt, one or more participants each)",
+        ));
+    }
+    let mut all = Responses {
+        participants: Vec::new(),
+        practice_rows: 0,
+        columns: Vec::new(),
+        other_rows: 0,
+        files: files.clone(),
+    };
+    for file in &files {
+        let stem = file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let r = parse_data(&read_text(file)?, file, keys, &stem)?;
+        if all.columns.is_empty() {
+            all.columns = r.columns;
+        }
+        all.practice_rows += r.practice_rows;
+        all.other_rows += r.other_rows;
+        for (who, trials) in r.participants {
+            match all.participants.iter_mut().find(|(p, _)| *p == who) {
+                Some((_, t)) => t.extend(trials),
+                None => all.participants.push((who, trials)),
+            }
+        }
+    }
+    Ok(all)
+}
+
+/// A shadelab experiment's `design.json` (not data).
+fn is_design(path: &Path) -> bool {
+    path.file_name()
+        .is_some_and(|n| n == super::experiment::MARKER)
+        && io::read_bytes(path)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+            .is_some_and(|v| v["program"] == "shadelab" && v["trials"].is_array())
+}
+
+fn read_text(path: &Path) -> Result<String> {
     let bytes = io::read_bytes(path)?;
-    let text = String::from_utf8(bytes).map_err(|_| Error::format(path, "not UTF-8 text"))?;
-    parse_responses(&text, path)
+    String::from_utf8(bytes).map_err(|_| Error::format(path, "not UTF-8 text"))
 }
 
 /// Parses the text of a responses CSV; `path` names it in errors, which give the line.
 pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
+    parse_data(text, path, None, "")
+}
+
+/// Parses responses as CSV, or as JSON (jsPsych's: an array of row objects) when the text
+/// starts with `[`; `participant` names the rows without a `participant` column.
+pub fn parse_data(
+    text: &str,
+    path: &Path,
+    keys: Option<&KeyMap>,
+    participant: &str,
+) -> Result<Responses> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let (columns, rows, unit) = if text.trim_start().starts_with(['[', '{']) {
+        let (c, r) = json_table(text, path)?;
+        (c, r, "row")
+    } else {
+        let (c, r) = csv_table(text, path)?;
+        (c, r, "line")
+    };
+    interpret(columns, rows, path, keys, participant, unit)
+}
+
+type Rows = Vec<(usize, Vec<String>)>;
+
+fn csv_table(text: &str, path: &Path) -> Result<(Vec<String>, Rows)> {
     let rows = io::parse_csv(text).map_err(|m| Error::format(path, m))?;
     let Some(((_, header), rows)) = rows.split_first() else {
         return Err(Error::format(path, "empty: no header and no trials"));
     };
     let columns: Vec<String> = header.iter().map(|h| h.trim().to_string()).collect();
-    let find = |name: &str| columns.iter().position(|c| c.eq_ignore_ascii_case(name));
-    let need = |name: &str| {
-        find(name).ok_or_else(|| {
-            Error::format(
-                path,
-                format!("line 1: no '{name}' column (the header needs rotation_deg and response)"),
-            )
-        })
-    };
-    let (rotation, response) = (need("rotation_deg")?, need("response")?);
-    let (block, participant) = (find("block"), find("participant"));
-    let mut participants: Vec<(String, Vec<(f64, bool)>)> = Vec::new();
-    let mut practice_rows = 0;
     for (line, row) in rows {
         if row.len() != columns.len() {
             return Err(Error::format(
@@ -100,8 +234,97 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
                 ),
             ));
         }
+    }
+    Ok((columns, rows.to_vec()))
+}
+
+/// jsPsych's JSON (`jsPsych.data.get().json()`, as JATOS stores it): an array of objects,
+/// or an object with such an array under `trials` or `data`.
+fn json_table(text: &str, path: &Path) -> Result<(Vec<String>, Rows)> {
+    use serde_json::Value;
+    let v: Value =
+        serde_json::from_str(text).map_err(|e| Error::format(path, format!("not JSON: {e}")))?;
+    let array = match &v {
+        Value::Array(a) => a,
+        Value::Object(o) => match o.get("trials").or_else(|| o.get("data")) {
+            Some(Value::Array(a)) => a,
+            _ => {
+                return Err(Error::format(
+                    path,
+                    "JSON without an array of trials (jsPsych's data: [{...}, ...])",
+                ))
+            }
+        },
+        _ => return Err(Error::format(path, "JSON that is not an array of trials")),
+    };
+    let mut columns: Vec<String> = Vec::new();
+    for (i, row) in array.iter().enumerate() {
+        let Value::Object(o) = row else {
+            return Err(Error::format(path, format!("row {}: not an object", i + 1)));
+        };
+        for k in o.keys() {
+            if !columns.contains(k) {
+                columns.push(k.clone());
+            }
+        }
+    }
+    if columns.is_empty() {
+        return Err(Error::format(path, "empty: no trials"));
+    }
+    let rows = array
+        .iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let cells = columns
+                .iter()
+                .map(|c| match row.get(c) {
+                    None | Some(Value::Null) => String::new(),
+                    Some(Value::String(s)) => s.clone(),
+                    Some(other) => other.to_string(),
+                })
+                .collect();
+            (i + 1, cells)
+        })
+        .collect();
+    Ok((columns, rows))
+}
+
+fn interpret(
+    columns: Vec<String>,
+    rows: Rows,
+    path: &Path,
+    keys: Option<&KeyMap>,
+    default_participant: &str,
+    unit: &str,
+) -> Result<Responses> {
+    let find = |name: &str| columns.iter().position(|c| c.eq_ignore_ascii_case(name));
+    let need = |name: &str| {
+        find(name).ok_or_else(|| {
+            Error::format(
+                path,
+                format!(
+                    "{}no '{name}' column (the data need rotation_deg and response)",
+                    if unit == "line" { "line 1: " } else { "" }
+                ),
+            )
+        })
+    };
+    let (rotation, response) = (need("rotation_deg")?, need("response")?);
+    let (block, participant) = (find("block"), find("participant"));
+    let (judgement, key_convex, key_concave) =
+        (find("judgement"), find("key_convex"), find("key_concave"));
+    // jsPsych's data hold a row per screen; only those with a rotation are trials.
+    let jspsych = find("trial_type").is_some();
+    let mut participants: Vec<(String, Vec<(f64, bool)>)> = Vec::new();
+    let (mut practice_rows, mut other_rows) = (0, 0);
+    for (line, row) in &rows {
+        let cell = |i: usize| row[i].trim();
+        if jspsych && matches!(cell(rotation), "" | "null") {
+            other_rows += 1;
+            continue;
+        }
         if let Some(b) = block {
-            match row[b].trim().to_ascii_lowercase().as_str() {
+            match cell(b).to_ascii_lowercase().as_str() {
                 "test" => {}
                 "practice" => {
                     practice_rows += 1;
@@ -110,13 +333,12 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
                 other => {
                     return Err(Error::format(
                         path,
-                        format!("line {line}: block '{other}' is not 'test' or 'practice'"),
+                        format!("{unit} {line}: block '{other}' is not 'test' or 'practice'"),
                     ))
                 }
             }
         }
-        let theta: f64 = row[rotation]
-            .trim()
+        let theta: f64 = cell(rotation)
             .parse()
             .ok()
             .filter(|t: &f64| t.is_finite())
@@ -124,26 +346,63 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
                 Error::format(
                     path,
                     format!(
-                        "line {line}: rotation_deg '{}' is not a finite number of degrees",
+                        "{unit} {line}: rotation_deg '{}' is not a finite number of degrees",
                         row[rotation]
                     ),
                 )
             })?;
-        let convex = match row[response].trim().to_ascii_lowercase().as_str() {
-            "convex" | "1" => true,
-            "concave" | "0" => false,
-            other => {
+        let pressed = cell(response).to_lowercase();
+        let row_keys = match (key_convex, key_concave) {
+            (Some(a), Some(b)) if !cell(a).is_empty() && !cell(b).is_empty() => {
+                Some((cell(a).to_lowercase(), cell(b).to_lowercase()))
+            }
+            _ => None,
+        };
+        let convex = if let Some(k) = keys {
+            if pressed == k.convex {
+                true
+            } else if pressed == k.concave {
+                false
+            } else {
                 return Err(Error::format(
                     path,
                     format!(
-                        "line {line}: unknown response '{other}' (valid: convex, concave, 1, 0)"
+                        "{unit} {line}: response '{pressed}' is neither the bump key '{}' nor the dimple key '{}'",
+                        k.convex, k.concave
                     ),
-                ))
+                ));
+            }
+        } else if let Some(j) = judgement.filter(|&j| !cell(j).is_empty()) {
+            match cell(j).to_ascii_lowercase().as_str() {
+                "convex" => true,
+                "concave" => false,
+                other => {
+                    return Err(Error::format(
+                        path,
+                        format!("{unit} {line}: judgement '{other}' is not convex or concave"),
+                    ))
+                }
+            }
+        } else if let Some((kc, _)) = row_keys.filter(|(kc, kd)| pressed == *kc || pressed == *kd) {
+            pressed == kc
+        } else {
+            match pressed.as_str() {
+                "convex" | "1" => true,
+                "concave" | "0" => false,
+                other => {
+                    return Err(Error::format(
+                        path,
+                        format!(
+                            "{unit} {line}: unknown response '{other}' (valid: convex, concave, 1, 0; for key presses give the keys for bump and dimple)"
+                        ),
+                    ))
+                }
             }
         };
         let who = participant
-            .map(|p| row[p].trim().to_string())
-            .unwrap_or_default();
+            .map(|p| cell(p).to_string())
+            .filter(|p| !p.is_empty())
+            .unwrap_or_else(|| default_participant.to_string());
         match participants.iter_mut().find(|(p, _)| *p == who) {
             Some((_, trials)) => trials.push((theta, convex)),
             None => participants.push((who, vec![(theta, convex)])),
@@ -154,6 +413,8 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
             path,
             if practice_rows > 0 {
                 "no test trials (only practice rows)"
+            } else if other_rows > 0 {
+                "no bump/dimple trials (no row has a rotation_deg)"
             } else {
                 "no trials after the header"
             },
@@ -163,6 +424,8 @@ pub fn parse_responses(text: &str, path: &Path) -> Result<Responses> {
         participants,
         practice_rows,
         columns,
+        other_rows,
+        files: Vec::new(),
     })
 }
 
@@ -179,6 +442,93 @@ pub struct Design {
     pub trials_per_rotation: [usize; 2],
     /// Practice rows left out.
     pub practice_rows: usize,
+    /// jsPsych rows that are not trials (instructions, fixation, breaks, a lab's own), left out.
+    pub other_rows: usize,
+    /// The data files read.
+    pub files: Vec<String>,
+}
+
+/// The spread of the per-participant fits: a two-stage (summary-statistics) random-effects
+/// description of the group, beside the pooled fit (which treats every trial as one observer's).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GroupSummary {
+    /// Participants fitted individually.
+    pub participants: usize,
+    /// The circular mean of their μ, degrees in (−180, 180].
+    pub prior_tilt_mean_deg: f64,
+    /// The circular standard deviation of their μ, √(−2 ln R̄), degrees.
+    pub prior_tilt_sd_deg: f64,
+    /// A 95% interval for the group's mean μ: mean ± t(n−1) · sd / √n (degrees; `None` with
+    /// fewer than two participants).
+    pub prior_tilt_mean_ci95: Option<[f64; 2]>,
+    /// The mean of their κ.
+    pub prior_kappa_mean: f64,
+    /// The standard deviation of their κ (0 for one participant).
+    pub prior_kappa_sd: f64,
+    /// The median of their κ.
+    pub prior_kappa_median: f64,
+    /// The mean of their convexity priors π.
+    pub convexity_prior_mean: f64,
+    /// The standard deviation of their π.
+    pub convexity_prior_sd: f64,
+}
+
+/// The 0.975 quantile of Student's t with `df` degrees of freedom (1.96 beyond 30).
+fn t975(df: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    T.get(df.wrapping_sub(1)).copied().unwrap_or(1.96)
+}
+
+/// The group's spread from the per-participant fits (`None` without any).
+pub fn group_summary(fits: &[ParticipantFit]) -> Option<GroupSummary> {
+    let n = fits.len();
+    if n == 0 {
+        return None;
+    }
+    let nf = n as f64;
+    let (mut c, mut s) = (0.0, 0.0);
+    for f in fits {
+        let t = f.fit.prior_tilt_deg.value.to_radians();
+        c += t.cos();
+        s += t.sin();
+    }
+    let (c, s) = (c / nf, s / nf);
+    let r = c.hypot(s).clamp(1e-12, 1.0);
+    let mean = s.atan2(c).to_degrees();
+    let sd = (-2.0 * r.ln()).max(0.0).sqrt().to_degrees();
+    let stats = |values: Vec<f64>| {
+        let m = values.iter().sum::<f64>() / nf;
+        let var = if n > 1 {
+            values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (nf - 1.0)
+        } else {
+            0.0
+        };
+        (m, var.sqrt(), values)
+    };
+    let (k_mean, k_sd, mut kappas) = stats(fits.iter().map(|f| f.fit.prior_kappa.value).collect());
+    kappas.sort_by(f64::total_cmp);
+    let k_median = if n % 2 == 1 {
+        kappas[n / 2]
+    } else {
+        (kappas[n / 2 - 1] + kappas[n / 2]) / 2.0
+    };
+    let (p_mean, p_sd, _) = stats(fits.iter().map(|f| f.fit.convexity_prior.value).collect());
+    let half = t975(n.saturating_sub(1)) * sd / nf.sqrt();
+    Some(GroupSummary {
+        participants: n,
+        prior_tilt_mean_deg: mean,
+        prior_tilt_sd_deg: sd,
+        prior_tilt_mean_ci95: (n > 1).then_some([mean - half, mean + half]),
+        prior_kappa_mean: k_mean,
+        prior_kappa_sd: k_sd,
+        prior_kappa_median: k_median,
+        convexity_prior_mean: p_mean,
+        convexity_prior_sd: p_sd,
+    })
 }
 
 /// One participant's fit.
@@ -214,6 +564,11 @@ pub struct Report {
     pub pooled: ObserverFit,
     /// One fit per participant (when there are several).
     pub participants: Vec<ParticipantFit>,
+    /// The spread of the per-participant fits (when there are several).
+    pub group: Option<GroupSummary>,
+    /// The experiment's design (`design.json`), when given or found beside the data: what the
+    /// Methods paragraph describes.
+    pub experiment: Option<serde_json::Value>,
     /// The pooled fit as a study spec's observer settings (`priors` and `lapse`), to copy into
     /// a spec so that the study predicts with the fitted model.
     pub study: serde_json::Value,
@@ -234,7 +589,28 @@ pub const MODEL: &str = "P(convex | theta) = lapse/2 + (1 - lapse) * pi * vM(the
 pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let started = Instant::now();
     config.options.validate()?;
-    let responses = read_responses(&config.responses)?;
+    let responses = match &config.text {
+        Some(text) => parse_data(text, &config.responses, config.keys.as_ref(), "")?,
+        None => read_responses_with(&config.responses, config.keys.as_ref())?,
+    };
+    let design_file = config.design.clone().or_else(|| {
+        let beside = config.responses.join(super::experiment::MARKER);
+        (config.responses.is_dir() && is_design(&beside)).then_some(beside)
+    });
+    let experiment = match &design_file {
+        Some(path) => {
+            let v: serde_json::Value = serde_json::from_slice(&io::read_bytes(path)?)
+                .map_err(|e| Error::format(path, format!("not JSON: {e}")))?;
+            if v["program"] != "shadelab" || !v["trials"].is_array() {
+                return Err(Error::format(
+                    path,
+                    "not a shadelab experiment's design.json",
+                ));
+            }
+            Some(v)
+        }
+        None => None,
+    };
     let all: Vec<(f64, bool)> = responses
         .participants
         .iter()
@@ -304,15 +680,28 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             rotations_deg: pooled_bins.iter().map(|b| b.rotation_deg).collect(),
             trials_per_rotation: [per.clone().min().unwrap_or(0), per.max().unwrap_or(0)],
             practice_rows: responses.practice_rows,
+            other_rows: responses.other_rows,
+            files: responses
+                .files
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect(),
         },
         settings: config.options,
         pooled,
+        group: if several {
+            group_summary(&participants)
+        } else {
+            None
+        },
         participants,
+        experiment,
         study,
         warnings,
         outputs: BTreeMap::from([
             ("fit.json", "the estimates with 95% intervals, log-likelihood, AIC/BIC against the model without a convexity prior, counts per rotation, per-participant fits"),
             ("fit.png", "proportion convex per rotation (95% Wilson intervals), the fitted curve, and the fitted prior over light tilt on a polar plot (also .svg)"),
+            ("participants.png", "with several participants: each participant's fitted curve beside the pooled one (also .svg)"),
             ("methods.md", "a Methods paragraph: design, model, estimates, citations"),
         ]),
         seconds: started.elapsed().as_secs_f64(),
@@ -398,6 +787,58 @@ pub fn read_fit(path: &Path) -> Result<ModelParams> {
     Ok(model)
 }
 
+/// The stimulus and apparatus paragraph, from an experiment's design.json.
+fn apparatus(e: &serde_json::Value) -> String {
+    let num = |v: &serde_json::Value| v.as_f64().map_or("?".to_string(), |x| format!("{x}"));
+    let d = &e["display"];
+    let keys = &e["keys"];
+    let key = |k: &str| keys[k].as_str().unwrap_or("?").to_uppercase();
+    let breaks = e["break_every"].as_u64().unwrap_or(0);
+    format!(
+        "\n**Stimulus and apparatus.** Each trial showed one shaded `{}` (shadelab {}), \
+        {} × {} degrees of visual angle (height × width; {} pixels per degree at a viewing \
+        distance of {} cm, set for each participant by a credit-card calibration, jsPsych's \
+        virtual chinrest, where they made one), lit at a slant of {}° from the line of sight and \
+        turned so that its bright side faced θ, on a uniform background of the images' own grey \
+        ({}); the 8-bit images were encoded for a display gamma of {} and the luminance of the \
+        participants' screens was not calibrated. After a fixation cross ({} ms) the image \
+        stayed until the participant pressed {} (bump) or {} (dimple){}. The study ran in the \
+        browser on jsPsych {} ({} practice and {} test trials{}; each rotation shown {} \
+        time(s)), \
+        the practice and the test trials each in the participant's own random order, drawn \
+        from a seed made of the design's seed ({}) and the participant's id.\n",
+        e["stimulus"].as_str().unwrap_or("?"),
+        e["version"].as_str().unwrap_or("?"),
+        num(&d["visual_size"][0]),
+        num(&d["visual_size"][1]),
+        num(&d["ppd"]),
+        num(&d["viewing_distance_cm"]),
+        num(&e["light_slant_deg"]),
+        d["background"].as_str().unwrap_or("?"),
+        d["gamma"]
+            .as_f64()
+            .map_or("none (linear values)".to_string(), |g| g.to_string()),
+        num(&e["timing"]["fixation_ms"]),
+        key("convex"),
+        key("concave"),
+        if e["counterbalance_keys"] == true {
+            " (the keys swapped for half of the participants)"
+        } else {
+            ""
+        },
+        e["jspsych"]["jspsych"].as_str().unwrap_or("8"),
+        num(&e["practice_trials"]),
+        num(&e["test_trials"]),
+        if breaks > 0 && (breaks as f64) < e["test_trials"].as_f64().unwrap_or(0.0) {
+            format!(", a break after every {breaks}")
+        } else {
+            String::new()
+        },
+        num(&e["repeats"]),
+        num(&e["seed"]),
+    )
+}
+
 /// `[lo, hi]` as text, or "not estimated".
 fn interval(ci: Option<[f64; 2]>, decimals: usize) -> String {
     match ci {
@@ -477,6 +918,43 @@ impl Report {
             polar,
             size: (1500, 620),
         }
+    }
+
+    /// Every participant's fitted curve beside the pooled one (`None` with one participant).
+    pub fn participants_figure(&self) -> Option<LinePlot> {
+        if self.participants.is_empty() {
+            return None;
+        }
+        let curve = |m: &ModelParams| {
+            (0..=360)
+                .map(|d| (d as f64, m.p_convex(d as f64)))
+                .collect()
+        };
+        let mut line = LinePlot::new(
+            "Each participant's fitted P(convex)",
+            "direction of the bright side θ (°, 0 = up, 90 = left)",
+            "P(convex) (proportion)",
+            (0.0, 360.0),
+        );
+        line.y_range = Some((-0.02, 1.02));
+        line.reference_y = Some(0.5);
+        line.x_ticks = crate::analysis::plot::Ticks::Degrees;
+        let m = self.pooled.params();
+        line.series.push(Series {
+            name: format!("pooled fit: μ = {:.0}°, κ = {:.2}", m.tilt_deg, m.kappa),
+            points: curve(&m),
+        });
+        for p in &self.participants {
+            let m = p.fit.params();
+            line.series.push(Series {
+                name: format!(
+                    "participant {}: μ = {:.0}°, κ = {:.2}",
+                    p.participant, m.tilt_deg, m.kappa
+                ),
+                points: curve(&m),
+            });
+        }
+        Some(line)
     }
 
     /// The Methods paragraph (Markdown).
@@ -581,6 +1059,29 @@ impl Report {
             f.delta_aic,
             f.delta_bic,
         );
+        if let Some(g) = &self.group {
+            text += &format!(
+                "\n**Group.** Across the {} participants fitted individually, the light prior's \
+                direction had a circular mean of {:.1}°{} and a circular standard deviation of \
+                {:.1}°; κ had a mean of {:.2} (SD {:.2}, median {:.2}) and the convexity prior a \
+                mean of {:.3} (SD {:.3}). (A two-stage summary of the individual fits; the pooled \
+                fit above treats all trials as one observer's.)\n",
+                g.participants,
+                g.prior_tilt_mean_deg,
+                g.prior_tilt_mean_ci95
+                    .map(|[lo, hi]| format!(" (95% CI {lo:.1}° to {hi:.1}°)"))
+                    .unwrap_or_default(),
+                g.prior_tilt_sd_deg,
+                g.prior_kappa_mean,
+                g.prior_kappa_sd,
+                g.prior_kappa_median,
+                g.convexity_prior_mean,
+                g.convexity_prior_sd,
+            );
+        }
+        if let Some(e) = &self.experiment {
+            text += &apparatus(e);
+        }
         if f.nonparametric_prior.is_some() {
             text += "\nA smooth, non-parametric prior over light tilt (the odd harmonics 1, 3 and 5 of its log-density, with a roughness penalty, reported over 24 directions) was fitted as well, in the spirit of Stone, Kerrigan & Porrill (2009); bump/dimple judgements constrain only the odd part of the log-density (p(θ) against p(θ + 180°)), so its even part is not estimated.\n";
         }
@@ -602,6 +1103,10 @@ impl Report {
         let figure = self.figure();
         figure.write_png(&dir.join("fit.png"))?;
         figure.write_svg(&dir.join("fit.svg"))?;
+        if let Some(each) = self.participants_figure() {
+            each.write_png(&dir.join("participants.png"))?;
+            each.write_svg(&dir.join("participants.svg"))?;
+        }
         io::write_text(&dir.join("methods.md"), &self.methods())?;
         let value = serde_json::to_value(self)
             .map_err(|e| Error::Compute(format!("cannot serialise the fit: {e}")))?;
@@ -656,5 +1161,86 @@ mod tests {
                 ("b".into(), vec![(30.0, false)])
             ]
         );
+    }
+
+    #[test]
+    fn jspsych_data_are_read_with_their_key_mapping() {
+        let p = Path::new("d.csv");
+        // jsPsych's CSV (every field quoted, CRLF, "null" for missing values): the rows
+        // without a rotation are other screens; keys from the rows.
+        let csv = "\"trial_type\",\"shadelab\",\"block\",\"rotation_deg\",\"response\",\"key_convex\",\"key_concave\",\"participant\"\r\n\
+                   \"html-button-response\",\"consent\",\"\",\"\",\"0\",\"\",\"\",\"A\"\r\n\
+                   \"html-keyboard-response\",\"fixation\",\"\",\"null\",\"null\",\"\",\"\",\"A\"\r\n\
+                   \"image-keyboard-response\",\"trial\",\"practice\",\"90\",\"f\",\"f\",\"j\",\"A\"\r\n\
+                   \"image-keyboard-response\",\"trial\",\"test\",\"0\",\"f\",\"f\",\"j\",\"A\"\r\n\
+                   \"image-keyboard-response\",\"trial\",\"test\",\"180\",\"j\",\"f\",\"j\",\"A\"\r\n\
+                   \"image-keyboard-response\",\"trial\",\"test\",\"90\",\"j\",\"j\",\"f\",\"A\"\r\n";
+        let r = parse_data(csv, p, None, "").unwrap();
+        assert_eq!(
+            r.participants,
+            vec![("A".into(), vec![(0.0, true), (180.0, false), (90.0, true)])]
+        );
+        assert_eq!((r.practice_rows, r.other_rows), (1, 2));
+        // The same as jsPsych's JSON; a participant named by the file when no column says.
+        let json = r#"[{"trial_type":"html-button-response","response":0},
+            {"trial_type":"image-keyboard-response","block":"test","rotation_deg":0,"response":"a"},
+            {"trial_type":"image-keyboard-response","block":"test","rotation_deg":180,"response":"L"}]"#;
+        let e = parse_data(json, p, None, "p7").unwrap_err().to_string();
+        assert!(
+            e.contains("row 2: unknown response 'a'") && e.contains("give the keys"),
+            "{e}"
+        );
+        let keys = KeyMap::parse("a,l").unwrap();
+        let r = parse_data(json, p, Some(&keys), "p7").unwrap();
+        assert_eq!(
+            r.participants,
+            vec![("p7".into(), vec![(0.0, true), (180.0, false)])]
+        );
+        // A press that is neither key is named.
+        let e = parse_data(json, p, Some(&KeyMap::parse("fj").unwrap()), "")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("row 2: response 'a' is neither"), "{e}");
+        assert!(KeyMap::parse("ff").is_err() && KeyMap::parse("fjk").is_err());
+        assert!(parse_data("[1]", p, None, "")
+            .unwrap_err()
+            .to_string()
+            .contains("row 1"));
+        assert!(parse_data("{\"x\": 1}", p, None, "").is_err());
+    }
+
+    #[test]
+    fn the_group_summary_is_circular_for_the_direction() {
+        // One fitted participant (bump seen when lit from above), its estimates then set.
+        let trials: Vec<(f64, bool)> = (0..240)
+            .map(|i| {
+                (
+                    (i % 24) as f64 * 15.0,
+                    (i % 24) < 7 || (i % 24) > 19 || i % 7 == 0,
+                )
+            })
+            .collect();
+        let options = FitOptions {
+            bootstrap: 0,
+            ..FitOptions::default()
+        };
+        let carrier = fit(&bins(&trials), &options, "x").unwrap();
+        let fit = |tilt: f64, kappa: f64| {
+            let f = carrier.clone();
+            let mut f = f;
+            f.prior_tilt_deg.value = tilt;
+            f.prior_kappa.value = kappa;
+            ParticipantFit {
+                participant: format!("{tilt}"),
+                fit: f,
+            }
+        };
+        let g = group_summary(&[fit(350.0, 1.0), fit(10.0, 3.0)]).unwrap();
+        assert!(g.prior_tilt_mean_deg.abs() < 1e-9, "{g:?}");
+        assert!((g.prior_tilt_sd_deg - 10.0).abs() < 0.2, "{g:?}");
+        assert_eq!((g.prior_kappa_mean, g.prior_kappa_median), (2.0, 2.0));
+        let [lo, hi] = g.prior_tilt_mean_ci95.unwrap();
+        assert!(lo < 0.0 && hi > 0.0);
+        assert!(group_summary(&[]).is_none());
     }
 }

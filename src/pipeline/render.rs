@@ -272,6 +272,9 @@ pub struct Description {
     pub default_ppd: f64,
     /// Its parameters.
     pub params: Vec<ParamDescription>,
+    /// stimupy's names it accepts for its parameters: stimupy's → shadelab's
+    /// ([`stimulus::stimupy_names::ALIASES`]).
+    pub stimupy_names: std::collections::BTreeMap<&'static str, &'static str>,
 }
 
 /// Describes the stimulus `name` (an unknown name lists the valid ones).
@@ -298,6 +301,11 @@ pub fn describe(name: &str) -> Result<Description> {
                 range: p.range_text(),
                 doc: p.doc,
             })
+            .collect(),
+        stimupy_names: stimulus::stimupy_names::ALIASES
+            .iter()
+            .filter(|a| a.stimulus == info.name)
+            .map(|a| (a.stimupy, a.shadelab))
             .collect(),
     })
 }

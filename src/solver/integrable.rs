@@ -166,6 +166,16 @@ pub use newton::{CG_MAX_ITER, CG_TOL, LM_ANDERSON_DEPTH};
 /// (1e-4 moved ball 041 by 0.15°).
 const POISSON_TOL: f64 = 1e-5;
 
+/// Where [`Solver::minimise_from`] starts: the orientations (grids of the image's size; the
+/// unknown pixels' values are read), the depth at the unknown pixels (`None`: the least-squares
+/// depth of the orientations' slopes) and the factor on the integrability weight μ.
+pub(super) struct LmStart<'a> {
+    pub(super) f: &'a Image,
+    pub(super) g: &'a Image,
+    pub(super) depth: Option<&'a Image>,
+    pub(super) weight: f64,
+}
+
 impl Solver {
     /// The integrable method on a domain already built (see the module documentation).
     pub(super) fn solve_integrable(
@@ -199,6 +209,17 @@ impl Solver {
         if start.diverged || crate::cancel::requested() {
             return Ok(start);
         }
+        if options.method == Method::IntegrableLm {
+            let lm = LmStart {
+                f: &start.f,
+                g: &start.g,
+                depth: None,
+                weight: 1.0,
+            };
+            return self
+                .minimise_from(image, bc, reflectance, options, lm, progress)
+                .map(|(solution, _)| solution);
+        }
         let n = self.build(image, bc, reflectance, options.lambda);
         for (j, &p) in self.pixels.iter().enumerate() {
             self.cur_f[j] = start.f.data()[p as usize];
@@ -222,36 +243,6 @@ impl Solver {
             tol: POISSON_TOL,
             ..PoissonOptions::default()
         };
-        if options.method == Method::IntegrableLm {
-            // The depth of the start's slopes starts the joint minimisation.
-            let (f, g) = self.current_fg();
-            let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;
-            let z = prepared
-                .integrate_gradients(&dz_dx, &dz_dy, &poisson, None)?
-                .depth;
-            let mut x = vec![0.0; 3 * n];
-            x[..n].copy_from_slice(&self.cur_f[..n]);
-            x[n..2 * n].copy_from_slice(&self.cur_g[..n]);
-            for (j, &p) in self.pixels.iter().enumerate() {
-                x[2 * n + j] = z.data()[p as usize];
-            }
-            let energy = newton::Energy::new(
-                &self.nodes[..n],
-                &self.pixels,
-                &self.slot,
-                (image.width(), image.height()),
-                (&self.cur_f, &self.cur_g),
-                &angles,
-                &pull,
-                reflectance,
-            );
-            let mut minimiser = newton::Minimiser::new(&energy, x);
-            let stats = iterate(n, options, progress, |_| Ok(minimiser.step(&energy)))?;
-            let x = minimiser.x;
-            self.cur_f[..n].copy_from_slice(&x[..n]);
-            self.cur_g[..n].copy_from_slice(&x[n..2 * n]);
-            return Ok(self.solution(image, bc, reflectance, stats));
-        }
         let mut depth: Option<Image> = None;
         let (mut target_f, mut target_g) = (vec![0.0; n], vec![0.0; n]);
         let (mut before_f, mut before_g) = (vec![0.0; n], vec![0.0; n]);
@@ -296,6 +287,83 @@ impl Solver {
             Ok(last_update)
         })?;
         Ok(self.solution(image, bc, reflectance, stats))
+    }
+
+    /// The integrable energy minimised by Levenberg–Marquardt steps ([`Method::IntegrableLm`])
+    /// from `start`, at most `options.max_iter` steps to `options.tol`; returns the solution
+    /// and the depth of the last point (at the unknown pixels, 0 elsewhere). `start.weight`
+    /// multiplies the integrability weight μ (the brightness term's λ is `options.lambda`):
+    /// the coarse levels of [`Method::NestedLm`] weight both by the pixels each stands for.
+    pub(super) fn minimise_from(
+        &mut self,
+        image: &Image,
+        bc: &BoundaryConditions,
+        reflectance: &dyn ReflectanceMap,
+        options: &SolveOptions,
+        start: LmStart<'_>,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<(Solution, Image)> {
+        let n = self.build(image, bc, reflectance, options.lambda);
+        for (j, &p) in self.pixels.iter().enumerate() {
+            self.cur_f[j] = start.f.data()[p as usize];
+            self.cur_g[j] = start.g.data()[p as usize];
+        }
+        self.next_f.clone_from(&self.cur_f);
+        self.next_g.clone_from(&self.cur_g);
+        let domain: Mask = bc.roles.map(|r| *r == Role::Unknown);
+        let mut pull = pull_weights(&domain, &self.pixels);
+        if start.weight != 1.0 {
+            pull.iter_mut().for_each(|w| *w *= start.weight);
+        }
+        let scale = AngleScale::of(reflectance);
+        let angles: Vec<f64> = self.nodes[..n]
+            .iter()
+            .map(|node| scale.angle(node.intensity))
+            .collect();
+        let computed;
+        let z = match start.depth {
+            Some(z) => z,
+            None => {
+                // The depth of the start's slopes starts the joint minimisation.
+                let prepared = PreparedMask::new(&domain)?;
+                let poisson = PoissonOptions {
+                    tol: POISSON_TOL,
+                    ..PoissonOptions::default()
+                };
+                let (f, g) = self.current_fg();
+                let (dz_dx, dz_dy) = gradients_from_fg(f, g, &domain, DEFAULT_MIN_NZ)?;
+                computed = prepared
+                    .integrate_gradients(&dz_dx, &dz_dy, &poisson, None)?
+                    .depth;
+                &computed
+            }
+        };
+        let mut x = vec![0.0; 3 * n];
+        x[..n].copy_from_slice(&self.cur_f[..n]);
+        x[n..2 * n].copy_from_slice(&self.cur_g[..n]);
+        for (j, &p) in self.pixels.iter().enumerate() {
+            x[2 * n + j] = z.data()[p as usize];
+        }
+        let energy = newton::Energy::new(
+            &self.nodes[..n],
+            &self.pixels,
+            &self.slot,
+            (image.width(), image.height()),
+            (&self.cur_f, &self.cur_g),
+            &angles,
+            &pull,
+            reflectance,
+        );
+        let mut minimiser = newton::Minimiser::new(&energy, x);
+        let stats = iterate(n, options, progress, |_| Ok(minimiser.step(&energy)))?;
+        let x = minimiser.x;
+        self.cur_f[..n].copy_from_slice(&x[..n]);
+        self.cur_g[..n].copy_from_slice(&x[n..2 * n]);
+        let mut depth = Image::new(image.width(), image.height(), 0.0);
+        for (j, &p) in self.pixels.iter().enumerate() {
+            depth.data_mut()[p as usize] = x[2 * n + j];
+        }
+        Ok((self.solution(image, bc, reflectance, stats), depth))
     }
 
     /// One sweep of the screened update from `cur` into `next` (see the module documentation).

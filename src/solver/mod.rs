@@ -63,6 +63,10 @@ pub enum Method {
     /// rather than at a minimum of the energy, and closer to the truth on the folded objects
     /// of the evaluation.
     IntegrableLm,
+    /// The integrable method's energy minimised as [`Method::IntegrableLm`] minimises it, by
+    /// nested iteration: on a pyramid of half-size grids, coarsest first, each finer grid
+    /// starting from the minimum its coarser grid found (`nested.rs`).
+    NestedLm,
 }
 
 /// The names of the methods, as `--method` spells them.
@@ -72,6 +76,7 @@ pub const METHOD_NAMES: &[&str] = &[
     "literal",
     "integrable",
     "integrable-lm",
+    "nested-lm",
 ];
 
 impl FromStr for Method {
@@ -83,6 +88,7 @@ impl FromStr for Method {
             "literal" => Ok(Method::Literal),
             "integrable" => Ok(Method::Integrable),
             "integrable-lm" => Ok(Method::IntegrableLm),
+            "nested-lm" => Ok(Method::NestedLm),
             other => Err(Error::unknown("solver method", other, METHOD_NAMES)),
         }
     }
@@ -96,6 +102,7 @@ impl fmt::Display for Method {
             Method::Literal => "literal",
             Method::Integrable => "integrable",
             Method::IntegrableLm => "integrable-lm",
+            Method::NestedLm => "nested-lm",
         })
     }
 }
@@ -130,7 +137,7 @@ impl Method {
             Method::Multigrid => MULTIGRID_MAX_CYCLES,
             Method::Jacobi | Method::Literal => JACOBI_MAX_SWEEPS,
             Method::Integrable => INTEGRABLE_MAX_ITER,
-            Method::IntegrableLm => INTEGRABLE_LM_MAX_STEPS,
+            Method::IntegrableLm | Method::NestedLm => INTEGRABLE_LM_MAX_STEPS,
         }
     }
 
@@ -142,7 +149,7 @@ impl Method {
             Method::Multigrid => "cycles",
             Method::Jacobi | Method::Literal => "sweeps",
             Method::Integrable => "iterations",
-            Method::IntegrableLm => "steps",
+            Method::IntegrableLm | Method::NestedLm => "steps",
         }
     }
 }
@@ -533,6 +540,9 @@ impl Solver {
         if matches!(options.method, Method::Integrable | Method::IntegrableLm) {
             return self.solve_integrable(image, bc, reflectance, options, progress);
         }
+        if options.method == Method::NestedLm {
+            return self.solve_nested(image, bc, reflectance, options, progress);
+        }
         if options.method == Method::Multigrid {
             let (w, h) = (self.width, self.height);
             let mg = self
@@ -916,12 +926,14 @@ pub mod crease;
 mod globalize;
 mod integrable;
 mod multigrid;
+mod nested;
 
 pub use globalize::STALL_WINDOW;
 pub use integrable::{
     ANDERSON_DEPTH, CG_MAX_ITER, CG_TOL, INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER,
     LM_ANDERSON_DEPTH, MU, SIGMA, SWEEPS,
 };
+pub use nested::{COARSEST_SIDE, LEVEL_MAX_STEPS, LEVEL_TOL};
 
 #[cfg(test)]
 mod tests;

@@ -1316,7 +1316,10 @@ fn predicts_convergence(history: [f64; 2], tol: f64) -> bool {
 /// The problem on the half-size grid: each coarse pixel averages its children's brightness
 /// (those in the domain); it is fixed, to the mean of its fixed children, where any child is
 /// fixed, an unknown where any other child is, and outside otherwise.
-fn half_size_problem(image: &Image, bc: &BoundaryConditions) -> (Image, BoundaryConditions) {
+pub(super) fn half_size_problem(
+    image: &Image,
+    bc: &BoundaryConditions,
+) -> (Image, BoundaryConditions) {
     let (w, h) = (image.width(), image.height());
     let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
     let mut coarse_image = Grid::new(cw, ch, 0.0);

@@ -7,9 +7,9 @@
 //! and a pixel of the disc follows stimupy's rule (see [`disc`]); the SVG versions have their
 //! edges at the same places.
 //!
-//! Targets are stimupy's: the checkerboard's mask is stimupy's `checker_mask` (every check its
-//! own label, in reading order) unless `targets` names checks as stimupy's `target_indices` do,
-//! and then it is stimupy's `target_mask` (those checks, drawn with `intensity_target`).
+//! Targets are stimupy's: a checkerboard has none (no target mask, as stimupy's all-zero
+//! `target_mask`) unless `targets` names checks as stimupy's `target_indices` do, and then its
+//! mask is stimupy's `target_mask` (those checks, drawn with `intensity_target`).
 
 use super::frame::Frame;
 use super::svg::{document, gray, num};
@@ -34,7 +34,7 @@ stimulus_params! {
         intensity_first: f64 = 0.0, range 0.0..=1.0;
         /// luminance of its neighbours
         intensity_second: f64 = 1.0, range 0.0..=1.0;
-        /// target checks as stimupy's target_indices: "row,col;row,col" from the top left, 0-based (empty: every check is a target, as stimupy's checker_mask)
+        /// target checks as stimupy's target_indices: "row,col;row,col" from the top left, 0-based (empty: no targets, as stimupy)
         targets: String = "";
         /// luminance of the target checks (only with targets)
         intensity_target: f64 = 0.5, range 0.0..=1.0;
@@ -115,10 +115,10 @@ fn check_name(r: usize, c: usize) -> String {
 
 /// A plain checkerboard (as stimupy's), starting with the first intensity at the top left.
 ///
-/// Its target mask is stimupy's: with no `targets`, every check is a target (label
-/// row·columns + column + 1, in reading order, as stimupy's `checker_mask`), named `r0c0`,
-/// `r0c1`, …; with `targets` (stimupy's `target_indices`), the named checks in the order given,
-/// drawn with `intensity_target` (as stimupy's `target_mask`).
+/// Its targets are stimupy's: with no `targets` there are none (no target mask); with
+/// `targets` (stimupy's `target_indices`), the named checks in the order given, named `r0c1`
+/// (row 0, column 1, from the top left), drawn with `intensity_target` (as stimupy's
+/// `target_mask`).
 ///
 /// ```
 /// use shadelab::stimulus::{checkerboard, CheckerboardParams, Pixels};
@@ -132,10 +132,13 @@ fn check_name(r: usize, c: usize) -> String {
 /// let top: Vec<f64> = (0..6).map(|c| *image.get(c, 0)).collect();
 /// assert_eq!(top, [0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
 /// assert_eq!(*image.get(0, 2), 1.0);
-/// // Six checks, each its own target in reading order.
+/// // No targets unless named, as stimupy; named checks are drawn at intensity_target.
+/// assert!(out.targets.is_none());
+/// let p = CheckerboardParams { check: 0.5, targets: "1,2;0,0".into(), ..Default::default() };
+/// let out = checkerboard(&p, &g).unwrap();
 /// let targets = out.targets.unwrap();
-/// assert_eq!(targets.names, ["r0c0", "r0c1", "r0c2", "r1c0", "r1c1", "r1c2"]);
-/// assert_eq!(*targets.labels.get(5, 3), 6);
+/// assert_eq!(targets.names, ["r1c2", "r0c0"]);
+/// assert_eq!((*targets.labels.get(5, 3), *targets.labels.get(0, 0), *targets.labels.get(2, 0)), (1, 2, 0));
 /// ```
 pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
@@ -154,33 +157,24 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
         (frame.h as f64 / check).ceil() as usize,
     );
     let chosen = parse_targets(&p.targets, ny, nx)?;
+    if chosen.len() > usize::from(u16::MAX) {
+        return Err(Error::invalid(format!(
+            "checkerboard: parameter targets names {} checks; a target mask holds at most {}",
+            chosen.len(),
+            u16::MAX
+        )));
+    }
     // The label of each check (row-major), 0 where it is not a target.
-    let (check_labels, names): (Vec<u16>, Vec<String>) = if chosen.is_empty() {
-        if nx * ny > usize::from(u16::MAX) {
+    let mut check_labels = vec![0u16; nx * ny];
+    for (k, &(r, c)) in chosen.iter().enumerate() {
+        if check_labels[r * nx + c] != 0 {
             return Err(Error::invalid(format!(
-                "checkerboard: {} checks are too many to label each as a target (at most {}); choose targets with the parameter targets or make the checks larger",
-                nx * ny,
-                u16::MAX
+                "checkerboard: parameter targets names check ({r},{c}) twice"
             )));
         }
-        let labels = (1..=nx * ny).map(|l| l as u16).collect();
-        let names = (0..ny)
-            .flat_map(|r| (0..nx).map(move |c| check_name(r, c)))
-            .collect();
-        (labels, names)
-    } else {
-        let mut labels = vec![0u16; nx * ny];
-        for (k, &(r, c)) in chosen.iter().enumerate() {
-            if labels[r * nx + c] != 0 {
-                return Err(Error::invalid(format!(
-                    "checkerboard: parameter targets names check ({r},{c}) twice"
-                )));
-            }
-            labels[r * nx + c] = k as u16 + 1;
-        }
-        let names = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
-        (labels, names)
-    };
+        check_labels[r * nx + c] = k as u16 + 1;
+    }
+    let names: Vec<String> = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
     let targets_drawn = !chosen.is_empty();
     let target_value = p.intensity_target;
     let cols: Vec<usize> = (0..frame.w).map(index).collect();
@@ -221,7 +215,7 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     };
     Ok(Output {
         pixels: Pixels::Gray(image),
-        targets: Some(Targets { labels, names }),
+        targets: targets_drawn.then_some(Targets { labels, names }),
         surface: None,
         svg,
         notes,
@@ -374,7 +368,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
     vec![
         Typed::boxed(
             "checkerboard",
-            "a plain checkerboard (as stimupy's), first intensity at the top left; targets: every check (r0c0, r0c1, ...) or those named by targets",
+            "a plain checkerboard (as stimupy's), first intensity at the top left; targets: none, or the checks named by targets (as stimupy's target_indices)",
             (8.0, 8.0),
             32.0,
             |p, g, _| checkerboard(p, g),

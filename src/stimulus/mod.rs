@@ -24,6 +24,7 @@ mod frame;
 mod hollow_mask;
 pub mod mat;
 mod reflectance_map;
+pub mod stimupy_names;
 mod strips;
 mod surfaces;
 mod svg;
@@ -429,8 +430,9 @@ pub fn prepare(
 ) -> Result<(Box<dyn Stimulus>, Request)> {
     let stimulus = find(name)?;
     let info = stimulus.info();
-    let params =
-        Params::resolve(&info.params, given).map_err(|e| Error::invalid(format!("{name}: {e}")))?;
+    let given = stimupy_names::translate(name, given)?;
+    let params = Params::resolve(&info.params, &given)
+        .map_err(|e| Error::invalid(format!("{name}: {e}")))?;
     let mut size = *size;
     if size.shape.is_none() && !(size.visual_size.is_some() && size.ppd.is_some()) {
         size.shape = stimulus.natural_shape(&params)?.map(|(w, h)| (h, w));
