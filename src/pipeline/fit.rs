@@ -847,6 +847,20 @@ fn interval(ci: Option<[f64; 2]>, decimals: usize) -> String {
     }
 }
 
+/// Empty axes of P(convex) against the direction of the bright side θ, 0..360°.
+fn p_convex_axes(title: &str) -> LinePlot {
+    let mut line = LinePlot::new(
+        title,
+        "direction of the bright side θ (°, 0 = up, 90 = left)",
+        "P(convex) (proportion)",
+        (0.0, 360.0),
+    );
+    line.y_range = Some((-0.02, 1.02));
+    line.reference_y = Some(0.5);
+    line.x_ticks = crate::analysis::plot::Ticks::Degrees;
+    line
+}
+
 impl Report {
     /// The figure: proportions convex with Wilson intervals and the fitted curve against θ
     /// (0–360°), and the fitted prior over light tilt (and the smooth prior, when fitted) on a
@@ -854,15 +868,8 @@ impl Report {
     pub fn figure(&self) -> LineAndPolar {
         let f = &self.pooled;
         let m = f.params();
-        let mut line = LinePlot::new(
-            "Proportion 'convex' against the direction of the bright side",
-            "direction of the bright side θ (°, 0 = up, 90 = left)",
-            "P(convex) (proportion)",
-            (0.0, 360.0),
-        );
-        line.y_range = Some((-0.02, 1.02));
-        line.reference_y = Some(0.5);
-        line.x_ticks = crate::analysis::plot::Ticks::Degrees;
+        let mut line =
+            p_convex_axes("Proportion 'convex' against the direction of the bright side");
         line.series.push(Series {
             name: format!(
                 "fit: μ = {:.0}°, κ = {:.2}, π = {:.2}, λ = {:.3}",
@@ -930,15 +937,7 @@ impl Report {
                 .map(|d| (d as f64, m.p_convex(d as f64)))
                 .collect()
         };
-        let mut line = LinePlot::new(
-            "Each participant's fitted P(convex)",
-            "direction of the bright side θ (°, 0 = up, 90 = left)",
-            "P(convex) (proportion)",
-            (0.0, 360.0),
-        );
-        line.y_range = Some((-0.02, 1.02));
-        line.reference_y = Some(0.5);
-        line.x_ticks = crate::analysis::plot::Ticks::Degrees;
+        let mut line = p_convex_axes("Each participant's fitted P(convex)");
         let m = self.pooled.params();
         line.series.push(Series {
             name: format!("pooled fit: μ = {:.0}°, κ = {:.2}", m.tilt_deg, m.kappa),

@@ -936,4 +936,4 @@ pub use integrable::{
 pub use nested::{COARSEST_SIDE, LEVEL_MAX_STEPS, LEVEL_TOL};
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -245,7 +245,7 @@ mod tests {
     use crate::gradient_space::angle_deg;
     use crate::grid::Mask;
     use crate::light::Light;
-    use crate::surface::{gaussian, sphere, Surface};
+    use crate::surface::{sphere, Surface};
 
     /// Solves the picture of `surface` under `light` with `method` (λ = 1, its defaults, the
     /// occluding boundary).
@@ -360,27 +360,9 @@ mod tests {
     #[cfg(feature = "parallel")]
     #[test]
     fn results_do_not_depend_on_threads() {
-        let b = gaussian(200, 200, 20.0, 20.0, 0.0, 0.0).unwrap();
+        let b = crate::surface::gaussian(200, 200, 20.0, 20.0, 0.0, 0.0).unwrap();
         let light = Light::from_tilt_slant(20.0, 40.0).unwrap();
         let (image, map) = picture(&b, light);
-        let options = SolveOptions {
-            max_iter: 8,
-            ..SolveOptions::for_method(Method::NestedLm)
-        };
-        let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut solver = Solver::new(200, 200).unwrap();
-                    solver
-                        .solve(&image, &b.mask, &Boundary::Flat, &map, &options)
-                        .unwrap()
-                })
-        };
-        let one = run(1);
-        assert!(one.unknowns >= crate::solver::PARALLEL_MIN);
-        assert_eq!(one, run(3));
+        crate::solver::tests::same_for_any_thread_count(&b, &image, &map, Method::NestedLm);
     }
 }

@@ -13,6 +13,38 @@ pub(super) fn picture(surface: &Surface, light: Light) -> (Image, Lambertian) {
     (image, map)
 }
 
+/// Eight iterations (finest steps, cycles) of `method` on a 200² picture of `b`, on one thread
+/// and on three, give the same solution, which the parallel loops handle (returned for the
+/// caller's own checks).
+#[cfg(feature = "parallel")]
+pub(super) fn same_for_any_thread_count(
+    b: &Surface,
+    image: &Image,
+    map: &Lambertian,
+    method: Method,
+) -> Solution {
+    let options = SolveOptions {
+        max_iter: 8,
+        ..SolveOptions::for_method(method)
+    };
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut solver = Solver::new(200, 200).unwrap();
+                solver
+                    .solve(image, &b.mask, &Boundary::Flat, map, &options)
+                    .unwrap()
+            })
+    };
+    let one = run(1);
+    assert!(one.unknowns >= PARALLEL_MIN, "{method}");
+    assert_eq!(one, run(3), "{method}");
+    one
+}
+
 /// The built-in Stanford bunny (`bun_zipper_res3`) rasterised into a `size`² frame.
 pub(super) fn bunny(size: usize) -> Surface {
     let ply = include_bytes!("../../tests/data/bun_zipper_res3.ply");
