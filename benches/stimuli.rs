@@ -79,9 +79,18 @@ fn bench(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(10));
     let presets = shadelab::gallery::builtin_presets().expect("the built-in presets");
     let out = std::env::temp_dir().join(format!("shadelab-bench-gallery-{}", std::process::id()));
-    let options = shadelab::gallery::Options::default();
+    let config = shadelab::GalleryConfig {
+        presets,
+        options: shadelab::gallery::Options::default(),
+        source: None,
+    };
+    let dest = shadelab::Output::new(&out);
     group.bench_function("build", |b| {
-        b.iter(|| shadelab::gallery::build(black_box(&presets), &out, &options, &|_| {}))
+        b.iter(|| {
+            use shadelab::CommandReport;
+            shadelab::gallery(black_box(&config), &shadelab::NoProgress)
+                .and_then(|report| report.write(&dest))
+        })
     });
     group.finish();
     let _ = std::fs::remove_dir_all(&out);

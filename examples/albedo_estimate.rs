@@ -14,7 +14,7 @@ use shadelab::evaluation::datasets::{ball, BALL_IMAGES};
 use shadelab::evaluation::metrics::angular_error;
 use shadelab::grid::{Image, Mask};
 use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
-use shadelab::{Light, NoProgress};
+use shadelab::{FrontLight, Light, NoProgress};
 use std::path::PathBuf;
 
 /// The pre-scalings: the quantile of the brightness on the mask made 1.
@@ -41,7 +41,7 @@ fn solve(
     truth: &shadelab::Grid<shadelab::gradient_space::Normal>,
     saturation: Saturation,
 ) -> shadelab::Result<(f64, f64, usize)> {
-    let mut config = SolveConfig::new("ball", LightChoice::Given(light));
+    let mut config = SolveConfig::new("ball", LightChoice::Given(FrontLight::new(light)?));
     config.albedo_estimate = true;
     config.saturation = saturation;
     let run = run_image(&config, image.clone(), Some(mask.clone()), &NoProgress)?;

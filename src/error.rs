@@ -39,6 +39,10 @@ pub enum Error {
     /// A computation could not be carried out on valid input (e.g. an empty domain).
     #[error("{0}")]
     Compute(String),
+    /// A failure whose remedy is a setting the message names ([`crate::Message`]): each front
+    /// end names the setting its own way (a flag, a keyword).
+    #[error("{0}")]
+    Setting(crate::Message),
     /// An output would replace a file or folder that shadelab did not write (a front end may
     /// say how to allow it).
     #[error("{}: {message}", path.display())]
@@ -112,3 +116,16 @@ impl Error {
 
 /// The library's result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// `bytes` in words: `1 byte`, `512 bytes`, `64 MiB`, `1.5 GiB`.
+pub(crate) fn byte_size(bytes: u64) -> String {
+    const UNITS: [(&str, u64); 3] = [("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)];
+    match UNITS.iter().find(|(_, size)| bytes >= *size) {
+        Some((unit, size)) => {
+            let value = bytes as f64 / *size as f64;
+            format!("{} {unit}", (value * 10.0).round() / 10.0)
+        }
+        None if bytes == 1 => "1 byte".to_string(),
+        None => format!("{bytes} bytes"),
+    }
+}

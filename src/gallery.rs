@@ -11,9 +11,8 @@ use crate::analysis::plot::Caption;
 use crate::analysis::plot::{caption_pixels, encode, write_rgb_png};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, RgbImage};
-use crate::io::{self, AtomicDir, BitDepth};
+use crate::io::{self, BitDepth};
 use crate::parallel::prelude::*;
-use crate::pipeline::gallery::{GalleryEntry, GalleryReport};
 use crate::stimulus::{self, ExportOptions, Output, Pixels, Request, Spec};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -173,37 +172,56 @@ pub const DOCS_BASE: &str = "../";
 /// How to build a gallery.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
-    /// Replace an existing folder that shadelab did not write.
-    pub force: bool,
     /// Largest image made, in pixels.
     pub max_pixels: usize,
     /// The prefix put before each preset's `docs` link (`docs/priors.md#…`, relative to the
     /// repository root): [`DOCS_BASE`], or a URL of the repository's files, or an absolute path,
     /// for a gallery rendered elsewhere.
     pub docs_base: String,
-    /// What the presets were read from (a folder of specs), never replaced by the output
-    /// (see [`AtomicDir::reads`]).
-    pub inputs: Vec<std::path::PathBuf>,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Options {
-            force: false,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             docs_base: DOCS_BASE.to_string(),
-            inputs: Vec::new(),
         }
     }
 }
 
-/// What was rendered for one preset.
+/// What was rendered for one preset, in memory until [`write_into`] writes it.
 #[derive(Debug, Clone)]
-struct Rendered {
-    preset: Preset,
-    request: Request,
+pub struct Rendered {
+    /// The preset.
+    pub preset: Preset,
+    /// The resolved request (parameters, size, seed).
+    pub request: Request,
+    /// The picture and its targets.
+    pub output: Output,
     thumbnail: RgbImage,
-    files: Vec<String>,
+}
+
+impl Rendered {
+    /// The names of the files written for it in the gallery folder (image, mask, sidecar).
+    pub fn files(&self) -> Vec<String> {
+        // In the order `write_output` lists them: companions, image, sidecar.
+        let image = PathBuf::from(format!("{}.png", self.preset.name));
+        let mut files = stimulus::planned_files(&image, &self.output, &image_options());
+        files.rotate_left(1);
+        files.push(io::sibling(&image, "", "json"));
+        files
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect()
+    }
+}
+
+/// How a preset's image is written: 16-bit linear PNG with its sidecar and mask.
+fn image_options() -> ExportOptions {
+    ExportOptions {
+        force: true,
+        ..ExportOptions::default()
+    }
 }
 
 /// Checks that there is at least one preset and that no two share a name (their files would).
@@ -223,51 +241,42 @@ pub fn check_presets(presets: &[Preset]) -> Result<()> {
     Ok(())
 }
 
-/// Builds the gallery of `presets` in `out`: per preset `NAME.png` (16-bit linear),
-/// `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then `gallery.png`
-/// (all thumbnails) and `index.html`. `progress` is called with each preset's name when it is
-/// done (from worker threads). Returns what was written (see also
-/// [`crate::pipeline::gallery`], the same as a pipeline).
-pub fn build(
+/// Renders every preset (in parallel), in memory. `progress` is called with each preset's
+/// name when it is done (from worker threads).
+pub fn render(
     presets: &[Preset],
-    out: &Path,
     options: &Options,
     progress: &(dyn Fn(&str) + Sync),
-) -> Result<GalleryReport> {
+) -> Result<Vec<Rendered>> {
     check_presets(presets)?;
-    let dir = AtomicDir::create(out, MARKER, options.force)?.reads(&options.inputs)?;
-    let thumbs = dir.path().join("thumbs");
-    std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
-    let rendered: Vec<Rendered> = presets
+    presets
         .par_iter()
         .map(|preset| {
-            let r = render_one(preset, dir.path(), options);
+            let r = render_one(preset, options);
             progress(&preset.name);
             r
         })
-        .collect::<Result<_>>()?;
-    write_sheet(&dir.path().join("gallery.png"), &rendered)?;
-    let html = index_html(&rendered, &options.docs_base);
-    io::write_text(&dir.path().join(MARKER), &html)?;
-    let folder = dir.commit()?;
-    Ok(GalleryReport {
-        index: folder.join(MARKER),
-        folder,
-        presets: rendered
-            .into_iter()
-            .map(|r| GalleryEntry {
-                name: r.preset.name,
-                stimulus: r.preset.spec.stimulus,
-                geometry: r.request.geometry,
-                seed: r.request.seed,
-                files: r.files,
-            })
-            .collect(),
-    })
+        .collect()
 }
 
-fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered> {
-    // Workers stop at a requested stop; the caller drops the unfinished folder.
+/// Writes the gallery of `rendered` into the folder `dir`: per preset `NAME.png` (16-bit
+/// linear), `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then
+/// `gallery.png` (all thumbnails) and `index.html` ([`MARKER`]), whose links to the
+/// explanations start with `docs_base`.
+pub fn write_into(dir: &Path, rendered: &[Rendered], docs_base: &str) -> Result<()> {
+    let thumbs = dir.join("thumbs");
+    std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
+    rendered
+        .par_iter()
+        .map(|r| write_one(r, dir))
+        .collect::<Result<Vec<()>>>()?;
+    write_sheet(&dir.join("gallery.png"), rendered)?;
+    let html = index_html(rendered, docs_base);
+    io::write_text(&dir.join(MARKER), &html)
+}
+
+fn render_one(preset: &Preset, options: &Options) -> Result<Rendered> {
+    // Workers stop at a requested stop; the caller drops what was rendered.
     crate::cancel::check()?;
     let spec = &preset.spec;
     let context = |e: Error| match e {
@@ -282,34 +291,31 @@ fn render_one(preset: &Preset, dir: &Path, options: &Options) -> Result<Rendered
         options.max_pixels,
     )
     .map_err(context)?;
-    let path = dir.join(format!("{}.png", preset.name));
-    let written = stimulus::write_output(
-        &spec.stimulus,
-        &request,
-        &output,
-        &path,
-        &ExportOptions {
-            force: true,
-            ..ExportOptions::default()
-        },
-    )?;
     let thumbnail = thumbnail(&output);
-    io::write_rgb(
-        &dir.join("thumbs").join(format!("{}.png", preset.name)),
-        &thumbnail,
-        BitDepth::Eight,
-        Some(THUMBNAIL_GAMMA),
-    )?;
-    let files = written
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
     Ok(Rendered {
         preset: preset.clone(),
         request,
+        output,
         thumbnail,
-        files,
     })
+}
+
+fn write_one(r: &Rendered, dir: &Path) -> Result<()> {
+    crate::cancel::check()?;
+    let name = &r.preset.name;
+    stimulus::write_output(
+        &r.preset.spec.stimulus,
+        &r.request,
+        &r.output,
+        &dir.join(format!("{name}.png")),
+        &image_options(),
+    )?;
+    io::write_rgb(
+        &dir.join("thumbs").join(format!("{name}.png")),
+        &r.thumbnail,
+        BitDepth::Eight,
+        Some(THUMBNAIL_GAMMA),
+    )
 }
 
 /// A box-filtered reduction to at most [`THUMBNAIL`] pixels on the longer side (linear RGB).
@@ -520,7 +526,7 @@ Reproduce: <code>shadelab render --spec stimuli/{id}.json --out {id}.png</code><
             }
         }
         let links: Vec<String> = r
-            .files
+            .files()
             .iter()
             .map(|f| format!("<a href=\"{0}\">{0}</a>", escape(f)))
             .collect();

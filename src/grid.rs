@@ -89,7 +89,7 @@ pub fn check_memory(width: usize, height: usize) -> Result<()> {
         Error::Compute(format!(
             "image size {width}x{height} needs buffers of {} each, more memory than this \
              machine can give",
-            crate::io::byte_size(bytes as u64)
+            crate::error::byte_size(bytes as u64)
         ))
     })
 }

@@ -4,17 +4,17 @@
 //! the recovered normals are from the render's own:
 //!
 //! ```
-//! use shadelab::stimulus::{sphere, Pixels, SphereParams};
-//! use shadelab::{Boundary, Geometry, Lambertian, NoProgress, Problem, ReconstructOptions, Reconstructor};
+//! use shadelab::stimulus::{sphere, SphereParams};
+//! use shadelab::{angular_error, Boundary, Geometry, NoProgress, Problem, ReconstructOptions};
 //!
 //! let mut params = SphereParams::default();
-//! params.lighting.light = "tilt=30,slant=40".parse()?;           // from above-left
-//! let out = sphere(&params, &Geometry { width: 64, height: 64, ppd: 16.0 })?;
-//! let (Pixels::Gray(image), Some(truth)) = (&out.pixels, &out.surface) else { unreachable!() };
-//! let map = Lambertian { light: params.lighting.light, albedo: 1.0, ambient: 0.0 };
-//! let problem = Problem { image, mask: &truth.mask, boundary: &Boundary::Occluding, reflectance: &map };
-//! let shape = Reconstructor::new(64, 64, ReconstructOptions::default())?.reconstruct(&problem, &NoProgress)?;
-//! let error = shadelab::evaluation::metrics::angular_error(&shape.shape.solution.normals(), &truth.normals, &truth.mask)?;
+//! params.lighting.light = "tilt=30,slant=40".parse()?; // from above-left
+//! let out = sphere(&params, &Geometry::square(64, 16.0))?;
+//! let (image, truth) = (out.image()?, out.surface_layers()?);
+//! let map = params.lighting.reflectance()?; // the render's own light and reflectance
+//! let problem = Problem { image, mask: &truth.mask, boundary: &Boundary::Occluding, reflectance: map.as_ref() };
+//! let shape = problem.reconstruct(ReconstructOptions::default(), &NoProgress)?;
+//! let error = angular_error(&shape.normals(), &truth.normals, &truth.mask)?;
 //! assert!(error.mean_deg < 10.0, "{error:?}");
 //! # Ok::<(), shadelab::Error>(())
 //! ```
@@ -62,6 +62,7 @@ pub mod io;
 pub mod light;
 pub mod light_estimation;
 pub mod lightness;
+mod message;
 pub mod parallel;
 pub mod params;
 pub mod pipeline;
@@ -76,14 +77,16 @@ pub mod surface;
 pub mod visual_size;
 
 pub use error::{Error, Result};
+pub use evaluation::metrics::angular_error;
 pub use grid::{Grid, Image, Labels, Mask, RgbImage};
-pub use light::Light;
+pub use light::{FrontLight, Light};
+pub use message::{Message, Setting};
 pub use progress::{NoProgress, Progress};
 
 // The engine.
 pub use boundary::Boundary;
 pub use reconstruct::{
-    DepthMethod, Lighting, NonConvergence, Problem, ReconstructOptions, Reconstruction,
+    DepthMethod, LightAndAlbedo, NonConvergence, Problem, ReconstructOptions, Reconstruction,
     Reconstructor, Shape,
 };
 pub use reflectance::{BrdfModel, BrdfSpec, Lambertian, ReflectanceMap};
@@ -107,4 +110,18 @@ pub use pipeline::prior_sweep::{Config as PriorSweepConfig, Report as PriorSweep
 pub use pipeline::render::{RenderConfig, RenderReport};
 pub use pipeline::solve::{SolveConfig, SolveReport, SolveRun};
 pub use pipeline::study::{StudyMergeConfig, StudyMergeReport, StudyRunConfig, StudyRunReport};
-pub use pipeline::{Picture, PictureSource};
+pub use pipeline::{CommandReport, Output, Picture, PictureSource};
+
+// Each command's run, under the command's name (the Python module's names).
+pub use pipeline::bench::run as bench;
+pub use pipeline::experiment::run as experiment;
+pub use pipeline::fading::run as fading;
+pub use pipeline::fit::run as fit_observer;
+pub use pipeline::gallery::run as gallery;
+pub use pipeline::lightness::run as lightness;
+pub use pipeline::observer::run as observer;
+pub use pipeline::outline::run as outline;
+pub use pipeline::prior_sweep::run as prior_sweep;
+pub use pipeline::render::run as render;
+pub use pipeline::solve::run as solve;
+pub use pipeline::study::{merge as study_merge, run as study_run};

@@ -219,6 +219,83 @@ impl FromStr for Light {
     }
 }
 
+/// A light strictly in front of the surface (z > 0): the only light shape from shading can
+/// use, since a grazing or rear light leaves the shading without an answer. It is made once,
+/// where a light for a solve is parsed, given or estimated ([`FrontLight::new`], `FromStr`);
+/// what takes one checks nothing again. Everything of a [`Light`] is there by `Deref`.
+///
+/// ```
+/// use shadelab::{FrontLight, Light};
+/// let light: FrontLight = "tilt=30,slant=40".parse()?;
+/// assert_eq!(light.tilt_deg().round(), 30.0);
+/// let grazing: Light = "above,slant=90".parse()?; // renders, but cannot be solved under
+/// assert!(FrontLight::new(grazing).is_err());
+/// assert!("above,slant=90".parse::<FrontLight>().is_err());
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "Light", into = "Light")]
+pub struct FrontLight(Light);
+
+impl FrontLight {
+    /// The frontal light (0, 0, 1).
+    pub const FRONT: FrontLight = FrontLight(Light::FRONT);
+
+    /// `light`, which must be strictly in front of the surface (z > 0).
+    pub fn new(light: Light) -> Result<FrontLight> {
+        let d = light.direction();
+        if d.z > 0.0 {
+            Ok(FrontLight(light))
+        } else {
+            Err(Error::invalid(format!(
+                "the light ({:.4}, {:.4}, {:.4}) must have z > 0, a slant below 90° (a grazing or \
+                 rear light leaves the shading without an answer)",
+                d.x, d.y, d.z
+            )))
+        }
+    }
+
+    /// The light.
+    pub fn light(self) -> Light {
+        self.0
+    }
+}
+
+impl std::ops::Deref for FrontLight {
+    type Target = Light;
+    fn deref(&self) -> &Light {
+        &self.0
+    }
+}
+
+impl TryFrom<Light> for FrontLight {
+    type Error = Error;
+    fn try_from(light: Light) -> Result<FrontLight> {
+        FrontLight::new(light)
+    }
+}
+
+impl From<FrontLight> for Light {
+    fn from(light: FrontLight) -> Light {
+        light.0
+    }
+}
+
+impl FromStr for FrontLight {
+    type Err = Error;
+
+    /// A [`Light`]'s syntax, for a light in front of the surface.
+    fn from_str(text: &str) -> Result<FrontLight> {
+        FrontLight::new(text.parse()?)
+    }
+}
+
+impl fmt::Display for FrontLight {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

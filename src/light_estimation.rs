@@ -79,7 +79,7 @@
 use crate::boundary::occluding_normals;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask};
-use crate::light::Light;
+use crate::light::{FrontLight, Light};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 
@@ -132,8 +132,9 @@ pub enum Outline {
 /// An estimated light and albedo.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LightEstimate {
-    /// The estimated light (unit vector toward it).
-    pub light: Light,
+    /// The estimated light (unit vector toward it), in front of the surface: the largest slant
+    /// the estimators return is below 90°.
+    pub light: FrontLight,
     /// Tilt in degrees (0 = from above, +90 = from the left).
     pub tilt_deg: f64,
     /// Slant in degrees from the viewing direction.
@@ -254,7 +255,7 @@ pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Resu
             if e.slant_se_deg.is_some_and(|se| se > MAX_LIMB_SLANT_SE_DEG) {
                 // The limb's tilt, the interior's slant and albedo.
                 return Ok(LightEstimate {
-                    light: Light::from_tilt_slant(e.tilt_deg, moments.slant_deg)?,
+                    light: FrontLight::new(Light::from_tilt_slant(e.tilt_deg, moments.slant_deg)?)?,
                     slant_deg: moments.slant_deg,
                     albedo: moments.albedo,
                     method: EstimateMethod::LimbAndMoments,
@@ -370,7 +371,7 @@ fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
         90.0
     };
     Ok(Some(LightEstimate {
-        light: Light::from_tilt_slant(tilt_deg, slant_deg)?,
+        light: FrontLight::new(Light::from_tilt_slant(tilt_deg, slant_deg)?)?,
         tilt_deg,
         slant_deg,
         albedo: rho,
@@ -596,7 +597,7 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     let slant_var = jh * jh * var_h + 2.0 * jh * jz * cov_hz + jz * jz * cov[(2, 2)];
     let slant_se_deg = slant_var.max(0.0).sqrt().to_degrees().min(90.0);
     Ok(Some(LightEstimate {
-        light: Light::from_tilt_slant(tilt_deg, slant_deg)?,
+        light: FrontLight::new(Light::from_tilt_slant(tilt_deg, slant_deg)?)?,
         tilt_deg,
         slant_deg,
         albedo: rho,
@@ -806,7 +807,7 @@ fn moments_estimate(image: &Image, mask: &Mask) -> Result<LightEstimate> {
         (1.0, 4.0 * mu1 / std::f64::consts::PI)
     };
     let slant_deg = cos_slant.acos().to_degrees().min(MAX_ESTIMATED_SLANT_DEG);
-    let light = Light::from_tilt_slant(tilt_deg, slant_deg)?;
+    let light = FrontLight::new(Light::from_tilt_slant(tilt_deg, slant_deg)?)?;
     Ok(LightEstimate {
         light,
         tilt_deg,

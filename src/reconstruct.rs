@@ -8,7 +8,7 @@
 //! converge ([`NonConvergence`]), how depth is integrated ([`DepthMethod`]) and whether it is
 //! put to rest on zero (the lowest point of the domain at 0, 0 outside it).
 //!
-//! The light and albedo may be given or estimated from the image ([`Lighting::resolve`]).
+//! The light and albedo may be given or estimated from the image ([`LightAndAlbedo::resolve`]).
 //!
 //! ```
 //! use shadelab::{Boundary, Lambertian, Light, Problem, ReconstructOptions, Reconstructor};
@@ -42,8 +42,9 @@ use crate::integrate::{
     gradients_from_fg, integrate_owned_gradients, rest_on_zero, FrankotChellappa, PoissonOptions,
     DEFAULT_MIN_NZ,
 };
-use crate::light::Light;
+use crate::light::FrontLight;
 use crate::light_estimation::{estimate_light_with, LightEstimate, Outline};
+use crate::message::{Message, Setting};
 use crate::progress::Progress;
 use crate::reflectance::ReflectanceMap;
 use crate::solver::{Method, Solution, SolveOptions, Solver};
@@ -179,16 +180,16 @@ impl ReconstructOptions {
 
 /// The light and albedo a reconstruction assumes, and the estimate they came from if any.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Lighting {
-    /// The light.
-    pub light: Light,
+pub struct LightAndAlbedo {
+    /// The light, in front of the surface.
+    pub light: FrontLight,
     /// The albedo.
     pub albedo: f64,
     /// The estimate, when the light was estimated from the image.
     pub estimate: Option<LightEstimate>,
 }
 
-impl Lighting {
+impl LightAndAlbedo {
     /// The light `given`, or (with `None`) the one estimated from `image` on `mask`; the albedo
     /// `albedo`, or the estimate's when the light is estimated, or 1. With the occluding
     /// `boundary` the mask's outline is taken as the limb and the estimate fits the brightness
@@ -196,15 +197,14 @@ impl Lighting {
     /// [`crate::light_estimation::EstimateMethod::Limb`], where the outline is long enough);
     /// with any other, the interior statistics.
     ///
-    /// Fails when the light is not strictly in front of the surface (z ≤ 0: a grazing or rear
-    /// light leaves the shading without an answer) or the albedo is not a positive number.
+    /// Fails when the albedo is not a positive number or the estimate fails.
     pub fn resolve(
-        given: Option<Light>,
+        given: Option<FrontLight>,
         albedo: Option<f64>,
         image: &Image,
         mask: &Mask,
         boundary: &Boundary,
-    ) -> Result<Lighting> {
+    ) -> Result<LightAndAlbedo> {
         if let Some(a) = albedo {
             check_albedo(a)?;
         }
@@ -222,13 +222,12 @@ impl Lighting {
             (None, Some(e)) => e.light,
             (None, None) => return Err(Error::invalid("no light given or estimated")),
         };
-        check_light_in_front(&light)?;
         let albedo = match (albedo, &estimate) {
             (Some(a), _) => a,
             (None, Some(e)) => e.albedo,
             (None, None) => 1.0,
         };
-        Ok(Lighting {
+        Ok(LightAndAlbedo {
             light,
             albedo,
             estimate,
@@ -245,19 +244,6 @@ pub fn check_albedo(albedo: f64) -> Result<()> {
             "albedo {albedo} must be a positive number"
         )))
     }
-}
-
-/// Fails unless the light is strictly in front of the surface (z > 0).
-pub fn check_light_in_front(light: &Light) -> Result<()> {
-    let d = light.direction();
-    if d.z <= 0.0 {
-        return Err(Error::invalid(format!(
-            "the light ({:.4}, {:.4}, {:.4}) must have z > 0 (a grazing or rear light leaves \
-             the shading without an answer)",
-            d.x, d.y, d.z
-        )));
-    }
-    Ok(())
 }
 
 /// What a reconstruction is asked: the picture, where to solve, the condition at the domain's
@@ -337,6 +323,26 @@ pub struct Reconstruction {
     pub depth: Depth,
 }
 
+impl Reconstruction {
+    /// The recovered unit normals.
+    pub fn normals(&self) -> crate::Grid<crate::gradient_space::Normal> {
+        self.shape.solution.normals()
+    }
+}
+
+impl Problem<'_> {
+    /// Reconstructs this problem once: plans a [`Reconstructor`] for the image's size with
+    /// `options` and runs it (plan one and reuse it to reconstruct many images of a size).
+    pub fn reconstruct(
+        &self,
+        options: ReconstructOptions,
+        progress: &dyn Progress,
+    ) -> Result<Reconstruction> {
+        Reconstructor::new(self.image.width(), self.image.height(), options)?
+            .reconstruct(self, progress)
+    }
+}
+
 /// The reconstruction planner for one image size: the solver and the integrator, planned once
 /// and reused by every reconstruction.
 #[derive(Debug)]
@@ -397,18 +403,19 @@ impl Reconstructor {
             || blown(s.last_update)
             || s.f.data().iter().chain(s.g.data()).any(|&v| blown(v))
         {
-            return Err(Error::Compute(format!(
-                "the {} iteration diverged after {} {} (last update {:.3e}); use {}a smaller λ",
+            let mut why = Message::text(format!(
+                "the {} iteration diverged after {} {} (last update {:.3e}); use ",
                 shape.method,
                 shape.solution.iterations,
                 shape.method.iteration_unit(),
                 shape.solution.last_update,
-                if shape.method == Method::Jacobi {
-                    ""
-                } else {
-                    "the jacobi method or "
-                }
-            )));
+            ));
+            if shape.method != Method::Jacobi {
+                why = why
+                    .setting(Setting::JacobiMethod, "the jacobi method")
+                    .then(" or ");
+            }
+            return Err(Error::Setting(why.setting(Setting::Lambda, "a smaller λ")));
         }
         Ok(shape)
     }

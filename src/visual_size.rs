@@ -29,6 +29,15 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// A square picture of `side` pixels at `ppd` pixels per degree.
+    pub fn square(side: usize, ppd: f64) -> Geometry {
+        Geometry {
+            width: side,
+            height: side,
+            ppd,
+        }
+    }
+
     /// Width in degrees.
     pub fn width_deg(&self) -> f64 {
         self.width as f64 / self.ppd

@@ -475,7 +475,9 @@ fn every_gallery_preset_is_explained_on_a_docs_page_that_exists() {
 
 #[test]
 fn the_gallery_page_links_each_picture_to_its_explanation() {
-    use shadelab::gallery::{build, Options, Preset};
+    use shadelab::gallery::{Options, Preset};
+    use shadelab::pipeline::gallery::GalleryConfig;
+    use shadelab::{CommandReport, NoProgress, Output};
     let d = scratch("gallery-links");
     let spec: shadelab::stimulus::Spec = serde_json::from_str(
         r#"{"stimulus": "disc", "shape": [16, 16], "title": "A disc",
@@ -488,11 +490,16 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
         source: "disc.json".into(),
     }];
     let html = |dir: &str, base: &str| {
-        let options = Options {
-            docs_base: base.into(),
-            ..Options::default()
+        let config = GalleryConfig {
+            presets: presets.to_vec(),
+            options: Options {
+                docs_base: base.into(),
+                ..Options::default()
+            },
+            source: None,
         };
-        build(&presets, &d.join(dir), &options, &|_| {}).unwrap();
+        let report = shadelab::gallery(&config, &NoProgress).unwrap();
+        report.write(&Output::new(d.join(dir))).unwrap();
         read(&d.join(dir).join("index.html"))
     };
     assert!(html("g", shadelab::gallery::DOCS_BASE)

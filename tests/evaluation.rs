@@ -4,7 +4,6 @@
 use crate::cli::{assert_error, scratch, shadelab};
 use shadelab::boundary::Boundary;
 use shadelab::evaluation::{self, CaseResult, Config, Set};
-use shadelab::light::Light;
 use shadelab::solver::Method;
 use std::path::PathBuf;
 
@@ -58,7 +57,7 @@ fn errors_on_real_data_stay_within_measured_bounds() {
     let mut config = Config::new(&dir).unwrap();
     config.sets = vec![Set::Ball, Set::Bunny];
     config.bunny_size = 128;
-    config.bunny_lights = vec![Light::FRONT];
+    config.bunny_lights = vec![shadelab::FrontLight::FRONT];
     config.ball_images = vec!["052".into()];
     config.compared_boundaries = vec![Boundary::Occluding];
     config.object_boundaries = vec![Boundary::Occluding];
@@ -87,7 +86,7 @@ fn errors_on_real_data_stay_within_measured_bounds() {
 
     let mut config = Config::new(&dir).unwrap();
     config.sets = vec![Set::Mozart];
-    config.mozart_lights = vec![Light::from_vector(1.0, 0.0, 1.0).unwrap()];
+    config.mozart_lights = vec!["1,0,1".parse().unwrap()];
     config.compared_boundaries = vec![Boundary::Free];
     config.methods = vec![Method::Multigrid];
     let r = run(&config);
@@ -210,7 +209,7 @@ fn missing_data_is_a_one_line_error_naming_what_was_expected() {
 fn integrable_method_beats_ikeuchi_horn_on_mozart_and_the_ball() {
     let Some(dir) = data() else { return };
     let mut config = Config::new(&dir).unwrap();
-    config.mozart_lights = vec![Light::from_vector(1.0, 0.0, 1.0).unwrap()];
+    config.mozart_lights = vec!["1,0,1".parse().unwrap()];
     config.compared_boundaries = vec![Boundary::Free];
     config.ball_images = vec!["008".into()];
     config.methods = vec![Method::Multigrid, Method::Integrable];
@@ -249,7 +248,7 @@ fn integrable_method_beats_ikeuchi_horn_on_mozart_and_the_ball() {
 fn integrable_angle_residual_on_mozart_frontal_and_ball_041() {
     let Some(dir) = data() else { return };
     let mut config = Config::new(&dir).unwrap();
-    config.mozart_lights = vec![Light::FRONT];
+    config.mozart_lights = vec![shadelab::FrontLight::FRONT];
     config.compared_boundaries = vec![Boundary::Occluding];
     config.ball_images = vec!["041".into()];
     config.methods = vec![Method::Integrable];

@@ -9,7 +9,7 @@
 use crate::chromium::{chromium, run, Server};
 use crate::cli::{assert_error, scratch, shadelab};
 use shadelab::pipeline::experiment::{self, Config, CSV_HEADER};
-use shadelab::NoProgress;
+use shadelab::{NoProgress, Output};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpListener;
@@ -29,7 +29,7 @@ fn counts(report: &experiment::Report) -> BTreeMap<String, usize> {
 
 #[test]
 fn the_default_design_shows_every_rotation_repeats_times_in_a_seeded_order() {
-    let config = Config::new("unused");
+    let config = Config::new();
     let report = experiment::run(&config, &NoProgress).unwrap();
     let d = &report.design;
     assert_eq!(d.rotations_deg.len(), 24);
@@ -80,11 +80,11 @@ fn mean(path: &Path, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>)
 #[test]
 fn the_written_images_bright_side_faces_theta() {
     let d = scratch("experiment-images");
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap().folder;
+    let folder = report.write(&Output::new(d.join("e"))).unwrap().folder;
     let img = |deg: &str| folder.join(format!("images/theta-{deg}.png"));
     let (h, w) = report.design.display.shape;
     assert_eq!((h, w), (128, 128));
@@ -154,7 +154,7 @@ fn bad_configs_are_refused_with_one_line() {
         ),
     ];
     for (change, needle) in cases {
-        let mut config = Config::new("unused");
+        let mut config = Config::new();
         change(&mut config);
         let e = config.validate().unwrap_err().to_string();
         assert!(e.contains(needle), "'{needle}' not in: {e}");
@@ -162,12 +162,12 @@ fn bad_configs_are_refused_with_one_line() {
         assert!(experiment::run(&config, &NoProgress).is_err());
     }
     // What only rendering shows: two targets, and a dimple (its bright side faces away).
-    let mut two = Config::new("unused");
+    let mut two = Config::new();
     two.params.insert("columns".into(), 2.into());
     two.visual_size = (4.0, 8.0);
     let e = experiment::run(&two, &NoProgress).unwrap_err().to_string();
     assert!(e.contains("shows 2 targets"), "{e}");
-    let mut dimple = Config::new("unused");
+    let mut dimple = Config::new();
     dimple.params.insert("pattern".into(), "dimples".into());
     let e = experiment::run(&dimple, &NoProgress)
         .unwrap_err()
@@ -182,12 +182,12 @@ fn bad_configs_are_refused_with_one_line() {
 #[test]
 fn the_folder_is_whole_and_replaced_only_when_it_is_shadelabs() {
     let d = scratch("experiment-folder");
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 120.0, 240.0];
     config.repeats = 2;
     config.practice = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    let folder = experiment::write(&config, &report).unwrap().folder;
+    let folder = report.write(&Output::new(d.join("e"))).unwrap().folder;
     for f in [
         "index.html",
         "jatos.html",
@@ -248,14 +248,13 @@ fn the_folder_is_whole_and_replaced_only_when_it_is_shadelabs() {
     assert!(!js.contains("http://") && !js.contains("https://"));
     // Written again: replaced (it is shadelab's); the same bytes.
     let before = std::fs::read(folder.join("design.json")).unwrap();
-    experiment::write(&config, &report).unwrap();
+    report.write(&Output::new(d.join("e"))).unwrap();
     assert_eq!(std::fs::read(folder.join("design.json")).unwrap(), before);
     // A folder of someone else's is refused, and left alone.
     let foreign = d.join("theirs");
     std::fs::create_dir_all(&foreign).unwrap();
     std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
-    config.out = foreign.clone();
-    let e = experiment::write(&config, &report).unwrap_err();
+    let e = report.write(&Output::new(&foreign)).unwrap_err();
     assert!(matches!(e, shadelab::Error::NotOurs { .. }), "{e}");
     assert_eq!(
         std::fs::read_to_string(foreign.join("notes.txt")).unwrap(),
@@ -421,9 +420,9 @@ fn jspsych() -> Option<PathBuf> {
 }
 
 /// Writes the experiment of `config` with jsPsych linked in (as `npm install` would put it).
-fn study(config: &Config, modules: &Path) -> (experiment::Report, PathBuf) {
+fn study(config: &Config, out: &Path, modules: &Path) -> (experiment::Report, PathBuf) {
     let report = experiment::run(config, &NoProgress).unwrap();
-    let folder = experiment::write(config, &report).unwrap().folder;
+    let folder = report.write(&Output::new(out)).unwrap().folder;
     std::os::unix::fs::symlink(modules, folder.join("node_modules")).unwrap();
     (report, folder)
 }
@@ -498,12 +497,12 @@ frame.addEventListener('load', async () => {
 fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
     let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-participant");
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 2;
     config.practice = 1;
     config.break_every = 3;
-    let (report, folder) = study(&config, &modules);
+    let (report, folder) = study(&config, &d.join("e"), &modules);
     let server = Server::start(&folder, &[("__participant.html", PARTICIPANT)]);
     let page = run(
         &server.url("__participant.html"),
@@ -597,8 +596,8 @@ fn order(dom: &str) -> Vec<String> {
 fn the_pilot_is_fitted_back_and_each_participant_gets_their_own_order() {
     let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-browser");
-    let config = Config::new(d.join("e"));
-    let (report, folder) = study(&config, &modules);
+    let config = Config::new();
+    let (report, folder) = study(&config, &d.join("e"), &modules);
     let server = Server::start(&folder, &[]);
     let timeout = Duration::from_secs(120);
     let pilot = "index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1";
@@ -912,9 +911,9 @@ fn the_data_reach_a_real_server_by_post_and_a_refused_one_falls_back_to_the_down
     let d = scratch("experiment-save");
     let receiver = Receiver::start();
     // The default design (24 rotations x 16, 8 practice trials).
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.completion_url = Some(receiver.url("done?cc=C1234ABC"));
-    let (report, folder) = study(&config, &modules);
+    let (report, folder) = study(&config, &d.join("e"), &modules);
     let server = Server::start(&folder, &[("__frame.html", FRAME)]);
     let timeout = Duration::from_secs(120);
     let simulate = "simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1";
@@ -1054,10 +1053,10 @@ window.jatos = {
 fn under_jatos_the_data_go_to_submit_result_data_and_the_study_ends() {
     let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-jatos");
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 2;
-    let (report, folder) = study(&config, &modules);
+    let (report, folder) = study(&config, &d.join("e"), &modules);
     let server = Server::start(&folder, &[("jatos.js", JATOS_DOUBLE)]);
     let page = run(
         &server.url("jatos.html"),
@@ -1121,12 +1120,12 @@ fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
     let d = scratch("experiment-lab");
     let lab = d.join("lab");
     std::fs::create_dir_all(&lab).unwrap();
-    let mut config = Config::new(lab.join("shadelab"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 3;
     config.practice = 1;
     let report = experiment::run(&config, &NoProgress).unwrap();
-    experiment::write(&config, &report).unwrap();
+    report.write(&Output::new(lab.join("shadelab"))).unwrap();
     std::os::unix::fs::symlink(&modules, lab.join("node_modules")).unwrap();
     std::fs::write(lab.join("index.html"), LAB).unwrap();
     let server = Server::start(&lab, &[]);
@@ -1165,11 +1164,11 @@ fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
 fn counterbalanced_keys_are_swapped_for_half_of_the_participants_and_read_back() {
     let Some(modules) = jspsych() else { return };
     let d = scratch("experiment-counterbalance");
-    let mut config = Config::new(d.join("e"));
+    let mut config = Config::new();
     config.rotations = vec![0.0, 90.0, 180.0, 270.0];
     config.repeats = 3;
     config.counterbalance_keys = true;
-    let (_, folder) = study(&config, &modules);
+    let (_, folder) = study(&config, &d.join("e"), &modules);
     let server = Server::start(&folder, &[]);
     let mut assignments = Vec::new();
     for id in ["A", "B", "C", "D", "E", "F"] {

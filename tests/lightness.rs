@@ -422,7 +422,7 @@ fn lightness_and_fading_pipelines_run_from_plain_values() {
     assert_eq!(report.animation.frames, report.frames.len());
     let dir = std::env::temp_dir().join(format!("shadelab-fading-pipeline-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let written = report.write(&dir, false, &[]).unwrap();
+    let written = shadelab::CommandReport::write(&report, &shadelab::Output::new(&dir)).unwrap();
     for file in ["fading.json", "fading.gif", "time_course.csv"] {
         assert!(written.join(file).is_file(), "{file}");
     }

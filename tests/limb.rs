@@ -387,7 +387,7 @@ fn solve_reports_the_dark_level_of_the_limb_test() {
 fn the_limb_boundary_estimates_the_light_at_the_outline_and_serves_the_analyses() {
     use shadelab::boundary::domain_roles;
     use shadelab::light_estimation::EstimateMethod;
-    use shadelab::reconstruct::Lighting;
+    use shadelab::reconstruct::LightAndAlbedo as Lighting;
     let s = sphere(SIDE, SIDE, RADIUS).unwrap();
     let truth = Light::from_tilt_slant(90.0, 45.0).unwrap();
     let image = image_of(&s, &Lambertian::unit(truth));

@@ -174,7 +174,12 @@ fn shading_that_is_the_outlines_prediction_is_explained_exactly_and_leaves_flat_
         .map(|&p| profile.normal_at(p % w))
         .collect();
     let values: Vec<f64> = token.pixels().iter().map(|&p| image.data()[p]).collect();
-    let fit = fit_shading(&values, &normals, Some(light)).unwrap();
+    let fit = fit_shading(
+        &values,
+        &normals,
+        Some(shadelab::FrontLight::new(light).unwrap()),
+    )
+    .unwrap();
     assert!((fit.explained - 1.0).abs() < 1e-9, "{}", fit.explained);
     assert!((fit.albedo - 0.6).abs() < 1e-9 && (fit.offset - 0.1).abs() < 1e-9);
     // Through the pipeline, from files: the paint layer is flat.
@@ -188,7 +193,7 @@ fn shading_that_is_the_outlines_prediction_is_explained_exactly_and_leaves_flat_
     .unwrap();
     let _ = h;
     let config = OutlineConfig {
-        light: Some(light),
+        light: Some(shadelab::FrontLight::new(light).unwrap()),
         ..OutlineConfig::new(PictureSource {
             pixels: Some(shadelab::stimulus::Pixels::Gray(image.clone())),
             labels: Some(labels.clone()),

@@ -48,7 +48,10 @@ fn the_albedo_estimate_does_not_care_how_a_photograph_was_normalised() {
         let solve = |q: f64| {
             let top = brightness_quantile(&image, &mask, q).unwrap();
             let picture = image.map(|v| (v / top).min(1.0));
-            let mut config = SolveConfig::new("ball", LightChoice::Given(photo.light));
+            let mut config = SolveConfig::new(
+                "ball",
+                LightChoice::Given(shadelab::FrontLight::new(photo.light).unwrap()),
+            );
             config.albedo_estimate = true;
             let run = run_image(&config, picture, Some(mask.clone()), &NoProgress).unwrap();
             let error = angular_error(&run.shape.solution.normals(), &truth, &mask).unwrap();
@@ -109,7 +112,10 @@ fn a_sphere_clipped_at_its_90th_percentile_is_solved_as_the_unclipped_one() {
     let share = at_one as f64 / s.mask.count() as f64;
     assert!((0.09..0.11).contains(&share), "{share}");
     let solve = |picture: &shadelab::Image, saturation: Saturation| {
-        let mut config = SolveConfig::new("sphere", LightChoice::Given(light));
+        let mut config = SolveConfig::new(
+            "sphere",
+            LightChoice::Given(shadelab::FrontLight::new(light).unwrap()),
+        );
         config.albedo_estimate = true;
         config.saturation = saturation;
         let run = run_image(&config, picture.clone(), Some(s.mask.clone()), &NoProgress).unwrap();

@@ -393,7 +393,10 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
             let (c, r) = (i % 96, i / 96);
             *picture.get_mut(c, r) = 1.0;
         }
-        let mut config = SolveConfig::new("sphere", LightChoice::Given(light));
+        let mut config = SolveConfig::new(
+            "sphere",
+            LightChoice::Given(shadelab::FrontLight::new(light).unwrap()),
+        );
         config.albedo_estimate = true;
         run_image(&config, picture, Some(s.mask.clone()), &NoProgress).unwrap()
     };
@@ -425,7 +428,10 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
         }
         assert!(sum / (n as f64) < 0.5, "scale {scale}: {}°", sum / n as f64);
     }
-    let mut both = SolveConfig::new("sphere", LightChoice::Given(light));
+    let mut both = SolveConfig::new(
+        "sphere",
+        LightChoice::Given(shadelab::FrontLight::new(light).unwrap()),
+    );
     both.albedo_estimate = true;
     both.albedo = Some(0.5);
     let err = run_image(&both, image.clone(), None, &NoProgress).unwrap_err();

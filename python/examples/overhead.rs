@@ -27,7 +27,7 @@ fn main() -> Result<(), shadelab::Error> {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(21);
-    let mut board = render::RenderConfig::new("checkerboard", "<array>");
+    let mut board = render::RenderConfig::new("checkerboard");
     board.size.shape = Some((1024, 1024));
     board.size.ppd = Some(32.0);
     let ms = times_ms(runs, || {
@@ -35,7 +35,7 @@ fn main() -> Result<(), shadelab::Error> {
     });
     println!("render_ms {ms}");
 
-    let mut sphere = render::RenderConfig::new("sphere", "<array>");
+    let mut sphere = render::RenderConfig::new("sphere");
     sphere.size.shape = Some((256, 256));
     sphere.params.insert("light".into(), "0.3,0.4,0.866".into());
     let out = render::run(&sphere, &NoProgress)?.output;

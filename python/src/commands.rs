@@ -12,7 +12,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shadelab::pipeline as pl;
-use shadelab::{Error, NoProgress};
+use shadelab::{CommandReport, Error, NoProgress, Output};
 use std::path::PathBuf;
 
 /// The fading disk's band-pass filter and adaptation settings, `None` for each default:
@@ -92,7 +92,7 @@ pub fn outline<'py>(
     let mut config = pl::outline::OutlineConfig::new(source);
     config.size = size.map(|(h, w)| (w, h));
     config.light = light
-        .map(|t| t.parse::<shadelab::Light>())
+        .map(|t| t.parse::<shadelab::FrontLight>())
         .transpose()
         .map_err(|e| PyValueError::new_err(format!("light: {e}")))?;
     config.profile.depth_scale = depth_scale;
@@ -182,7 +182,7 @@ pub fn study_merge(
     let config = pl::study::StudyMergeConfig::new(dirs, &out).map_err(to_py)?;
     let (report, written) = run_released(py, || {
         let report = pl::study::merge(&config, &NoProgress)?;
-        let written = report.write(&out, force)?;
+        let written = report.write(&Output::new(&out).force(force).reads(config.dirs.clone()))?;
         Ok((report, written))
     })?;
     Ok((
@@ -284,8 +284,7 @@ pub fn evaluate(
     config.max_iter = max_iter;
     config.validate().map_err(to_py)?;
     let record = report::Record {
-        out,
-        force,
+        out: out.map(|o| Output::new(o).force(force)),
         commit: "unknown".into(),
         command: vec![format!(
             "shadelab.evaluate (Python, shadelab {})",
@@ -309,14 +308,20 @@ pub fn gallery(
     presets: Option<PathBuf>,
     force: bool,
 ) -> PyResult<String> {
-    let mut config = match &presets {
-        Some(dir) => pl::gallery::GalleryConfig::from_folder(dir, &out),
-        None => pl::gallery::GalleryConfig::builtin(&out),
+    let config = match &presets {
+        Some(dir) => pl::gallery::GalleryConfig::from_folder(dir),
+        None => pl::gallery::GalleryConfig::builtin(),
     }
     .map_err(to_py)?;
-    config.options.force = force;
-    let report = run_released(py, || pl::gallery::run(&config, &NoProgress))?;
-    json_text(&report)
+    let dest = Output::new(&out).force(force).reads(config.files());
+    let (report, folder) = run_released(py, || {
+        dest.check(pl::gallery::GalleryReport::MARKER)?;
+        let report = pl::gallery::run(&config, &NoProgress)?;
+        let folder = report.write(&dest)?;
+        Ok((report, folder))
+    })?;
+    let index = folder.join(pl::gallery::GalleryReport::MARKER);
+    json_text(&serde_json::json!({ "folder": folder, "index": index, "presets": report.presets }))
 }
 
 /// The solvers timed (`bench`): (report JSON, table).
@@ -333,7 +338,7 @@ pub fn bench(
     reference_up_to: usize,
     repeat: usize,
 ) -> PyResult<(String, String)> {
-    let light: shadelab::Light = light
+    let light: shadelab::FrontLight = light
         .parse()
         .map_err(|e: Error| PyValueError::new_err(format!("light: {e}")))?;
     let config = pl::bench::BenchConfig {
@@ -389,7 +394,7 @@ pub fn experiment(
     use pl::experiment::{Config, Install, SaveFormat};
     let s: ExperimentArgs = serde_json::from_str(settings_json)
         .map_err(|e| PyValueError::new_err(format!("experiment: {e}")))?;
-    let mut config = Config::new(&out);
+    let mut config = Config::new();
     if let Some(name) = &stimulus {
         config.set_stimulus(name).map_err(to_py)?;
     }
@@ -435,13 +440,14 @@ pub fn experiment(
         config.completion_url = s.completion_url;
     }
     config.install = s.install.unwrap_or(false);
-    config.force = force;
     config
         .check()
         .map_err(|e| PyValueError::new_err(format!("{}: {}", e.field, e.error)))?;
     let (report, written) = run_released(py, || {
+        let dest = Output::new(&out).force(force);
+        dest.check(pl::experiment::MARKER)?;
         let report = pl::experiment::run(&config, &NoProgress)?;
-        let written = pl::experiment::write(&config, &report)?;
+        let written = report.write(&dest)?;
         Ok((report, written))
     })?;
     let install = match &written.install {

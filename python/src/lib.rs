@@ -12,7 +12,7 @@ use pyo3::types::PyDict;
 use serde_json::{Map, Value};
 use shadelab::grid::{Grid, Image, Labels, Mask, RgbImage};
 use shadelab::pipeline::{self as pl, perception};
-use shadelab::{Error, NoProgress, Pixels, SizeRequest};
+use shadelab::{Error, NoProgress, Pixels, Setting, SizeRequest};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
@@ -38,6 +38,23 @@ pub(crate) fn to_py(e: Error) -> PyErr {
         }
         Error::Io { .. } | Error::Locked { .. } => PyOSError::new_err(text),
         Error::Compute(_) => PyRuntimeError::new_err(text),
+        // The settings a message names, as Python's keywords.
+        Error::Setting(message) => {
+            let text = message.render(|setting, words| match setting {
+                Setting::Mask => "mask=".into(),
+                Setting::Ppd => "ppd=".into(),
+                Setting::InputGamma => "input_gamma=".into(),
+                Setting::Keys => "keys='fj' (bump, dimple)".into(),
+                Setting::Lambda => format!("{words} (lam=)"),
+                Setting::JacobiMethod => format!("{words} (method='jacobi')"),
+                _ => words.into(),
+            });
+            if message.settings().any(|s| s == Setting::Lambda) {
+                PyRuntimeError::new_err(text)
+            } else {
+                PyValueError::new_err(text)
+            }
+        }
         _ => PyValueError::new_err(text),
     }
 }
@@ -244,7 +261,7 @@ fn render<'py>(
     String,
     Bound<'py, PyDict>,
 )> {
-    let mut config = pl::render::RenderConfig::new(name, pl::source::IN_MEMORY);
+    let mut config = pl::render::RenderConfig::new(name);
     config.params = params_from(params_json)?;
     config.size = size_request(visual_size, ppd, shape);
     config.seed = seed;
@@ -406,18 +423,18 @@ fn save(
     layers: bool,
     force: bool,
 ) -> PyResult<Vec<String>> {
-    let mut config = pl::render::RenderConfig::new(name, out);
+    let mut config = pl::render::RenderConfig::new(name);
     config.params = params_from(params_json)?;
     config.size = size_request(None, Some(ppd), Some(shape));
     config.seed = seed;
     config.export = export_options(bit_depth, gamma, range, (display, display_json), luminance)?;
     let export = &mut config.export;
     export.layers = layers;
-    export.force = force;
     let written = run_released(py, || {
         config.validate()?;
+        config.check_output(&out)?;
         let report = pl::render::run(&config, &NoProgress)?;
-        pl::render::write(&config, &report)
+        report.write(&shadelab::Output::new(&out).force(force))
     })?;
     Ok(written
         .into_iter()

@@ -8,9 +8,8 @@ use numpy::IntoPyArray;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use shadelab::io::AtomicDir;
 use shadelab::pipeline as pl;
-use shadelab::Error;
+use shadelab::{CommandReport, Error, Output};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -50,21 +49,18 @@ impl ReportHandle {
     /// Writes the output folder `out` as the command line does: whole or not at all, into a
     /// folder shadelab did not write only with `force`, never over an input.
     fn write_folder(&self, out: &Path, force: bool) -> Result<PathBuf, Error> {
-        let inputs = &self.inputs;
-        let atomic = |marker: &str, write: &dyn Fn(&Path) -> Result<(), Error>| {
-            let folder = AtomicDir::create(out, marker, force)?.reads(inputs)?;
-            write(folder.path())?;
-            folder.commit()
-        };
+        let out = Output::new(out)
+            .force(force)
+            .reads(self.inputs.iter().cloned());
         match &self.kind {
-            Kind::PriorSweep(r) => atomic(pl::prior_sweep::REPORT_FILE, &|d| r.write(d)),
-            Kind::Observer(r) => atomic(pl::observer::REPORT_FILE, &|d| r.write(d)),
-            Kind::Outline(r) => atomic(pl::outline::REPORT_FILE, &|d| r.write(d)),
-            Kind::Lightness(r) => r.write(out, force, inputs),
-            Kind::Fading(r) => r.write(out, force, inputs),
-            Kind::Study(r) => atomic(shadelab::analysis::study::REPORT, &|d| r.write_into(d)),
-            Kind::Solve(r) => atomic(pl::solve::REPORT_FILE, &|d| r.write(d)),
-            Kind::Fit(r) => atomic(pl::fit::REPORT_FILE, &|d| r.write(d)),
+            Kind::PriorSweep(r) => r.write(&out),
+            Kind::Observer(r) => r.write(&out),
+            Kind::Outline(r) => r.write(&out),
+            Kind::Lightness(r) => r.write(&out),
+            Kind::Fading(r) => r.write(&out),
+            Kind::Study(r) => r.write(&out),
+            Kind::Solve(r) => r.write(&out),
+            Kind::Fit(r) => r.write(&out),
         }
     }
 }

@@ -32,7 +32,7 @@ use crate::boundary::{is_rim, Boundary, BoundaryConditions, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::{fg_from_pq, normal_from_pq, Normal};
 use crate::grid::{Grid, Image, Mask};
-use crate::light::Light;
+use crate::light::{FrontLight, Light};
 use crate::solver::SolveOptions;
 use serde::Serialize;
 
@@ -411,8 +411,12 @@ impl ShadingFit {
 /// profile's normals all lie in the x–z plane, where a light's y-component changes nothing; so
 /// the fitted light lies in that plane, from the left or the right at the slant that explains
 /// most (searched every 0.5° over −89.5..89.5°, then refined to 0.001°; ties go to the least
-/// slant). Fails for a light not above the horizon (z ≤ 0) or mismatched lengths.
-pub fn fit_shading(values: &[f64], normals: &[Normal], light: Option<Light>) -> Result<ShadingFit> {
+/// slant). Fails for mismatched lengths.
+pub fn fit_shading(
+    values: &[f64],
+    normals: &[Normal],
+    light: Option<FrontLight>,
+) -> Result<ShadingFit> {
     if values.len() != normals.len() || values.is_empty() {
         return Err(Error::invalid(format!(
             "{} luminances for {} normals: the shading fit needs one of each",
@@ -421,8 +425,7 @@ pub fn fit_shading(values: &[f64], normals: &[Normal], light: Option<Light>) -> 
         )));
     }
     if let Some(l) = light {
-        crate::reconstruct::check_light_in_front(&l)?;
-        return Ok(fit_under(values, normals, l, false));
+        return Ok(fit_under(values, normals, l.light(), false));
     }
     // θ > 0: from the left (tilt 90°), θ < 0: from the right.
     let at = |theta: f64| -> Result<ShadingFit> {

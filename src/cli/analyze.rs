@@ -135,11 +135,7 @@ impl Source {
         let out = Output::new(global);
         // A sidecar that cannot be read is reported when the picture is (after the image).
         for line in source.notes().unwrap_or_default() {
-            out.note(
-                line.replace("the given ppd", "--ppd")
-                    .replace("the given mask", "--mask")
-                    .replace("the given input gamma", "--input-gamma"),
-            );
+            out.note(super::flags::worded(&line));
         }
         Ok(source)
     }

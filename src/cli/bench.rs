@@ -2,9 +2,10 @@
 //! table, with the NumPy reference solver beside them when python3 with numpy and the reference
 //! folder are there.
 
+use super::flags::usage;
 use super::{progress::Bar, CliError, CliResult, Global};
-use shadelab::light::Light;
 use shadelab::pipeline::bench::{self, BenchConfig};
+use shadelab::FrontLight;
 use std::path::PathBuf;
 
 /// Arguments of `bench`.
@@ -70,9 +71,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     if args.repeat == 0 {
         return Err(CliError::usage("--repeat must be at least 1"));
     }
-    let light: Light = args.light.parse()?;
-    shadelab::reconstruct::check_light_in_front(&light)
-        .map_err(|e| CliError::usage(format!("--light: {e}")))?;
+    let light: FrontLight = args.light.parse().map_err(|e| usage("--light", e))?;
     if let Some(&n) = args
         .sizes
         .iter()

@@ -4,7 +4,6 @@ use super::output::Output;
 use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
 use shadelab::boundary::Boundary;
 use shadelab::evaluation::{self, report, Config, Set};
-use shadelab::light::Light;
 use shadelab::solver::Method;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -107,7 +106,10 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             .map(|s| s.trim().trim_end_matches(".png").to_string())
             .collect();
     }
-    config.diligent_light = args.diligent_light.parse::<Light>()?;
+    config.diligent_light = args
+        .diligent_light
+        .parse()
+        .map_err(|e| super::flags::usage("--diligent-light", e))?;
     config.boundary = args.boundary.as_deref().map(Boundary::named).transpose()?;
     config.bunny_size = args.bunny_size;
     config.albedo_quantile = args.albedo_quantile;
@@ -127,8 +129,10 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     };
 
     let record = report::Record {
-        out: args.out.clone(),
-        force: global.force,
+        out: args
+            .out
+            .as_ref()
+            .map(|o| shadelab::Output::new(o).force(global.force)),
         commit,
         command: std::env::args().collect(),
     };

@@ -3,7 +3,7 @@
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
 use shadelab::pipeline::experiment::{
-    prolific_completion_url, run as build, write, Config, Install, SaveFormat,
+    prolific_completion_url, run as build, Config, Install, SaveFormat,
 };
 use shadelab::visual_size::parse_size;
 use std::path::PathBuf;
@@ -74,7 +74,7 @@ pub struct Args {
 /// Runs `experiment`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
-    let mut config = Config::new(&args.out);
+    let mut config = Config::new();
     if let Some(name) = &args.stimulus {
         config.set_stimulus(name)?;
     }
@@ -140,11 +140,13 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         config.completion_url = Some(url.clone());
     }
     config.install = !args.no_install;
-    config.force = global.force;
     config.max_pixels = global.max_pixels;
     config.check().map_err(super::flags::setting)?;
+    // Claimed before the work, so that a folder that may not be written fails at once.
+    let dest = shadelab::Output::new(&args.out).force(global.force);
+    dest.check(shadelab::pipeline::experiment::MARKER)?;
     let report = build(&config, &Bar::new(global.quiet))?;
-    let written = write(&config, &report)?;
+    let written = report.write(&dest)?;
     let folder = written.folder;
     let out = super::output::Output::new(global);
     if !written.kept.is_empty() {

@@ -1,12 +1,13 @@
 //! `shadelab fit observer`: the observer model fitted to bump/dimple responses (the work is
 //! [`shadelab::pipeline::fit`]).
 
+use super::destination;
 use super::output::Output;
 use super::progress::Bar;
 use super::{CliResult, Global};
 use shadelab::analysis::fit::FitOptions;
-use shadelab::io::AtomicDir;
-use shadelab::pipeline::fit::{self as pipeline, Config, KeyMap, REPORT_FILE};
+use shadelab::pipeline::fit::{self as pipeline, Config, KeyMap, Report as FitReport};
+use shadelab::CommandReport;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -88,22 +89,9 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
         },
         "--bootstrap",
     )?;
-    let folder =
-        AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&[&config.responses])?;
-    let report = pipeline::run(&config, &Bar::new(global.quiet)).map_err(|e| {
-        let text = e.to_string();
-        // The library says what is missing; the command line names its flag.
-        if text.contains("give the keys for bump and dimple") {
-            super::CliError::from(anyhow::anyhow!(text.replace(
-                "give the keys for bump and dimple",
-                "give --keys BUMP,DIMPLE"
-            )))
-        } else {
-            e.into()
-        }
-    })?;
-    report.write(folder.path())?;
-    let target = folder.commit()?;
+    let dest = destination::<FitReport>(&args.out, global, vec![config.responses.clone()])?;
+    let report = pipeline::run(&config, &Bar::new(global.quiet))?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     for w in &report.warnings {
         out.warn(w);

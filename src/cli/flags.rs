@@ -143,6 +143,20 @@ pub fn usage(flag: &str, e: shadelab::Error) -> CliError {
     CliError::usage(format!("{flag}: {e}"))
 }
 
+/// A library message with each setting it names said as its flag.
+pub fn worded(message: &shadelab::Message) -> String {
+    use shadelab::Setting;
+    message.render(|setting, words| match setting {
+        Setting::Mask => "--mask".into(),
+        Setting::Ppd => "--ppd".into(),
+        Setting::InputGamma => "--input-gamma".into(),
+        Setting::Keys => "--keys BUMP,DIMPLE".into(),
+        Setting::Lambda => format!("{words} (--lambda)"),
+        Setting::JacobiMethod => format!("{words} (--method jacobi)"),
+        _ => words.into(),
+    })
+}
+
 /// The flag behind each configuration field the pipelines name.
 const FIELD_FLAGS: &[(&str, &str)] = &[
     ("size", "--size"),

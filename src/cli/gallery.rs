@@ -3,7 +3,8 @@
 use super::progress::Bar;
 use super::{CliResult, Global};
 use shadelab::gallery;
-use shadelab::pipeline::gallery::{run as build, GalleryConfig};
+use shadelab::pipeline::gallery::{run as build, GalleryConfig, GalleryReport};
+use shadelab::CommandReport;
 use std::path::PathBuf;
 
 /// Arguments of `gallery`.
@@ -23,23 +24,25 @@ pub struct Args {
 /// Runs `gallery`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let mut config = match &args.presets {
-        Some(dir) => GalleryConfig::from_folder(dir, &args.out)?,
-        None => GalleryConfig::builtin(&args.out)?,
+        Some(dir) => GalleryConfig::from_folder(dir)?,
+        None => GalleryConfig::builtin()?,
     };
     config.options = gallery::Options {
-        force: global.force,
         max_pixels: global.max_pixels,
         docs_base: args.docs_base,
-        ..config.options
     };
+    let dest = super::destination::<GalleryReport>(&args.out, global, config.files())?;
     let report = build(&config, &Bar::new(global.quiet))?;
+    let folder = report.write(&dest)?;
+    let index = folder.join(GalleryReport::MARKER);
     let out = super::output::Output::new(global);
     out.note(format!(
         "wrote {} ({} stimuli; open {})",
-        report.folder.display(),
+        folder.display(),
         report.presets.len(),
-        report.index.display()
+        index.display()
     ));
-    // The folder is the result; with --json, its report.
-    out.results("", &report)
+    // The folder is the result; with --json, where it is and what it holds.
+    let json = serde_json::json!({ "folder": folder, "index": index, "presets": report.presets });
+    out.results("", &json)
 }

@@ -189,6 +189,20 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Where a command writes `path`, with `--force`, never replacing `inputs`; claimed now, so that
+/// a folder that may not be written fails before the work.
+pub(crate) fn destination<R: shadelab::CommandReport>(
+    path: &std::path::Path,
+    global: &Global,
+    inputs: Vec<std::path::PathBuf>,
+) -> Result<shadelab::Output, CliError> {
+    let out = shadelab::Output::new(path)
+        .force(global.force)
+        .reads(inputs);
+    out.check(R::MARKER)?;
+    Ok(out)
+}
+
 /// The exit status of a run stopped by a signal (128 + SIGINT, as shells report it).
 const INTERRUPTED: u8 = 130;
 
@@ -222,7 +236,11 @@ fn hint(error: &anyhow::Error) -> &'static str {
 fn one_line(error: &anyhow::Error) -> String {
     let mut text = String::new();
     for cause in error.chain() {
-        let part = cause.to_string();
+        // A message that names settings names them by their flags.
+        let part = match cause.downcast_ref::<shadelab::Error>() {
+            Some(shadelab::Error::Setting(message)) => flags::worded(message),
+            _ => cause.to_string(),
+        };
         if !text.contains(&part) {
             if !text.is_empty() {
                 text.push_str(": ");

@@ -8,7 +8,7 @@ use shadelab::pipeline::render::{self, RenderConfig};
 use shadelab::stimulus::Range;
 use shadelab::visual_size::parse_size;
 use shadelab::{Error, NoProgress};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `render`.
 #[derive(Debug, clap::Args)]
@@ -93,7 +93,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let spec = args
         .spec
         .as_deref()
-        .map(|path| RenderConfig::from_spec_file(path, &args.out))
+        .map(RenderConfig::from_spec_file)
         .transpose()?;
     let mut config = match (&args.name, spec) {
         (Some(n), Some(s)) if *n != s.stimulus => {
@@ -103,7 +103,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             )))
         }
         (_, Some(s)) => s,
-        (Some(n), None) => RenderConfig::new(n.as_str(), &args.out),
+        (Some(n), None) => RenderConfig::new(n.as_str()),
         (None, None) => {
             return Err(CliError::usage(
                 "name what to render (see `shadelab list`) or give --spec FILE.json",
@@ -173,39 +173,42 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         export.luminance = Some(mapping);
     }
     export.layers |= args.layers;
-    export.force = global.force;
     // A value given as a flag that the output's format cannot take is named by its flag.
     if args.range.is_some() {
         export
-            .check_range(&config.out)
+            .check_range(&args.out)
             .map_err(|e| super::flags::usage("--range", e))?;
     }
     if args.gamma.is_some() {
         export
-            .check_gamma(&config.out)
+            .check_gamma(&args.out)
             .map_err(|e| super::flags::usage("--gamma", e))?;
     }
     if args.display.is_some() {
         // The display and the format first, then the luminance asked of it.
         let luminance = export.luminance.take();
         export
-            .check_display(&config.out)
+            .check_display(&args.out)
             .map_err(|e| super::flags::usage("--display", e))?;
         export.luminance = luminance;
         export
-            .check_display(&config.out)
+            .check_display(&args.out)
             .map_err(|e| super::flags::usage("--luminance", e))?;
     }
     config.max_pixels = global.max_pixels;
-    render_to(&config, global)
+    render_to(&config, &args.out, global)
 }
 
 /// Renders what `config` says and writes it with its sidecar; prints the files written unless
 /// quiet.
-pub fn render_to(config: &RenderConfig, global: &Global) -> CliResult {
+pub fn render_to(config: &RenderConfig, out: &Path, global: &Global) -> CliResult {
     config.validate()?;
+    config.check_output(out)?;
     let report = render::run(config, &NoProgress)?;
-    let files = render::write(config, &report)?;
+    let dest = shadelab::Output::new(out)
+        .force(global.force)
+        .reads(config.files());
+    let files = report.write(&dest)?;
     let out = super::output::Output::new(global);
     for w in &report.warnings {
         out.warn(w);

@@ -3,11 +3,8 @@
 use super::flags::{input_gamma, say_input_note, usage, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
-use shadelab::io::AtomicDir;
-use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord, REPORT_FILE};
-use shadelab::reconstruct::{
-    check_albedo, check_light_in_front, NonConvergence, ReconstructOptions,
-};
+use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord};
+use shadelab::reconstruct::{check_albedo, NonConvergence, ReconstructOptions};
 use shadelab::reflectance::BrdfSpec;
 use shadelab::solver::{Method, SolveOptions};
 use std::path::PathBuf;
@@ -81,27 +78,14 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     // What the image's sidecar gives (the library reads it; this says so).
     let out = Output::new(global);
     for line in solve::sidecar_notes(&config) {
-        out.note(
-            line.replace("the given mask", "--mask")
-                .replace("give a mask", "give --mask")
-                .replace("the given input gamma", "--input-gamma"),
-        );
+        out.note(super::flags::worded(&line));
     }
-    // Claim the output folder before the long part, so an unwritable one fails at once.
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&config.files())?;
-    let bar = Bar::new(global.quiet);
-    let report = solve::run_into(&config, folder.path(), &bar).map_err(|e| match e {
-        shadelab::Error::Compute(why) if why.contains("diverged") => {
-            let flags = if why.contains("jacobi method") {
-                "--method jacobi, --lambda"
-            } else {
-                "--lambda"
-            };
-            CliError::from(shadelab::Error::Compute(format!("{why} ({flags})")))
-        }
-        other => CliError::from(other),
-    })?;
-    let target = folder.commit()?;
+    // The folder is claimed before the long part, so an unwritable one fails at once.
+    let dest = shadelab::Output::new(&args.out)
+        .force(global.force)
+        .reads(config.files());
+    let report = solve::run_into(&config, &dest, &Bar::new(global.quiet))?;
+    let target = dest.path().to_path_buf();
     // Said once the picture was read and solved: a refusal stays one line.
     say_input_note(
         &out,
@@ -187,10 +171,7 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
             (Some(a), false)
         }
     };
-    let light: LightChoice = args.light.parse()?;
-    if let LightChoice::Given(l) = &light {
-        check_light_in_front(l).map_err(|e| usage("--light", e))?;
-    }
+    let light: LightChoice = args.light.parse().map_err(|e| usage("--light", e))?;
     let boundary = args.boundary.parse().map_err(|e| usage("--boundary", e))?;
     Ok(SolveConfig {
         image: args.image.clone(),

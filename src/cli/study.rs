@@ -2,12 +2,13 @@
 //! in parallel on one machine or in shards on many (see docs/studies.md), merged into the
 //! files a single run writes.
 
+use super::destination;
 use super::output::Output;
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
-use shadelab::analysis::study::{Shard, REPORT};
-use shadelab::io::AtomicDir;
+use shadelab::analysis::study::Shard;
 use shadelab::pipeline::study::{self as pipeline, StudyMergeConfig, StudyRunConfig};
+use shadelab::{CommandReport, StudyMergeReport, StudyRunReport};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -60,11 +61,9 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
         None => Shard::WHOLE,
     };
     let config = StudyRunConfig::load(&args.spec, shard, global.max_pixels)?;
-    // Claimed before the work, so that a folder that may not be replaced fails at once.
-    let folder = AtomicDir::create(&args.out, REPORT, global.force)?.reads(&[&args.spec])?;
+    let dest = destination::<StudyRunReport>(&args.out, global, vec![args.spec.clone()])?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
-    report.write_into(folder.path())?;
-    let target = folder.commit()?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.wrote(&target, started.elapsed().as_secs_f64());
     let text = format!(
@@ -80,8 +79,9 @@ fn run_study(args: RunArgs, global: &Global) -> CliResult {
 fn merge_shards(args: MergeArgs, global: &Global) -> CliResult {
     let config = StudyMergeConfig::new(args.dirs, &args.out)
         .map_err(|e| CliError::usage(format!("--out {e}")))?;
+    let dest = destination::<StudyMergeReport>(&args.out, global, config.dirs.clone())?;
     let report = pipeline::merge(&config, &Bar::new(global.quiet))?;
-    let target = report.write(&args.out, global.force)?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.note(format!("wrote {}", target.display()));
     let text = format!("merged {} shard folders\n", config.dirs.len());

@@ -37,7 +37,7 @@ use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask, RgbImage};
-use crate::light::Light;
+use crate::light::{FrontLight, Light};
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
@@ -60,13 +60,13 @@ pub struct Config {
     /// Side of the square frame the bunny is rasterised into, in pixels.
     pub bunny_size: usize,
     /// The lights the bunny is rendered under.
-    pub bunny_lights: Vec<Light>,
+    pub bunny_lights: Vec<FrontLight>,
     /// The lights the Mozart depth map is rendered under.
-    pub mozart_lights: Vec<Light>,
+    pub mozart_lights: Vec<FrontLight>,
     /// The DiLiGenT objects to run.
     pub diligent_objects: Vec<String>,
     /// The light the DiLiGenT normals are rendered under.
-    pub diligent_light: Light,
+    pub diligent_light: FrontLight,
     /// The ball photographs to run (names without `.png`).
     pub ball_images: Vec<String>,
     /// The boundary conditions the ball and Mozart are solved with, each giving a row: the
@@ -125,19 +125,22 @@ pub fn default_boundary(_set: Set) -> Boundary {
 impl Config {
     /// Every set with its default lights, objects and images.
     pub fn new(data: impl Into<PathBuf>) -> Result<Config> {
-        let light = |t, s| Light::from_tilt_slant(t, s);
+        let light = |t, s| FrontLight::new(Light::from_tilt_slant(t, s)?);
         Ok(Config {
             data: data.into(),
             sets: SETS.to_vec(),
             bunny_size: 256,
             bunny_lights: vec![
-                Light::FRONT,
+                FrontLight::FRONT,
                 light(0.0, 30.0)?,
                 light(90.0, 45.0)?,
                 light(-135.0, 60.0)?,
             ],
             // The two lights of the survey's Mozart images: (0, 0, 1) and (1, 0, 1).
-            mozart_lights: vec![Light::FRONT, Light::from_vector(1.0, 0.0, 1.0)?],
+            mozart_lights: vec![
+                FrontLight::FRONT,
+                FrontLight::new(Light::from_vector(1.0, 0.0, 1.0)?)?,
+            ],
             diligent_objects: DILIGENT_OBJECTS.iter().map(|s| s.to_string()).collect(),
             diligent_light: light(0.0, 30.0)?,
             ball_images: BALL_IMAGES.iter().map(|s| s.to_string()).collect(),
@@ -184,21 +187,6 @@ impl Config {
         for i in &self.ball_images {
             if !BALL_IMAGES.contains(&i.as_str()) {
                 return Err(Error::unknown("ball image", i, BALL_IMAGES));
-            }
-        }
-        let lights = self
-            .bunny_lights
-            .iter()
-            .chain(&self.mozart_lights)
-            .chain(std::iter::once(&self.diligent_light));
-        for l in lights {
-            if l.direction().z <= 0.0 {
-                return Err(Error::invalid(format!(
-                    "light (tilt {:.1}°, slant {:.1}°) must be in front of the surface (slant \
-                     below 90°)",
-                    l.tilt_deg(),
-                    l.slant_deg()
-                )));
             }
         }
         if !(self.albedo_quantile > 0.0 && self.albedo_quantile <= 1.0) {
@@ -249,7 +237,8 @@ impl Config {
 
     /// Everything that determines the numbers, for the JSON report.
     pub fn describe(&self) -> Value {
-        let lights = |ls: &[Light]| -> Vec<Value> { ls.iter().map(light_json).collect() };
+        let lights =
+            |ls: &[FrontLight]| -> Vec<Value> { ls.iter().map(|l| light_json(l)).collect() };
         json!({
             "sets": self.sets.iter().map(|s| s.name()).collect::<Vec<_>>(),
             "bunny": {
@@ -381,7 +370,7 @@ pub fn run(
                             "bunny".into(),
                             &surface,
                             &surface.mask,
-                            *light,
+                            light.light(),
                             boundary,
                             true,
                         )?;
@@ -400,7 +389,7 @@ pub fn run(
                             "mozart".into(),
                             &surface,
                             &m.measured,
-                            *light,
+                            light.light(),
                             boundary,
                             true,
                         )?;
@@ -423,7 +412,7 @@ pub fn run(
                             object.clone(),
                             &surface,
                             &surface.mask,
-                            config.diligent_light,
+                            config.diligent_light.light(),
                             boundary,
                             false,
                         )?;

@@ -4,14 +4,15 @@ use super::case::CaseResult;
 use super::Config;
 use crate::error::Result;
 use crate::io;
-use crate::io::{AtomicDir, BitDepth};
+use crate::io::BitDepth;
+use crate::pipeline::Output;
 use crate::progress::Progress;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The file that marks an output folder as written by the evaluation.
-pub const REPORT_FILE: &str = "evaluation.json";
+pub const MARKER: &str = "evaluation.json";
 
 /// Writes `evaluation.md` (the table, with the version, commit and command) and
 /// `evaluation.json` (every number and parameter) into `dir`.
@@ -41,19 +42,16 @@ pub fn write_summary(
         "cases": results,
         "seconds": seconds,
     });
-    io::write_json(&dir.join(REPORT_FILE), &report)
+    io::write_json(&dir.join(MARKER), &report)
 }
 
 /// Where and how [`run_into`] records an evaluation: the output folder (none: the results
-/// only), whether a folder shadelab did not write may be written into, and the commit and
-/// command line the summary names.
+/// only) and the commit and command line the summary names.
 #[derive(Debug, Clone, Default)]
 pub struct Record {
     /// The output folder: the summary (`evaluation.md`, `evaluation.json`) and a picture per
-    /// row; `None` writes nothing.
-    pub out: Option<PathBuf>,
-    /// Write into a folder shadelab did not write (every other file in it stays).
-    pub force: bool,
+    /// row; `None` writes nothing. The data folder is never written into.
+    pub out: Option<Output>,
     /// The commit of the program that ran, as the summary states it.
     pub commit: String,
     /// The command line (or call) that ran, as the summary states it.
@@ -72,9 +70,7 @@ pub fn run_into(
 ) -> Result<(Vec<CaseResult>, Option<PathBuf>)> {
     let started = Instant::now();
     let folder = match &record.out {
-        Some(out) => {
-            Some(AtomicDir::create(out, REPORT_FILE, record.force)?.reads(&[&config.data])?)
-        }
+        Some(out) => Some(out.clone().reads([&config.data]).folder(MARKER)?),
         None => None,
     };
     let dir = folder.as_ref().map(|f| f.path().to_path_buf());

@@ -1,14 +1,12 @@
 //! Atomic output: write to a temporary name beside the target, then rename.
 
 use super::output_set::OutputSet;
+use super::temp::{check_parent, parent_of, temp_name, Tag};
 use crate::error::{Error, Result};
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
-
-static COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// The temporary folders of the [`AtomicDir`]s being written. A file written (by
 /// [`write_atomic`]) straight into one of them is not synced on its own: its write-back to the
@@ -85,78 +83,6 @@ fn sync_folder(dir: &Path) -> Result<()> {
     sync(dir)
 }
 
-/// The longest file name part kept as written in a temporary's name; a longer name is cut and
-/// followed by a hash of the whole, so that any legal final name (up to 255 bytes) has a
-/// temporary name that is legal too.
-const TEMP_STEM_BYTES: usize = 100;
-
-/// What a name made beside an output is for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Tag {
-    /// A file or folder being written: `.NAME.tmp-PID-START-N`.
-    Temporary,
-    /// An old version moved aside during a commit: `.NAME.old-PID-START-N`.
-    Backup,
-    /// The lock of an output: `.NAME.lock`.
-    Lock,
-    /// The lock of a run that is gone, moved aside to be recovered: `.NAME.stale-PID-START-N`.
-    Stale,
-}
-
-impl Tag {
-    /// The text before the owner in the name.
-    pub(crate) fn text(self) -> &'static str {
-        match self {
-            Tag::Temporary => ".tmp-",
-            Tag::Backup => ".old-",
-            Tag::Lock => ".lock",
-            Tag::Stale => ".stale-",
-        }
-    }
-}
-
-/// A hidden name beside `target` for `tag`: `.NAME.tmp-PID-START-N` (and the like, see
-/// [`Tag`]), with NAME cut to [`TEMP_STEM_BYTES`] (at a character boundary) plus 12 hex digits
-/// of the whole name's MD5 when longer. PID and START (the process's start time) name the run,
-/// so that a later run can tell a temporary of a run that is gone (see
-/// [`super::output_set::remove_dead_temporaries`]).
-pub(crate) fn temp_name(target: &Path, tag: Tag) -> Result<PathBuf> {
-    let name = target
-        .file_name()
-        .ok_or_else(|| Error::invalid(format!("{}: not a file name", target.display())))?
-        .to_string_lossy();
-    let stem = if name.len() <= TEMP_STEM_BYTES {
-        name.to_string()
-    } else {
-        let mut cut = TEMP_STEM_BYTES;
-        while !name.is_char_boundary(cut) {
-            cut -= 1;
-        }
-        use md5::{Digest, Md5};
-        let hash: String = Md5::digest(name.as_bytes())
-            .iter()
-            .take(6)
-            .map(|b| format!("{b:02x}"))
-            .collect();
-        format!("{}~{hash}", &name[..cut])
-    };
-    let name = if tag == Tag::Lock {
-        format!(".{stem}{}", tag.text())
-    } else {
-        let (pid, start) = super::output_set::identity();
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        format!(".{stem}{}{pid}-{start}-{n}", tag.text())
-    };
-    Ok(target.with_file_name(name))
-}
-
-pub(crate) fn parent_of(target: &Path) -> &Path {
-    match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    }
-}
-
 /// Writes `target` atomically: `write` fills a temporary file in the same folder, which is
 /// renamed over `target` only when everything succeeded. On failure the temporary file is
 /// removed and `target` is untouched. A stop requested meanwhile ([`crate::cancel`]) ends the
@@ -220,22 +146,6 @@ pub fn write_text(target: &Path, text: &str) -> Result<()> {
         out.write_all(text.as_bytes())
             .map_err(|e| Error::io(target, e))
     })
-}
-
-/// The folder that will hold `target` must exist and be a folder; a path under a regular file
-/// gets its own message rather than "does not exist".
-pub(crate) fn check_parent(target: &Path) -> Result<()> {
-    let parent = parent_of(target);
-    if parent.is_dir() {
-        Ok(())
-    } else if parent.exists() {
-        Err(Error::format(
-            parent,
-            "is not a folder, so it cannot hold the output",
-        ))
-    } else {
-        Err(Error::format(parent, "output folder does not exist"))
-    }
 }
 
 /// Whether `marker` is a sidecar or report that shadelab wrote: a JSON object whose `program`
@@ -524,6 +434,8 @@ impl AtomicDir {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::io::temp::{temp_name, Tag};
+    use std::sync::atomic::Ordering;
 
     /// A fresh scratch folder for one test of `io`.
     pub(crate) fn scratch(name: &str) -> PathBuf {

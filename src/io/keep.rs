@@ -29,7 +29,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use super::output_set::temporary_owner;
+use super::temp::temporary_owner;
 use crate::error::{Error, Result};
 use std::collections::BTreeSet;
 use std::fs;

@@ -14,6 +14,7 @@ mod output_set;
 mod png;
 pub mod render_sidecar;
 mod sidecar;
+mod temp;
 
 pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
 pub(crate) use csv::check_csv_finite;
@@ -34,7 +35,7 @@ pub use png::{
     write_gray, write_gray_fn, write_labels, write_mask, write_rgb, write_rgb_fn, write_stimulus,
     BitDepth, DisplayCodes, GrayInfo, PngPicture, LUMINANCE_FORMULA,
 };
-pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight};
+pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight, SILHOUETTE_NOTE};
 pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
 
 use crate::error::{Error, Result};
@@ -229,22 +230,9 @@ pub(crate) fn too_long(path: &Path, cap: u64) -> Error {
         path,
         format!(
             "is larger than {}, the most shadelab reads from such a file",
-            byte_size(cap)
+            crate::error::byte_size(cap)
         ),
     )
-}
-
-/// `bytes` in words: `1 byte`, `512 bytes`, `64 MiB`, `1.5 GiB`.
-pub(crate) fn byte_size(bytes: u64) -> String {
-    const UNITS: [(&str, u64); 3] = [("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)];
-    match UNITS.iter().find(|(_, size)| bytes >= *size) {
-        Some((unit, size)) => {
-            let value = bytes as f64 / *size as f64;
-            format!("{} {unit}", (value * 10.0).round() / 10.0)
-        }
-        None if bytes == 1 => "1 byte".to_string(),
-        None => format!("{bytes} bytes"),
-    }
 }
 
 /// The lower-case extension of `path` ("" when none).

@@ -41,61 +41,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use super::atomic::{check_parent, parent_of, temp_name, Tag};
+use super::temp::{check_parent, identity, parent_of, running, temp_name, temporary_owner, Tag};
 use crate::error::{Error, Result};
 use std::ffi::{OsStr, OsString};
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
-
-/// This process: its id and its start time (clock ticks after boot, field 22 of
-/// `/proc/self/stat`; 0 where there is no `/proc`). The pair names this run in temporary names
-/// and locks, so that a later run can tell whether their owner is still running.
-pub(crate) fn identity() -> (u32, u64) {
-    static ID: OnceLock<(u32, u64)> = OnceLock::new();
-    *ID.get_or_init(|| {
-        let pid = std::process::id();
-        (pid, proc_stat(pid).map_or(0, |(_, start)| start))
-    })
-}
-
-/// A process's state letter and start time from `/proc/PID/stat`.
-fn proc_stat(pid: u32) -> Option<(String, u64)> {
-    let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // The command name (field 2) is in parentheses and may hold spaces: count from after it.
-    let rest = stat.get(stat.rfind(')')? + 1..)?;
-    let mut fields = rest.split_whitespace();
-    let state = fields.next()?.to_string();
-    let start = fields.nth(18)?.parse().ok()?;
-    Some((state, start))
-}
-
-/// Whether the process `pid` that started at `start` still runs: `Some(false)` when it is gone,
-/// a zombie, or its id now names another process; `None` when this system cannot tell (no
-/// `/proc`).
-pub(crate) fn running(pid: u32, start: u64) -> Option<bool> {
-    proc_stat(std::process::id())?;
-    match proc_stat(pid) {
-        None => Some(false),
-        Some((state, s)) => Some(s == start && state != "Z"),
-    }
-}
-
-/// The owner (pid, start) that a temporary's name `….tmp-PID-START-N` records, if it is one.
-pub(crate) fn temporary_owner(name: &OsStr) -> Option<(u32, u64)> {
-    let name = name.to_str()?;
-    if !name.starts_with('.') {
-        return None;
-    }
-    let tag = Tag::Temporary.text();
-    let at = name.rfind(tag)?;
-    let mut parts = name[at + tag.len()..].split('-');
-    let pid = parts.next()?.parse().ok()?;
-    let start = parts.next()?.parse().ok()?;
-    parts.next()?.parse::<u64>().ok()?;
-    parts.next().is_none().then_some((pid, start))
-}
 
 /// Removes the temporaries that runs no longer running left in `dir` (hidden names ending in
 /// `.tmp-PID-START-N`, files or folders); returns what was removed. Temporaries of a running

@@ -10,6 +10,11 @@ use serde::Serialize;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
+/// The sidecar note (`notes.target_is_silhouette: true`) that says a stimulus's target mask is
+/// an object's silhouette, its occluding outline against the background (the rendered
+/// surfaces), not regions of a surface that goes on outside them (bumps, discs, a crater).
+pub const SILHOUETTE_NOTE: &str = "target_is_silhouette";
+
 /// What a shadelab render sidecar says about its picture.
 ///
 /// ```
@@ -295,7 +300,7 @@ impl RenderSidecar {
             light: declared.light,
             parameters,
             silhouette: notes
-                .get(crate::stimulus::SILHOUETTE_NOTE)
+                .get(SILHOUETTE_NOTE)
                 .and_then(Value::as_bool)
                 .unwrap_or(false),
             notes,

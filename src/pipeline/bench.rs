@@ -5,11 +5,9 @@
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::evaluation::metrics::angular_error;
-use crate::light::Light;
+use crate::light::{FrontLight, Light};
 use crate::progress::Progress;
-use crate::reconstruct::{
-    check_light_in_front, NonConvergence, Problem, ReconstructOptions, Reconstructor,
-};
+use crate::reconstruct::{NonConvergence, Problem, ReconstructOptions, Reconstructor};
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
 use crate::solver::{Method, Solution};
@@ -33,8 +31,8 @@ pub struct BenchConfig {
     pub sizes: Vec<usize>,
     /// `sphere` (radius 0.45 of the side) or `vase`.
     pub shape: String,
-    /// The light (z > 0).
-    pub light: Light,
+    /// The light.
+    pub light: FrontLight,
     /// Time plain Jacobi up to this side.
     pub jacobi_up_to: usize,
     /// The folder of the NumPy reference (`run_reference.py`).
@@ -61,7 +59,6 @@ impl BenchConfig {
         if !BENCH_SHAPES.contains(&self.shape.as_str()) {
             return Err(Error::unknown("shape", &self.shape, BENCH_SHAPES));
         }
-        check_light_in_front(&self.light)?;
         if let Some(&n) = self
             .sizes
             .iter()
@@ -131,7 +128,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
     config.validate()?;
     let light = config.light;
     let map = Lambertian {
-        light,
+        light: light.light(),
         albedo: 1.0,
         ambient: 0.0,
     };

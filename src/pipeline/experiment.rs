@@ -40,7 +40,7 @@
 use super::perception::{field, BadSetting};
 use crate::analysis::convexity;
 use crate::error::{Error, Result};
-use crate::io::{self, AtomicDir, BitDepth};
+use crate::io::{self, BitDepth};
 use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::random::SplitMix64;
@@ -208,7 +208,7 @@ impl Default for Timing {
     }
 }
 
-/// An experiment to write: the stimulus, the design, the display and the output folder.
+/// An experiment to make: the stimulus, the design and the display.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
     /// The stimulus (any shadelab stimulus with a `light` parameter and one target).
@@ -239,10 +239,6 @@ pub struct Config {
     pub timing: Timing,
     /// Display gamma of the images (8-bit PNGs for the browser; `None` writes linear values).
     pub gamma: Option<f64>,
-    /// The output folder.
-    pub out: PathBuf,
-    /// Replace a folder that shadelab did not write.
-    pub force: bool,
     /// The largest image made, in pixels.
     pub max_pixels: usize,
     /// A break after every this many test trials (0: none).
@@ -261,11 +257,17 @@ pub struct Config {
     pub install: bool,
 }
 
+impl Default for Config {
+    fn default() -> Config {
+        Config::new()
+    }
+}
+
 impl Config {
-    /// The default experiment into `out`: one hemispherical bump (shadelab's `bumps` with one
+    /// The default experiment: one hemispherical bump (shadelab's `bumps` with one
     /// disc), 4° × 4° at 32 ppd, lit at slant 45°, rotations every 15° (24), 16 repeats, 8
     /// practice trials, 57 cm viewing distance, keys F = bump and J = dimple, seed 1.
-    pub fn new(out: impl Into<PathBuf>) -> Config {
+    pub fn new() -> Config {
         Config {
             stimulus: "bumps".into(),
             params: default_params("bumps"),
@@ -280,8 +282,6 @@ impl Config {
             keys: Keys::default(),
             timing: Timing::default(),
             gamma: Some(2.2),
-            out: out.into(),
-            force: false,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             break_every: DEFAULT_BREAK_EVERY,
             counterbalance_keys: false,
@@ -648,6 +648,9 @@ pub struct Report {
     /// The images, in the order of `design.images`.
     #[serde(skip)]
     pub images: Vec<Rendered>,
+    /// Whether [`Report::write`] runs `npm install` in the folder ([`Config::install`]).
+    #[serde(skip)]
+    pub install: bool,
 }
 
 /// The file name of the image for rotation `deg`: `theta-015`, or `theta-007.5` for a
@@ -810,6 +813,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     Ok(Report {
         design,
         images: rendered,
+        install: config.install,
     })
 }
 
@@ -849,82 +853,86 @@ fn background_css(output: &Output, gamma: Option<f64>) -> String {
     format!("#{r:02x}{g:02x}{b:02x}")
 }
 
-/// Writes the experiment folder whole (or not at all) and returns its path: `index.html`,
-/// `experiment.js`, `experiment.css`, `design.json`, `README.md` and `images/` (per rotation
-/// a PNG, its sidecar and its target mask).
-///
-/// A folder that holds files an earlier run did not write (responses saved beside the design)
-/// is refused unless `config.force`; with it they are kept, as every file shadelab did not
-/// write always is, and [`Written::kept`] lists them.
-pub fn write(config: &Config, report: &Report) -> Result<Written> {
-    let dir = AtomicDir::create(&config.out, MARKER, config.force)?
-        .refusing_collected("the experiment's design");
-    let images = dir.path().join("images");
-    std::fs::create_dir(&images).map_err(|e| Error::io(&images, e))?;
-    let options = ExportOptions {
-        bit_depth: BitDepth::Eight,
-        gamma: config.gamma,
-        force: true,
-        ..ExportOptions::default()
-    };
-    let design = &report.design;
-    report
-        .images
-        .par_iter()
-        .zip(design.images.par_iter())
-        .map(|(r, entry)| {
-            stimulus::write_output(
-                &design.stimulus,
-                &r.request,
-                &r.output,
-                &dir.path().join(&entry.file),
-                &options,
-            )
-            .map(|_| ())
+impl Report {
+    /// Writes the experiment folder whole (or not at all) and returns its path: `index.html`,
+    /// `experiment.js`, `experiment.css`, `design.json`, `README.md` and `images/` (per rotation
+    /// a PNG, its sidecar and its target mask).
+    ///
+    /// A folder that holds files an earlier run did not write (responses saved beside the design)
+    /// is refused unless [`Output::force`](super::Output::force); with it they are kept, as every file shadelab did not
+    /// write always is, and [`Written::kept`] lists them.
+    pub fn write(&self, out: &super::Output) -> Result<Written> {
+        let report = self;
+        let dir = out
+            .folder(MARKER)?
+            .refusing_collected("the experiment's design");
+        let images = dir.path().join("images");
+        std::fs::create_dir(&images).map_err(|e| Error::io(&images, e))?;
+        let options = ExportOptions {
+            bit_depth: BitDepth::Eight,
+            gamma: report.design.display.gamma,
+            force: true,
+            ..ExportOptions::default()
+        };
+        let design = &report.design;
+        report
+            .images
+            .par_iter()
+            .zip(design.images.par_iter())
+            .map(|(r, entry)| {
+                stimulus::write_output(
+                    &design.stimulus,
+                    &r.request,
+                    &r.output,
+                    &dir.path().join(&entry.file),
+                    &options,
+                )
+                .map(|_| ())
+            })
+            .collect::<Result<Vec<()>>>()?;
+        let json = serde_json::to_value(design)
+            .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?;
+        io::write_json(&dir.path().join(MARKER), &json)?;
+        // The page carries the design itself, so it also runs when opened as a file; `<` is
+        // escaped so that no text of the design can close the script element.
+        let embedded = serde_json::to_string(&json)
+            .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?
+            .replace('<', "\\u003c");
+        let scripts: String = JSPSYCH_PACKAGES
+            .iter()
+            .map(|(_, _, script)| format!("<script src=\"node_modules/{script}\"></script>\n"))
+            .collect();
+        let page = |jatos: &str| {
+            PAGE_HTML
+                .replace("{{BACKGROUND}}", &design.display.background)
+                .replace("{{SCRIPTS}}", scripts.trim_end())
+                .replace("{{JATOS}}", jatos)
+                .replace("{{DESIGN}}", &embedded)
+        };
+        io::write_text(&dir.path().join("experiment.js"), RUNNER_JS)?;
+        io::write_text(&dir.path().join("shadelab-timeline.js"), TIMELINE_JS)?;
+        io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
+        io::write_text(&dir.path().join("package.json"), &package_json())?;
+        io::write_text(&dir.path().join("README.md"), &readme(design))?;
+        io::write_text(&dir.path().join("index.html"), &page(""))?;
+        // JATOS serves its jatos.js beside the study's files; a static host has none, so the
+        // JATOS page is a file of its own rather than a failing script in index.html.
+        io::write_text(
+            &dir.path().join("jatos.html"),
+            &page("<script src=\"jatos.js\"></script>\n"),
+        )?;
+        let install = if report.install {
+            npm_install(dir.path())
+        } else {
+            Install::NotAsked
+        };
+        let (folder, kept) = dir.commit_keeping()?;
+        Ok(Written {
+            folder,
+            kept,
+            install,
         })
-        .collect::<Result<Vec<()>>>()?;
-    let json = serde_json::to_value(design)
-        .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?;
-    io::write_json(&dir.path().join(MARKER), &json)?;
-    // The page carries the design itself, so it also runs when opened as a file; `<` is
-    // escaped so that no text of the design can close the script element.
-    let embedded = serde_json::to_string(&json)
-        .map_err(|e| Error::Compute(format!("cannot serialise the design: {e}")))?
-        .replace('<', "\\u003c");
-    let scripts: String = JSPSYCH_PACKAGES
-        .iter()
-        .map(|(_, _, script)| format!("<script src=\"node_modules/{script}\"></script>\n"))
-        .collect();
-    let page = |jatos: &str| {
-        PAGE_HTML
-            .replace("{{BACKGROUND}}", &design.display.background)
-            .replace("{{SCRIPTS}}", scripts.trim_end())
-            .replace("{{JATOS}}", jatos)
-            .replace("{{DESIGN}}", &embedded)
-    };
-    io::write_text(&dir.path().join("experiment.js"), RUNNER_JS)?;
-    io::write_text(&dir.path().join("shadelab-timeline.js"), TIMELINE_JS)?;
-    io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
-    io::write_text(&dir.path().join("package.json"), &package_json())?;
-    io::write_text(&dir.path().join("README.md"), &readme(design))?;
-    io::write_text(&dir.path().join("index.html"), &page(""))?;
-    // JATOS serves its jatos.js beside the study's files; a static host has none, so the
-    // JATOS page is a file of its own rather than a failing script in index.html.
-    io::write_text(
-        &dir.path().join("jatos.html"),
-        &page("<script src=\"jatos.js\"></script>\n"),
-    )?;
-    let install = if config.install {
-        npm_install(dir.path())
-    } else {
-        Install::NotAsked
-    };
-    let (folder, kept) = dir.commit_keeping()?;
-    Ok(Written {
-        folder,
-        kept,
-        install,
-    })
+    }
 }
 
 /// Whether jsPsych was installed into the folder.

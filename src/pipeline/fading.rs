@@ -8,11 +8,12 @@
 //! `blur = 0` (the sharp one), each with its own target named `disk`.
 
 use super::source::{Picture, PictureSource};
+use super::CommandReport;
 use crate::analysis::plot::{LinePlot, Series};
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
-use crate::io::{self, AtomicDir};
+use crate::io;
 use crate::lightness::fading::{
     adaptation_time_course, border_energy, AdaptationOptions, BorderEnergy, Disk, DogBand,
     PerceivedFrames, TimeCourse,
@@ -22,11 +23,9 @@ use crate::progress::Progress;
 use crate::stimulus::Pixels;
 use serde::Serialize;
 use serde_json::{Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-/// The file that marks an output folder as written by the fading analysis.
-pub const FADING_REPORT: &str = "fading.json";
 /// The animation's frame rate.
 const FPS: f64 = 10.0;
 /// The animation's largest side in pixels.
@@ -269,17 +268,14 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
     })
 }
 
-impl FadingReport {
-    /// Writes the output folder `out` (whole or not at all; a folder shadelab did not write is
-    /// written into only with `force`, and every file this run does not write stays, see
-    /// [`AtomicDir`]): `time_course.csv`, with plots
-    /// `time_course.png` and `.svg` ([`FadingReport::time_course_plot`]), `fading.gif` and
-    /// `fading.json`. Returns the folder written.
-    /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never
-    /// replaces them (see [`AtomicDir::reads`]).
-    pub fn write(&self, out: &Path, force: bool, inputs: &[PathBuf]) -> Result<PathBuf> {
-        let folder = AtomicDir::create(out, FADING_REPORT, force)?.reads(inputs)?;
-        let dir = folder.path().to_path_buf();
+impl CommandReport for FadingReport {
+    /// The report, `fading.json`.
+    const MARKER: &'static str = "fading.json";
+
+    /// Writes `time_course.csv`, with plots `time_course.png` and `.svg`
+    /// ([`FadingReport::time_course_plot`]), `fading.gif` and the report,
+    /// [`FadingReport::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         let c = &self.course;
         let mut csv = String::from("time_s,blurred,sharp,eye_x_deg,eye_y_deg\n");
         for i in 0..c.times.len() {
@@ -299,8 +295,7 @@ impl FadingReport {
         )?;
         let json = serde_json::to_value(self)
             .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
-        io::write_json(&dir.join(FADING_REPORT), &json)?;
-        folder.commit()
+        io::write_json(&dir.join(Self::MARKER), &json)
     }
 }
 

@@ -15,19 +15,18 @@
 //! assert_eq!(r.participants, vec![("p1".to_string(), vec![(0.0, true), (180.0, false)])]);
 //! ```
 
+use super::CommandReport;
 use crate::analysis::fit::{bins, fit, FitOptions, ObserverFit};
 use crate::analysis::observer_model::ModelParams;
 use crate::analysis::plot::{IntervalSeries, LineAndPolar, LinePlot, Marker, PolarPlot, Series};
 use crate::error::{Error, Result};
 use crate::io;
+use crate::message::{Message, Setting};
 use crate::progress::Progress;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// The report's file name, which marks an output folder as a fit's.
-pub const REPORT_FILE: &str = "fit.json";
 
 /// What to fit, as plain values.
 #[derive(Debug, Clone)]
@@ -390,11 +389,14 @@ fn interpret(
                 "convex" | "1" => true,
                 "concave" | "0" => false,
                 other => {
-                    return Err(Error::format(
-                        path,
-                        format!(
-                            "{unit} {line}: unknown response '{other}' (valid: convex, concave, 1, 0; for key presses give the keys for bump and dimple)"
-                        ),
+                    return Err(Error::Setting(
+                        Message::text(format!(
+                            "{}: {unit} {line}: unknown response '{other}' (valid: convex, \
+                             concave, 1, 0; for key presses give ",
+                            path.display()
+                        ))
+                        .setting(Setting::Keys, "the keys for bump and dimple")
+                        .then(")"),
                     ))
                 }
             }
@@ -1095,10 +1097,15 @@ impl Report {
             Sun, J., & Perona, P. (1998). Where is the sun? *Nature Neuroscience*, 1, 183–184.\n";
         text
     }
+}
 
-    /// Writes `fit.json` (the report, [`REPORT_FILE`]), `fit.png`, `fit.svg` and
-    /// `methods.md` into the folder `dir` (which must exist).
-    pub fn write(&self, dir: &Path) -> Result<()> {
+impl CommandReport for Report {
+    /// The report, `fit.json`.
+    const MARKER: &'static str = "fit.json";
+
+    /// Writes `fit.json` (the report, [`Report::MARKER`]), `fit.png`, `fit.svg` and
+    /// `methods.md` (and `participants.png`/`.svg` for a folder of participants).
+    fn write_into(&self, dir: &Path) -> Result<()> {
         let figure = self.figure();
         figure.write_png(&dir.join("fit.png"))?;
         figure.write_svg(&dir.join("fit.svg"))?;
@@ -1109,7 +1116,7 @@ impl Report {
         io::write_text(&dir.join("methods.md"), &self.methods())?;
         let value = serde_json::to_value(self)
             .map_err(|e| Error::Compute(format!("cannot serialise the fit: {e}")))?;
-        io::write_json(&dir.join(REPORT_FILE), &value)
+        io::write_json(&dir.join(Self::MARKER), &value)
     }
 }
 

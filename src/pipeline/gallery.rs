@@ -1,60 +1,63 @@
 //! `gallery` as a pipeline: every preset (the built-in ones of `stimuli/`, or a folder of
-//! specs) rendered into one folder with thumbnails, a contact sheet and an `index.html`. The
-//! folder is the output, so `run` writes it (whole or not at all); see [`crate::gallery`] for
-//! what it holds.
+//! specs) rendered in memory, then written into one folder with thumbnails, a contact sheet and
+//! an `index.html`; see [`crate::gallery`] for what it holds.
 //!
 //! ```
 //! use shadelab::pipeline::gallery::{run, GalleryConfig};
-//! use shadelab::NoProgress;
+//! use shadelab::{CommandReport, NoProgress, Output};
 //!
 //! let dir = std::env::temp_dir().join(format!("shadelab-doc-gallery-{}", std::process::id()));
-//! let mut config = GalleryConfig::builtin(&dir).unwrap();
+//! let mut config = GalleryConfig::builtin().unwrap();
 //! config.presets.truncate(1); // the first preset only, to keep the example quick
 //! let report = run(&config, &NoProgress).unwrap();
 //! assert_eq!(report.presets.len(), 1);
-//! assert!(report.index.exists());
 //! assert!(report.presets[0].files.iter().any(|f| f.ends_with(".json")));
+//! let folder = report.write(&Output::new(&dir)).unwrap();
+//! assert!(folder.join("index.html").exists());
 //! std::fs::remove_dir_all(&dir).unwrap();
 //! ```
 
+use super::CommandReport;
 use crate::error::Result;
-use crate::gallery::{self, Options, Preset};
+use crate::gallery::{self, Options, Preset, Rendered};
 use crate::progress::Progress;
 use crate::visual_size::Geometry;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// What to put in a gallery and where.
+/// What to put in a gallery.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GalleryConfig {
     /// The presets, in gallery order.
     pub presets: Vec<Preset>,
-    /// The output folder.
-    pub out: PathBuf,
-    /// Replacing a foreign folder, the largest picture, the prefix of the docs links.
+    /// The largest picture, the prefix of the docs links.
     pub options: Options,
+    /// The folder the presets were read from, if any: an input, never replaced.
+    pub source: Option<PathBuf>,
 }
 
 impl GalleryConfig {
-    /// The built-in presets of `stimuli/`, into `out`, with default options.
-    pub fn builtin(out: impl Into<PathBuf>) -> Result<GalleryConfig> {
+    /// The built-in presets of `stimuli/`, with default options.
+    pub fn builtin() -> Result<GalleryConfig> {
         Ok(GalleryConfig {
             presets: gallery::builtin_presets()?,
-            out: out.into(),
             options: Options::default(),
+            source: None,
         })
     }
 
-    /// Every `*.json` spec in the folder `presets`, into `out`, with default options.
-    pub fn from_folder(presets: &Path, out: impl Into<PathBuf>) -> Result<GalleryConfig> {
+    /// Every `*.json` spec in the folder `presets`, with default options.
+    pub fn from_folder(presets: &Path) -> Result<GalleryConfig> {
         Ok(GalleryConfig {
             presets: gallery::load_presets(presets)?,
-            out: out.into(),
-            options: Options {
-                inputs: vec![presets.to_path_buf()],
-                ..Options::default()
-            },
+            options: Options::default(),
+            source: Some(presets.to_path_buf()),
         })
+    }
+
+    /// The files and folders the gallery reads, for [`Output::reads`](super::Output::reads).
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.source.iter().cloned().collect()
     }
 
     /// Checks that there is at least one preset and that their names are distinct.
@@ -78,27 +81,51 @@ pub struct GalleryEntry {
     pub files: Vec<String>,
 }
 
-/// What a gallery run wrote.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A gallery rendered: every picture, in gallery order.
+#[derive(Debug, Clone, Serialize)]
 pub struct GalleryReport {
-    /// The gallery folder.
-    pub folder: PathBuf,
-    /// Its index page.
-    pub index: PathBuf,
     /// Every picture, in gallery order.
     pub presets: Vec<GalleryEntry>,
+    /// The pictures themselves.
+    #[serde(skip)]
+    pub rendered: Vec<Rendered>,
+    /// The prefix of the docs links ([`Options::docs_base`]).
+    #[serde(skip)]
+    pub docs_base: String,
 }
 
-/// Renders every preset (in parallel) and writes the gallery folder; one progress step per
-/// preset.
+/// Renders every preset (in parallel), in memory; one progress step per preset.
 pub fn run(config: &GalleryConfig, progress: &dyn Progress) -> Result<GalleryReport> {
     config.validate()?;
     progress.start(config.presets.len() as u64, "gallery");
-    let report = gallery::build(&config.presets, &config.out, &config.options, &|_| {
-        progress.advance(1)
-    });
+    let rendered = gallery::render(&config.presets, &config.options, &|_| progress.advance(1));
     progress.finish();
-    report
+    let rendered = rendered?;
+    Ok(GalleryReport {
+        presets: rendered
+            .iter()
+            .map(|r| GalleryEntry {
+                name: r.preset.name.clone(),
+                stimulus: r.preset.spec.stimulus.clone(),
+                geometry: r.request.geometry,
+                seed: r.request.seed,
+                files: r.files(),
+            })
+            .collect(),
+        rendered,
+        docs_base: config.options.docs_base.clone(),
+    })
+}
+
+impl CommandReport for GalleryReport {
+    /// The index page, `index.html`.
+    const MARKER: &'static str = gallery::MARKER;
+
+    /// Writes every picture with its sidecar and mask, the thumbnails, the contact sheet and
+    /// the index page (see [`gallery::write_into`]).
+    fn write_into(&self, dir: &Path) -> Result<()> {
+        gallery::write_into(dir, &self.rendered, &self.docs_base)
+    }
 }
 
 #[cfg(test)]
@@ -107,7 +134,7 @@ mod tests {
 
     #[test]
     fn configs_refuse_no_presets_and_twins() {
-        let mut config = GalleryConfig::builtin("g").unwrap();
+        let mut config = GalleryConfig::builtin().unwrap();
         config.validate().unwrap();
         config.presets.truncate(1);
         config.presets.push(config.presets[0].clone());
@@ -116,6 +143,5 @@ mod tests {
         config.presets.clear();
         assert!(config.validate().is_err());
         assert!(run(&config, &crate::progress::NoProgress).is_err());
-        assert!(!Path::new("g").exists());
     }
 }

@@ -3,22 +3,20 @@
 //! and each model's verdict.
 
 use super::source::PictureSource;
+use super::CommandReport;
 use crate::analysis::plot::{ColourBar, MapFigure, Outline};
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
-use crate::io::{self, AtomicDir, BitDepth};
+use crate::io::{self, BitDepth};
 use crate::lightness::checker::{self, Prediction, SquareFacts};
 use crate::lightness::{target_means, Model, TargetMean};
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
-
-/// The file that marks an output folder as written by the lightness analysis.
-pub const LIGHTNESS_REPORT: &str = "lightness.json";
 
 /// What to analyse and with which models.
 #[derive(Debug, Clone)]
@@ -237,17 +235,13 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
     })
 }
 
-impl LightnessReport {
-    /// Writes the output folder `out` (whole or not at all; a folder shadelab did not write is
-    /// written into only with `force`, and every file this run does not write stays, see
-    /// [`AtomicDir`]): each model's `.npy` and
-    /// `.png`, `targets.csv` and `targets.json` when there are targets, and `lightness.json`.
-    /// Returns the folder written.
-    /// `inputs` are the files the run read (e.g. [`PictureSource::files`]): the folder never
-    /// replaces them (see [`AtomicDir::reads`]).
-    pub fn write(&self, out: &Path, force: bool, inputs: &[PathBuf]) -> Result<PathBuf> {
-        let folder = AtomicDir::create(out, LIGHTNESS_REPORT, force)?.reads(inputs)?;
-        let dir = folder.path().to_path_buf();
+impl CommandReport for LightnessReport {
+    /// The report, `lightness.json`.
+    const MARKER: &'static str = "lightness.json";
+
+    /// Writes each model's `.npy` and `.png` (and figure), `targets.csv` and `targets.json`
+    /// when there are targets, and the report, [`LightnessReport::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         for (files, (model, image)) in self.outputs.iter().zip(&self.images) {
             io::write_image(&dir.join(&files.npy), image)?;
             io::write_gray(
@@ -261,10 +255,9 @@ impl LightnessReport {
             }
         }
         if !self.targets.is_empty() {
-            write_targets(&dir, &self.targets)?;
+            write_targets(dir, &self.targets)?;
         }
-        io::write_json(&dir.join(LIGHTNESS_REPORT), &to_json(self)?)?;
-        folder.commit()
+        io::write_json(&dir.join(Self::MARKER), &to_json(self)?)
     }
 }
 

@@ -12,6 +12,7 @@ pub mod gallery;
 pub mod lightness;
 pub mod observer;
 pub mod outline;
+mod output;
 pub mod perception;
 pub mod prior_sweep;
 pub mod render;
@@ -19,4 +20,5 @@ pub mod solve;
 pub mod source;
 pub mod study;
 
+pub use output::{CommandReport, Output};
 pub use source::{Picture, PictureSource};

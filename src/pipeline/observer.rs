@@ -3,6 +3,7 @@
 //! prior concentration κ.
 
 use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
+use super::CommandReport;
 use crate::analysis::observer::{
     check_circle, curves_csv, p_convex_plot, Curve, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
     DEFAULT_PRIOR_TILT_DEG,
@@ -21,9 +22,6 @@ pub const DEFAULT_TILTS: &str = "0:360:5";
 
 /// The default rotations of the picture: every 15°.
 pub const DEFAULT_ROTATIONS: &str = "0:360:15";
-
-/// The report's file name, which marks an output folder as an observer's.
-pub const REPORT_FILE: &str = "observer.json";
 
 /// What to observe, as plain values.
 #[derive(Debug, Clone)]
@@ -247,10 +245,12 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     })
 }
 
-impl Report {
-    /// Writes `observer.csv`, `p_convex.png`, `p_convex.svg` and the report, [`REPORT_FILE`],
-    /// into the folder `dir` (which must exist).
-    pub fn write(&self, dir: &Path) -> Result<()> {
+impl CommandReport for Report {
+    /// The report, `observer.json`.
+    const MARKER: &'static str = "observer.json";
+
+    /// Writes `observer.csv`, `p_convex.png`, `p_convex.svg` and the report, [`Report::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         let plot = p_convex_plot(&self.sweep, &self.percepts)?;
         let figure = Figure {
             size: plot.size,
@@ -261,7 +261,7 @@ impl Report {
             dir,
             ("p_convex", &figure),
             ("observer.csv", &csv),
-            REPORT_FILE,
+            Self::MARKER,
             self,
         )
     }

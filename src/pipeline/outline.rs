@@ -13,6 +13,7 @@
 //! bending sits at folds (near 1) or is spread (about 0.3).
 
 use super::source::PictureSource;
+use super::CommandReport;
 use crate::analysis::convexity::Token;
 use crate::analysis::outline::{
     curvature_concentration, fit_shading, outline_conditions, outline_profile, Profile, ProfileFit,
@@ -26,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
 use crate::io::{self, csv_field};
-use crate::light::Light;
+use crate::light::FrontLight;
 use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
@@ -36,9 +37,6 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
-
-/// The report's file name, which marks an output folder as an outline analysis's.
-pub const REPORT_FILE: &str = "outline.json";
 
 /// The table's file name.
 pub const CSV_FILE: &str = "outline.csv";
@@ -58,7 +56,7 @@ pub struct OutlineConfig {
     /// The rendered stimulus's size in pixels (height, width); only with a stimulus.
     pub size: Option<(usize, usize)>,
     /// The light; `None`: fitted per target in the plane of its profile.
-    pub light: Option<Light>,
+    pub light: Option<FrontLight>,
     /// How the outline's profile is read.
     pub profile: ProfileFit,
     /// The crease-preserving reconstruction's settings (its smoothness is the one compared
@@ -99,9 +97,6 @@ impl OutlineConfig {
                     "size {w}x{h} must be at least 1 pixel each way"
                 )));
             }
-        }
-        if let Some(l) = &self.light {
-            crate::reconstruct::check_light_in_front(l)?;
         }
         self.profile.validate()?;
         self.crease.validate()
@@ -187,7 +182,7 @@ pub struct OutlineReport {
     /// The picture's height, pixels.
     pub height: usize,
     /// The light as given, or `null` when fitted per target.
-    pub light: Option<Light>,
+    pub light: Option<FrontLight>,
     /// How the profiles were read.
     pub profile: ProfileFit,
     /// The reconstructions' λ.
@@ -274,7 +269,7 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
             "one row per target: the light, albedo and offset, shape_explained, paint_rms, bend_concentration (crease-preserving) and bend_concentration_quadratic (Horn)".to_string(),
         ),
         (
-            REPORT_FILE.to_string(),
+            OutlineReport::MARKER.to_string(),
             "this report".to_string(),
         ),
     ]);
@@ -617,10 +612,14 @@ impl OutlineReport {
         }
         csv
     }
+}
 
-    /// Writes [`CSV_FILE`], every target's pictures and the report, [`REPORT_FILE`], into the
-    /// folder `dir` (which must exist).
-    pub fn write(&self, dir: &Path) -> Result<()> {
+impl CommandReport for OutlineReport {
+    /// The report, `outline.json`.
+    const MARKER: &'static str = "outline.json";
+
+    /// Writes [`CSV_FILE`], every target's pictures and the report, [`OutlineReport::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         io::write_text(&dir.join(CSV_FILE), &self.csv())?;
         for t in &self.targets {
             for (name, figure) in t.figures() {
@@ -629,7 +628,7 @@ impl OutlineReport {
         }
         let value = serde_json::to_value(self)
             .map_err(|e| Error::Compute(format!("cannot serialise the report: {e}")))?;
-        io::write_json(&dir.join(REPORT_FILE), &value)
+        io::write_json(&dir.join(Self::MARKER), &value)
     }
 }
 

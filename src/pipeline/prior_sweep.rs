@@ -4,6 +4,7 @@
 //! per token).
 
 use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
+use super::CommandReport;
 use crate::analysis::binding::{binding, Binding, GlobalLight};
 use crate::analysis::{parse_angles, Interpreter, Sweep};
 use crate::error::{Error, Result};
@@ -15,9 +16,6 @@ use std::time::Instant;
 
 /// The default assumed tilts: every 15°.
 pub const DEFAULT_TILTS: &str = "0:360:15";
-
-/// The report's file name, which marks an output folder as a prior sweep's.
-pub const REPORT_FILE: &str = "sweep.json";
 
 /// What to sweep, as plain values.
 #[derive(Debug, Clone)]
@@ -189,16 +187,18 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     })
 }
 
-impl Report {
-    /// Writes `sweep.csv`, `sweep.png`, `sweep.svg` and the report, [`REPORT_FILE`], into the
-    /// folder `dir` (which must exist).
-    pub fn write(&self, dir: &Path) -> Result<()> {
+impl CommandReport for Report {
+    /// The report, `sweep.json`.
+    const MARKER: &'static str = "sweep.json";
+
+    /// Writes `sweep.csv`, `sweep.png`, `sweep.svg` and the report, [`Report::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         let csv = self.sweep.csv();
         write_outputs(
             dir,
             ("sweep", &self.sweep.figure()),
             ("sweep.csv", &csv),
-            REPORT_FILE,
+            Self::MARKER,
             self,
         )
     }

@@ -1,12 +1,13 @@
 //! `render` as a pipeline: one stimulus or surface, from its name (or a spec) and plain
-//! parameter values, to a picture written with its sidecar (and mask and layers); and `list` and
-//! `describe`, what can be rendered and with which parameters.
+//! parameter values, to a picture in memory ([`run`]), written with its sidecar (and mask and
+//! layers) by [`RenderReport::write`]; and `list` and `describe`, what can be rendered and with
+//! which parameters.
 //!
 //! ```
 //! use shadelab::pipeline::render::{run, RenderConfig};
 //! use shadelab::NoProgress;
 //!
-//! let mut config = RenderConfig::new("sphere", "sphere.png");
+//! let mut config = RenderConfig::new("sphere");
 //! config.size.set_shape((24, 32)); // (height, width), as stimupy's shape
 //! config.validate().unwrap();
 //! let report = run(&config, &NoProgress).unwrap();
@@ -24,7 +25,8 @@ use serde::Serialize;
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 
-/// How to render: what, at which size and seed, and how to write it.
+/// How to render: what, at which size and seed, and how to encode it (where is the
+/// [`Output`](super::Output) given to [`RenderReport::write`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderConfig {
     /// The stimulus or surface (see [`list`]).
@@ -37,82 +39,80 @@ pub struct RenderConfig {
     pub size: SizeRequest,
     /// Seed for random layouts (recorded in the sidecar).
     pub seed: u64,
-    /// The output file: `.png`, `.npy`, `.mat` or `.svg` (the sidecar goes beside it).
-    pub out: PathBuf,
-    /// Bit depth, gamma, value range, layers and whether to replace a foreign file.
+    /// Bit depth, gamma, value range, display and layers of the files written.
     pub export: ExportOptions,
+    /// The spec file this render was read from, if any: an input, never replaced.
+    pub spec: Option<PathBuf>,
     /// The largest picture made, in pixels.
     pub max_pixels: usize,
 }
 
 impl RenderConfig {
-    /// Renders `stimulus` with its defaults (size, parameters, seed 0) to `out`.
-    pub fn new(stimulus: impl Into<String>, out: impl Into<PathBuf>) -> RenderConfig {
+    /// Renders `stimulus` with its defaults (size, parameters, seed 0).
+    pub fn new(stimulus: impl Into<String>) -> RenderConfig {
         RenderConfig {
             stimulus: stimulus.into(),
             params: Map::new(),
             size: SizeRequest::default(),
             seed: 0,
-            out: out.into(),
             export: ExportOptions::default(),
+            spec: None,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
         }
     }
 
-    /// Renders what a stimulus spec file names (stimulus, parameters, size and seed) to `out`.
-    pub fn from_spec(spec: &Spec, out: impl Into<PathBuf>) -> RenderConfig {
+    /// Renders what a stimulus spec names (stimulus, parameters, size and seed).
+    pub fn from_spec(spec: &Spec) -> RenderConfig {
         RenderConfig {
             params: spec.params.clone(),
             size: spec.size(),
             seed: spec.seed.unwrap_or(0),
-            ..RenderConfig::new(spec.stimulus.clone(), out)
+            ..RenderConfig::new(spec.stimulus.clone())
         }
     }
 
-    /// Renders what a spec file names to `out`: a stimulus spec ([`Spec`]), or a sidecar that
+    /// Renders what a spec file names: a stimulus spec ([`Spec`]), or a sidecar that
     /// shadelab wrote beside an earlier render. A sidecar records everything that render used —
     /// the stimulus, every parameter, the size in pixels and ppd, the seed, and how the files
     /// were written (bit depth, gamma, value range, layers) — so rendering it again to a file of
     /// the same name gives the same files, byte for byte.
     ///
     /// ```
-    /// use shadelab::RenderConfig;
+    /// use shadelab::{NoProgress, Output, RenderConfig};
     /// let dir = std::env::temp_dir().join(format!("shadelab-doc-sidecar-{}", std::process::id()));
     /// std::fs::create_dir_all(dir.join("again"))?;
-    /// let mut first = RenderConfig::new("bumps", dir.join("b.png"));
+    /// let mut first = RenderConfig::new("bumps");
     /// first.size.ppd = Some(8.0);
-    /// shadelab::pipeline::render::write(&first, &shadelab::pipeline::render::run(&first, &shadelab::NoProgress)?)?;
-    /// let again = RenderConfig::from_spec_file(&dir.join("b.json"), dir.join("again/b.png"))?;
-    /// shadelab::pipeline::render::write(&again, &shadelab::pipeline::render::run(&again, &shadelab::NoProgress)?)?;
+    /// shadelab::render(&first, &NoProgress)?.write(&Output::new(dir.join("b.png")))?;
+    /// let again = RenderConfig::from_spec_file(&dir.join("b.json"))?;
+    /// let out = Output::new(dir.join("again/b.png")).reads(again.files());
+    /// shadelab::render(&again, &NoProgress)?.write(&out)?;
     /// assert_eq!(std::fs::read(dir.join("b.png"))?, std::fs::read(dir.join("again/b.png"))?);
     /// assert_eq!(std::fs::read(dir.join("b.json"))?, std::fs::read(dir.join("again/b.json"))?);
     /// # std::fs::remove_dir_all(&dir)?;
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn from_spec_file(path: &Path, out: impl Into<PathBuf>) -> Result<RenderConfig> {
+    pub fn from_spec_file(path: &Path) -> Result<RenderConfig> {
         let bytes = crate::io::read_bytes(path)?;
         let value: Value = serde_json::from_slice(&bytes)
             .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))?;
         let is_sidecar = value.get("program").and_then(Value::as_str) == Some("shadelab")
             && value.get("parameters").is_some();
         if !is_sidecar {
-            let out = out.into();
-            // A spec of the user's is an input, never an output: the render's sidecar must
-            // not replace it (a shadelab sidecar describes its own set and is re-rendered).
-            let sidecar = crate::io::render_sidecar::sidecar_path(&out);
-            let canonical = |p: &Path| std::fs::canonicalize(p).ok();
-            if canonical(&sidecar).is_some() && canonical(&sidecar) == canonical(path) {
-                return Err(Error::format(
-                    path,
-                    "is the spec this render reads, and the render's sidecar would replace it \
-                     (even with --force): give the output another name",
-                ));
-            }
             let spec: Spec = serde_json::from_value(value)
                 .map_err(|e| Error::format(path, format!("bad stimulus spec: {e}")))?;
-            return Ok(RenderConfig::from_spec(&spec, out));
+            return Ok(RenderConfig {
+                spec: Some(path.to_path_buf()),
+                ..RenderConfig::from_spec(&spec)
+            });
         }
-        from_sidecar(&value, out.into()).map_err(|e| Error::format(path, format!("{e}")))
+        // A shadelab sidecar describes its own set: rendering it again may replace it.
+        from_sidecar(&value).map_err(|e| Error::format(path, format!("{e}")))
+    }
+
+    /// The files the render reads (its spec, if any), for [`Output::reads`](super::Output::reads).
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.spec.iter().cloned().collect()
     }
 
     /// Sets the space of a figure drawn in one (`pq` or `fg`, the reflectance map's), the same
@@ -133,12 +133,18 @@ impl RenderConfig {
         Ok(())
     }
 
-    /// Checks what needs no rendering: the stimulus exists and the output format suits the
-    /// export options. Parameters and size are checked when rendering resolves them.
+    /// Checks what needs no rendering: the stimulus exists. Parameters and size are checked
+    /// when rendering resolves them, the export options against the output's format by
+    /// [`RenderConfig::check_output`] and when writing.
     pub fn validate(&self) -> Result<()> {
         stimulus::find(&self.stimulus)?;
-        self.export.check(&self.out)?;
         Ok(())
+    }
+
+    /// Checks, before rendering, that the export options suit the format of `out` (`.png`,
+    /// `.npy`, `.mat`, `.svg`).
+    pub fn check_output(&self, out: &Path) -> Result<()> {
+        self.export.check(out).map(drop)
     }
 }
 
@@ -165,6 +171,9 @@ pub struct RenderReport {
     /// The picture, targets and layers.
     #[serde(skip)]
     pub output: Output,
+    /// How the files are encoded ([`RenderConfig::export`]).
+    #[serde(skip)]
+    pub export: ExportOptions,
 }
 
 /// Renders the config's stimulus (nothing is written; see [`write()`]).
@@ -194,28 +203,43 @@ pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderRepor
         warnings,
         request,
         output,
+        export: config.export.clone(),
     })
 }
 
-/// Writes a render to `config.out` with its sidecar, mask and (if asked) layers, whole or not
-/// at all; returns every file written.
-pub fn write(config: &RenderConfig, report: &RenderReport) -> Result<Vec<PathBuf>> {
-    write_to(report, &config.out, &config.export)
-}
-
-/// Writes a render to `out` with `options` (see [`stimulus::write_output`]).
-pub fn write_to(
-    report: &RenderReport,
-    out: &Path,
-    options: &ExportOptions,
-) -> Result<Vec<PathBuf>> {
-    stimulus::write_output(
-        &report.stimulus,
-        &report.request,
-        &report.output,
-        out,
-        options,
-    )
+impl RenderReport {
+    /// Writes the render to the file `out` (`.png`, `.npy`, `.mat` or `.svg`) with its sidecar,
+    /// mask and (if asked) layers, whole or not at all (see [`stimulus::write_output`]); a file
+    /// shadelab did not write is replaced only with [`Output::force`](super::Output::force), and
+    /// never one of [`Output::reads`](super::Output::reads) (a spec beside the render whose
+    /// sidecar would take its name). Returns every file written.
+    pub fn write(&self, out: &super::Output) -> Result<Vec<PathBuf>> {
+        let sidecar = crate::io::render_sidecar::sidecar_path(out.path());
+        let canonical = |p: &Path| std::fs::canonicalize(p).ok();
+        let same = |input: &PathBuf| {
+            [out.path(), sidecar.as_path()]
+                .iter()
+                .any(|p| canonical(p).is_some() && canonical(p) == canonical(input))
+        };
+        if let Some(input) = out.inputs().iter().find(|i| same(i)) {
+            return Err(Error::format(
+                input,
+                "is the spec this render reads, and the render's files would replace it (even \
+                 when forced): give the output another name",
+            ));
+        }
+        let options = ExportOptions {
+            force: out.forced(),
+            ..self.export.clone()
+        };
+        stimulus::write_output(
+            &self.stimulus,
+            &self.request,
+            &self.output,
+            out.path(),
+            &options,
+        )
+    }
 }
 
 /// One stimulus of [`list`].
@@ -311,7 +335,7 @@ pub fn describe(name: &str) -> Result<Description> {
 }
 
 /// The render a sidecar records.
-fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
+fn from_sidecar(v: &Value) -> Result<RenderConfig> {
     let field = |key: &str| {
         v.get(key)
             .ok_or_else(|| Error::invalid(format!("the sidecar has no '{key}'")))
@@ -370,7 +394,7 @@ fn from_sidecar(v: &Value, out: PathBuf) -> Result<RenderConfig> {
             luminance,
             ..ExportOptions::default()
         },
-        ..RenderConfig::new(stimulus, out)
+        ..RenderConfig::new(stimulus)
     })
 }
 
@@ -392,19 +416,20 @@ mod tests {
 
     #[test]
     fn configs_are_checked_and_specs_fill_them() {
-        assert!(RenderConfig::new("teapot", "a.png").validate().is_err());
-        assert!(RenderConfig::new("sphere", "a.tiff").validate().is_err());
-        let mut config = RenderConfig::new("sphere", "a.png");
+        assert!(RenderConfig::new("teapot").validate().is_err());
+        let mut config = RenderConfig::new("sphere");
+        assert!(config.check_output(Path::new("a.tiff")).is_err());
+        assert!(config.check_output(Path::new("a.png")).is_ok());
         let e = config.set_space("fg").unwrap_err().to_string();
         assert!(e.contains("'sphere' has no space parameter"), "{e}");
         assert!(!e.contains("--"), "{e}");
-        let mut figure = RenderConfig::new("reflectance-map", "a.png");
+        let mut figure = RenderConfig::new("reflectance-map");
         figure.set_space("fg").unwrap();
         assert_eq!(figure.params["space"], "fg");
         let spec: Spec =
             serde_json::from_str(r#"{"stimulus": "sphere", "shape": [20, 10], "seed": 7}"#)
                 .unwrap();
-        config = RenderConfig::from_spec(&spec, "b.png");
+        config = RenderConfig::from_spec(&spec);
         assert_eq!((config.seed, config.size.shape), (7, Some((20, 10))));
         let report = run(&config, &NoProgress).unwrap();
         // (height, width): 20 rows of 10 pixels; `Pixels::size` is (width, height).

@@ -6,16 +6,20 @@
 //! `depth.png`, `surface.obj`, `convergence.csv` (and `convergence.png` with the `plots`
 //! feature) and `report.json`.
 
+use super::{CommandReport, Output};
 use crate::albedo::{AlbedoEstimate, Saturation};
 use crate::boundary::{Boundary, LimbTest, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{size_mismatch, Grid, Image, Mask};
 use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
-use crate::light::Light;
+use crate::light::FrontLight;
 use crate::light_estimation::LightEstimate;
+use crate::message::{Message, Setting};
 use crate::progress::Progress;
-use crate::reconstruct::{Depth, Lighting, Problem, ReconstructOptions, Reconstructor, Shape};
+use crate::reconstruct::{
+    Depth, LightAndAlbedo, Problem, ReconstructOptions, Reconstructor, Shape,
+};
 use crate::reflectance::BrdfSpec;
 use serde::Serialize;
 use serde_json::Value;
@@ -23,21 +27,18 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The file that marks an output folder as written by `solve`.
-pub const REPORT_FILE: &str = "report.json";
-
 /// The light of a solve: given, or estimated from the image (with the albedo).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightChoice {
-    /// This light (z > 0).
-    Given(Light),
+    /// This light.
+    Given(FrontLight),
     /// Estimated from the image's shading (Zheng–Chellappa), with the albedo.
     Estimate,
 }
 
 impl std::str::FromStr for LightChoice {
     type Err = Error;
-    /// `estimate`, or any light syntax ([`Light`]'s `FromStr`).
+    /// `estimate`, or any light syntax ([`Light`]'s `FromStr`) for a light in front.
     fn from_str(text: &str) -> Result<Self> {
         match text.trim() {
             "estimate" => Ok(LightChoice::Estimate),
@@ -175,7 +176,7 @@ impl SolveConfig {
         }
     }
 
-    /// Checks everything that needs no file: the policy, the albedo, a given light in front.
+    /// Checks everything that needs no file: the policy, the albedo.
     pub fn validate(&self) -> Result<()> {
         self.options.validate()?;
         self.saturation.validate()?;
@@ -187,9 +188,6 @@ impl SolveConfig {
             return Err(Error::invalid(
                 "give the albedo or ask for its estimate, not both",
             ));
-        }
-        if let LightChoice::Given(light) = &self.light {
-            crate::reconstruct::check_light_in_front(light)?;
         }
         Ok(())
     }
@@ -385,7 +383,7 @@ struct Solved {
     shape: Shape,
     mask: Mask,
     planner: Reconstructor,
-    lighting: Lighting,
+    lighting: LightAndAlbedo,
     brdf: BrdfSpec,
     image_info: Value,
     boundary_kind: &'static str,
@@ -470,10 +468,10 @@ fn solve_loaded(
         LightChoice::Given(l) => Some(l),
         LightChoice::Estimate => None,
     };
-    let lighting = Lighting::resolve(given, albedo, &image, &mask, &boundary)?;
+    let lighting = LightAndAlbedo::resolve(given, albedo, &image, &mask, &boundary)?;
     let mut brdf = config.brdf.clone();
     brdf.albedo = lighting.albedo;
-    let reflectance = brdf.build(lighting.light)?;
+    let reflectance = brdf.build(lighting.light.light())?;
     let options = ReconstructOptions {
         saturation,
         ..config.options
@@ -508,7 +506,7 @@ fn solve_loaded(
 /// The lines that say what the image's shadelab sidecar gives the solve (none without one),
 /// for a log: what was read, what the config gives instead, and which mask is solved.
 /// A sidecar that cannot be read gives no lines here: [`run`] reports it, after the image.
-pub fn sidecar_notes(config: &SolveConfig) -> Vec<String> {
+pub fn sidecar_notes(config: &SolveConfig) -> Vec<Message> {
     let source = super::PictureSource {
         image: Some(config.image.clone()),
         input_encoding: config.input_encoding,
@@ -522,9 +520,12 @@ pub fn sidecar_notes(config: &SolveConfig) -> Vec<String> {
     if let Some(s) = beside.sidecar() {
         if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
             lines.push(
-                "its targets are regions of a surface, not objects' outlines: the whole \
-                 picture is solved (give a mask to solve inside them)"
-                    .into(),
+                Message::text(
+                    "its targets are regions of a surface, not objects' outlines: the whole \
+                     picture is solved (give ",
+                )
+                .setting(Setting::Mask, "a mask")
+                .then(" to solve inside them)"),
             );
         }
     }
@@ -596,10 +597,24 @@ pub fn run_image(
     finish(config, solved, started)
 }
 
-/// [`run`] writing the outputs into `dir` as they are made, each dropped once written: the
-/// normals before the integration, whose buffers take over (f, g) (the memory a large solve
-/// needs stays near what the solve itself holds; `docs/performance.md`).
-pub fn run_into(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
+/// [`run`] and [`SolveRun::write`] in one, writing the outputs into the folder `out` as they
+/// are made, each dropped once written: the normals before the integration, whose buffers take
+/// over (f, g) (the memory a large solve needs stays near what the solve itself holds;
+/// `docs/performance.md`). The folder is claimed before the solve, so that one that cannot be
+/// written fails at once, and appears whole or not at all.
+pub fn run_into(
+    config: &SolveConfig,
+    out: &Output,
+    progress: &dyn Progress,
+) -> Result<SolveReport> {
+    let folder = out.folder(SolveRun::MARKER)?;
+    let report = fill(config, folder.path(), progress)?;
+    folder.commit()?;
+    Ok(report)
+}
+
+/// The outputs of [`run_into`], written into `dir`.
+fn fill(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
     let started = Instant::now();
     let mut solved = solve_stage(config, progress)?;
     write_normals(dir, &solved.shape.solution)?;
@@ -756,10 +771,13 @@ fn report(
     }
 }
 
-impl SolveRun {
-    /// Writes every output into `dir` (an existing, empty folder: the caller makes it appear
-    /// whole, e.g. with [`io::AtomicDir`]).
-    pub fn write(&self, dir: &Path) -> Result<()> {
+impl CommandReport for SolveRun {
+    /// The report, `report.json`.
+    const MARKER: &'static str = "report.json";
+
+    /// Writes `normals.npy`/`.png`, `convergence.csv`/`.png`, `depth.npy`/`.png`,
+    /// `surface.obj` and the report, [`SolveRun::MARKER`].
+    fn write_into(&self, dir: &Path) -> Result<()> {
         write_normals(dir, &self.shape.solution)?;
         write_convergence(dir, &self.shape, self.report.parameters.tol)?;
         write_depth(dir, &self.depth, &self.mask)?;
@@ -823,7 +841,7 @@ fn write_depth(dir: &Path, depth: &Depth, mask: &Mask) -> Result<()> {
 fn write_report(dir: &Path, report: &SolveReport) -> Result<()> {
     let value = serde_json::to_value(report)
         .map_err(|e| Error::Compute(format!("the report cannot be serialised: {e}")))?;
-    io::write_json(&dir.join(REPORT_FILE), &value)
+    io::write_json(&dir.join(SolveRun::MARKER), &value)
 }
 
 /// `convergence.csv` and, with plots, `convergence.png`: log10 of the largest update against

@@ -10,6 +10,7 @@
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels};
 use crate::io::{self, Beside, Declared, InputEncoding, RenderSidecar};
+use crate::message::{Message, Setting};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
 use serde_json::{json, Map, Value};
@@ -133,7 +134,7 @@ impl PictureSource {
 
     /// The lines that say what the picture's sidecar gives and what is given instead (none
     /// without a sidecar), for a log.
-    pub fn notes(&self) -> Result<Vec<String>> {
+    pub fn notes(&self) -> Result<Vec<Message>> {
         Ok(self.notes_on(&self.beside()?))
     }
 
@@ -144,43 +145,56 @@ impl PictureSource {
     }
 
     /// [`notes`](Self::notes) on a sidecar already read by [`beside`](Self::beside).
-    pub fn notes_on(&self, beside: &Beside) -> Vec<String> {
-        let mut lines = Vec::new();
+    pub fn notes_on(&self, beside: &Beside) -> Vec<Message> {
+        let mut lines: Vec<Message> = Vec::new();
         // The one rule for integer pictures, said where it applies (docs/conventions.md).
         let npy = self.image.as_deref().filter(|p| io::extension(p) == "npy");
         if let Some((path, scale)) = npy.and_then(|p| Some((p, io::npy_file_scale(p)?))) {
-            lines.push(format!("{}: {}", path.display(), scale.note()));
+            lines.push(format!("{}: {}", path.display(), scale.note()).into());
         }
         match beside {
             Beside::Nothing => {}
-            Beside::Foreign(path) => lines.push(format!(
-                "{} is not a shadelab sidecar (no \"program\": \"shadelab\"): ignored",
-                path.display()
-            )),
+            Beside::Foreign(path) => lines.push(
+                format!(
+                    "{} is not a shadelab sidecar (no \"program\": \"shadelab\"): ignored",
+                    path.display()
+                )
+                .into(),
+            ),
             Beside::Ours(s) => {
-                lines.push(s.summary());
+                lines.push(s.summary().into());
                 if let (Some(g), true) = (s.gamma, self.input_encoding.is_explicit()) {
-                    lines.push(format!(
-                        "the given input gamma {} replaces the sidecar's gamma {g}",
-                        self.input_encoding
-                    ));
+                    lines.push(
+                        Message::default()
+                            .setting(Setting::InputGamma, "the given input gamma")
+                            .then(format!(
+                                " {} replaces the sidecar's gamma {g}",
+                                self.input_encoding
+                            )),
+                    );
                 }
                 if let (Some(given), Some(own)) = (self.ppd, s.ppd.filter(|&p| Some(p) != self.ppd))
                 {
-                    lines.push(format!(
-                        "the given ppd {given} replaces the sidecar's {own}"
-                    ));
+                    lines.push(
+                        Message::default()
+                            .setting(Setting::Ppd, "the given ppd")
+                            .then(format!(" {given} replaces the sidecar's {own}")),
+                    );
                 }
                 let other_mask = s
                     .target_mask
                     .as_ref()
                     .filter(|&m| self.mask.as_ref().is_some_and(|g| !same_file(g, m)));
                 if let (Some(given), Some(own)) = (&self.mask, other_mask) {
-                    lines.push(format!(
-                        "the given mask {} replaces the sidecar's {}",
-                        given.display(),
-                        own.display()
-                    ));
+                    lines.push(
+                        Message::default()
+                            .setting(Setting::Mask, "the given mask")
+                            .then(format!(
+                                " {} replaces the sidecar's {}",
+                                given.display(),
+                                own.display()
+                            )),
+                    );
                 }
             }
         }
@@ -307,7 +321,7 @@ impl PictureSource {
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
                 // The output name is not used: the spec is rendered in memory.
-                let config = crate::pipeline::render::RenderConfig::from_spec_file(spec, "")?;
+                let config = crate::pipeline::render::RenderConfig::from_spec_file(spec)?;
                 let mut size = config.size;
                 if self.ppd.is_some() {
                     size.ppd = self.ppd;

@@ -20,9 +20,10 @@
 //! assert_eq!(report.sweep.lines().count(), 1 + 4);
 //! ```
 
+use super::CommandReport;
 use crate::analysis::study::{self, Shard, Study, StudySpec, REPORT, RESULTS, SWEEP};
 use crate::error::{Error, Result};
-use crate::io::{self, AtomicDir};
+use crate::io;
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;
@@ -123,17 +124,12 @@ pub fn run(config: &StudyRunConfig, progress: &dyn Progress) -> Result<StudyRunR
     })
 }
 
-impl StudyRunReport {
-    /// Writes `results.csv`, `sweep.csv` and `study.json` into the folder `dir`.
-    pub fn write_into(&self, dir: &Path) -> Result<()> {
-        write_study_files(dir, &self.results, &self.sweep, self)
-    }
+impl CommandReport for StudyRunReport {
+    const MARKER: &'static str = REPORT;
 
-    /// Writes the output folder `out` whole or not at all (a folder shadelab did not write is
-    /// written into only with `force`, and every file this run does not write stays, see
-    /// [`AtomicDir`]); returns the folder.
-    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
-        write_study_folder(out, force, |dir| self.write_into(dir))
+    /// Writes `results.csv`, `sweep.csv` and the report, `study.json`.
+    fn write_into(&self, dir: &Path) -> Result<()> {
+        write_study_files(dir, &self.results, &self.sweep, self)
     }
 }
 
@@ -228,29 +224,13 @@ pub fn merge(config: &StudyMergeConfig, progress: &dyn Progress) -> Result<Study
     })
 }
 
-impl StudyMergeReport {
-    /// Writes `results.csv`, `sweep.csv` and `study.json` into the folder `dir`.
-    pub fn write_into(&self, dir: &Path) -> Result<()> {
+impl CommandReport for StudyMergeReport {
+    const MARKER: &'static str = REPORT;
+
+    /// Writes `results.csv`, `sweep.csv` and the report, `study.json`.
+    fn write_into(&self, dir: &Path) -> Result<()> {
         write_study_files(dir, &self.results, &self.sweep, self)
     }
-
-    /// Writes the output folder `out` whole or not at all (a folder shadelab did not write is
-    /// written into only with `force`, and every file this run does not write stays, see
-    /// [`AtomicDir`]); returns the folder.
-    pub fn write(&self, out: &Path, force: bool) -> Result<PathBuf> {
-        write_study_folder(out, force, |dir| self.write_into(dir))
-    }
-}
-
-/// A study folder written whole or not at all by `fill`.
-fn write_study_folder(
-    out: &Path,
-    force: bool,
-    fill: impl FnOnce(&Path) -> Result<()>,
-) -> Result<PathBuf> {
-    let folder = AtomicDir::create(out, REPORT, force)?;
-    fill(folder.path())?;
-    folder.commit()
 }
 
 /// The three files of a study folder.
@@ -298,7 +278,7 @@ mod tests {
             assert_eq!(config.point_count(), 2);
             let report = run(&config, &NoProgress).unwrap();
             let out = dir.join(format!("s{index}"));
-            assert_eq!(report.write(&out, false).unwrap(), out);
+            assert_eq!(report.write(&super::super::Output::new(&out)).unwrap(), out);
             dirs.push(out);
         }
         let out = dir.join("merged");
@@ -313,7 +293,7 @@ mod tests {
         );
         assert_eq!(merged.spec_md5, whole.spec_md5);
         assert_eq!(merged.merged_from[0].shard.index, 0);
-        merged.write(&out, false).unwrap();
+        merged.write(&super::super::Output::new(&out)).unwrap();
         let report: Value =
             serde_json::from_slice(&std::fs::read(out.join(REPORT)).unwrap()).unwrap();
         assert_eq!(report["command"], "study merge");

@@ -179,8 +179,9 @@ pub struct CreaseSolution {
 /// Solves for (f, g) on `bc`'s domain from `image` under `reflectance` with a
 /// crease-preserving smoothness (see the module's documentation). Unknowns start at (0, 0).
 ///
-/// Fails on an image of another size than the domain, a light not in front of the surface,
-/// bad options, or a value that is not a number (from a non-finite brightness).
+/// Fails on an image of another size than the domain, bad options, or a value that is not a
+/// number (from a non-finite brightness). The light is the caller's to choose (a
+/// [`FrontLight`](crate::FrontLight)).
 ///
 /// ```
 /// use shadelab::boundary::{boundary_conditions, Boundary};
@@ -225,7 +226,6 @@ pub fn solve_from(
     options.validate()?;
     let (w, h) = (bc.roles.width(), bc.roles.height());
     image.check_same_size("image is", &bc.roles, "the domain is")?;
-    crate::reconstruct::check_light_in_front(&reflectance.light())?;
     let roles = bc.roles.data();
     let (mut f, mut g) = match start {
         Some((f0, g0)) => {

@@ -455,8 +455,10 @@ impl Solver {
     /// Recovers surface normals from `image` on `mask` under `reflectance`, with the boundary
     /// condition `boundary`.
     ///
-    /// Fails on sizes that differ from the solver's, non-finite brightness, an empty mask, a
-    /// light not strictly in front of the surface (z ≤ 0) or bad options.
+    /// Fails on sizes that differ from the solver's, non-finite brightness, an empty mask or bad
+    /// options. The light is the caller's to choose: shape from shading needs one in front of
+    /// the surface, a [`FrontLight`](crate::FrontLight), made where the light is parsed or
+    /// estimated; under a grazing light the answer means nothing.
     pub fn solve(
         &mut self,
         image: &Image,
@@ -496,14 +498,6 @@ impl Solver {
                 "image value at column {}, row {} is not a finite number",
                 i % w,
                 i / w
-            )));
-        }
-        let light = reflectance.light().direction();
-        if light.z <= 0.0 {
-            return Err(Error::invalid(format!(
-                "light ({:.4}, {:.4}, {:.4}) must have z > 0 (in front of the surface) for \
-                 shape from shading",
-                light.x, light.y, light.z
             )));
         }
         if !matches!(boundary, Boundary::Occluding | Boundary::Limb) {

@@ -259,7 +259,7 @@ fn stale_companions(path: &Path, sidecar: &Path, files: &[PathBuf]) -> Vec<PathB
 }
 
 /// The image and the companion files `write_all` writes beside it (not the sidecar).
-fn planned_files(path: &Path, output: &Output, options: &ExportOptions) -> Vec<PathBuf> {
+pub(crate) fn planned_files(path: &Path, output: &Output, options: &ExportOptions) -> Vec<PathBuf> {
     let mut files = vec![path.to_path_buf()];
     if output.targets.is_some() {
         files.push(io::sibling(path, "_mask", "png"));

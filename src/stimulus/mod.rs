@@ -29,6 +29,7 @@ mod strips;
 mod surfaces;
 mod svg;
 
+pub(crate) use export::planned_files;
 pub use export::{shown_on_display, write_output, ExportOptions, Range};
 
 // The typed interface: one parameter struct and one function per stimulus.
@@ -75,11 +76,6 @@ pub struct Info {
     /// Default pixels per degree.
     pub default_ppd: f64,
 }
-
-/// The sidecar note (`notes.target_is_silhouette: true`) that says a stimulus's target mask is
-/// an object's silhouette, its occluding outline against the background (the rendered
-/// surfaces), not regions of a surface that goes on outside them (bumps, discs, a crater).
-pub const SILHOUETTE_NOTE: &str = "target_is_silhouette";
 
 /// A fully resolved request to render a stimulus.
 #[derive(Debug, Clone)]
@@ -218,6 +214,23 @@ impl Output {
             svg: None,
             notes: Map::new(),
         }
+    }
+
+    /// The picture's luminance, when it is a gray picture (what shape from shading reads).
+    pub fn image(&self) -> Result<&Image> {
+        match &self.pixels {
+            Pixels::Gray(image) => Ok(image),
+            Pixels::Rgb(_) => Err(Error::invalid(
+                "a colour picture has no single luminance: render a gray one",
+            )),
+        }
+    }
+
+    /// The rendered surface's layers (depth, normals, mask), when it is a rendered surface.
+    pub fn surface_layers(&self) -> Result<&SurfaceLayers> {
+        self.surface.as_ref().ok_or_else(|| {
+            Error::invalid("only a rendered surface has layers (depth, normals, mask)")
+        })
     }
 }
 

@@ -88,7 +88,7 @@ fn render_surface(
     // The target is the object's silhouette against the backdrop: an occluding outline, so a
     // solve of the render takes it as the object's mask (see `io::RenderSidecar::silhouette`).
     let mut notes = serde_json::Map::new();
-    notes.insert(super::SILHOUETTE_NOTE.into(), true.into());
+    notes.insert(crate::io::SILHOUETTE_NOTE.into(), true.into());
     Ok(Output::rendered(surface, rendering, targets, notes))
 }
 

@@ -250,7 +250,7 @@ fn every_stimulus_writes_a_named_target_mask_beside_its_image() {
     let mut rendered = Vec::new();
     for s in render::list() {
         let out = d.join(format!("{}.png", s.name));
-        let mut config = RenderConfig::new(s.name, &out);
+        let mut config = RenderConfig::new(s.name);
         // Its default visual size, at a ppd that keeps the picture near 128 pixels.
         let info = stimulus::find(s.name).unwrap().info();
         let (h, w) = info.default_visual_size;
@@ -272,7 +272,7 @@ fn every_stimulus_writes_a_named_target_mask_beside_its_image() {
             }
             Err(e) => panic!("{}: {e}", s.name),
         };
-        render::write(&config, &report).unwrap();
+        report.write(&shadelab::Output::new(&out)).unwrap();
         let mask_path = d.join(format!("{}_mask.png", s.name));
         assert!(mask_path.exists(), "{}: no mask beside the image", s.name);
         let labels = io::read_labels(&mask_path, MAX).unwrap();

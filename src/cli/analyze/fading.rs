@@ -3,10 +3,12 @@
 //! fixational jitter, and an animation in which the blurred disk fades.
 
 use super::{CliError, CliResult, Global, Source};
+use crate::cli::destination;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::lightness::fading::{AdaptationOptions, DogBand};
 use shadelab::pipeline::fading::{self, FadingConfig};
+use shadelab::{CommandReport, FadingReport};
 
 /// Arguments of `analyze fading`.
 ///
@@ -110,8 +112,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..AdaptationOptions::default()
     };
     let config = FadingConfig::new(args.source.to_library(global)?, band, adaptation)?;
+    let dest = destination::<FadingReport>(&args.out, global, config.source.files())?;
     let report = fading::run(&config, &Bar::new(global.quiet))?;
-    let target = report.write(&args.out, global.force, &config.source.files())?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.note(format!("wrote {}", target.display()));
     let (energy, last) = (&report.border_energy, &report.final_contrast);

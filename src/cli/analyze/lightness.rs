@@ -3,9 +3,11 @@
 //! each model's verdict.
 
 use super::{CliError, CliResult, Global, Source};
+use crate::cli::destination;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::lightness::{self, LightnessConfig};
+use shadelab::{CommandReport, LightnessReport};
 
 /// Arguments of `analyze lightness`.
 #[derive(Debug, clap::Args)]
@@ -34,8 +36,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         }
     }
     let config = LightnessConfig::new(args.source.to_library(global)?, models)?;
+    let dest = destination::<LightnessReport>(&args.out, global, config.source.files())?;
     let report = lightness::run(&config, &Bar::new(global.quiet))?;
-    let target = report.write(&args.out, global.force, &config.source.files())?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.wrote(&target, report.seconds.total);
     let mut text = String::new();

@@ -4,14 +4,15 @@
 
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
+use crate::cli::destination;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::analysis::observer::{
     parse_kappas, LightPrior, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA, DEFAULT_PRIOR_TILT_DEG,
 };
-use shadelab::io::AtomicDir;
-use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS, REPORT_FILE};
+use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS};
+use shadelab::{CommandReport, ObserverReport};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -82,10 +83,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.check().map_err(flags::setting)?;
     let mut inputs = config.picture.source.files();
     inputs.extend(args.prior.clone());
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&inputs)?;
+    let dest = destination::<ObserverReport>(&args.out, global, inputs)?;
     let report = observer::run(&config, &Bar::new(global.quiet))?;
-    report.write(folder.path())?;
-    let target = folder.commit()?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.wrote(&target, started.elapsed().as_secs_f64());
     let mut text = true_light_line(&report.header);

@@ -3,13 +3,13 @@
 //! the shape explains and what is left as paint (the work is [`shadelab::pipeline::outline`]).
 
 use super::{CliError, CliResult, Global, Source};
+use crate::cli::destination;
 use crate::cli::flags::usage;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::io::AtomicDir;
-use shadelab::light::Light;
-use shadelab::pipeline::outline::{self, OutlineConfig, REPORT_FILE};
+use shadelab::pipeline::outline::{self, OutlineConfig, OutlineReport};
 use shadelab::visual_size::parse_size;
+use shadelab::CommandReport;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -60,24 +60,18 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         None => None,
     };
     if let Some(text) = &args.light {
-        let light: Light = text.parse().map_err(|e| usage("--light", e))?;
-        config.light = Some(light);
+        config.light = Some(text.parse().map_err(|e| usage("--light", e))?);
     }
     config.profile.depth_scale = args.depth_scale;
     config.crease.lambda = args.lambda;
-    if let Some(light) = &config.light {
-        shadelab::reconstruct::check_light_in_front(light).map_err(|e| usage("--light", e))?;
-    }
     config
         .profile
         .validate()
         .map_err(|e| usage("--depth-scale", e))?;
     config.crease.validate().map_err(|e| usage("--lambda", e))?;
-    let folder =
-        AtomicDir::create(&args.out, REPORT_FILE, global.force)?.reads(&config.source.files())?;
+    let dest = destination::<OutlineReport>(&args.out, global, config.source.files())?;
     let report = outline::run(&config, &Bar::new(global.quiet))?;
-    report.write(folder.path())?;
-    let target = folder.commit()?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     out.wrote(&target, started.elapsed().as_secs_f64());
     let mut text = String::new();

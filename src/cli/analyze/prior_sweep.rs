@@ -4,13 +4,12 @@
 
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
+use crate::cli::destination;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::io::AtomicDir;
-use shadelab::pipeline::prior_sweep::{
-    self, parse_global_light, Config, DEFAULT_TILTS, REPORT_FILE,
-};
+use shadelab::pipeline::prior_sweep::{self, parse_global_light, Config, DEFAULT_TILTS};
+use shadelab::{CommandReport, PriorSweepReport};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -46,11 +45,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..Config::new(args.picture.config(global)?)?
     };
     config.check().map_err(flags::setting)?;
-    let folder = AtomicDir::create(&args.out, REPORT_FILE, global.force)?
-        .reads(&config.picture.source.files())?;
+    let dest = destination::<PriorSweepReport>(&args.out, global, config.picture.source.files())?;
     let report = prior_sweep::run(&config, &Bar::new(global.quiet))?;
-    report.write(folder.path())?;
-    let target = folder.commit()?;
+    let target = report.write(&dest)?;
     let out = Output::new(global);
     if report.unconverged_solves > 0 {
         out.warn(format!(
