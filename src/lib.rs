@@ -65,6 +65,7 @@ pub mod lightness;
 pub mod parallel;
 pub mod params;
 pub mod pipeline;
+pub mod plot;
 pub mod progress;
 mod random;
 pub mod reconstruct;

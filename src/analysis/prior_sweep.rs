@@ -9,10 +9,10 @@
 //! changes sign: the assumed tilts at which a bump becomes a dimple.
 
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
-use super::plot::{span, Figure, LinePlot, Marker, Series};
 use crate::error::{Error, Result};
 use crate::io::csv_field;
 use crate::parallel::prelude::*;
+use crate::plot::{circle_step, span, Figure, LinePlot, Marker, Series};
 use crate::solver::SolveOptions;
 use serde::Serialize;
 
@@ -148,19 +148,6 @@ impl Sweep {
             size: (900, 900),
         }
     }
-}
-
-/// The step of `tilts` when they are equally spaced, increasing, and cover 360° exactly once.
-pub fn circle_step(tilts: &[f64]) -> Option<f64> {
-    if tilts.len() < 2 {
-        return None;
-    }
-    let step = 360.0 / tilts.len() as f64;
-    let ok = tilts
-        .iter()
-        .enumerate()
-        .all(|(i, &t)| (t - (tilts[0] + i as f64 * step)).abs() < 1e-6);
-    ok.then_some(step)
 }
 
 /// Where `values` (sampled at `angles`) change sign: linear interpolation between neighbours,

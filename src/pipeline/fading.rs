@@ -8,7 +8,6 @@
 //! `blur = 0` (the sharp one), each with its own target named `disk`.
 
 use super::source::{Picture, PictureSource};
-use crate::analysis::plot::{LinePlot, Series};
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
@@ -18,6 +17,7 @@ use crate::lightness::fading::{
     PerceivedFrames, TimeCourse,
 };
 use crate::parallel::prelude::*;
+use crate::plot::{LinePlot, Series};
 use crate::progress::Progress;
 use crate::stimulus::Pixels;
 use serde::Serialize;

@@ -3,13 +3,13 @@
 //! and each model's verdict.
 
 use super::source::PictureSource;
-use crate::analysis::plot::{ColourBar, MapFigure, Outline};
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
 use crate::io::{self, AtomicDir, BitDepth};
 use crate::lightness::checker::{self, Prediction, SquareFacts};
 use crate::lightness::{target_means, Model, TargetMean};
+use crate::plot::{ColourBar, MapFigure, Outline};
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;
