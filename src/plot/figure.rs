@@ -2,15 +2,13 @@
 
 use super::LinePlot;
 #[cfg(feature = "plots")]
-use crate::error::Result;
-#[cfg(feature = "plots")]
-use crate::grid::Grid;
-#[cfg(feature = "plots")]
-use crate::io::{self, BitDepth};
-#[cfg(feature = "plots")]
-use plotters::prelude::*;
-#[cfg(feature = "plots")]
-use std::path::Path;
+use {
+    crate::error::Result,
+    crate::grid::Grid,
+    crate::io::{self, BitDepth},
+    plotters::prelude::*,
+    std::path::Path,
+};
 
 /// Several plots stacked top to bottom in one picture.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,19 +1,14 @@
 //! Line plots: curves, markers and intervals, with the legend beside the data.
 
-use super::MAX_LEGEND;
+use super::{circle_step, Ticks, MAX_LEGEND};
 #[cfg(feature = "plots")]
-use super::{axes, plot_failure, titled_panel, write_rgb_png, PixelRect, COLOURS, FAMILY};
-use super::{circle_step, Ticks};
-#[cfg(feature = "plots")]
-use crate::error::Result;
-#[cfg(feature = "plots")]
-use crate::io;
-#[cfg(feature = "plots")]
-use plotters::prelude::*;
-#[cfg(feature = "plots")]
-use plotters::style::text_anchor::{HPos, Pos, VPos};
-#[cfg(feature = "plots")]
-use std::path::Path;
+use {
+    super::{axes, plot_failure, titled_panel, write_rgb_png, PixelRect, COLOURS, FAMILY},
+    crate::{error::Result, io},
+    plotters::prelude::*,
+    plotters::style::text_anchor::{HPos, Pos, VPos},
+    std::path::Path,
+};
 
 /// One curve.
 #[derive(Debug, Clone, PartialEq)]
