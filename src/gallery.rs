@@ -6,13 +6,13 @@
 //! it appears complete or not at all. Nothing in it depends on the clock or the thread count,
 //! so two runs give identical folders.
 
-use crate::analysis::plot::Caption;
-#[cfg(feature = "plots")]
-use crate::analysis::plot::{caption_pixels, encode, write_rgb_png};
 use crate::error::{Error, Result};
 use crate::grid::{Grid, RgbImage};
 use crate::io::{self, BitDepth};
 use crate::parallel::prelude::*;
+use crate::plot::Caption;
+#[cfg(feature = "plots")]
+use crate::plot::{caption_pixels, encode, write_rgb_png};
 use crate::stimulus::{self, ExportOptions, Output, Pixels, Request, Spec};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

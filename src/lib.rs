@@ -66,6 +66,7 @@ mod message;
 pub mod parallel;
 pub mod params;
 pub mod pipeline;
+pub mod plot;
 pub mod progress;
 mod random;
 pub mod reconstruct;

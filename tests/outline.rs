@@ -217,7 +217,7 @@ fn shading_that_is_the_outlines_prediction_is_explained_exactly_and_leaves_flat_
         .filter(|(_, &i)| i)
         .map(|(v, _)| *v)
         .collect();
-    let (lo, hi) = shadelab::analysis::plot::span(&inside);
+    let (lo, hi) = shadelab::plot::span(&inside);
     assert!(hi - lo < 1e-12, "paint spans {lo}..{hi}");
     // The fitted light finds the light's part in the plane of the profile: from the left
     // (θ = atan(sin 60° tan 40°) ≈ 36.0°), and explains it as exactly.

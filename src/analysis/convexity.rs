@@ -16,6 +16,10 @@
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels};
 
+/// Convexities of smaller magnitude than this count as zero (no verdict) when locating flips:
+/// values that small are the solver's tolerance showing through, not a shape.
+pub const CONVEXITY_ZERO: f64 = 1e-6;
+
 /// One token: which pixels it has, its core and rim.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Token {
@@ -155,7 +159,7 @@ pub(crate) fn moment_tilt(dx: f64, dy: f64) -> f64 {
 }
 
 /// The reading of a token's signed convexity: convex, concave, or flat when it is within
-/// [`CONVEXITY_ZERO`](super::prior_sweep::CONVEXITY_ZERO) of zero.
+/// [`CONVEXITY_ZERO`] of zero.
 ///
 /// ```
 /// use shadelab::analysis::convexity::Verdict;
@@ -177,7 +181,7 @@ pub enum Verdict {
 impl Verdict {
     /// The verdict on a signed convexity (NaN reads as flat).
     pub fn of(convexity: f64) -> Verdict {
-        if convexity.is_nan() || convexity.abs() <= super::prior_sweep::CONVEXITY_ZERO {
+        if convexity.is_nan() || convexity.abs() <= CONVEXITY_ZERO {
             Verdict::Flat
         } else if convexity > 0.0 {
             Verdict::Convex
@@ -408,7 +412,6 @@ mod tests {
 
     #[test]
     fn verdicts_and_the_central_token() {
-        use crate::analysis::prior_sweep::CONVEXITY_ZERO;
         assert_eq!(Verdict::of(2.0 * CONVEXITY_ZERO), Verdict::Convex);
         assert_eq!(Verdict::of(-2.0 * CONVEXITY_ZERO), Verdict::Concave);
         assert_eq!(Verdict::of(CONVEXITY_ZERO), Verdict::Flat);

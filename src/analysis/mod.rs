@@ -22,7 +22,8 @@
 //! - [`rotation`]: quarter-turn rotation of grids, for checking that rotating a picture is the
 //!   same as turning the assumed light.
 //! - [`study`]: grids of stimuli × parameters × priors, run in shards and merged.
-//! - [`plot`]: line plots (PNG and SVG) of the results.
+//!
+//! Their figures are drawn by [`crate::plot`].
 //!
 //! The exact ambiguity behind all of them: a Lambertian image under light s = (s_x, s_y, s_z) is
 //! reproduced exactly by the depth-negated surface, whose normals are (−n_x, −n_y, n_z), under
@@ -37,7 +38,6 @@ pub mod observer;
 pub mod observer_model;
 pub mod outline;
 pub mod picture;
-pub mod plot;
 pub mod prior_sweep;
 pub mod rotation;
 pub mod study;

@@ -36,13 +36,15 @@
 //! hypothesis t − θ of the sweep, and only the prior moves. This needs tilts that cover the
 //! circle in equal steps, so that the sum over t is a fair integral.
 
+use super::convexity::CONVEXITY_ZERO;
 use super::observer_model::{
     check_lapse, check_tilt_prior, convexity_bias, with_lapse, ModelParams,
 };
-use super::plot::{span, LinePlot, Marker, Series};
-use super::prior_sweep::{circle_step, Sweep, CONVEXITY_ZERO};
+use super::prior_sweep::Sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_field;
+use crate::plot::circle_step;
+use crate::plot::{span, LinePlot, Marker, Series};
 use serde::Serialize;
 
 /// The default prior tilt: 26° to the left of vertical (Mamassian & Goutcher 2001).

@@ -196,7 +196,7 @@ impl Profile {
 
     /// The height range max z − min z.
     pub fn relief(&self) -> f64 {
-        let (lo, hi) = crate::analysis::plot::span(&self.height);
+        let (lo, hi) = crate::plot::span(&self.height);
         hi - lo
     }
 }

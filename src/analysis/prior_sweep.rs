@@ -8,17 +8,14 @@
 //! not depend on the number of threads. For each token the sweep reports where its convexity
 //! changes sign: the assumed tilts at which a bump becomes a dimple.
 
+use super::convexity::CONVEXITY_ZERO;
 use super::interpretation::{check_scene, Interpretation, Interpreter, Lighting, Scene};
-use super::plot::{span, Figure, LinePlot, Marker, Series};
 use crate::error::{Error, Result};
 use crate::io::csv_field;
 use crate::parallel::prelude::*;
+use crate::plot::{circle_step, span, Figure, LinePlot, Marker, Series};
 use crate::solver::SolveOptions;
 use serde::Serialize;
-
-/// Convexities of smaller magnitude than this count as zero (no verdict) when locating flips:
-/// values that small are the solver's tolerance showing through, not a shape.
-pub const CONVEXITY_ZERO: f64 = 1e-6;
 
 /// A finished sweep.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -148,19 +145,6 @@ impl Sweep {
             size: (900, 900),
         }
     }
-}
-
-/// The step of `tilts` when they are equally spaced, increasing, and cover 360° exactly once.
-pub fn circle_step(tilts: &[f64]) -> Option<f64> {
-    if tilts.len() < 2 {
-        return None;
-    }
-    let step = 360.0 / tilts.len() as f64;
-    let ok = tilts
-        .iter()
-        .enumerate()
-        .all(|(i, &t)| (t - (tilts[0] + i as f64 * step)).abs() < 1e-6);
-    ok.then_some(step)
 }
 
 /// Where `values` (sampled at `angles`) change sign: linear interpolation between neighbours,

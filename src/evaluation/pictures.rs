@@ -109,7 +109,7 @@ const SCALE_TEXT: usize = 46;
 /// The error bar with its end values and the unit set beside it.
 #[cfg(feature = "plots")]
 fn label_error_scale(bar: RgbImage) -> RgbImage {
-    use crate::analysis::plot::{caption_pixels, encode, Caption};
+    use crate::plot::{caption_pixels, encode, Caption};
     let (width, h) = (bar.width(), bar.height());
     let size = (width as u32, h as u32);
     let mut bytes: Vec<u8> = bar

@@ -849,7 +849,7 @@ fn background_css(output: &Output, gamma: Option<f64>) -> String {
         Pixels::Gray(g) => [*g.get(0, 0); 3],
         Pixels::Rgb(c) => *c.get(0, 0),
     };
-    let [r, g, b] = v.map(|v| crate::analysis::plot::encode(v, gamma));
+    let [r, g, b] = v.map(|v| crate::plot::encode(v, gamma));
     format!("#{r:02x}{g:02x}{b:02x}")
 }
 

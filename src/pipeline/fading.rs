@@ -9,7 +9,6 @@
 
 use super::source::{Picture, PictureSource};
 use super::CommandReport;
-use crate::analysis::plot::{LinePlot, Series};
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
@@ -19,6 +18,7 @@ use crate::lightness::fading::{
     PerceivedFrames, TimeCourse,
 };
 use crate::parallel::prelude::*;
+use crate::plot::{LinePlot, Series};
 use crate::progress::Progress;
 use crate::stimulus::Pixels;
 use serde::Serialize;

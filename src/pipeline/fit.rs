@@ -18,10 +18,10 @@
 use super::CommandReport;
 use crate::analysis::fit::{bins, fit, FitOptions, ObserverFit};
 use crate::analysis::observer_model::ModelParams;
-use crate::analysis::plot::{IntervalSeries, LineAndPolar, LinePlot, Marker, PolarPlot, Series};
 use crate::error::{Error, Result};
 use crate::io;
 use crate::message::{Message, Setting};
+use crate::plot::{IntervalSeries, LineAndPolar, LinePlot, Marker, PolarPlot, Series};
 use crate::progress::Progress;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -859,7 +859,7 @@ fn p_convex_axes(title: &str) -> LinePlot {
     );
     line.y_range = Some((-0.02, 1.02));
     line.reference_y = Some(0.5);
-    line.x_ticks = crate::analysis::plot::Ticks::Degrees;
+    line.x_ticks = crate::plot::Ticks::Degrees;
     line
 }
 

@@ -4,13 +4,13 @@
 
 use super::source::PictureSource;
 use super::CommandReport;
-use crate::analysis::plot::{ColourBar, MapFigure, Outline};
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
 use crate::io::{self, BitDepth};
 use crate::lightness::checker::{self, Prediction, SquareFacts};
 use crate::lightness::{target_means, Model, TargetMean};
+use crate::plot::{ColourBar, MapFigure, Outline};
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;

@@ -8,9 +8,9 @@ use crate::analysis::observer::{
     check_circle, curves_csv, p_convex_plot, Curve, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
     DEFAULT_PRIOR_TILT_DEG,
 };
-use crate::analysis::plot::Figure;
 use crate::analysis::{observe, parse_angles, LightPrior, ObserverOptions, Sweep};
 use crate::error::{Error, Result};
+use crate::plot::Figure;
 use crate::progress::Progress;
 use serde::Serialize;
 use std::collections::BTreeMap;

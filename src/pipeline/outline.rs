@@ -19,7 +19,6 @@ use crate::analysis::outline::{
     curvature_concentration, fit_shading, outline_conditions, outline_profile, Profile, ProfileFit,
     ShadingFit, TOP_FRACTION,
 };
-use crate::analysis::plot::{ColourBar, MapFigure};
 use crate::analysis::Picture;
 use crate::boundary::BoundaryConditions;
 use crate::colormap::Colormap;
@@ -29,6 +28,7 @@ use crate::grid::{Grid, Image, Mask};
 use crate::io::{self, csv_field};
 use crate::light::FrontLight;
 use crate::parallel::prelude::*;
+use crate::plot::{ColourBar, MapFigure};
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::solver::crease::{self, CreaseOptions, CreaseSolution, Smoothness};

@@ -6,13 +6,13 @@
 use super::solve::BoundarySource;
 use super::source::PictureSource;
 use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
-use crate::analysis::plot::Figure;
 use crate::analysis::{sweep, Interpretation, Sweep};
 use crate::analysis::{Domain, Picture};
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
 use crate::io::{self, TrueLight};
+use crate::plot::Figure;
 use crate::progress::Progress;
 use crate::solver::SolveOptions;
 use serde::{Serialize, Serializer};

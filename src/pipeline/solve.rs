@@ -857,7 +857,7 @@ fn write_convergence(dir: &Path, shape: &Shape, tol: f64) -> Result<()> {
     io::write_text(&dir.join("convergence.csv"), &csv)?;
     #[cfg(feature = "plots")]
     {
-        use crate::analysis::plot::{LinePlot, Series, Ticks};
+        use crate::plot::{LinePlot, Series, Ticks};
         let mut plot = LinePlot::new(
             &format!("{method} convergence"),
             &format!("{} (count)", &unit[..unit.len() - 1]),

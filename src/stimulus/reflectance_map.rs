@@ -244,8 +244,8 @@ fn figure_pixels(
 ) -> Result<Option<crate::grid::RgbImage>> {
     #[cfg(feature = "plots")]
     {
-        use crate::analysis::plot::{ColourBar, MapFigure};
         use crate::colormap::Colormap;
+        use crate::plot::{ColourBar, MapFigure};
         let fg = p.space == OrientationSpace::Fg;
         let (space, a, b) = if fg {
             ("f, g", "f", "g")

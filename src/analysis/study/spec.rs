@@ -170,7 +170,7 @@ impl Study {
             return Err(Error::invalid("the study has no stimuli"));
         }
         let tilts = parse_angles(&spec.tilts, "tilts")?;
-        if crate::analysis::prior_sweep::circle_step(&tilts).is_none() {
+        if crate::plot::circle_step(&tilts).is_none() {
             return Err(Error::invalid(format!(
                 "tilts '{}' must cover the circle in equal steps for the observer (e.g. 0:360:15)",
                 spec.tilts
