@@ -164,7 +164,7 @@ mod cli {
         assert_eq!(checker["identical_pixels"], true);
         assert_eq!(checker["a"]["min"], checker["b"]["max"]);
         let predictions = checker["predictions"].as_array().unwrap();
-        assert_eq!(predictions.len(), 4);
+        assert_eq!(predictions.len(), 5);
         // The literature's property: FLODOG and Retinex, which discount the soft shadow,
         // predict B lighter than A (docs/lightness.md gives every model's numbers).
         for p in predictions {
