@@ -34,7 +34,7 @@ pub fn effect(output: &Image, labels: &Labels, lighter: u16, darker: u16) -> Res
             nb += 1;
         }
     }
-    Ok((na > 0 && nb > 0).then(|| a / na as f64 - b / nb as f64))
+    Ok((na > 0 && nb > 0).then_some(a / na.max(1) as f64 - b / nb.max(1) as f64))
 }
 
 /// The ranks of `values` from 1, ties given the mean of the ranks they span.
@@ -85,7 +85,7 @@ pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
         sxx += (a - mx) * (a - mx);
         syy += (b - my) * (b - my);
     }
-    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+    (sxx > 0.0 && syy > 0.0).then_some(sxy / (sxx * syy).sqrt())
 }
 
 /// How many model effects have the human sign: pairs (human, model) whose human value is 0

@@ -85,7 +85,7 @@ mod tests {
                 4.0,
             )
             .unwrap();
-        assert!(step.get(32, 4) > 0.3 && step.get(31, 4) < -0.3);
+        assert!(*step.get(32, 4) > 0.3 && *step.get(31, 4) < -0.3);
         assert!(hp.apply(&Grid::new(4, 4, 0.5), 0.0).is_err());
         assert!(HighPass { sigma_deg: -1.0 }
             .apply(&Grid::new(4, 4, 0.5), 4.0)

@@ -379,7 +379,7 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
                 },
                 human_direction: direction,
                 effect: e,
-                agrees: (direction != 0).then(|| e != 0.0 && e.signum() == f64::from(direction)),
+                agrees: (direction != 0).then_some(e != 0.0 && e.signum() == f64::from(direction)),
             });
             progress.advance(1);
         }
