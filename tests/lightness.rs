@@ -150,13 +150,13 @@ mod cli {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        for m in ["odog", "lodog", "flodog", "retinex"] {
+        for m in ["odog", "lodog", "flodog", "retinex", "highpass"] {
             assert!(dir.join(format!("res/lightness_{m}.npy")).is_file());
             assert!(dir.join(format!("res/lightness_{m}.png")).is_file());
         }
         let csv = read(&dir.join("res/targets.csv"));
         assert!(csv.starts_with("model,label,name,pixels,luminance,output\n"));
-        assert_eq!(csv.lines().count(), 1 + 4 * 2, "{csv}");
+        assert_eq!(csv.lines().count(), 1 + 5 * 2, "{csv}");
         assert!(csv.contains("retinex,2,B,"));
         let report: serde_json::Value =
             serde_json::from_str(&read(&dir.join("res/lightness.json"))).unwrap();
@@ -164,7 +164,7 @@ mod cli {
         assert_eq!(checker["identical_pixels"], true);
         assert_eq!(checker["a"]["min"], checker["b"]["max"]);
         let predictions = checker["predictions"].as_array().unwrap();
-        assert_eq!(predictions.len(), 4);
+        assert_eq!(predictions.len(), 5);
         // The literature's property: FLODOG and Retinex, which discount the soft shadow,
         // predict B lighter than A (docs/lightness.md gives every model's numbers).
         for p in predictions {

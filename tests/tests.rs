@@ -1,6 +1,7 @@
 //! shadelab's integration tests: one binary (one link step) with a module per area.
 
 mod analysis;
+mod benchmark;
 mod browser;
 mod chromium;
 mod cli;

@@ -37,6 +37,7 @@ from ._api import (
 )
 from ._commands import (
     bench,
+    benchmark,
     evaluate,
     experiment,
     fading,
@@ -49,6 +50,7 @@ from ._commands import (
 from ._display import to_psychopy
 from ._results import (
     Bench,
+    Benchmark,
     Evaluation,
     Experiment,
     Fading,
@@ -75,6 +77,7 @@ COMMANDS = {
     "analyze observer": observer,
     "analyze outline": outline,
     "bench": bench,
+    "benchmark": benchmark,
     "study run": study_run,
     "study merge": study_merge,
     "eval": evaluate,
@@ -85,6 +88,7 @@ COMMANDS = {
 __all__ = [
     "COMMANDS",
     "Bench",
+    "Benchmark",
     "Evaluation",
     "Experiment",
     "Fading",
@@ -98,6 +102,7 @@ __all__ = [
     "Result",
     "Study",
     "bench",
+    "benchmark",
     "describe",
     "evaluate",
     "experiment",

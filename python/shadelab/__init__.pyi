@@ -91,6 +91,14 @@ class Bench(Result):
     @property
     def rows(self) -> List[Dict[str, Any]]: ...
 
+class Benchmark(Result):
+    table: str
+    folder: Optional[str]
+    @property
+    def scores(self) -> List[Dict[str, Any]]: ...
+    @property
+    def rows(self) -> List[Dict[str, Any]]: ...
+
 class Experiment(Result):
     folder: str
     kept: List[str]
@@ -260,6 +268,13 @@ def outline(
     seed: Optional[int] = ...,
     **params: Any,
 ) -> Outline: ...
+def benchmark(
+    *,
+    out: Optional[PathLike] = ...,
+    force: bool = ...,
+    models: Union[str, Sequence[str]] = ...,
+    stimuli: Optional[Union[str, Sequence[str]]] = ...,
+) -> Benchmark: ...
 def study_run(spec: Union[PathLike, Dict[str, Any]], *, shard: Optional[str] = ...) -> Study: ...
 def study_merge(folders: Sequence[PathLike], out: PathLike, *, force: bool = ...) -> Study: ...
 def evaluate(

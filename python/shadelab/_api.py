@@ -655,7 +655,7 @@ def lightness(
     stimupy-style dict (its ``img``, with its ``target_mask`` and ``ppd`` unless given) or a
     stimulus name (rendered at ``ppd`` with ``params`` and ``seed``). ``ppd`` is required for
     an array when the model works in degrees (every model but ``retinex``).
-    ``model``: ``odog``, ``lodog``, ``flodog`` or ``retinex``. Returns a
+    ``model``: ``odog``, ``lodog``, ``flodog``, ``retinex`` or ``highpass``. Returns a
     :class:`Lightness`: its ``output`` (H×W) and, where the picture has targets (``mask``:
     target labels, 0 = background; a stimupy dict's ``target_mask``; a stimulus's own),
     ``targets``: one dict per target with its ``label``, ``name``, ``pixels``, mean

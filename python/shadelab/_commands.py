@@ -15,7 +15,17 @@ import numpy as np
 
 from . import _shadelab
 from ._api import _light_text, _opt, _pair, _params_json, _picture_args, _ppd
-from ._results import Bench, Evaluation, Experiment, Fading, Fit, Gallery, Outline, Study
+from ._results import (
+    Bench,
+    Benchmark,
+    Evaluation,
+    Experiment,
+    Fading,
+    Fit,
+    Gallery,
+    Outline,
+    Study,
+)
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -218,6 +228,37 @@ def bench(
         int(repeat),
     )
     return Bench(json.loads(report), table)
+
+
+def benchmark(
+    *,
+    out: Optional[PathLike] = None,
+    force: bool = False,
+    models: Union[str, Sequence[str]] = "all",
+    stimuli: Optional[Union[str, Sequence[str]]] = None,
+) -> Benchmark:
+    """Scores the lightness models against people (``shadelab benchmark``): every model
+    (``all`` or the names given: odog, lodog, flodog, retinex, highpass) on every stimulus of
+    stimupy's ``papers.RHS2007`` and ``papers.murray2020`` that has human data, or the
+    ``stimuli`` named (``NAME`` or ``SET/NAME``). The stimuli and human values come from
+    stimupy (``pip install stimupy==1.2.0``), exported by :mod:`shadelab.benchmark_data`;
+    ``out`` gets the command line's folder. Returns a :class:`Benchmark`."""
+    import tempfile
+
+    from . import benchmark_data
+
+    names = _names(stimuli) or []
+    model_text = models if isinstance(models, str) else ",".join(str(m) for m in models)
+    with tempfile.TemporaryDirectory(prefix="shadelab-benchmark-") as export:
+        benchmark_data.export(export, names)
+        report, table, folder = _shadelab.benchmark(
+            export,
+            model_text,
+            names,
+            None if out is None else _fspath(out),
+            bool(force),
+        )
+    return Benchmark(json.loads(report), table, folder)
 
 
 def experiment(

@@ -288,6 +288,28 @@ class Bench(Result):
         return self.report["rows"]
 
 
+class Benchmark(Result):
+    """:func:`shadelab.benchmark`'s result: ``scores`` (per stimulus set and model: direction
+    agreement and Spearman ρ), ``rows`` (every model on every stimulus), the Markdown
+    ``table``, the ``folder`` written (or None) and the report."""
+
+    __slots__ = ("table", "folder")
+    command = "benchmark"
+
+    def __init__(self, report: Dict[str, Any], table: str, folder: Optional[str]) -> None:
+        super().__init__(report, {})
+        self.table = table
+        self.folder = folder
+
+    @property
+    def scores(self) -> List[Dict[str, Any]]:
+        return self.report["scores"]
+
+    @property
+    def rows(self) -> List[Dict[str, Any]]:
+        return self.report["rows"]
+
+
 class Experiment(Result):
     """:func:`shadelab.experiment`'s result: the ``design`` (design.json: trials, rotations,
     keys, display, jsPsych versions), the ``folder`` written, the files it ``kept`` that the

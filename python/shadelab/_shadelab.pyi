@@ -125,6 +125,9 @@ def outline(
 def study_run(
     spec_path: Optional[str], spec_json: Optional[str], shard: Optional[str]
 ) -> Tuple[str, str, str, ReportHandle]: ...
+def benchmark(
+    export: str, models: str, stimuli: List[str], out: Optional[str], force: bool
+) -> Tuple[str, str, Optional[str]]: ...
 def study_merge(dirs: List[str], out: str, force: bool) -> Tuple[str, str, str, str]: ...
 def evaluate(
     data: str,

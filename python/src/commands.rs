@@ -1,5 +1,6 @@
 //! The commands beyond render, solve and the perception analyses: the fading disk, the
-//! outline analysis, the study (run and merge), the evaluation, the gallery and the benchmark.
+//! outline analysis, the study (run and merge), the evaluation, the gallery, the solver timing
+//! (`bench`) and the lightness benchmark against human data (`benchmark`).
 //! Each builds the library's configuration from Python's values, runs the SAME `run` the
 //! command line runs with the GIL released, and hands back its report as JSON text (with the
 //! arrays a Python user reads, and a handle that writes the command line's folder).
@@ -354,6 +355,38 @@ pub fn bench(
     config.validate().map_err(to_py)?;
     let report = run_released(py, || pl::bench::run(&config, &NoProgress))?;
     Ok((json_text(&report)?, report.table()))
+}
+
+/// The lightness models scored against stimupy's human data (`benchmark`), from the folder
+/// `shadelab.benchmark_data` exported: (report JSON, Markdown table, folder written or None).
+#[pyfunction]
+#[pyo3(signature = (export, models, stimuli, out, force))]
+pub fn benchmark(
+    py: Python<'_>,
+    export: PathBuf,
+    models: &str,
+    stimuli: Vec<String>,
+    out: Option<PathBuf>,
+    force: bool,
+) -> PyResult<(String, String, Option<String>)> {
+    let models = pl::benchmark::BenchmarkConfig::parse_models(models)
+        .map_err(|e| PyValueError::new_err(format!("models: {e}")))?;
+    let config =
+        pl::benchmark::BenchmarkConfig::from_export(&export, models, &stimuli).map_err(to_py)?;
+    let (report, written) = run_released(py, || {
+        let report = pl::benchmark::run(&config, &NoProgress)?;
+        let written = match &out {
+            Some(out) => Some(
+                report
+                    .write(&Output::new(out).force(force))?
+                    .display()
+                    .to_string(),
+            ),
+            None => None,
+        };
+        Ok((report, written))
+    })?;
+    Ok((json_text(&report)?, report.markdown(), written))
 }
 
 /// The experiment's settings as Python passes them (JSON of the keywords given; each absent

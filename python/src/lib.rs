@@ -683,6 +683,7 @@ fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(commands::gallery, m)?)?;
     m.add_function(wrap_pyfunction!(commands::bench, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::benchmark, m)?)?;
     m.add_function(wrap_pyfunction!(commands::experiment, m)?)?;
     m.add_function(wrap_pyfunction!(commands::fit_observer, m)?)?;
     m.add_class::<ReportHandle>()?;

@@ -47,7 +47,10 @@ use crate::plot::circle_step;
 use crate::plot::{span, LinePlot, Marker, Series};
 use serde::Serialize;
 
-/// The default prior tilt: 26° to the left of vertical (Mamassian & Goutcher 2001).
+/// The default prior tilt: 26° to the left of vertical, the average Mamassian & Goutcher
+/// (2001, *Cognition* 81:B1) measured. Other published values differ with the task (McManus,
+/// Buckman & Woolley 2004: 0.5° right for a single bubble, 14° left in a 16-bubble pop-out,
+/// 9° combined); docs/priors.md tabulates them.
 pub const DEFAULT_PRIOR_TILT_DEG: f64 = 26.0;
 
 /// The default concentration κ of the tilt prior (a circular standard deviation of about 49°).

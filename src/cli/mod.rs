@@ -4,6 +4,7 @@
 
 mod analyze;
 mod bench;
+mod benchmark;
 mod describe;
 mod eval;
 mod experiment;
@@ -73,6 +74,8 @@ enum Command {
     Analyze(analyze::Command),
     /// Time the shape-from-shading solvers (multigrid, Jacobi, the NumPy reference) as a table.
     Bench(bench::Args),
+    /// Score the lightness models against people: stimupy's RHS2007 and murray2020 stimuli with their human data.
+    Benchmark(benchmark::Args),
     /// Run a grid of stimuli × parameters × priors (whole or one shard), or merge shards.
     #[command(subcommand)]
     Study(study::Command),
@@ -280,6 +283,7 @@ fn run(command: Command, global: &Global) -> CliResult {
         Command::Solve(args) => solve::run(args, global),
         Command::Analyze(args) => analyze::run(args, global),
         Command::Bench(args) => bench::run(args, global),
+        Command::Benchmark(args) => benchmark::run(args, global),
         Command::Study(args) => study::run(args, global),
         Command::Eval(args) => eval::run(args, global),
         Command::Experiment(args) => experiment::run(args, global),

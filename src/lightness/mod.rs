@@ -6,19 +6,25 @@
 //!   difference-of-Gaussians with divisive normalisation), matching the multyscale package.
 //! - [`retinex`](mod@retinex): a Land–McCann / Horn Retinex (threshold small log-luminance gradients,
 //!   reintegrate the rest).
+//! - [`highpass`]: a high-pass model after Shapiro & Lu (2011): the image minus its blur.
+//! - [`benchmark`]: scores of model predictions against human data (direction of effect,
+//!   Spearman rank correlation).
 //! - [`checker`]: the checker-shadow analysis (what each model predicts for squares A and B).
 //! - [`fading`]: the fading (Troxler) disk: border band-pass energy and a temporal adaptation
 //!   model with fixational jitter.
 //!
-//! [`Model`] runs any of the four models by name; [`target_means`] summarises an output per
+//! [`Model`] runs any of the five models by name; [`target_means`] summarises an output per
 //! target label.
 
+pub mod benchmark;
 pub mod checker;
 pub mod fading;
+pub mod highpass;
 pub mod odog;
 pub mod retinex;
 
 pub use checker::{checker_shadow, CheckerReport};
+pub use highpass::HighPass;
 pub use odog::{Odog, OdogOptions, Variant};
 pub use retinex::{retinex, RetinexOptions, RetinexOutput};
 
@@ -35,39 +41,51 @@ pub enum Model {
     Odog(Variant),
     /// Retinex with the default settings.
     Retinex,
+    /// The high-pass model ([`HighPass`]) with its default σ.
+    HighPass,
 }
 
 impl Model {
     /// The names accepted by [`FromStr`].
-    pub const NAMES: [&'static str; 4] = ["odog", "lodog", "flodog", "retinex"];
+    pub const NAMES: [&'static str; 5] = ["odog", "lodog", "flodog", "retinex", "highpass"];
 
     /// The model's name.
     pub fn name(&self) -> &'static str {
         match self {
             Model::Odog(v) => v.name(),
             Model::Retinex => "retinex",
+            Model::HighPass => "highpass",
         }
     }
 
     /// The name as the literature writes it, for titles and captions: ODOG, LODOG, FLODOG
-    /// (Blakeslee & McCourt; Robinson, Hammon & de Sa), Retinex (Land & McCann).
+    /// (Blakeslee & McCourt; Robinson, Hammon & de Sa), Retinex (Land & McCann), High-pass
+    /// (Shapiro & Lu).
     pub fn title(&self) -> &'static str {
         match self {
             Model::Odog(Variant::Odog) => "ODOG",
             Model::Odog(Variant::Lodog) => "LODOG",
             Model::Odog(Variant::Flodog) => "FLODOG",
             Model::Retinex => "Retinex",
+            Model::HighPass => "High-pass",
         }
     }
 
     /// Whether the model needs the image's resolution in pixels per degree (the filter models
     /// are defined in degrees; Retinex works on neighbouring pixels).
     pub fn needs_ppd(&self) -> bool {
-        matches!(self, Model::Odog(_))
+        matches!(self, Model::Odog(_) | Model::HighPass)
+    }
+
+    /// Whether the output is signed about zero (the filter models) rather than a reflectance
+    /// estimate in 0..1 (Retinex).
+    pub fn signed(&self) -> bool {
+        !matches!(self, Model::Retinex)
     }
 
     /// The model's output for `image` (linear luminance): arbitrary units for the ODOG family
-    /// (positive = brighter), estimated reflectance with the lightest pixel 1 for Retinex.
+    /// (positive = brighter), estimated reflectance with the lightest pixel 1 for Retinex,
+    /// luminance minus its blur for the high-pass model.
     pub fn predict(&self, image: &Image, ppd: Option<f64>) -> Result<Image> {
         match self {
             Model::Odog(v) => {
@@ -80,6 +98,12 @@ impl Model {
                 Odog::new(image.width(), image.height(), ppd, *v)?.apply(image)
             }
             Model::Retinex => Ok(retinex(image, None, &RetinexOptions::default())?.lightness),
+            Model::HighPass => {
+                let ppd = ppd.ok_or_else(|| {
+                    Error::invalid("the highpass model needs the resolution in pixels per degree")
+                })?;
+                HighPass::default().apply(image, ppd)
+            }
         }
     }
 }
@@ -95,6 +119,9 @@ impl FromStr for Model {
     fn from_str(s: &str) -> Result<Self> {
         if s.trim().eq_ignore_ascii_case("retinex") {
             return Ok(Model::Retinex);
+        }
+        if s.trim().eq_ignore_ascii_case("highpass") {
+            return Ok(Model::HighPass);
         }
         s.parse::<Variant>()
             .map(Model::Odog)
@@ -164,7 +191,7 @@ mod tests {
             assert_eq!(n.parse::<Model>().unwrap().name(), n);
         }
         let e = "odg".parse::<Model>().unwrap_err().to_string();
-        assert!(e.contains("odog, lodog, flodog, retinex"), "{e}");
+        assert!(e.contains("odog, lodog, flodog, retinex, highpass"), "{e}");
         assert!(Model::Odog(Variant::Lodog).needs_ppd() && !Model::Retinex.needs_ppd());
         let err = Model::Odog(Variant::Odog)
             .predict(&Grid::new(8, 8, 0.5), None)

@@ -958,7 +958,9 @@ impl Report {
         Some(line)
     }
 
-    /// The Methods paragraph (Markdown).
+    /// The Methods paragraph (Markdown). The fitted μ is set beside the published values it
+    /// compares with (docs/priors.md's table): Mamassian & Goutcher (2001), 26° left on
+    /// average, and McManus, Buckman & Woolley (2004), 9° left combined.
     pub fn methods(&self) -> String {
         let f = &self.pooled;
         let d = &self.design;
@@ -1027,7 +1029,9 @@ impl Report {
             likelihood, maximised over the other parameters, lies within χ²₁(0.95)/2 of the \
             maximum){}.\n\n\
             **Results.** The light prior pointed at μ = {:.1}° ({}; positive = left of \
-            vertical) with concentration κ = {:.2} ({}); the convexity prior was π = {:.3} ({}) \
+            vertical; compare: Mamassian & Goutcher 2001, 26° left on average; McManus, \
+            Buckman & Woolley 2004, 9° left over a single bubble and a 16-bubble pop-out \
+            combined) with concentration κ = {:.2} ({}); the convexity prior was π = {:.3} ({}) \
             and the lapse rate λ = {:.3} ({}). The log-likelihood was {:.2}; against the model \
             without a convexity prior (π = 0.5), ΔAIC = {:.2} and ΔBIC = {:.2} (positive values \
             favour a convexity prior).\n",

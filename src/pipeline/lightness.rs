@@ -39,7 +39,7 @@ impl LightnessConfig {
     ///
     /// ```
     /// use shadelab::pipeline::lightness::LightnessConfig;
-    /// assert_eq!(LightnessConfig::parse_models("all").unwrap().len(), 4);
+    /// assert_eq!(LightnessConfig::parse_models("all").unwrap().len(), 5);
     /// assert_eq!(LightnessConfig::parse_models("retinex").unwrap().len(), 1);
     /// assert!(LightnessConfig::parse_models("blah").is_err());
     /// ```
@@ -268,7 +268,7 @@ impl LightnessReport {
     pub fn figure(&self, model: Model, out: &Image) -> MapFigure {
         let range = match model {
             Model::Retinex => (0.0, 1.0),
-            Model::Odog(_) => {
+            Model::Odog(_) | Model::HighPass => {
                 let m = out.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 if m > 0.0 {
                     (-m, m)
@@ -283,6 +283,7 @@ impl LightnessReport {
             label: match model {
                 Model::Retinex => "estimated reflectance (lightest pixel = 1)",
                 Model::Odog(_) => "model brightness (arbitrary units, 0 = mid-grey)",
+                Model::HighPass => "luminance minus its blur (0 = as its surround)",
             }
             .into(),
         };
@@ -314,6 +315,9 @@ fn units(model: Model) -> &'static str {
     match model {
         Model::Retinex => "estimated reflectance, lightest pixel = 1",
         Model::Odog(_) => "model brightness, arbitrary units, 0 = mid-grey, positive = brighter",
+        Model::HighPass => {
+            "luminance minus its Gaussian blur, positive = brighter than the surround"
+        }
     }
 }
 
@@ -322,7 +326,7 @@ fn units(model: Model) -> &'static str {
 fn picture(model: Model, out: &Image) -> Image {
     match model {
         Model::Retinex => out.clone(),
-        Model::Odog(_) => {
+        Model::Odog(_) | Model::HighPass => {
             let m = out.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
             out.map(|v| if m > 0.0 { 0.5 + 0.5 * v / m } else { 0.5 })
         }

@@ -5,6 +5,7 @@
 //! writes what the report says.
 
 pub mod bench;
+pub mod benchmark;
 pub mod experiment;
 pub mod fading;
 pub mod fit;

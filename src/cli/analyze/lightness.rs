@@ -14,8 +14,8 @@ use shadelab::{CommandReport, LightnessReport};
 pub struct Args {
     #[command(flatten)]
     pub source: Source,
-    /// The model: odog, lodog, flodog, retinex, or all (each in turn).
-    #[arg(long, value_name = "odog|lodog|flodog|retinex|all")]
+    /// The model: odog, lodog, flodog, retinex, highpass, or all (each in turn).
+    #[arg(long, value_name = "odog|lodog|flodog|retinex|highpass|all")]
     model: String,
     /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
     #[arg(long, value_name = "DIR")]

@@ -1,0 +1,190 @@
+//! `shadelab benchmark`: the scores' arithmetic, the table's files, and the models on stimupy's
+//! own stimuli with their human data. The stimupy tests need a Python with stimupy 1.2
+//! (`SHADELAB_STIMUPY_PYTHON`, else `target/python/venv/bin/python` where `.ci/run` installs
+//! it, else `python3`); without one they say why and pass, unless `SHADELAB_REQUIRE_STIMUPY=1`.
+
+use crate::cli::{assert_error, scratch, shadelab};
+use shadelab::lightness::benchmark::spearman;
+use shadelab::pipeline::benchmark::{
+    self as bm, contrast_stimulus, BenchmarkConfig, BenchmarkRow, Human,
+};
+use shadelab::progress::NoProgress;
+use std::path::PathBuf;
+
+/// The interpreter with stimupy, or `None` (having said why) when there is none.
+fn stimupy_python() -> Option<String> {
+    let venv = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/python/venv/bin/python");
+    let python = std::env::var("SHADELAB_STIMUPY_PYTHON")
+        .ok()
+        .unwrap_or_else(|| {
+            if venv.is_file() {
+                venv.display().to_string()
+            } else {
+                "python3".into()
+            }
+        });
+    if bm::stimupy_available(&python) {
+        return Some(python);
+    }
+    let why = format!("{python} cannot import stimupy and numpy (pip install stimupy==1.2.0)");
+    if std::env::var("SHADELAB_REQUIRE_STIMUPY").is_ok_and(|v| v == "1") {
+        panic!("benchmark test cannot run, and SHADELAB_REQUIRE_STIMUPY=1: {why}");
+    }
+    eprintln!("benchmark test SKIPPED: {why}");
+    None
+}
+
+fn row(stimulus: &str, human: f64, effect: f64) -> BenchmarkRow {
+    BenchmarkRow {
+        set: "synthetic".into(),
+        stimulus: stimulus.into(),
+        model: "m".into(),
+        human,
+        human_ci95: None,
+        human_direction: if human > 0.0 { 1 } else { 0 },
+        effect,
+        agrees: (human > 0.0).then_some(effect > 0.0),
+    }
+}
+
+#[test]
+fn scores_on_three_stimuli_match_the_hand_computed_ones() {
+    // Human 1, 2, 3 against effects 0.1, 0.3, −0.2: ranks (1, 2, 3) and (2, 3, 1), d² = 1 + 1
+    // + 4 = 6, ρ = 1 − 6·6 / (3·(9 − 1)) = −0.5; two of three effects have the human sign.
+    let rows = [row("a", 1.0, 0.1), row("b", 2.0, 0.3), row("c", 3.0, -0.2)];
+    let s = &bm::scores(&rows)[0];
+    assert_eq!(
+        (s.direction_agrees, s.direction_counted, s.stimuli),
+        (2, 3, 3)
+    );
+    assert!(
+        (s.spearman.unwrap() - (-0.5)).abs() < 1e-12,
+        "{:?}",
+        s.spearman
+    );
+    // A stimulus without a human effect is ranked but not counted for the direction.
+    let rows = [row("a", 1.0, 0.1), row("b", 0.0, -0.3), row("c", 3.0, 0.2)];
+    let s = &bm::scores(&rows)[0];
+    assert_eq!((s.direction_agrees, s.direction_counted), (2, 2));
+    assert_eq!(s.spearman, spearman(&[1.0, 0.0, 3.0], &[0.1, -0.3, 0.2]));
+    assert!((s.spearman.unwrap() - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn the_tables_csv_and_json_hold_the_same_rows() {
+    let stimuli = (1..=3)
+        .map(|i| {
+            contrast_stimulus(
+                &format!("sbc{i}"),
+                32 * i,
+                8.0,
+                Human::EffectStrength { value: i as f64 },
+            )
+        })
+        .collect();
+    let config = BenchmarkConfig::new(
+        stimuli,
+        BenchmarkConfig::parse_models("retinex,highpass").unwrap(),
+        "test".into(),
+    )
+    .unwrap();
+    let report = bm::run(&config, &NoProgress).unwrap();
+    let dir = scratch("benchmark-tables");
+    let written =
+        shadelab::CommandReport::write(&report, &shadelab::Output::new(dir.join("res"))).unwrap();
+    let csv_path = written.join("benchmark.csv");
+    let from_csv =
+        bm::parse_rows_csv(&std::fs::read_to_string(&csv_path).unwrap(), &csv_path).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(written.join(bm::MARKER)).unwrap()).unwrap();
+    let from_json: Vec<BenchmarkRow> = serde_json::from_value(json["rows"].clone()).unwrap();
+    assert_eq!(from_csv, from_json);
+    assert_eq!(from_csv, report.rows);
+    assert_eq!(from_csv.len(), 6);
+    let md = std::fs::read_to_string(written.join("benchmark.md")).unwrap();
+    assert!(md.contains("| highpass |") && md.contains("sbc3"), "{md}");
+    // The high-pass model sees simultaneous contrast in the direction people do.
+    assert!(report
+        .rows
+        .iter()
+        .filter(|r| r.model == "highpass")
+        .all(|r| r.agrees == Some(true)));
+    if cfg!(feature = "plots") {
+        assert!(written.join("benchmark.png").is_file());
+    }
+}
+
+#[test]
+fn odog_predicts_the_direction_of_whites_effect_on_stimupys_stimuli() {
+    let Some(python) = stimupy_python() else {
+        return;
+    };
+    let dir = scratch("benchmark-stimupy");
+    let out = shadelab(
+        &dir,
+        &[
+            "--json",
+            "--quiet",
+            "benchmark",
+            "--python",
+            &python,
+            "--models",
+            "odog,highpass",
+            "--stimuli",
+            "murray2020/white,simcon,snake",
+            "--out",
+            "res",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["stimupy_version"], "1.2.0");
+    let rows = report["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3 * 2);
+    for r in rows.iter().filter(|r| r["model"] == "odog") {
+        // White's effect, simultaneous contrast and the snake: ODOG puts the target people
+        // see as lighter above the other (Blakeslee & McCourt 1999). murray2020's pictures are
+        // small (128 × 128 at 16 ppd): RHS2007's 1024 × 1024 ones would take minutes here.
+        assert_eq!(r["agrees"], true, "{r}");
+        assert_eq!(r["human_direction"], 1, "{r}");
+    }
+    let human_of = |name: &str| {
+        rows.iter()
+            .find(|r| r["stimulus"] == name)
+            .map(|r| r["human"].as_f64().unwrap())
+            .unwrap()
+    };
+    // The human values are stimupy's (Murray's proportion expected and its interval).
+    assert_eq!(human_of("white"), 0.95);
+    assert_eq!(human_of("snake"), 0.9625);
+    for f in ["benchmark.csv", "scores.csv", "benchmark.md", bm::MARKER] {
+        assert!(dir.join("res").join(f).is_file(), "{f}");
+    }
+    // An unknown stimulus, and an interpreter that cannot be run: one line each.
+    let bad = shadelab(
+        &dir,
+        &["benchmark", "--python", &python, "--stimuli", "nope"],
+    );
+    assert_error(&bad, 2, "nope");
+}
+
+#[test]
+fn a_missing_python_is_one_line_saying_how_to_install_stimupy() {
+    let dir = scratch("benchmark-no-python");
+    let out = shadelab(
+        &dir,
+        &[
+            "benchmark",
+            "--python",
+            "/nonexistent/python3",
+            "--stimuli",
+            "WE_thick",
+        ],
+    );
+    assert_error(&out, 2, "pip install stimupy==1.2.0");
+    assert!(!dir.join("res").exists());
+}
