@@ -241,11 +241,11 @@ def benchmark(
     (``all`` or the names given: odog, lodog, flodog, retinex, highpass) on every stimulus of
     stimupy's ``papers.RHS2007`` and ``papers.murray2020`` that has human data, or the
     ``stimuli`` named (``NAME`` or ``SET/NAME``). The stimuli and human values come from
-    stimupy (``pip install stimupy==1.2.0``), exported by :mod:`shadelab.benchmark_data`;
+    stimupy (``pip install stimupy==1.2.0``), exported by :mod:`shadelab._benchmark_data`;
     ``out`` gets the command line's folder. Returns a :class:`Benchmark`."""
     import tempfile
 
-    from . import benchmark_data
+    from . import _benchmark_data as benchmark_data
 
     names = _names(stimuli) or []
     model_text = models if isinstance(models, str) else ",".join(str(m) for m in models)

@@ -358,7 +358,7 @@ pub fn bench(
 }
 
 /// The lightness models scored against stimupy's human data (`benchmark`), from the folder
-/// `shadelab.benchmark_data` exported: (report JSON, Markdown table, folder written or None).
+/// `shadelab._benchmark_data` exported: (report JSON, Markdown table, folder written or None).
 #[pyfunction]
 #[pyo3(signature = (export, models, stimuli, out, force))]
 pub fn benchmark(

@@ -5,7 +5,7 @@
 //!
 //! shadelab holds no human value: the stimuli and the data come from stimupy through an
 //! export folder (`stimuli.json` with `.npy` images and target masks) that the Python package
-//! writes (`python3 -m shadelab.benchmark_data DIR`, also run by the `benchmark` command).
+//! writes (`python3 -m shadelab._benchmark_data DIR`, also run by the `benchmark` command).
 
 use super::CommandReport;
 use crate::error::{Error, Result};
@@ -23,7 +23,7 @@ use std::time::Instant;
 /// The file that marks an output folder as written by the benchmark.
 pub const MARKER: &str = "benchmark.json";
 
-/// The export folder's index, written by `shadelab.benchmark_data`.
+/// The export folder's index, written by `shadelab._benchmark_data`.
 pub const EXPORT_INDEX: &str = "stimuli.json";
 
 /// What people reported for one stimulus.
@@ -240,9 +240,9 @@ impl BenchmarkConfig {
     }
 }
 
-/// The exporter (`python/shadelab/benchmark_data.py`), carried by the program so that the
+/// The exporter (`python/shadelab/_benchmark_data.py`), carried by the program so that the
 /// command line needs only Python with stimupy and NumPy, not the shadelab package.
-pub const EXPORTER: &str = include_str!("../../python/shadelab/benchmark_data.py");
+pub const EXPORTER: &str = include_str!("../../python/shadelab/_benchmark_data.py");
 
 /// Runs the exporter with the interpreter `python` into the folder `dir` (created), keeping
 /// the stimuli named in `only`. Fails with one line saying how to install stimupy when the

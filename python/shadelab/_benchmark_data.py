@@ -1,6 +1,6 @@
 """Exports the lightness benchmark's stimuli and human data from stimupy into a folder.
 
-Run as ``python3 -m shadelab.benchmark_data DIR [NAME ...]`` (or as a plain script: it imports
+Run as ``python3 -m shadelab._benchmark_data DIR [NAME ...]`` (or as a plain script: it imports
 only stimupy and NumPy, so ``shadelab benchmark`` runs it without the shadelab package). It
 writes ``DIR/stimuli.json`` and, per stimulus, ``SET_NAME_img.npy`` and
 ``SET_NAME_mask.npy``: every stimulus of ``stimupy.papers.RHS2007`` and
