@@ -677,7 +677,7 @@ impl CommandReport for BenchmarkReport {
 
     /// Writes `benchmark.json`, `benchmark.csv` (every model on every stimulus),
     /// `scores.csv`, `benchmark.md` and, in builds with plots, `benchmark.png` into `dir`, a
-    /// folder already prepared (see [`AtomicDir`]).
+    /// folder already prepared (see [`crate::io::AtomicDir`]).
     fn write_into(&self, dir: &Path) -> Result<()> {
         io::write_text(&dir.join("benchmark.csv"), &rows_csv(&self.rows))?;
         let mut scores =

@@ -5,7 +5,7 @@
 //! seed, the display and the design's hash) that `shadelab fit observer` reads.
 //!
 //! [`run`] renders one image per rotation (with the render pipeline, so every image has its
-//! sidecar) and lists the trials; [`write()`] lands the folder whole: `index.html` (the design
+//! sidecar) and lists the trials; [`Report::write`] lands the folder whole: `index.html` (the design
 //! embedded) and `jatos.html` (the same study for JATOS), `experiment.js` (the study around the
 //! trials: browser check, consent, fullscreen, calibration, saving to JATOS, to a server by POST
 //! or as a download, the Prolific completion), `shadelab-timeline.js` (the trials as a jsPsych
@@ -19,18 +19,18 @@
 //! `trials` lists them in the order of the design's seed alone).
 //!
 //! ```
-//! use shadelab::pipeline::experiment::{run, write, Config};
-//! use shadelab::NoProgress;
+//! use shadelab::pipeline::experiment::{run, Config};
+//! use shadelab::{NoProgress, Output};
 //!
 //! let dir = std::env::temp_dir().join(format!("shadelab-doc-experiment-{}", std::process::id()));
-//! let mut config = Config::new(&dir);
+//! let mut config = Config::new();
 //! config.rotations = vec![0.0, 90.0, 180.0, 270.0];
 //! config.repeats = 2;
 //! config.practice = 1;
 //! config.validate()?;
 //! let report = run(&config, &NoProgress)?;
 //! assert_eq!(report.design.trials.len(), 4 * 2 + 1);
-//! let folder = write(&config, &report)?.folder;
+//! let folder = report.write(&Output::new(&dir))?.folder;
 //! assert!(folder.join("index.html").exists() && folder.join("design.json").exists());
 //! assert!(folder.join("images/theta-090.png").exists());
 //! # std::fs::remove_dir_all(&dir)?;
@@ -703,7 +703,7 @@ fn angle_between(a: f64, b: f64) -> f64 {
 }
 
 /// Renders one image per rotation and draws the trial order (nothing is written; see
-/// [`write()`]). Refuses a stimulus that does not show one target, or whose bright side does not
+/// [`Report::write`]). Refuses a stimulus that does not show one target, or whose bright side does not
 /// face its light (a dimple), since θ would then mean something else.
 pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     config.validate()?;
@@ -980,7 +980,7 @@ fn npm_install(folder: &Path) -> Install {
     }
 }
 
-/// What [`write()`] did.
+/// What [`Report::write`] did.
 #[derive(Debug, Clone)]
 pub struct Written {
     /// The experiment folder.

@@ -1,6 +1,6 @@
 //! `gallery` as a pipeline: every preset (the built-in ones of `stimuli/`, or a folder of
 //! specs) rendered in memory, then written into one folder with thumbnails, a contact sheet and
-//! an `index.html`; see [`crate::gallery`] for what it holds.
+//! an `index.html`; see [`mod@crate::gallery`] for what it holds.
 //!
 //! ```
 //! use shadelab::pipeline::gallery::{run, GalleryConfig};

@@ -176,7 +176,7 @@ pub struct RenderReport {
     pub export: ExportOptions,
 }
 
-/// Renders the config's stimulus (nothing is written; see [`write()`]).
+/// Renders the config's stimulus (nothing is written; see [`RenderReport::write`]).
 pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderReport> {
     progress.start(1, "render");
     let rendered = stimulus::generate(

@@ -38,7 +38,7 @@ pub enum LightChoice {
 
 impl std::str::FromStr for LightChoice {
     type Err = Error;
-    /// `estimate`, or any light syntax ([`Light`]'s `FromStr`) for a light in front.
+    /// `estimate`, or any light syntax ([`crate::Light`]'s `FromStr`) for a light in front.
     fn from_str(text: &str) -> Result<Self> {
         match text.trim() {
             "estimate" => Ok(LightChoice::Estimate),
