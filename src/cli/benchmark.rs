@@ -45,9 +45,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         )?),
         None => None,
     };
-    let temp = TempDir::new()?;
-    pipeline::export_with_python(&args.python, &temp.0, &args.stimuli)?;
-    let config = BenchmarkConfig::from_export(&temp.0, models, &args.stimuli)?;
+    let config = BenchmarkConfig::from_stimupy(&args.python, models, &args.stimuli)?;
     let report = pipeline::run(&config, &Bar::new(global.quiet))?;
     let out = Output::new(global);
     if let Some(dest) = dest {
@@ -55,25 +53,4 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         out.wrote(&target, started.elapsed().as_secs_f64());
     }
     out.results(&report.markdown(), &report)
-}
-
-/// A scratch folder removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> std::io::Result<TempDir> {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let dir =
-            std::env::temp_dir().join(format!("shadelab-benchmark-{}-{nanos}", std::process::id()));
-        std::fs::create_dir_all(&dir)?;
-        Ok(TempDir(dir))
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }

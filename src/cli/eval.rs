@@ -132,7 +132,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         out: args
             .out
             .as_ref()
-            .map(|o| shadelab::Output::new(o).force(global.force)),
+            .map(|o| super::output_to(o, global, Vec::new())),
         commit,
         command: std::env::args().collect(),
     };

@@ -143,8 +143,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.max_pixels = global.max_pixels;
     config.check().map_err(super::flags::setting)?;
     // Claimed before the work, so that a folder that may not be written fails at once.
-    let dest = shadelab::Output::new(&args.out).force(global.force);
-    dest.check(shadelab::pipeline::experiment::MARKER)?;
+    let dest = super::destination_marked(
+        &args.out,
+        global,
+        Vec::new(),
+        shadelab::pipeline::experiment::MARKER,
+    )?;
     let report = build(&config, &Bar::new(global.quiet))?;
     let written = report.write(&dest)?;
     let folder = written.folder;

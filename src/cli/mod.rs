@@ -192,18 +192,37 @@ pub fn main() -> ExitCode {
     }
 }
 
-/// Where a command writes `path`, with `--force`, never replacing `inputs`; claimed now, so that
-/// a folder that may not be written fails before the work.
+/// Where a command writes `path`, with `--force`, never replacing `inputs`.
+pub(crate) fn output_to(
+    path: &std::path::Path,
+    global: &Global,
+    inputs: Vec<std::path::PathBuf>,
+) -> shadelab::Output {
+    shadelab::Output::new(path)
+        .force(global.force)
+        .reads(inputs)
+}
+
+/// [`output_to`], claimed now for a folder marked by `marker`, so that a folder that may not be
+/// written fails before the work.
+pub(crate) fn destination_marked(
+    path: &std::path::Path,
+    global: &Global,
+    inputs: Vec<std::path::PathBuf>,
+    marker: &str,
+) -> Result<shadelab::Output, CliError> {
+    let out = output_to(path, global, inputs);
+    out.check(marker)?;
+    Ok(out)
+}
+
+/// [`destination_marked`] for a command's report `R`.
 pub(crate) fn destination<R: shadelab::CommandReport>(
     path: &std::path::Path,
     global: &Global,
     inputs: Vec<std::path::PathBuf>,
 ) -> Result<shadelab::Output, CliError> {
-    let out = shadelab::Output::new(path)
-        .force(global.force)
-        .reads(inputs);
-    out.check(R::MARKER)?;
-    Ok(out)
+    destination_marked(path, global, inputs, R::MARKER)
 }
 
 /// The exit status of a run stopped by a signal (128 + SIGINT, as shells report it).

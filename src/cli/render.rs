@@ -205,9 +205,7 @@ pub fn render_to(config: &RenderConfig, out: &Path, global: &Global) -> CliResul
     config.validate()?;
     config.check_output(out)?;
     let report = render::run(config, &NoProgress)?;
-    let dest = shadelab::Output::new(out)
-        .force(global.force)
-        .reads(config.files());
+    let dest = super::output_to(out, global, config.files());
     let files = report.write(&dest)?;
     let out = super::output::Output::new(global);
     for w in &report.warnings {

@@ -81,9 +81,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         out.note(super::flags::worded(&line));
     }
     // The folder is claimed before the long part, so an unwritable one fails at once.
-    let dest = shadelab::Output::new(&args.out)
-        .force(global.force)
-        .reads(config.files());
+    let dest = super::output_to(&args.out, global, config.files());
     let report = solve::run_into(&config, &dest, &Bar::new(global.quiet))?;
     let target = dest.path().to_path_buf();
     // Said once the picture was read and solved: a refusal stays one line.

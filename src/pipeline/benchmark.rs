@@ -172,6 +172,15 @@ impl BenchmarkConfig {
         Ok(())
     }
 
+    /// The stimuli and human data stimupy exports (run by `python`, which must have stimupy;
+    /// see [`export_with_python`]), read into memory from a scratch folder that is removed
+    /// afterwards, whatever happens; `only` as [`BenchmarkConfig::from_export`].
+    pub fn from_stimupy(python: &str, models: Vec<Model>, only: &[String]) -> Result<Self> {
+        let scratch = Scratch::new();
+        export_with_python(python, &scratch.0, only)?;
+        BenchmarkConfig::from_export(&scratch.0, models, only)
+    }
+
     /// Reads an export folder (`stimuli.json` and its `.npy` files), keeping the stimuli
     /// named in `only` (`NAME` or `SET/NAME`; empty keeps all).
     pub fn from_export(dir: &Path, models: Vec<Model>, only: &[String]) -> Result<Self> {
@@ -243,6 +252,29 @@ impl BenchmarkConfig {
 /// The exporter (`python/shadelab/_benchmark_data.py`), carried by the program so that the
 /// command line needs only Python with stimupy and NumPy, not the shadelab package.
 pub const EXPORTER: &str = include_str!("../../python/shadelab/_benchmark_data.py");
+
+/// A scratch folder for one export, removed when dropped.
+struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    fn new() -> Scratch {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        Scratch(std::env::temp_dir().join(format!(
+            "shadelab-benchmark-{}-{nanos}-{n}",
+            std::process::id()
+        )))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
 
 /// Runs the exporter with the interpreter `python` into the folder `dir` (created), keeping
 /// the stimuli named in `only`. Fails with one line saying how to install stimupy when the

@@ -215,13 +215,14 @@ impl RenderReport {
     /// sidecar would take its name). Returns every file written.
     pub fn write(&self, out: &super::Output) -> Result<Vec<PathBuf>> {
         let sidecar = crate::io::render_sidecar::sidecar_path(out.path());
-        let canonical = |p: &Path| std::fs::canonicalize(p).ok();
-        let same = |input: &PathBuf| {
-            [out.path(), sidecar.as_path()]
-                .iter()
-                .any(|p| canonical(p).is_some() && canonical(p) == canonical(input))
-        };
-        if let Some(input) = out.inputs().iter().find(|i| same(i)) {
+        // The files already there under the names written, each resolved once.
+        let replaced: Vec<PathBuf> = [out.path(), sidecar.as_path()]
+            .iter()
+            .filter_map(|p| std::fs::canonicalize(p).ok())
+            .collect();
+        let is_replaced =
+            |input: &&PathBuf| std::fs::canonicalize(input).is_ok_and(|c| replaced.contains(&c));
+        if let Some(input) = out.inputs().iter().find(is_replaced) {
             return Err(Error::format(
                 input,
                 "is the spec this render reads, and the render's files would replace it (even \
