@@ -6,11 +6,11 @@
 //! median, and how many solves needed the Jacobi fallback. Not criterion: one sample takes
 //! seconds, and the figure wanted is the wall time of one sweep.
 
-use shadelab::analysis::interpretation::analysis_solve_options;
-use shadelab::analysis::{sweep, Domain, Picture, Scene};
-use shadelab::boundary::Boundary;
-use shadelab::solver::Method;
-use shadelab::visual_size::SizeRequest;
+use shadelab::internal::analysis::interpretation::analysis_solve_options;
+use shadelab::internal::analysis::{sweep, Domain, Scene, TokenPicture};
+use shadelab::Boundary;
+use shadelab::Method;
+use shadelab::SizeRequest;
 use std::time::Instant;
 
 fn main() {
@@ -26,7 +26,7 @@ fn main() {
         rayon::current_num_threads()
     );
     for (name, pairs, ppd, domain) in cases {
-        let given = shadelab::params::Params::parse_pairs(pairs).expect("valid parameters");
+        let given = shadelab::Params::parse_pairs(pairs).expect("valid parameters");
         let size = SizeRequest {
             visual_size: Some((256.0 / ppd, 256.0 / ppd)),
             ppd: Some(ppd),
@@ -34,7 +34,7 @@ fn main() {
         };
         let (request, output) =
             shadelab::stimulus::generate(name, &given, &size, 0, 1 << 24).expect("renders");
-        let picture = Picture::from_stimulus(&request, &output).expect("a picture");
+        let picture = TokenPicture::from_stimulus(&request, &output).expect("a picture");
         let mask = picture.domain(domain);
         let lighting = picture
             .lighting(&mask, 45.0, None, None)

@@ -6,8 +6,8 @@
 //! model, applies it once, prints the timings and exits.
 
 use criterion::{criterion_group, Criterion};
-use shadelab::grid::Grid;
-use shadelab::lightness::{Odog, Variant};
+use shadelab::internal::lightness::{Odog, Variant};
+use shadelab::Grid;
 use shadelab::Image;
 use std::hint::black_box;
 use std::time::{Duration, Instant};

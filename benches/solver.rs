@@ -8,11 +8,11 @@
 //! once with multigrid, prints the time and exits.
 
 use criterion::{criterion_group, BenchmarkId, Criterion};
-use shadelab::boundary::Boundary;
-use shadelab::reflectance::Lambertian;
-use shadelab::render::{render, RenderOptions};
-use shadelab::solver::{Method, SolveOptions, Solver};
-use shadelab::surface::{sphere, Surface};
+use shadelab::internal::render::{render, RenderOptions};
+use shadelab::internal::solver::{Method, SolveOptions, Solver};
+use shadelab::internal::surface::{sphere, Surface};
+use shadelab::Boundary;
+use shadelab::Lambertian;
 use shadelab::{Image, Light};
 use std::hint::black_box;
 use std::time::{Duration, Instant};

@@ -8,7 +8,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use serde_json::{Map, Value};
 use shadelab::stimulus;
-use shadelab::visual_size::SizeRequest;
+use shadelab::SizeRequest;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(2));
-    for preset in shadelab::gallery::builtin_presets().unwrap_or_default() {
+    for preset in shadelab::internal::gallery::builtin_presets().unwrap_or_default() {
         let spec = preset.spec;
         group.bench_function(preset.name.as_str(), |b| {
             b.iter(|| {
@@ -77,11 +77,11 @@ fn bench(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(10));
-    let presets = shadelab::gallery::builtin_presets().expect("the built-in presets");
+    let presets = shadelab::internal::gallery::builtin_presets().expect("the built-in presets");
     let out = std::env::temp_dir().join(format!("shadelab-bench-gallery-{}", std::process::id()));
     let config = shadelab::GalleryConfig {
         presets,
-        options: shadelab::gallery::Options::default(),
+        options: shadelab::pipeline::gallery::Options::default(),
         source: None,
     };
     let dest = shadelab::Output::new(&out);

@@ -8,13 +8,13 @@
 //! `cargo run --release --example albedo_estimate -- ../shared/data` (prints the tables of
 //! docs/evaluation.md's "Albedo estimate" section; says why and stops when the data is absent).
 
-use shadelab::albedo::{albedo_with_normals, brightness_quantile, Saturation};
-use shadelab::evaluation::crop::Crop;
-use shadelab::evaluation::datasets::{ball, BALL_IMAGES};
-use shadelab::evaluation::metrics::angular_error;
-use shadelab::grid::{Image, Mask};
+use shadelab::angular_error;
+use shadelab::internal::albedo::{albedo_with_normals, brightness_quantile, Saturation};
+use shadelab::internal::evaluation::crop::Crop;
+use shadelab::internal::evaluation::datasets::{ball, BALL_IMAGES};
 use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
 use shadelab::{FrontLight, Light, NoProgress};
+use shadelab::{Image, Mask};
 use std::path::PathBuf;
 
 /// The pre-scalings: the quantile of the brightness on the mask made 1.
@@ -38,7 +38,7 @@ fn solve(
     image: &Image,
     mask: &Mask,
     light: Light,
-    truth: &shadelab::Grid<shadelab::gradient_space::Normal>,
+    truth: &shadelab::Grid<shadelab::Normal>,
     saturation: Saturation,
 ) -> shadelab::Result<(f64, f64, usize)> {
     let mut config = SolveConfig::new("ball", LightChoice::Given(FrontLight::new(light)?));

@@ -12,10 +12,18 @@
 //! `cargo run --release --example fit_recovery -- worked OUT.csv` writes the worked example's
 //! simulated responses instead (a 26°-left prior, the same design).
 
-use shadelab::analysis::fit::{fit, simulate, FitOptions};
-use shadelab::analysis::observer_model::ModelParams;
-use shadelab::analysis::wrap_180;
-use shadelab::parallel::prelude::*;
+use rayon::prelude::*;
+use shadelab::pipeline::fit::{fit, simulate, simulated_responses, FitOptions, ModelParams};
+
+/// An angle in (−180°, 180°].
+fn wrap_180(angle: f64) -> f64 {
+    let a = angle.rem_euclid(360.0);
+    if a > 180.0 {
+        a - 360.0
+    } else {
+        a
+    }
+}
 
 fn design() -> Vec<f64> {
     (0..24).map(|i| 15.0 * i as f64).collect()
@@ -31,8 +39,8 @@ fn main() {
             convexity_prior: 0.6,
             lapse: 0.03,
         };
-        let csv = shadelab::pipeline::fit::simulated_responses(&truth, &design(), 20, 2001, "sim1");
-        shadelab::io::write_text(std::path::Path::new(out), &csv).expect("write the CSV");
+        let csv = simulated_responses(&truth, &design(), 20, 2001, "sim1");
+        std::fs::write(out, csv).expect("write the CSV");
         eprintln!("wrote {out}: {truth:?}");
         return;
     }

@@ -7,7 +7,7 @@ fn main() -> shadelab::Result<()> {
     let source = PictureSource {
         stimulus: Some("checker-shadow".into()),
         ppd: Some(12.0),
-        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        max_pixels: shadelab::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };
     let config = LightnessConfig::new(source, vec!["odog".parse::<LightnessModel>()?])?;

@@ -11,7 +11,7 @@ fn main() -> shadelab::Result<()> {
     };
     source.params.insert("rows".into(), 1.into());
     source.params.insert("columns".into(), 2.into());
-    source.max_pixels = shadelab::grid::DEFAULT_MAX_PIXELS;
+    source.max_pixels = shadelab::DEFAULT_MAX_PIXELS;
     let mut config = PriorSweepConfig::new(PerceptionConfig::new(source))?;
     config.tilts = (0..24).map(|k| 15.0 * k as f64).collect();
     let report = shadelab::pipeline::prior_sweep::run(&config, &NoProgress)?;

@@ -44,68 +44,85 @@
 #![deny(missing_docs)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-pub mod albedo;
-pub mod analysis;
-pub mod boundary;
+mod albedo;
+mod analysis;
+mod boundary;
 pub mod cancel;
-pub mod colormap;
+mod colormap;
 mod conjugate_gradients;
 pub mod display;
 mod error;
-pub mod evaluation;
-pub mod gallery;
-pub mod gradient_space;
-pub mod grid;
-pub mod imageops;
-pub mod integrate;
-pub mod io;
-pub mod light;
-pub mod light_estimation;
-pub mod lightness;
+mod evaluation;
+mod gallery;
+mod gradient_space;
+mod grid;
+mod imageops;
+mod integrate;
+mod io;
+mod light;
+mod light_estimation;
+mod lightness;
 mod message;
-pub mod parallel;
-pub mod params;
+mod parallel;
+mod params;
 pub mod pipeline;
-pub mod plot;
-pub mod progress;
+mod plot;
+mod progress;
 mod random;
-pub mod reconstruct;
-pub mod reflectance;
-pub mod render;
-pub mod solver;
+mod reconstruct;
+mod reflectance;
+mod render;
+mod solver;
 pub mod stimulus;
-pub mod surface;
-pub mod visual_size;
+mod surface;
+mod visual_size;
 
+// The core: images, lights, sizes, errors, progress.
 pub use error::{Error, Result};
-pub use evaluation::metrics::angular_error;
-pub use grid::{Grid, Image, Labels, Mask, RgbImage};
+pub use gradient_space::Normal;
+pub use grid::{Grid, Image, Labels, Mask, RgbImage, DEFAULT_MAX_PIXELS};
 pub use light::{FrontLight, Light};
 pub use message::{Message, Setting};
+pub use params::{ParamKind, ParamSet, ParamSpec, Params};
 pub use progress::{NoProgress, Progress};
-
-// The engine.
-pub use boundary::Boundary;
-pub use reconstruct::{
-    DepthMethod, LightAndAlbedo, NonConvergence, Problem, ReconstructOptions, Reconstruction,
-    Reconstructor, Shape,
-};
-pub use reflectance::{BrdfModel, BrdfSpec, Lambertian, ReflectanceMap};
-pub use solver::{Method, Solution, SolveOptions};
-
-// Stimuli.
-pub use params::{ParamSet, Params};
-pub use stimulus::{Pixels, SurfaceLayers, Targets};
 pub use visual_size::{Geometry, SizeRequest};
 
-// The commands as library pipelines.
+// Files: what a picture's pixels mean when read, and how they are written.
+pub use colormap::Colormap;
+pub use io::{read_display, BitDepth, InputEncoding};
+
+// The engine: reflectance, boundary, solver, integration, and the one reconstruction over them.
+pub use albedo::{AlbedoEstimate, Saturation};
+pub use boundary::{Boundary, LimbTest};
+pub use evaluation::metrics::{angular_error, AngularError};
+pub use integrate::PoissonOptions;
+pub use light_estimation::{EstimateMethod, LightEstimate};
+pub use reconstruct::{
+    Depth, DepthMethod, IntegrationReport, LightAndAlbedo, NonConvergence, Problem,
+    ReconstructOptions, Reconstruction, Reconstructor, Shape,
+};
+pub use reflectance::{
+    BrdfModel, BrdfSpec, Lambertian, ReflectanceMap, Sample as ReflectanceSample,
+};
+pub use render::RenderOptions;
+pub use solver::crease::{CreaseOptions, Smoothness};
+pub use solver::{Method, Solution, SolveOptions};
+
+// Stimuli (the catalogue itself is the `stimulus` module).
+pub use stimulus::{Pixels, SurfaceLayers, Targets};
+
+// The commands as library pipelines: each command's Config and Report (their parts are in the
+// command's `pipeline` module) and the contract they share.
 pub use lightness::Model as LightnessModel;
 pub use pipeline::bench::{BenchConfig, BenchReport};
+pub use pipeline::benchmark::{BenchmarkConfig, BenchmarkReport};
 pub use pipeline::experiment::{Config as ExperimentConfig, Report as ExperimentReport};
 pub use pipeline::fading::{FadingConfig, FadingReport};
+pub use pipeline::fit::{Config as FitConfig, Report as FitReport};
 pub use pipeline::gallery::{GalleryConfig, GalleryReport};
 pub use pipeline::lightness::{LightnessConfig, LightnessReport};
 pub use pipeline::observer::{Config as ObserverConfig, Report as ObserverReport};
+pub use pipeline::outline::{OutlineConfig, OutlineReport};
 pub use pipeline::perception::Config as PerceptionConfig;
 pub use pipeline::prior_sweep::{Config as PriorSweepConfig, Report as PriorSweepReport};
 pub use pipeline::render::{RenderConfig, RenderReport};
@@ -115,6 +132,7 @@ pub use pipeline::{CommandReport, Output, Picture, PictureSource};
 
 // Each command's run, under the command's name (the Python module's names).
 pub use pipeline::bench::run as bench;
+pub use pipeline::benchmark::run as benchmark;
 pub use pipeline::experiment::run as experiment;
 pub use pipeline::fading::run as fading;
 pub use pipeline::fit::run as fit_observer;
@@ -126,3 +144,92 @@ pub use pipeline::prior_sweep::run as prior_sweep;
 pub use pipeline::render::run as render;
 pub use pipeline::solve::run as solve;
 pub use pipeline::study::{merge as study_merge, run as study_run};
+
+/// The modules behind the surface, for this repository's own front ends and tests (the
+/// command line, the Python and WebAssembly bindings, `tests/`) while they move onto the
+/// surface above. Not API: anything here may change in any release.
+#[doc(hidden)]
+#[cfg(not(shadelab_surface))]
+pub mod internal {
+    #![allow(missing_docs)]
+    pub mod albedo {
+        pub use crate::albedo::*;
+    }
+    pub mod analysis {
+        pub use crate::analysis::*;
+    }
+    pub mod boundary {
+        pub use crate::boundary::*;
+    }
+    pub mod colormap {
+        pub use crate::colormap::*;
+    }
+    pub mod evaluation {
+        pub use crate::evaluation::*;
+    }
+    pub mod gallery {
+        pub use crate::gallery::*;
+    }
+    pub mod gradient_space {
+        pub use crate::gradient_space::*;
+    }
+    pub mod grid {
+        pub use crate::grid::*;
+    }
+    pub mod imageops {
+        pub use crate::imageops::*;
+    }
+    pub mod integrate {
+        pub use crate::integrate::*;
+    }
+    pub mod io {
+        pub use crate::io::*;
+    }
+    pub mod light {
+        pub use crate::light::*;
+    }
+    pub mod light_estimation {
+        pub use crate::light_estimation::*;
+    }
+    pub mod lightness {
+        pub use crate::lightness::*;
+    }
+    pub mod parallel {
+        pub use crate::parallel::*;
+    }
+    pub mod params {
+        pub use crate::params::*;
+    }
+    pub mod plot {
+        pub use crate::plot::*;
+    }
+    pub mod progress {
+        pub use crate::progress::*;
+    }
+    pub mod reconstruct {
+        pub use crate::reconstruct::*;
+    }
+    pub mod reflectance {
+        pub use crate::reflectance::*;
+    }
+    pub mod render {
+        pub use crate::render::*;
+    }
+    pub mod solver {
+        pub use crate::solver::*;
+    }
+    pub mod stimulus {
+        pub mod face {
+            pub use crate::stimulus::face::*;
+        }
+        pub mod mat {
+            pub use crate::stimulus::mat::*;
+        }
+    }
+    pub mod surface {
+        pub use crate::surface::*;
+    }
+    pub mod visual_size {
+        pub use crate::visual_size::*;
+    }
+}

@@ -1,18 +1,7 @@
 //! The size triple of stimupy: visual size (degrees of visual angle), resolution (pixels per
 //! degree) and shape (pixels). Any two give the third.
 //!
-//! **Order: (height, width)**, as stimupy and NumPy write it: `visual_size: (4.0, 8.0)` is 4°
-//! tall and 8° wide, and `shape: (128, 256)` is 128 rows of 256 pixels. The same order holds in
-//! JSON specs, sidecars and the `.mat`/`.npz` bundles; only the CLI's `--size WxH` and
-//! `--visual-size WxH` name width first, explicitly (see [`parse_size`]).
-//!
-//! **One rule for a shape.** A shape given without a ppd sets the output size and scales the
-//! whole stimulus to fill it: the ppd is derived as the largest at which the stimulus's visual
-//! size (the one given, or its default) fits the shape, so a picture of another shape shows the
-//! same stimulus larger or smaller. When the shape's aspect differs from the visual size's, the
-//! stimulus fits along the tighter axis and the other axis gets more field (the stimulus stays
-//! centred): the resolved visual size is the shape divided by that ppd. Extra field at a fixed
-//! scale is what a ppd given with the visual size or the shape gives.
+//! See [`SizeRequest`] for the order and the rule.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -55,7 +44,20 @@ impl Geometry {
 }
 
 /// What the user gave of the triple, in stimupy's order **(height, width)**; anything left
-/// `None` is derived or defaulted (see the [module](self) for the rule).
+/// `None` is derived or defaulted.
+///
+/// **Order: (height, width)**, as stimupy and NumPy write it: `visual_size: (4.0, 8.0)` is 4°
+/// tall and 8° wide, and `shape: (128, 256)` is 128 rows of 256 pixels. The same order holds in
+/// JSON specs, sidecars and the `.mat`/`.npz` bundles; only the CLI's `--size WxH` and
+/// `--visual-size WxH` name width first, explicitly (see `parse_size`).
+///
+/// **One rule for a shape.** A shape given without a ppd sets the output size and scales the
+/// whole stimulus to fill it: the ppd is derived as the largest at which the stimulus's visual
+/// size (the one given, or its default) fits the shape, so a picture of another shape shows the
+/// same stimulus larger or smaller. When the shape's aspect differs from the visual size's, the
+/// stimulus fits along the tighter axis and the other axis gets more field (the stimulus stays
+/// centred): the resolved visual size is the shape divided by that ppd. Extra field at a fixed
+/// scale is what a ppd given with the visual size or the shape gives.
 ///
 /// ```
 /// use shadelab::SizeRequest;

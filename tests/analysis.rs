@@ -3,37 +3,46 @@
 
 use crate::cli::{assert_error, scratch, shadelab};
 use serde_json::{Map, Value};
-use shadelab::analysis::binding::{binding, GlobalLight};
-use shadelab::analysis::convexity::tokens_from_labels;
-use shadelab::analysis::interpretation::analysis_solve_options;
-use shadelab::analysis::observer::{observe, LightPrior, ObserverOptions};
-use shadelab::analysis::rotation::rotate_quarter_turns;
-use shadelab::analysis::{
-    sweep, Domain, Interpretation, Interpreter, Lighting, Picture, Scene, Sweep,
+use shadelab::internal::analysis::binding::{binding, GlobalLight};
+use shadelab::internal::analysis::convexity::tokens_from_labels;
+use shadelab::internal::analysis::interpretation::analysis_solve_options;
+use shadelab::internal::analysis::observer::{observe, LightPrior, ObserverOptions};
+use shadelab::internal::analysis::rotation::rotate_quarter_turns;
+use shadelab::internal::analysis::{
+    sweep, Domain, Interpretation, Interpreter, Lighting, Scene, Sweep, TokenPicture,
 };
-use shadelab::boundary::Boundary;
-use shadelab::grid::Mask;
 use shadelab::stimulus;
-use shadelab::visual_size::SizeRequest;
+use shadelab::Boundary;
+use shadelab::Mask;
+use shadelab::SizeRequest;
 use std::path::Path;
 
 /// Renders `name` at `w`×`h` pixels and `ppd` with `pairs` as parameters.
-pub(crate) fn picture(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> Picture {
-    let given: Map<String, Value> = shadelab::params::Params::parse_pairs(pairs).unwrap();
+pub(crate) fn picture(
+    name: &str,
+    pairs: &[&str],
+    (w, h): (usize, usize),
+    ppd: f64,
+) -> TokenPicture {
+    let given: Map<String, Value> = shadelab::Params::parse_pairs(pairs).unwrap();
     let size = SizeRequest {
         visual_size: Some((h as f64 / ppd, w as f64 / ppd)),
         ppd: Some(ppd),
         shape: None,
     };
     let (request, output) = stimulus::generate(name, &given, &size, 1, 1 << 24).unwrap();
-    let p = Picture::from_stimulus(&request, &output).unwrap();
+    let p = TokenPicture::from_stimulus(&request, &output).unwrap();
     assert_eq!((p.image.width(), p.image.height()), (w, h), "{name}");
     p
 }
 
 /// The picture's interpretations under each tilt (flat boundary, whole-picture domain unless
 /// `domain` says otherwise, slant 45°).
-pub(crate) fn interpretations(p: &Picture, domain: Domain, tilts: &[f64]) -> (Sweep, Lighting) {
+pub(crate) fn interpretations(
+    p: &TokenPicture,
+    domain: Domain,
+    tilts: &[f64],
+) -> (Sweep, Lighting) {
     let mask = p.domain(domain);
     let lighting = p.lighting(&mask, 45.0, None, None).unwrap();
     let scene = Scene {
@@ -331,7 +340,7 @@ fn rotating_the_picture_is_turning_the_assumed_light() {
     let tilts: Vec<f64> = (0..12).map(|i| i as f64 * 30.0).collect();
     let (s, lighting) = interpretations(&p, Domain::Image, &tilts);
     let labels = {
-        let mut l = shadelab::grid::Labels::new(96, 48, 0);
+        let mut l = shadelab::Labels::new(96, 48, 0);
         for t in &p.tokens {
             for &px in t.pixels() {
                 l.data_mut()[px] = t.label;
@@ -613,8 +622,8 @@ fn bad_input_is_one_line_and_leaves_nothing() {
     );
     assert_error(&out, 2, "unknown stimulus 'teapot'");
     // A mask with no tokens.
-    let empty = shadelab::grid::Labels::new(48, 48, 0);
-    shadelab::io::write_labels(&d.join("empty.png"), &empty).unwrap();
+    let empty = shadelab::Labels::new(48, 48, 0);
+    shadelab::internal::io::write_labels(&d.join("empty.png"), &empty).unwrap();
     assert_error(&run(sweep_args(&["--mask", "empty.png"])), 2, "no tokens");
     // A spec with an unknown key, a shard that does not exist.
     std::fs::write(
@@ -667,7 +676,7 @@ fn the_engine_follows_the_shading_not_the_outline_of_boundary_strips() {
     // the sawtooth cut should give facets (bending concentrated at folds, share near 1) and
     // the sinusoidal cut smooth corrugations (about 0.31); the engine gives the sinusoid's
     // spread in both. If this fails, the engine has learned to show the effect: update the doc.
-    use shadelab::analysis::outline::outline_shapes;
+    use shadelab::internal::analysis::outline::outline_shapes;
     let p = picture(
         "boundary-strips",
         &["boundary=sinusoidal,sawtooth"],
@@ -707,12 +716,7 @@ fn multigrid_settles_every_tilt_of_the_strips_without_the_jacobi_fallback() {
     let tilts: Vec<f64> = (0..24).map(|i| i as f64 * 15.0).collect();
     let (s, _) = interpretations(&p, Domain::Image, &tilts);
     for i in &s.interpretations {
-        assert_eq!(
-            i.method,
-            shadelab::solver::Method::Multigrid,
-            "tilt {}",
-            i.tilt_deg
-        );
+        assert_eq!(i.method, shadelab::Method::Multigrid, "tilt {}", i.tilt_deg);
         assert!(
             i.iterations <= 15,
             "tilt {}: {} cycles",
@@ -726,8 +730,7 @@ fn multigrid_settles_every_tilt_of_the_strips_without_the_jacobi_fallback() {
 fn bump_config() -> shadelab::pipeline::perception::Config {
     let source = shadelab::pipeline::PictureSource {
         stimulus: Some("bumps".into()),
-        params: shadelab::params::Params::parse_pairs(&["rows=1", "columns=1", "pattern=bumps"])
-            .unwrap(),
+        params: shadelab::Params::parse_pairs(&["rows=1", "columns=1", "pattern=bumps"]).unwrap(),
         ppd: Some(16.0),
         max_pixels: 1 << 24,
         ..Default::default()
@@ -770,7 +773,10 @@ fn command_writes_the_same(dir: &Path, command: &str, extra: &[&str]) {
         crate::determinism::outputs(&dir.join("cli")),
     );
     // Both folders list their files (the output-folder rule's manifest).
-    assert!(lib.contains_key(shadelab::io::MANIFEST) && cli.contains_key(shadelab::io::MANIFEST));
+    assert!(
+        lib.contains_key(shadelab::internal::io::MANIFEST)
+            && cli.contains_key(shadelab::internal::io::MANIFEST)
+    );
     assert_eq!(
         lib.keys().collect::<Vec<_>>(),
         cli.keys().collect::<Vec<_>>()
@@ -786,7 +792,7 @@ fn the_prior_sweep_pipeline_writes_what_the_command_writes() {
     use shadelab::pipeline::prior_sweep;
     let d = scratch("pipeline-prior-sweep");
     let config = prior_sweep::Config {
-        tilts: shadelab::analysis::parse_angles("0:360:90", "tilts").unwrap(),
+        tilts: shadelab::internal::analysis::parse_angles("0:360:90", "tilts").unwrap(),
         binding: Some(GlobalLight::Given(0.0)),
         ..prior_sweep::Config::new(bump_config()).unwrap()
     };
@@ -809,7 +815,7 @@ fn the_observer_pipeline_writes_what_the_command_writes() {
     use shadelab::pipeline::observer;
     let d = scratch("pipeline-observer");
     let config = observer::Config {
-        tilts: shadelab::analysis::parse_angles("0:360:45", "tilts").unwrap(),
+        tilts: shadelab::internal::analysis::parse_angles("0:360:45", "tilts").unwrap(),
         rotations: vec![0.0, 180.0],
         kappas: vec![1.0, 4.0],
         ..observer::Config::new(bump_config()).unwrap()

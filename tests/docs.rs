@@ -451,7 +451,7 @@ fn the_link_checker_finds_missing_files_and_anchors() {
 
 #[test]
 fn every_gallery_preset_is_explained_on_a_docs_page_that_exists() {
-    let presets = shadelab::gallery::builtin_presets().unwrap();
+    let presets = shadelab::internal::gallery::builtin_presets().unwrap();
     let readme = root().join("README.md");
     for p in &presets {
         let caption = p.spec.caption.as_deref().unwrap_or("");
@@ -475,7 +475,7 @@ fn every_gallery_preset_is_explained_on_a_docs_page_that_exists() {
 
 #[test]
 fn the_gallery_page_links_each_picture_to_its_explanation() {
-    use shadelab::gallery::{Options, Preset};
+    use shadelab::internal::gallery::{Options, Preset};
     use shadelab::pipeline::gallery::GalleryConfig;
     use shadelab::{CommandReport, NoProgress, Output};
     let d = scratch("gallery-links");
@@ -502,7 +502,7 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
         report.write(&Output::new(d.join(dir))).unwrap();
         read(&d.join(dir).join("index.html"))
     };
-    assert!(html("g", shadelab::gallery::DOCS_BASE)
+    assert!(html("g", shadelab::internal::gallery::DOCS_BASE)
         .contains(r##"<a href="../docs/priors.md#light-from-above">"##));
     assert!(
         html("h", "https://example.org/shadelab/blob/main").contains(

@@ -2,9 +2,9 @@
 //! and its errors when data is missing.
 
 use crate::cli::{assert_error, scratch, shadelab};
-use shadelab::boundary::Boundary;
-use shadelab::evaluation::{self, CaseResult, Config, Set};
-use shadelab::solver::Method;
+use shadelab::internal::evaluation::{self, CaseResult, Config, Set};
+use shadelab::Boundary;
+use shadelab::Method;
 use std::path::PathBuf;
 
 /// The shared evaluation data, or `None` (with the reason printed) when it is not there.
@@ -176,7 +176,7 @@ fn eval_writes_table_report_and_pictures() {
 }
 
 fn image_size(path: &std::path::Path) -> (usize, usize) {
-    let rgb = shadelab::io::read_rgb(path, 1 << 24).unwrap();
+    let rgb = shadelab::internal::io::read_rgb(path, 1 << 24).unwrap();
     (rgb.width(), rgb.height())
 }
 

@@ -8,12 +8,12 @@
 //! of everything that shapes Jacobi's answer (any change there recomputes them).
 
 use md5::{Digest, Md5};
-use shadelab::boundary::{boundary_conditions, Boundary, Role};
-use shadelab::gradient_space::{angle_deg, normal_from_fg};
-use shadelab::reflectance::Lambertian;
-use shadelab::render::{render, RenderOptions};
-use shadelab::solver::{Method, Solution, SolveOptions, Solver};
-use shadelab::surface::{gaussian, sphere, vase, Surface};
+use shadelab::internal::boundary::{boundary_conditions, Boundary, Role};
+use shadelab::internal::gradient_space::{angle_deg, normal_from_fg};
+use shadelab::internal::render::{render, RenderOptions};
+use shadelab::internal::solver::{Method, Solution, SolveOptions, Solver};
+use shadelab::internal::surface::{gaussian, sphere, vase, Surface};
+use shadelab::Lambertian;
 use shadelab::{Grid, Image, Light, Mask};
 use std::path::PathBuf;
 
@@ -351,7 +351,7 @@ fn bad_input_is_rejected_as_for_jacobi() {
 #[test]
 fn solve_command_uses_multigrid_and_reports_non_convergence() {
     use crate::cli::{scratch, shadelab};
-    use shadelab::io;
+    use shadelab::internal::io;
     let d = scratch("fast-solver-cli");
     let c = case("sphere", 64, FRONT, Boundary::Occluding);
     io::write_image(&d.join("image.npy"), &c.image).unwrap();

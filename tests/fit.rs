@@ -4,7 +4,7 @@
 
 use super::cli::{assert_error, scratch, shadelab};
 use serde_json::Value;
-use shadelab::analysis::observer_model::ModelParams;
+use shadelab::pipeline::fit::ModelParams;
 use shadelab::pipeline::fit::{simulated_responses, RESPONSES_HEADER};
 use std::path::Path;
 

@@ -1,8 +1,8 @@
 //! Lightness models against reference data: the ODOG family against multyscale 0.2's outputs
 //! (`../shared/reference/odog_white32.npz`; skipped with a message when absent).
 
-use shadelab::grid::Grid;
-use shadelab::lightness::{Odog, Variant};
+use shadelab::internal::lightness::{Odog, Variant};
+use shadelab::Grid;
 use shadelab::Image;
 use std::path::PathBuf;
 
@@ -120,8 +120,8 @@ mod cli {
     //! `shadelab analyze lightness` and `analyze fading` through the binary.
 
     use crate::cli::{assert_error, scratch, shadelab};
-    use shadelab::grid::Grid;
-    use shadelab::io;
+    use shadelab::internal::io;
+    use shadelab::Grid;
 
     fn read(path: &std::path::Path) -> String {
         std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -392,13 +392,13 @@ mod cli {
 /// write the same folder layout the command writes.
 #[test]
 fn lightness_and_fading_pipelines_run_from_plain_values() {
-    use shadelab::lightness::fading::{AdaptationOptions, DogBand};
+    use shadelab::internal::lightness::fading::{AdaptationOptions, DogBand};
     use shadelab::pipeline::{fading, lightness, PictureSource};
     use shadelab::NoProgress;
     let source = |name: &str| PictureSource {
         stimulus: Some(name.into()),
         ppd: Some(12.0),
-        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        max_pixels: shadelab::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };
     let models = lightness::LightnessConfig::parse_models("retinex").unwrap();

@@ -6,18 +6,18 @@
 
 use crate::cli::{scratch, shadelab};
 use nalgebra::Vector3;
-use shadelab::boundary::{
+use shadelab::angular_error;
+use shadelab::internal::boundary::{
     boundary_conditions, dark_level, limb_conditions, limb_count, Boundary, Role, BOUNDARY_NAMES,
     LIMB_MAX_NZ,
 };
-use shadelab::evaluation::metrics::angular_error;
-use shadelab::gradient_space::{angle_deg, normal_from_fg};
-use shadelab::io;
-use shadelab::reflectance::{Lambertian, ReflectanceMap};
-use shadelab::render::{render, RenderOptions};
-use shadelab::solver::{SolveOptions, Solver};
-use shadelab::surface::{sphere, Surface};
+use shadelab::internal::gradient_space::{angle_deg, normal_from_fg};
+use shadelab::internal::io;
+use shadelab::internal::render::{render, RenderOptions};
+use shadelab::internal::solver::{SolveOptions, Solver};
+use shadelab::internal::surface::{sphere, Surface};
 use shadelab::{Grid, Light};
+use shadelab::{Lambertian, ReflectanceMap};
 
 /// Side of the test images.
 const SIDE: usize = 96;
@@ -88,7 +88,7 @@ fn the_cut_is_held_at_its_shading_slant_and_the_limb_is_left_alone() {
                 assert!(col + 3 >= cut_col, "({col}, {row}) under {light}");
                 // The contour's azimuth (the occluding value's) at the slant that gives the
                 // pixel's brightness, closer to the truth than the occluding value.
-                let azimuth = |n: &shadelab::gradient_space::Normal| n.y.atan2(n.x);
+                let azimuth = |n: &shadelab::Normal| n.y.atan2(n.x);
                 assert!(
                     (azimuth(&now) - azimuth(&pin)).abs() < 1e-9,
                     "{now:?} {pin:?}"
@@ -119,12 +119,7 @@ fn the_cut_is_held_at_its_shading_slant_and_the_limb_is_left_alone() {
 /// `image` as a photograph reads it where no light falls: every pixel of `mask` at exactly 0
 /// raised by `offset` (a camera's black level) plus a uniform `noise` in [0, noise) from a
 /// fixed sequence.
-fn dark_offset(
-    image: &Grid<f64>,
-    mask: &shadelab::grid::Mask,
-    offset: f64,
-    noise: f64,
-) -> Grid<f64> {
+fn dark_offset(image: &Grid<f64>, mask: &shadelab::Mask, offset: f64, noise: f64) -> Grid<f64> {
     let mut dark = image.clone();
     let mut state = 0x5EED_u64;
     for (value, inside) in dark.data_mut().iter_mut().zip(mask.data()) {
@@ -385,9 +380,9 @@ fn solve_reports_the_dark_level_of_the_limb_test() {
 /// and the analyses take it: their domain is the occluding one.
 #[test]
 fn the_limb_boundary_estimates_the_light_at_the_outline_and_serves_the_analyses() {
-    use shadelab::boundary::domain_roles;
-    use shadelab::light_estimation::EstimateMethod;
-    use shadelab::reconstruct::LightAndAlbedo as Lighting;
+    use shadelab::internal::boundary::domain_roles;
+    use shadelab::EstimateMethod;
+    use shadelab::LightAndAlbedo as Lighting;
     let s = sphere(SIDE, SIDE, RADIUS).unwrap();
     let truth = Light::from_tilt_slant(90.0, 45.0).unwrap();
     let image = image_of(&s, &Lambertian::unit(truth));

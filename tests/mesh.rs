@@ -2,13 +2,13 @@
 //! binary PLY, a sphere mesh against the analytic sphere, and `.npy` depth maps.
 
 use nalgebra::{Rotation3, Vector3};
-use shadelab::gradient_space::angle_deg;
-use shadelab::reflectance::Lambertian;
-use shadelab::render::{render, RenderOptions};
-use shadelab::surface::{
+use shadelab::internal::gradient_space::angle_deg;
+use shadelab::internal::render::{render, RenderOptions};
+use shadelab::internal::surface::{
     self, load_depth_surface, view_rotation, world_xy, DepthDomain, Mesh, MeshShading, Projection,
     Surface,
 };
+use shadelab::Lambertian;
 use shadelab::{Grid, Light};
 use std::path::{Path, PathBuf};
 

@@ -2,19 +2,21 @@
 //! and the hollow mask read the same at any framing.
 
 use serde_json::{Map, Value};
-use shadelab::analysis::Domain;
-use shadelab::grid::{Image, Mask};
-use shadelab::light_estimation::{estimate_light_with, EstimateMethod, LightEstimate, Outline};
+use shadelab::internal::analysis::Domain;
+use shadelab::internal::light_estimation::{
+    estimate_light_with, EstimateMethod, LightEstimate, Outline,
+};
 use shadelab::pipeline::perception::{self, DomainSpec};
 use shadelab::pipeline::source::PictureSource;
-use shadelab::progress::NoProgress;
 use shadelab::stimulus;
-use shadelab::visual_size::SizeRequest;
+use shadelab::NoProgress;
+use shadelab::SizeRequest;
+use shadelab::{Image, Mask};
 
 /// Renders stimulus `name` at `w`×`h` pixels (`ppd` pixels per degree) with `pairs`: its
 /// linear luminance and its target mask (every labelled pixel).
 fn render(name: &str, pairs: &[&str], (w, h): (usize, usize), ppd: f64) -> (Image, Mask) {
-    let given: Map<String, Value> = shadelab::params::Params::parse_pairs(pairs).unwrap();
+    let given: Map<String, Value> = shadelab::Params::parse_pairs(pairs).unwrap();
     let size = SizeRequest {
         visual_size: Some((h as f64 / ppd, w as f64 / ppd)),
         ppd: Some(ppd),
@@ -247,12 +249,11 @@ fn the_limb_estimate_on_the_finer_bunny() {
 /// recovers the light.
 #[test]
 fn the_bunny_outline_is_not_edge_on() {
-    use shadelab::boundary::occluding_normals;
+    use shadelab::internal::boundary::occluding_normals;
     // (mean n_z, share above 0.5, median and 90th-percentile angle to the contour normal).
     let outline = |name: &str, tilt: f64, slant: f64, ppd: f64| {
         let light = format!("light=tilt={tilt},slant={slant}");
-        let given =
-            shadelab::params::Params::parse_pairs(&[&light, "ambient=0", "albedo=0.8"]).unwrap();
+        let given = shadelab::Params::parse_pairs(&[&light, "ambient=0", "albedo=0.8"]).unwrap();
         let size = SizeRequest {
             visual_size: Some((8.0, 8.0)),
             ppd: Some(ppd),
@@ -331,8 +332,8 @@ fn without_a_limb_the_moments_run() {
 }
 
 mod hollow {
-    use shadelab::analysis::observer::{observe, LightPrior, ObserverOptions};
-    use shadelab::analysis::Sweep;
+    use shadelab::internal::analysis::observer::{observe, LightPrior, ObserverOptions};
+    use shadelab::internal::analysis::Sweep;
 
     /// (P(convex), P(light from above), most probable tilt) upright, with convexity bias `bias`.
     pub fn percept(s: &Sweep, bias: f64) -> (f64, f64, f64) {
@@ -354,8 +355,7 @@ fn hollow_setup(w: f64, h: f64, background: &str, domain: DomainSpec) -> percept
     let ppd = 10.0;
     let source = PictureSource {
         stimulus: Some("hollow-mask".into()),
-        params: shadelab::params::Params::parse_pairs(&[&format!("background={background}")])
-            .unwrap(),
+        params: shadelab::Params::parse_pairs(&[&format!("background={background}")]).unwrap(),
         ppd: Some(ppd),
         max_pixels: 1 << 24,
         ..Default::default()
@@ -444,7 +444,7 @@ fn the_hollow_mask_reads_the_same_in_a_12_by_14_degree_frame() {
 /// one surface; targets given by the caller say nothing of a backdrop.
 #[test]
 fn the_default_domain_is_the_targets_of_an_object_on_a_backdrop_only() {
-    let load = |name: &str, labels: Option<shadelab::grid::Labels>| {
+    let load = |name: &str, labels: Option<shadelab::Labels>| {
         let source = PictureSource {
             stimulus: Some(name.into()),
             ppd: Some(8.0),

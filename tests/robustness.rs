@@ -3,15 +3,15 @@
 //! when the shared data is absent) and on a rendered sphere clipped at its 90th percentile,
 //! whose clipped plateau the solve leaves out of the data term.
 
-use shadelab::albedo::{brightness_quantile, Saturation};
-use shadelab::evaluation::crop::Crop;
-use shadelab::evaluation::datasets::ball;
-use shadelab::evaluation::metrics::angular_error;
+use shadelab::angular_error;
+use shadelab::internal::albedo::{brightness_quantile, Saturation};
+use shadelab::internal::evaluation::crop::Crop;
+use shadelab::internal::evaluation::datasets::ball;
+use shadelab::internal::surface::sphere;
 use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
-use shadelab::progress::NoProgress;
-use shadelab::reflectance::{Lambertian, ReflectanceMap};
-use shadelab::surface::sphere;
 use shadelab::Light;
+use shadelab::NoProgress;
+use shadelab::{Lambertian, ReflectanceMap};
 use std::path::PathBuf;
 
 /// The shared data: `SHADELAB_EVAL_DATA`, else `../shared/data` beside the repository.

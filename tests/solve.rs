@@ -2,11 +2,11 @@
 //! that leave no half-filled folder behind.
 
 use crate::cli::{assert_error, files_in, scratch, shadelab};
-use shadelab::gradient_space::angle_deg;
-use shadelab::io::{self, BitDepth};
-use shadelab::reflectance::Lambertian;
-use shadelab::render::{render, RenderOptions};
-use shadelab::surface::{sphere, Surface};
+use shadelab::internal::gradient_space::angle_deg;
+use shadelab::internal::io::{self, BitDepth};
+use shadelab::internal::render::{render, RenderOptions};
+use shadelab::internal::surface::{sphere, Surface};
+use shadelab::Lambertian;
 use shadelab::{Grid, Light};
 use std::path::Path;
 
@@ -371,7 +371,7 @@ fn boundary_normals_can_come_from_a_file() {
 #[test]
 fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
     use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
-    use shadelab::progress::NoProgress;
+    use shadelab::NoProgress;
     let light = Light::from_tilt_slant(20.0, 25.0).unwrap();
     let s = sphere(96, 96, 0.45 * 96.0).unwrap();
     let image = render(&s, &Lambertian::unit(light), &RenderOptions::default()).image;

@@ -49,7 +49,7 @@ fn assert_user_files(out: &Path, what: &str) {
         assert_eq!(got, bytes, "{what}: {name} changed");
     }
     // The manifest lists what shadelab wrote, never the user's files.
-    let manifest = std::fs::read_to_string(out.join(shadelab::io::MANIFEST)).unwrap();
+    let manifest = std::fs::read_to_string(out.join(shadelab::internal::io::MANIFEST)).unwrap();
     let listed: serde_json::Value = serde_json::from_str(&manifest).unwrap();
     let files = listed["files"].as_array().unwrap();
     assert!(!files.is_empty(), "{what}: {manifest}");
@@ -252,7 +252,7 @@ fn the_analyses_keep_the_users_files() {
 fn fit_study_gallery_and_eval_keep_the_users_files() {
     let d = scratch("keep-fit-study");
     // fit: the responses CSV lies in the output folder of an earlier fit (issue 38's case).
-    let m = shadelab::analysis::observer_model::ModelParams {
+    let m = shadelab::pipeline::fit::ModelParams {
         tilt_deg: 26.0,
         kappa: 2.0,
         convexity_prior: 0.5,
@@ -637,8 +637,8 @@ fn rim_normals_facing_away_are_refused_naming_the_file() {
     let d = scratch("keep-normals");
     render_sphere(&d);
     // Normals facing away from the viewer everywhere: (0, 0, -1).
-    let normals = shadelab::grid::Grid::new(32, 32, nalgebra::Vector3::new(0.0, 0.0, -1.0));
-    shadelab::io::write_normals(&d.join("back_normals.npy"), &normals).unwrap();
+    let normals = shadelab::Grid::new(32, 32, nalgebra::Vector3::new(0.0, 0.0, -1.0));
+    shadelab::internal::io::write_normals(&d.join("back_normals.npy"), &normals).unwrap();
     let out = quiet(
         &d,
         false,

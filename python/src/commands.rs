@@ -37,10 +37,10 @@ pub fn fading<'py>(
 ) -> PyResult<(String, Bound<'py, PyDict>, ReportHandle)> {
     let (source, _) = picture_source(picture)?;
     let (tau, duration, dt, jitter, seed, dog_sigma, border) = settings;
-    let mut band = shadelab::lightness::fading::DogBand::default();
+    let mut band = shadelab::pipeline::fading::DogBand::default();
     band.centre_sigma_deg = dog_sigma.unwrap_or(band.centre_sigma_deg);
     band.border_half_width_deg = border.unwrap_or(band.border_half_width_deg);
-    let mut adaptation = shadelab::lightness::fading::AdaptationOptions::default();
+    let mut adaptation = shadelab::pipeline::fading::AdaptationOptions::default();
     adaptation.tau_s = tau.unwrap_or(adaptation.tau_s);
     adaptation.duration_s = duration.unwrap_or(adaptation.duration_s);
     adaptation.dt_s = dt.unwrap_or(adaptation.dt_s);
@@ -126,10 +126,10 @@ fn study_config(
     shard: Option<&str>,
 ) -> PyResult<(pl::study::StudyRunConfig, Vec<PathBuf>)> {
     let shard = match shard {
-        Some(text) => shadelab::analysis::study::Shard::parse(text).map_err(to_py)?,
-        None => shadelab::analysis::study::Shard::WHOLE,
+        Some(text) => shadelab::pipeline::study::Shard::parse(text).map_err(to_py)?,
+        None => shadelab::pipeline::study::Shard::WHOLE,
     };
-    let max = shadelab::grid::DEFAULT_MAX_PIXELS;
+    let max = shadelab::DEFAULT_MAX_PIXELS;
     match (spec_path, spec_json) {
         (Some(path), _) => Ok((
             pl::study::StudyRunConfig::load(&path, shard, max).map_err(to_py)?,
@@ -223,7 +223,7 @@ pub fn evaluate(
     force: bool,
     settings: EvalArgs,
 ) -> PyResult<(String, String, Option<String>)> {
-    use shadelab::evaluation::{report, Config, Set};
+    use shadelab::internal::evaluation::{report, Config, Set};
     let (
         only,
         objects,
@@ -289,7 +289,7 @@ pub fn evaluate(
         commit: "unknown".into(),
         command: vec![format!(
             "shadelab.evaluate (Python, shadelab {})",
-            shadelab::io::PROGRAM_VERSION
+            shadelab::internal::io::PROGRAM_VERSION
         )],
     };
     let (results, written) = run_released(py, || report::run_into(&config, &record, &NoProgress))?;
@@ -350,7 +350,7 @@ pub fn bench(
         reference,
         reference_up_to,
         repeat,
-        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        max_pixels: shadelab::DEFAULT_MAX_PIXELS,
     };
     config.validate().map_err(to_py)?;
     let report = run_released(py, || pl::bench::run(&config, &NoProgress))?;

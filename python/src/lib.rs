@@ -10,9 +10,9 @@ use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueEr
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde_json::{Map, Value};
-use shadelab::grid::{Grid, Image, Labels, Mask, RgbImage};
 use shadelab::pipeline::{self as pl, perception};
 use shadelab::{Error, NoProgress, Pixels, Setting, SizeRequest};
+use shadelab::{Grid, Image, Labels, Mask, RgbImage};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
@@ -163,7 +163,7 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, grid: RgbImage) -> Bound<'py, PyAr
 /// Unit normals (x right, y up, z toward the viewer) as an H×W×3 array.
 fn normals_array<'py>(
     py: Python<'py>,
-    normals: Grid<shadelab::gradient_space::Normal>,
+    normals: Grid<shadelab::Normal>,
 ) -> Bound<'py, PyArray3<f64>> {
     let (w, h) = (normals.width(), normals.height());
     // Same size and alignment: the collect reuses the buffer.
@@ -300,8 +300,9 @@ fn render<'py>(
         extra.set_item("display_json", record.to_string())?;
     } else if export.gamma.is_some() || bit_depth.is_some() {
         if let Pixels::Gray(i) = &output.pixels {
-            let codes = shadelab::io::stimulus_codes(i.data(), export.bit_depth, export.gamma)
-                .map_err(to_py)?;
+            let codes =
+                shadelab::internal::io::stimulus_codes(i.data(), export.bit_depth, export.gamma)
+                    .map_err(to_py)?;
             let grid = Grid::from_vec(i.width(), i.height(), codes).map_err(to_py)?;
             extra.set_item("codes", image_array(py, grid))?;
         }
@@ -355,8 +356,8 @@ fn export_options(
         ..Default::default()
     };
     export.bit_depth = match bit_depth {
-        8 => shadelab::io::BitDepth::Eight,
-        16 => shadelab::io::BitDepth::Sixteen,
+        8 => shadelab::BitDepth::Eight,
+        16 => shadelab::BitDepth::Sixteen,
         other => {
             return Err(PyValueError::new_err(format!(
                 "bit_depth {other}: a PNG is written with 8 or 16 bits"
@@ -373,12 +374,12 @@ fn export_options(
         }
     };
     export.display = match (display, display_json) {
-        (Some(path), _) => Some(shadelab::io::read_display(&path).map_err(to_py)?),
+        (Some(path), _) => Some(shadelab::read_display(&path).map_err(to_py)?),
         (None, Some(text)) => {
             let value: Value = serde_json::from_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("display: {e}")))?;
             Some(
-                shadelab::io::display_from_value(&value, std::path::Path::new("."))
+                shadelab::internal::io::display_from_value(&value, std::path::Path::new("."))
                     .map_err(to_py)?,
             )
         }
@@ -535,7 +536,7 @@ pub(crate) fn picture_source(
         seed,
         ppd,
         labels: labels.map(|l| -> Labels { grid_from(l.as_array()) }),
-        max_pixels: shadelab::grid::DEFAULT_MAX_PIXELS,
+        max_pixels: shadelab::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };
     Ok((source, shape))

@@ -1,6 +1,6 @@
 //! One interpretation of a picture: the shape recovered under one assumed light.
 //!
-//! The picture is solved by the Ikeuchi–Horn engine ([`crate::solver`], default method) under a
+//! The picture is solved by the Ikeuchi–Horn engine (`crate::solver`, default method) under a
 //! Lambertian reflectance map with the assumed light, integrated to depth, and read on each
 //! token: convexity ([`crate::analysis::convexity`]), the irradiance residual
 //! e_R = Σ (I − R(f, g))² over the token's unknown, lit pixels and the smoothness

@@ -45,7 +45,7 @@ pub mod study;
 pub use convexity::Token;
 pub use interpretation::{Interpretation, Interpreter, Lighting, Scene, TokenReading};
 pub use observer::{observe, LightPrior, ObserverOptions, Percept};
-pub use picture::{Domain, Picture};
+pub use picture::{Domain, TokenPicture};
 pub use prior_sweep::{sweep, Sweep};
 
 use crate::error::{Error, Result};

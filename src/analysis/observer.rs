@@ -294,7 +294,7 @@ pub fn curves_csv(sweep: &Sweep, curves: &[Curve]) -> String {
 /// P(convex) against rotation, one curve per token (and per κ when there are several), the
 /// prior's mean tilt marked. The curves share the prior's mean tilt and convexity bias (the
 /// first curve's are named in the title). Fails on no curves.
-pub fn p_convex_plot(sweep: &Sweep, curves: &[Curve]) -> Result<LinePlot> {
+pub(crate) fn p_convex_plot(sweep: &Sweep, curves: &[Curve]) -> Result<LinePlot> {
     let first = curves
         .first()
         .ok_or_else(|| Error::invalid("no observer curves to plot"))?;

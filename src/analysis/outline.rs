@@ -27,7 +27,7 @@
 
 use super::convexity::Token;
 use super::interpretation::{Interpreter, Lighting, Scene};
-use super::picture::{Domain, Picture};
+use super::picture::{Domain, TokenPicture};
 use crate::boundary::{is_rim, Boundary, BoundaryConditions, Role};
 use crate::error::{Error, Result};
 use crate::gradient_space::{fg_from_pq, normal_from_pq, Normal};
@@ -54,7 +54,7 @@ pub struct OutlineReading {
 /// `boundary` taken from its outline, under the light of `tilt_deg`, and measures where the
 /// recovered shape bends.
 pub fn outline_shapes(
-    picture: &Picture,
+    picture: &TokenPicture,
     boundary: &Boundary,
     tilt_deg: f64,
     lighting: &Lighting,

@@ -45,7 +45,7 @@ impl fmt::Display for Domain {
 
 /// A picture with its tokens.
 #[derive(Debug, Clone)]
-pub struct Picture {
+pub struct TokenPicture {
     /// Linear luminance.
     pub image: Image,
     /// The tokens (the whole picture when there is no target mask).
@@ -56,10 +56,10 @@ pub struct Picture {
     pub ambient: Option<f64>,
 }
 
-impl Picture {
+impl TokenPicture {
     /// A picture from an image and, optionally, a label map with token names. Fails on a label
     /// map of another size, one with no tokens, or a non-finite luminance.
-    pub fn from_image(image: Image, labels: Option<(&Labels, &[String])>) -> Result<Picture> {
+    pub fn from_image(image: Image, labels: Option<(&Labels, &[String])>) -> Result<TokenPicture> {
         if let Some(i) = image.data().iter().position(|v| !v.is_finite()) {
             return Err(Error::invalid(format!(
                 "image value at column {}, row {} is not a finite number",
@@ -74,7 +74,7 @@ impl Picture {
             }
             None => vec![Token::whole(image.width(), image.height())?],
         };
-        Ok(Picture {
+        Ok(TokenPicture {
             image,
             tokens,
             albedo: None,
@@ -84,13 +84,13 @@ impl Picture {
 
     /// A rendered stimulus, its targets as tokens, with the albedo and ambient level it
     /// declares as parameters.
-    pub fn from_stimulus(request: &Request, output: &Output) -> Result<Picture> {
+    pub fn from_stimulus(request: &Request, output: &Output) -> Result<TokenPicture> {
         let image = output.pixels.luminance();
         let targets = output
             .targets
             .as_ref()
             .map(|t| (&t.labels, t.names.as_slice()));
-        let mut picture = Picture::from_image(image, targets)?;
+        let mut picture = TokenPicture::from_image(image, targets)?;
         picture.take_declared(&request.params);
         Ok(picture)
     }

@@ -96,7 +96,7 @@ impl Sweep {
     /// Convexity (top; with one token, its flips marked) and surface residual (bottom) against
     /// assumed tilt, one curve per token (grouped by class when there are many); a sweep that
     /// covers the circle is shown over the full 0–360° with each curve closed.
-    pub fn figure(&self) -> Figure {
+    pub(crate) fn figure(&self) -> Figure {
         let tilts = self.tilts();
         let (lo, hi) = span(&tilts);
         let x_label = "assumed light tilt (°; 0 = above, 90 = left, 180 = below)";

@@ -124,7 +124,7 @@ impl Source {
             image: self.image.clone(),
             spec: self.spec.clone(),
             stimulus: self.stimulus.clone(),
-            params: shadelab::params::Params::parse_pairs(&self.set)?,
+            params: shadelab::Params::parse_pairs(&self.set)?,
             seed: self.seed,
             ppd: self.ppd,
             mask: self.mask.clone(),

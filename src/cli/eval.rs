@@ -2,9 +2,9 @@
 
 use super::output::Output;
 use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
-use shadelab::boundary::Boundary;
-use shadelab::evaluation::{self, report, Config, Set};
-use shadelab::solver::Method;
+use shadelab::internal::evaluation::{self, report, Config, Set};
+use shadelab::Boundary;
+use shadelab::Method;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -42,7 +42,7 @@ pub struct Args {
     /// A photograph's albedo: at the default, the library's rule (`solve --albedo estimate`:
     /// the bright tail below this quantile extrapolated); any other value takes this quantile
     /// of its brightness on its mask (a comparison).
-    #[arg(long, value_name = "Q", default_value_t = shadelab::evaluation::albedo::BRIGHT_QUANTILE,
+    #[arg(long, value_name = "Q", default_value_t = shadelab::internal::evaluation::albedo::BRIGHT_QUANTILE,
         allow_hyphen_values = true
     )]
     pub albedo_quantile: f64,

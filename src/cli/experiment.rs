@@ -2,10 +2,10 @@
 
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
+use shadelab::internal::visual_size::parse_size;
 use shadelab::pipeline::experiment::{
     prolific_completion_url, run as build, Config, Install, SaveFormat,
 };
-use shadelab::visual_size::parse_size;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -80,7 +80,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     config
         .params
-        .extend(shadelab::params::Params::parse_pairs(&args.set)?);
+        .extend(shadelab::Params::parse_pairs(&args.set)?);
     if let Some(text) = &args.rotations {
         config.rotations = super::flags::angles(text, "--rotations")?;
     }

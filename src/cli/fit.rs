@@ -5,7 +5,7 @@ use super::destination;
 use super::output::Output;
 use super::progress::Bar;
 use super::{CliResult, Global};
-use shadelab::analysis::fit::FitOptions;
+use shadelab::pipeline::fit::FitOptions;
 use shadelab::pipeline::fit::{self as pipeline, Config, KeyMap, Report as FitReport};
 use shadelab::CommandReport;
 use std::path::PathBuf;

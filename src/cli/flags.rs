@@ -3,13 +3,13 @@
 //! Defaults are the library's: a flag left out leaves the library's value in place.
 
 use super::CliError;
-use shadelab::analysis::interpretation::MULTIGRID_CYCLES;
-use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
-use shadelab::pipeline::solve::BoundarySource;
-use shadelab::solver::{
+use shadelab::internal::analysis::interpretation::MULTIGRID_CYCLES;
+use shadelab::internal::solver::{
     SolveOptions, INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS,
     MULTIGRID_MAX_CYCLES,
 };
+use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
+use shadelab::pipeline::solve::BoundarySource;
 
 /// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
 /// the library's configuration of the command already holds).
@@ -122,7 +122,7 @@ impl AnalysisFlags {
 pub const INPUT_GAMMA_HELP: &str = "How the picture's codes encode luminance: auto (a PNG's sRGB or gAMA chunk; without one, a 16-bit PNG, a TIFF, a .npy and shadelab's own pictures are linear, and an 8-bit PNG or a JPEG is decoded as sRGB, with a note), srgb, linear, or G, the file's gamma (luminance = code^G, 0.1 to 10); anything but auto overrides the file's chunk and a sidecar's gamma";
 
 /// The encoding `--input-gamma` names.
-pub fn input_gamma(text: &str) -> Result<shadelab::io::InputEncoding, CliError> {
+pub fn input_gamma(text: &str) -> Result<shadelab::InputEncoding, CliError> {
     text.parse().map_err(|e| usage("--input-gamma", e))
 }
 
@@ -135,7 +135,7 @@ pub fn say_input_note(out: &super::output::Output, note: Option<String>) {
 
 /// Angles in degrees from `START:STOP:STEP` or a list, for `flag`.
 pub fn angles(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
-    Ok(shadelab::analysis::parse_angles(text, flag)?)
+    Ok(shadelab::internal::analysis::parse_angles(text, flag)?)
 }
 
 /// A usage error about `flag`.

@@ -2,7 +2,7 @@
 
 use super::progress::Bar;
 use super::{CliResult, Global};
-use shadelab::gallery;
+use shadelab::internal::gallery;
 use shadelab::pipeline::gallery::{run as build, GalleryConfig, GalleryReport};
 use shadelab::CommandReport;
 use std::path::PathBuf;

@@ -34,7 +34,7 @@ pub struct Global {
     #[arg(long, global = true, value_name = "N", allow_hyphen_values = true)]
     pub threads: Option<usize>,
     /// Largest image accepted or made, in pixels.
-    #[arg(long, global = true, value_name = "N", default_value_t = shadelab::grid::DEFAULT_MAX_PIXELS,
+    #[arg(long, global = true, value_name = "N", default_value_t = shadelab::DEFAULT_MAX_PIXELS,
         allow_hyphen_values = true
     )]
     pub max_pixels: usize,
@@ -278,7 +278,7 @@ fn configure_threads(global: &Global) -> CliResult {
         if n == 0 {
             return Err(CliError::usage("--threads must be at least 1"));
         }
-        let (n, capped) = shadelab::parallel::capped_threads(n);
+        let (n, capped) = shadelab::internal::parallel::capped_threads(n);
         if capped {
             output::Output::new(global).warn(format!(
                 "--threads {} is more than {n} (4 per core of this machine): using {n}",

@@ -3,10 +3,10 @@
 use super::{CliError, CliResult, Global};
 use clap::builder::TypedValueParser;
 use serde_json::Value;
-use shadelab::io::BitDepth;
+use shadelab::internal::visual_size::parse_size;
 use shadelab::pipeline::render::{self, RenderConfig};
 use shadelab::stimulus::Range;
-use shadelab::visual_size::parse_size;
+use shadelab::BitDepth;
 use shadelab::{Error, NoProgress};
 use std::path::{Path, PathBuf};
 
@@ -112,7 +112,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     };
     config
         .params
-        .extend(shadelab::params::Params::parse_pairs(&args.set)?);
+        .extend(shadelab::Params::parse_pairs(&args.set)?);
     if let Some(l) = &args.light {
         config
             .params
@@ -164,7 +164,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         None => {}
     }
     if let Some(path) = &args.display {
-        export.display = Some(shadelab::io::read_display(path)?);
+        export.display = Some(shadelab::read_display(path)?);
     }
     if let Some(text) = &args.luminance {
         let mapping = text

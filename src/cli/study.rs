@@ -6,7 +6,7 @@ use super::destination;
 use super::output::Output;
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
-use shadelab::analysis::study::Shard;
+use shadelab::pipeline::study::Shard;
 use shadelab::pipeline::study::{self as pipeline, StudyMergeConfig, StudyRunConfig};
 use shadelab::{CommandReport, StudyMergeReport, StudyRunReport};
 use std::path::PathBuf;

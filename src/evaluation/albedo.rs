@@ -1,4 +1,4 @@
-//! The albedo of a photographed object: the library's rule ([`crate::albedo`]), which
+//! The albedo of a photographed object: the library's rule (`crate::albedo`), which
 //! `solve --albedo estimate` uses too, re-exported where the evaluation has always found it.
 
 use crate::error::Result;

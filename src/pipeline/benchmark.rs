@@ -620,7 +620,7 @@ impl BenchmarkReport {
     /// The figure: one panel per stimulus set, the stimuli numbered as in the Markdown table
     /// along x, and the human values and each model's effects scaled to their largest
     /// magnitude in the set (so that the shapes compare; the signs are the data's).
-    pub fn figure(&self) -> Figure {
+    pub(crate) fn figure(&self) -> Figure {
         let order = self.stimulus_order();
         let mut panels = Vec::new();
         let mut sets: Vec<&str> = Vec::new();

@@ -7,16 +7,16 @@
 //! sharp disk), or from a stimulus rendered twice: as given (the blurred disk) and with
 //! `blur = 0` (the sharp one), each with its own target named `disk`.
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::lightness::fading::{AdaptationOptions, BorderEnergy, DogBand, TimeCourse};
+
 use super::source::{Picture, PictureSource};
 use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
 use crate::io;
-use crate::lightness::fading::{
-    adaptation_time_course, border_energy, AdaptationOptions, BorderEnergy, Disk, DogBand,
-    PerceivedFrames, TimeCourse,
-};
+use crate::lightness::fading::{adaptation_time_course, border_energy, Disk, PerceivedFrames};
 use crate::parallel::prelude::*;
 use crate::plot::{LinePlot, Series};
 use crate::progress::Progress;
@@ -273,7 +273,7 @@ impl CommandReport for FadingReport {
     const MARKER: &'static str = "fading.json";
 
     /// Writes `time_course.csv`, with plots `time_course.png` and `.svg`
-    /// ([`FadingReport::time_course_plot`]), `fading.gif` and the report,
+    /// (the time course plotted), `fading.gif` and the report,
     /// [`FadingReport::MARKER`].
     fn write_into(&self, dir: &Path) -> Result<()> {
         let c = &self.course;
@@ -302,7 +302,7 @@ impl CommandReport for FadingReport {
 impl FadingReport {
     /// The time course as a plot: each disk's relative perceived contrast (1 = at onset)
     /// against time since stimulus onset in seconds.
-    pub fn time_course_plot(&self) -> LinePlot {
+    pub(crate) fn time_course_plot(&self) -> LinePlot {
         let c = &self.course;
         let end = c.times.last().copied().unwrap_or(1.0).max(1e-3);
         let mut plot = LinePlot::new(

@@ -15,9 +15,14 @@
 //! assert_eq!(r.participants, vec![("p1".to_string(), vec![(0.0, true), (180.0, false)])]);
 //! ```
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::fit::{
+    fit, simulate, Bin, BinSummary, Criteria, Estimate, FitOptions, ObserverFit, SmoothPrior,
+};
+pub use crate::analysis::observer_model::ModelParams;
+
 use super::CommandReport;
-use crate::analysis::fit::{bins, fit, FitOptions, ObserverFit};
-use crate::analysis::observer_model::ModelParams;
+use crate::analysis::fit::bins;
 use crate::error::{Error, Result};
 use crate::io;
 use crate::message::{Message, Setting};
@@ -867,7 +872,7 @@ impl Report {
     /// The figure: proportions convex with Wilson intervals and the fitted curve against θ
     /// (0–360°), and the fitted prior over light tilt (and the smooth prior, when fitted) on a
     /// polar plot.
-    pub fn figure(&self) -> LineAndPolar {
+    pub(crate) fn figure(&self) -> LineAndPolar {
         let f = &self.pooled;
         let m = f.params();
         let mut line =
@@ -930,7 +935,7 @@ impl Report {
     }
 
     /// Every participant's fitted curve beside the pooled one (`None` with one participant).
-    pub fn participants_figure(&self) -> Option<LinePlot> {
+    pub(crate) fn participants_figure(&self) -> Option<LinePlot> {
         if self.participants.is_empty() {
             return None;
         }

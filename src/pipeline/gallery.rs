@@ -1,6 +1,6 @@
 //! `gallery` as a pipeline: every preset (the built-in ones of `stimuli/`, or a folder of
 //! specs) rendered in memory, then written into one folder with thumbnails, a contact sheet and
-//! an `index.html`; see [`mod@crate::gallery`] for what it holds.
+//! an `index.html`; see [`GalleryReport`] for what it holds.
 //!
 //! ```
 //! use shadelab::pipeline::gallery::{run, GalleryConfig};
@@ -17,9 +17,12 @@
 //! std::fs::remove_dir_all(&dir).unwrap();
 //! ```
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::gallery::{Options, Preset, Rendered};
+
 use super::CommandReport;
 use crate::error::Result;
-use crate::gallery::{self, Options, Preset, Rendered};
+use crate::gallery::{self};
 use crate::progress::Progress;
 use crate::visual_size::Geometry;
 use serde::Serialize;

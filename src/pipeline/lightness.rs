@@ -2,14 +2,18 @@
 //! mean output per target, and for the checker-shadow (targets named A and B) the pixel facts
 //! and each model's verdict.
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::lightness::checker::{Prediction, SquareFacts};
+pub use crate::lightness::{TargetMean, Variant};
+
 use super::source::PictureSource;
 use super::CommandReport;
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
 use crate::io::{self, BitDepth};
-use crate::lightness::checker::{self, Prediction, SquareFacts};
-use crate::lightness::{target_means, Model, TargetMean};
+use crate::lightness::checker::{self};
+use crate::lightness::{target_means, Model};
 use crate::plot::{ColourBar, MapFigure, Outline};
 use crate::progress::Progress;
 use serde::Serialize;
@@ -151,7 +155,7 @@ pub struct LightnessReport {
     pub images: Vec<(Model, Image)>,
     /// The targets, outlined on the figures.
     #[serde(skip)]
-    pub outlines: Vec<Outline>,
+    pub(crate) outlines: Vec<Outline>,
 }
 
 /// Runs the lightness analysis.
@@ -265,7 +269,7 @@ impl LightnessReport {
     /// One model's output as a figure: the same gray levels as its `.png`, in degrees when the
     /// resolution is known, with a colour bar in the model's units and the targets outlined
     /// and named.
-    pub fn figure(&self, model: Model, out: &Image) -> MapFigure {
+    pub(crate) fn figure(&self, model: Model, out: &Image) -> MapFigure {
         let range = match model {
             Model::Retinex => (0.0, 1.0),
             Model::Odog(_) | Model::HighPass => {

@@ -2,13 +2,16 @@
 //! upright picture, then each token's P(convex) against the picture's rotation, one curve per
 //! prior concentration κ.
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::observer::{Curve, LightPrior, ObserverOptions, Percept};
+
 use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
 use super::CommandReport;
 use crate::analysis::observer::{
-    check_circle, curves_csv, p_convex_plot, Curve, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
+    check_circle, curves_csv, p_convex_plot, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
     DEFAULT_PRIOR_TILT_DEG,
 };
-use crate::analysis::{observe, parse_angles, LightPrior, ObserverOptions, Sweep};
+use crate::analysis::{observe, parse_angles, Sweep};
 use crate::error::{Error, Result};
 use crate::plot::Figure;
 use crate::progress::Progress;

@@ -12,14 +12,17 @@
 //! quadratic smoothness, and the bend concentration of each reconstruction says whether its
 //! bending sits at folds (near 1) or is spread (about 0.3).
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::outline::{ProfileFit, ShadingFit};
+
 use super::source::PictureSource;
 use super::CommandReport;
 use crate::analysis::convexity::Token;
 use crate::analysis::outline::{
-    curvature_concentration, fit_shading, outline_conditions, outline_profile, Profile, ProfileFit,
-    ShadingFit, TOP_FRACTION,
+    curvature_concentration, fit_shading, outline_conditions, outline_profile, Profile,
+    TOP_FRACTION,
 };
-use crate::analysis::Picture;
+use crate::analysis::TokenPicture;
 use crate::boundary::BoundaryConditions;
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
@@ -225,7 +228,7 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
             "the picture has no targets: the outline analysis reads each target (label 1..N of a target mask) as a strip cut by an outline",
         ));
     };
-    let picture = Picture::from_image(loaded.luminance(), Some((labels, names.as_slice())))?;
+    let picture = TokenPicture::from_image(loaded.luminance(), Some((labels, names.as_slice())))?;
     let (w, h) = (picture.image.width(), picture.image.height());
     progress.start(picture.tokens.len() as u64, "outline");
     // Every target's two reconstructions are independent: they run side by side, each one
@@ -523,7 +526,7 @@ fn stem(name: &str, label: u16) -> String {
 impl TargetReading {
     /// The target's three figures: (file name, figure) for the shape, the shading and the
     /// paint.
-    pub fn figures(&self) -> Vec<(String, MapFigure)> {
+    pub(crate) fn figures(&self) -> Vec<(String, MapFigure)> {
         let l = &self.layers;
         let (c0, r0) = l.origin;
         let (cw, ch) = (l.inside.width(), l.inside.height());

@@ -86,7 +86,7 @@ impl Output {
     /// Starts the output folder with `marker` as the file that marks it as the command's
     /// (checked against a folder that exists, and against the inputs): the one place a
     /// command's folder is claimed.
-    pub fn folder(&self, marker: &str) -> Result<AtomicDir> {
+    pub(crate) fn folder(&self, marker: &str) -> Result<AtomicDir> {
         AtomicDir::create(&self.path, marker, self.force)?.reads(&self.inputs)
     }
 

@@ -3,11 +3,15 @@
 //! domain's rim ([`BoundarySource`], as `solve` takes it), the lighting to assume besides its tilt, and the solver settings, with their
 //! defaults; [`Config::load`] turns them into a [`Setup`] ready to interpret.
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::convexity::Token;
+pub use crate::analysis::interpretation::{Lighting, Scene};
+pub use crate::analysis::{Domain, Interpretation, TokenPicture, TokenReading};
+
 use super::solve::BoundarySource;
 use super::source::PictureSource;
-use crate::analysis::interpretation::{analysis_solve_options, Lighting, Scene};
-use crate::analysis::{sweep, Interpretation, Sweep};
-use crate::analysis::{Domain, Picture};
+use crate::analysis::interpretation::analysis_solve_options;
+use crate::analysis::{sweep, Sweep};
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
@@ -116,7 +120,12 @@ impl DomainSpec {
 
     /// The domain's mask for `picture`, whose targets are (`on_backdrop`) or are not objects
     /// on a backdrop (a mask file is read and checked against its size).
-    pub fn resolve(&self, picture: &Picture, on_backdrop: bool, max_pixels: usize) -> Result<Mask> {
+    pub fn resolve(
+        &self,
+        picture: &TokenPicture,
+        on_backdrop: bool,
+        max_pixels: usize,
+    ) -> Result<Mask> {
         match self {
             DomainSpec::Mask(path) => {
                 let mask = io::read_mask(path, max_pixels)?;
@@ -242,8 +251,8 @@ impl Config {
         let options = self.solver;
         let (loaded, _) = self.source.load_shaped(false, self.size)?;
         let labels = loaded.labels.as_ref().map(|(l, n)| (l, n.as_slice()));
-        let mut picture =
-            Picture::from_image(loaded.luminance(), labels).map_err(|e| self.naming_mask(e))?;
+        let mut picture = TokenPicture::from_image(loaded.luminance(), labels)
+            .map_err(|e| self.naming_mask(e))?;
         // What the stimulus or the image's sidecar declares (the same reader for both).
         picture.albedo = loaded.declared.albedo;
         picture.ambient = loaded.declared.ambient;
@@ -321,7 +330,7 @@ pub struct Parameters {
 #[derive(Debug, Clone)]
 pub struct Setup {
     /// The picture, its albedo and ambient set to the ones used.
-    pub picture: Picture,
+    pub picture: TokenPicture,
     /// Where the engine solves.
     pub domain: Mask,
     /// The boundary at the domain's rim.

@@ -3,10 +3,14 @@
 //! where it flips, and optionally the binding analysis (one light for the scene against a light
 //! per token).
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::binding::{Binding, GlobalLight, UsedLight};
+pub use crate::analysis::Sweep;
+
 use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
 use super::CommandReport;
-use crate::analysis::binding::{binding, Binding, GlobalLight};
-use crate::analysis::{parse_angles, Interpreter, Sweep};
+use crate::analysis::binding::binding;
+use crate::analysis::{parse_angles, Interpreter};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use serde::Serialize;

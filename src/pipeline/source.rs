@@ -7,9 +7,12 @@
 //! ambient level and true light are taken, and a recorded display gamma or PsychoPy range is
 //! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::io::{Beside, Declared, RenderSidecar, TrueLight};
+
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels};
-use crate::io::{self, Beside, Declared, InputEncoding, RenderSidecar};
+use crate::io::{self, InputEncoding};
 use crate::message::{Message, Setting};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;

@@ -20,8 +20,12 @@
 //! assert_eq!(report.sweep.lines().count(), 1 + 4);
 //! ```
 
+// The parts of this command's configuration and report that other modules define.
+pub use crate::analysis::study::grid::Point;
+pub use crate::analysis::study::{PriorGrid, Shard, StimulusEntry, Study, StudyOutput, StudySpec};
+
 use super::CommandReport;
-use crate::analysis::study::{self, Shard, Study, StudySpec, REPORT, RESULTS, SWEEP};
+use crate::analysis::study::{self, REPORT, RESULTS, SWEEP};
 use crate::error::{Error, Result};
 use crate::io;
 use crate::progress::Progress;

@@ -6,29 +6,29 @@
 //! Two ways in: by name ([`find`], [`generate`], [`Spec`]), with the parameters as key=value
 //! pairs or JSON checked against the stimulus's declarations; or typed, with one parameter
 //! struct and one function per stimulus ([`bumps`] with [`BumpsParams`], [`sphere`] with
-//! [`SphereParams`] ...). Each struct is declared once (`stimulus_params!` in
-//! [`crate::params`]), which gives its defaults, ranges, docs and the conversion to and from
+//! [`SphereParams`] ...). Each struct is declared once (`stimulus_params!`), which gives its defaults, ranges, docs and the conversion to and from
 //! the generic [`Params`] that sidecars record.
 
 mod boundary_strips;
 mod bumps;
-pub mod bundle;
+pub(crate) mod bundle;
 mod checker_shadow;
 mod checkerboard;
 mod circles;
 mod crater;
 mod export;
-pub mod face;
+pub(crate) mod face;
 mod fading_disk;
 mod frame;
 mod hollow_mask;
-pub mod mat;
+pub(crate) mod mat;
 mod reflectance_map;
-pub mod stimupy_names;
+pub(crate) mod stimupy_names;
 mod strips;
 mod surfaces;
 mod svg;
 
+pub use crate::surface::{Mesh, MeshShading, Projection, Surface};
 pub(crate) use export::planned_files;
 pub use export::{shown_on_display, write_output, ExportOptions, Range};
 

@@ -9,8 +9,6 @@ use serde_json::{Map, Value};
 /// How a stimupy value becomes shadelab's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Conversion {
-    /// The same value under another name.
-    Same,
     /// A (height, width) size whose two values must agree (shadelab's is one number: square).
     SquarePair,
     /// A pair split into two parameters, in order.
@@ -94,7 +92,6 @@ pub fn translate(stimulus: &str, given: &Map<String, Value>) -> Result<Map<Strin
             Ok(())
         };
         match alias.conversion {
-            Conversion::Same => set(alias.shadelab, value.clone())?,
             Conversion::SquarePair => {
                 match numbers(&value).as_deref() {
                     Some([v]) => set(alias.shadelab, Value::from(*v))?,

@@ -3,8 +3,8 @@
 
 use super::*;
 use crate::cli::{scratch, shadelab};
-use shadelab::grid::Grid;
 use shadelab::stimulus::Pixels;
+use shadelab::Grid;
 
 #[test]
 fn a_spec_gives_stimupys_shape_in_height_width_order() {
@@ -19,7 +19,7 @@ fn a_spec_gives_stimupys_shape_in_height_width_order() {
         &d,
         &["render", "--spec", "spec.json", "--out", "c.png"],
     ));
-    let (img, _) = shadelab::io::read_gray(&d.join("c.png"), MAX).unwrap();
+    let (img, _) = shadelab::internal::io::read_gray(&d.join("c.png"), MAX).unwrap();
     assert_eq!((img.height(), img.width()), (128, 256));
     // 1° checks at 32 ppd: 4 rows and 8 columns of checks.
     let changes = |values: Vec<f64>| values.windows(2).filter(|pair| pair[0] != pair[1]).count();
@@ -44,7 +44,7 @@ fn a_spec_gives_stimupys_shape_in_height_width_order() {
         &["render", "sphere", "--size", "50x30", "--out", "t.png"],
     ));
     for f in ["s.png", "t.png"] {
-        let (img, _) = shadelab::io::read_gray(&d.join(f), MAX).unwrap();
+        let (img, _) = shadelab::internal::io::read_gray(&d.join(f), MAX).unwrap();
         assert_eq!((img.height(), img.width()), (30, 50), "{f}");
     }
 }
@@ -315,6 +315,12 @@ fn a_visual_size_is_rounded_down_to_whole_pixels_as_stimupy_and_said() {
     let side: Value = serde_json::from_slice(&std::fs::read(d.join("w.json")).unwrap()).unwrap();
     assert!(side["notes"].get("visual_size_rounded").is_none());
     // 0.29° × 100 ppd is 29 px (28.999999999999996 before the product is rounded to 10 decimals).
-    assert_eq!(shadelab::visual_size::whole_pixels(0.29, 100.0), 29.0);
-    assert_eq!(shadelab::visual_size::whole_pixels(3.3, 31.7), 104.0);
+    assert_eq!(
+        shadelab::internal::visual_size::whole_pixels(0.29, 100.0),
+        29.0
+    );
+    assert_eq!(
+        shadelab::internal::visual_size::whole_pixels(3.3, 31.7),
+        104.0
+    );
 }

@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::cli::{assert_error, files_in, scratch, shadelab};
-use shadelab::io;
+use shadelab::internal::io;
 
 /// The gAMA value (hundred-thousandths) and the iTXt chunks of a PNG, as the `png` crate reads
 /// them.

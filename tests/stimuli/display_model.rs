@@ -47,7 +47,7 @@ fn linear(d: &Path, args: &[&str]) -> Vec<f64> {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let array = shadelab::io::read_array(&d.join("truth.npy"), 1 << 24).unwrap();
+    let array = shadelab::internal::io::read_array(&d.join("truth.npy"), 1 << 24).unwrap();
     array.data
 }
 
@@ -165,7 +165,7 @@ fn the_sidecar_records_each_targets_luminance_and_the_file_reads_back_as_the_sti
     )
     .unwrap();
     let (codes, ..) = samples(&d.join("b.png"));
-    let labels = shadelab::io::read_labels(&d.join("b_mask.png"), 1 << 24).unwrap();
+    let labels = shadelab::internal::io::read_labels(&d.join("b_mask.png"), 1 << 24).unwrap();
     for t in side["targets"].as_array().unwrap() {
         let label = t["label"].as_u64().unwrap() as u16;
         let inside: Vec<f64> = codes
@@ -221,7 +221,7 @@ fn the_sidecar_records_each_targets_luminance_and_the_file_reads_back_as_the_sti
 #[test]
 fn a_psychopy_monitor_file_gives_psychopys_own_luminances() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
-    let display = shadelab::io::read_display(&data.join("psychopy-monitor-labcrt.json")).unwrap();
+    let display = shadelab::read_display(&data.join("psychopy-monitor-labcrt.json")).unwrap();
     // The latest calibration (method 4, Pelli & Zhang) against PsychoPy's gammaFun.
     assert!(
         display.name().contains("2026_11_20 lab"),
@@ -253,7 +253,7 @@ fn a_psychopy_monitor_file_gives_psychopys_own_luminances() {
         r#"{"psychopy_monitor": "labcrt.json", "calibration": "2026_11_28 09:03", "bit_depth": 8}"#,
     )
     .unwrap();
-    let old = shadelab::io::read_display(&d.join("old.json")).unwrap();
+    let old = shadelab::read_display(&d.join("old.json")).unwrap();
     let expect = 0.5 + (110.0 - 0.5) * (128.0f64 / 255.0).powf(2.4);
     assert!((old.code_luminance(128) - expect).abs() < 1e-9);
     // The monitor file itself renders with --display.
@@ -340,7 +340,7 @@ fn a_photometer_table_bit_stealing_and_dithering() {
         "{errors:?}"
     );
     // The table's rows are where the display is measured: the model passes through them.
-    let display = shadelab::io::read_display(&d.join("meter.csv")).unwrap();
+    let display = shadelab::read_display(&d.join("meter.csv")).unwrap();
     for row in &rows {
         let (c, l) = row.split_once(',').unwrap();
         let l: f64 = l.parse().unwrap();

@@ -3,9 +3,10 @@
 use super::*;
 use crate::cli::{assert_error, scratch, shadelab};
 use serde_json::Map;
-use shadelab::io::{self};
-use shadelab::stimulus::{self, mat, ExportOptions, Pixels};
-use shadelab::visual_size::SizeRequest;
+use shadelab::internal::io::{self};
+use shadelab::internal::stimulus::mat;
+use shadelab::stimulus::{self, ExportOptions, Pixels};
+use shadelab::SizeRequest;
 use std::collections::BTreeSet;
 use std::path::Path;
 

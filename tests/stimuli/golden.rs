@@ -1,10 +1,10 @@
 //! Golden images of every stimulus, and rendering that repeats exactly.
 
 use super::*;
-use shadelab::io::{self, BitDepth};
+use shadelab::internal::io::{self, BitDepth};
 use shadelab::stimulus::{self, Output, Pixels};
-use shadelab::visual_size::SizeRequest;
 use shadelab::Grid;
+use shadelab::SizeRequest;
 use std::path::{Path, PathBuf};
 
 fn golden_dir() -> PathBuf {
@@ -163,8 +163,7 @@ fn every_stimulus_matches_its_golden_image() {
 
 #[test]
 fn rendering_twice_gives_the_same_output_and_the_seed_matters() {
-    let given =
-        shadelab::params::Params::parse_pairs(&["layout=random", "odd_one_out=true"]).unwrap();
+    let given = shadelab::Params::parse_pairs(&["layout=random", "odd_one_out=true"]).unwrap();
     let size = SizeRequest::default();
     let a = stimulus::generate("circles-gradient", &given, &size, 9, MAX)
         .unwrap()

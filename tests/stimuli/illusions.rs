@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::cli::{scratch, shadelab};
-use shadelab::io::{self};
+use shadelab::internal::io::{self};
 use shadelab::Image;
 use std::collections::BTreeSet;
 

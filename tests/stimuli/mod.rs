@@ -21,7 +21,7 @@ mod sidecar;
 
 use serde_json::{Map, Value};
 use shadelab::stimulus::{self, Output};
-use shadelab::visual_size::SizeRequest;
+use shadelab::SizeRequest;
 use std::path::Path;
 
 /// The largest picture the tests make.

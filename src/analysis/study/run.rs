@@ -4,7 +4,7 @@ use super::grid::{params_text, prior_combinations, Point};
 use super::{Shard, Study, RESULTS_HEADER, SWEEP_HEADER};
 use crate::analysis::interpretation::{analysis_solve_options, Scene};
 use crate::analysis::observer::{observe, ObserverOptions};
-use crate::analysis::picture::Picture;
+use crate::analysis::picture::TokenPicture;
 use crate::analysis::prior_sweep::sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_field;
@@ -64,7 +64,7 @@ impl Study {
             entry.seed,
             self.max_pixels,
         )?;
-        let picture = Picture::from_stimulus(&request, &output)?;
+        let picture = TokenPicture::from_stimulus(&request, &output)?;
         let domain = picture.domain(self.domain);
         let lighting = picture.lighting(&domain, point.slant_deg, None, None)?;
         let scene = Scene {

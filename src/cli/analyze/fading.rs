@@ -6,7 +6,7 @@ use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::lightness::fading::{AdaptationOptions, DogBand};
+use shadelab::internal::lightness::fading::{AdaptationOptions, DogBand};
 use shadelab::pipeline::fading::{self, FadingConfig};
 use shadelab::{CommandReport, FadingReport};
 

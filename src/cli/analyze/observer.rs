@@ -8,7 +8,7 @@ use crate::cli::destination;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::analysis::observer::{
+use shadelab::internal::analysis::observer::{
     parse_kappas, LightPrior, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA, DEFAULT_PRIOR_TILT_DEG,
 };
 use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS};

@@ -3,8 +3,8 @@
 
 use super::{CliError, Global, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
+use shadelab::internal::visual_size::parse_size;
 use shadelab::pipeline::perception::{Config, Header};
-use shadelab::visual_size::parse_size;
 
 /// The picture and how to interpret it.
 #[derive(Debug, clap::Args)]

@@ -3,12 +3,12 @@
 //! One call, [`frame`], does a frame's work with the library's own pipelines and nothing
 //! else: it renders the chosen stimulus under the true light
 //! ([`shadelab::pipeline::source::PictureSource`], as `shadelab render` renders it), turns it by
-//! 180° when asked ([`shadelab::analysis::rotation`]), solves it under the *assumed* light
+//! 180° when asked ([`shadelab::internal::analysis::rotation`]), solves it under the *assumed* light
 //! with the Ikeuchi–Horn engine and integrates the result to depth
-//! ([`shadelab::pipeline::perception`] and [`shadelab::analysis::Interpreter`], as
+//! ([`shadelab::pipeline::perception`] and [`shadelab::internal::analysis::Interpreter`], as
 //! `shadelab analyze prior-sweep` does for each tilt), and reads the central target
-//! ([`shadelab::analysis::convexity`]): its signed convexity and verdict, and the direction its
-//! bright side faces ([`shadelab::analysis::Token::bright_side`]). [`p_convex_model`] is the observer's
+//! ([`shadelab::internal::analysis::convexity`]): its signed convexity and verdict, and the direction its
+//! bright side faces ([`shadelab::pipeline::perception::Token::bright_side`]). [`p_convex_model`] is the observer's
 //! P(convex) for that direction.
 //!
 //! The browser talks to it through a plain C ABI over the module's linear memory (the `sl_*`
@@ -17,13 +17,13 @@
 //! the build to one `cargo build` (see docs/teaching.md).
 
 use serde_json::{json, Value};
-use shadelab::analysis::convexity::{central_token, Verdict};
-use shadelab::analysis::observer_model::ModelParams;
-use shadelab::analysis::rotation::rotate_quarter_turns;
-use shadelab::analysis::Interpreter;
-use shadelab::colormap::Colormap;
+use shadelab::internal::analysis::convexity::{central_token, Verdict};
+use shadelab::internal::analysis::rotation::rotate_quarter_turns;
+use shadelab::internal::analysis::Interpreter;
+use shadelab::pipeline::fit::ModelParams;
 use shadelab::pipeline::perception;
 use shadelab::pipeline::source::PictureSource;
+use shadelab::Colormap;
 use shadelab::{Error, Pixels, Result};
 use std::cell::RefCell;
 
@@ -221,7 +221,7 @@ impl Frame {
 }
 
 /// The display gamma of the page's pictures (the gallery's).
-const DISPLAY_GAMMA: f64 = shadelab::gallery::THUMBNAIL_GAMMA;
+const DISPLAY_GAMMA: f64 = shadelab::internal::gallery::THUMBNAIL_GAMMA;
 
 fn check_dial(what: &str, d: Dial) -> Result<()> {
     if !d.tilt_deg.is_finite() {
@@ -247,7 +247,7 @@ fn params(s: &Stimulus, light: Dial) -> Result<serde_json::Map<String, Value>> {
             .map_err(|e| Error::Compute(format!("parameter {k} of {}: {e}", s.name)))?;
         map.insert((*k).to_string(), value);
     }
-    let tilt = shadelab::analysis::wrap_360(light.tilt_deg);
+    let tilt = shadelab::internal::analysis::wrap_360(light.tilt_deg);
     match s.lit {
         Lit::Light => {
             map.insert(
@@ -284,7 +284,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
     let ppd = request.size as f64 / visual_h.max(visual_w);
 
     // Render under the true light, as `shadelab render` does.
-    let max_pixels = shadelab::grid::DEFAULT_MAX_PIXELS;
+    let max_pixels = shadelab::DEFAULT_MAX_PIXELS;
     let source = PictureSource {
         stimulus: Some(s.name.to_string()),
         params: params(s, request.light)?,
@@ -337,7 +337,8 @@ pub fn frame(request: &Request) -> Result<Frame> {
         .unwrap_or_else(|| token.name.clone());
 
     // Pictures for the page.
-    let picture_rgba = shadelab::io::display_rgba8(&image.map(|&v| [v; 3]), Some(DISPLAY_GAMMA))?;
+    let picture_rgba =
+        shadelab::internal::io::display_rgba8(&image.map(|&v| [v; 3]), Some(DISPLAY_GAMMA))?;
     let (lo, hi) = depth
         .data()
         .iter()
@@ -345,7 +346,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
             (lo.min(z), hi.max(z))
         });
     let colours = Colormap::Viridis.paint(&depth, (lo, hi), None, [0.0; 3]);
-    let depth_rgba = shadelab::io::display_rgba8(&colours, Some(DISPLAY_GAMMA))?;
+    let depth_rgba = shadelab::internal::io::display_rgba8(&colours, Some(DISPLAY_GAMMA))?;
     Ok(Frame {
         width: w,
         height: h,
@@ -367,7 +368,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
 /// The observer's P(convex | θ) for the bright side facing `theta_deg` (tilt convention), with
 /// the prior's light tilt `mu_deg`, concentration `kappa`, convexity prior `pi` and lapse rate
 /// `lapse`: the library's one observer model
-/// ([`shadelab::analysis::observer_model::ModelParams::p_convex`]), the model `shadelab fit
+/// ([`shadelab::pipeline::fit::ModelParams::p_convex`]), the model `shadelab fit
 /// observer` estimates. NaN when a value is out of range (κ < 0, π or λ outside 0..1), so the
 /// page shows no number rather than a wrong one.
 ///
