@@ -910,6 +910,49 @@ mod tests {
     }
 
     #[test]
+    fn an_exports_conventions_are_read_and_bad_target_labels_are_one_line_errors() {
+        let dir = std::env::temp_dir().join(format!("shadelab-bm-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let s = contrast_stimulus("sbc", 32, 8.0, Human::EffectStrength { value: 1.0 });
+        io::write_image(&dir.join("img.npy"), &s.image).unwrap();
+        io::write_image(&dir.join("mask.npy"), &s.targets.map(|&l| f64::from(l))).unwrap();
+        let write = |extra: &str| {
+            let index = format!(
+                r#"{{"stimupy_version": "1.2.0", "stimuli": [{{"set": "RHS2007", "name": "sbc",
+                "image": "img.npy", "mask": "mask.npy", "ppd": 8, "darker_target": 2,
+                "human": {{"kind": "effect_strength", "value": 1.0}}{extra}}}]}}"#
+            );
+            std::fs::write(dir.join(EXPORT_INDEX), index).unwrap();
+            BenchmarkConfig::from_export(&dir, vec![Model::HighPass], &[])
+        };
+        let c =
+            write(r#", "lighter_target": 1, "convention": "contrast", "convention_checked": true"#)
+                .unwrap();
+        let st = &c.stimuli[0];
+        assert_eq!((st.lighter, st.darker), (1, 2));
+        assert!(st.convention_checked && st.convention == "contrast");
+        let report = run(&c, &NoProgress).unwrap();
+        assert_eq!(report.conventions[0].lighter_target, 1);
+        assert_eq!(report.checked_scores, report.scores);
+        // An export from before the conventions: the set's order, not checked.
+        let c = write(r#", "lighter_target": 1"#).unwrap();
+        assert!(!c.stimuli[0].convention_checked);
+        let report = run(&c, &NoProgress).unwrap();
+        assert!(report.checked_scores.is_empty());
+        assert!(report.markdown().contains("only the 0 of 1 stimuli"));
+        for (bad, says) in [
+            (r#", "lighter_target": 0"#, "target label from 1"),
+            (r#", "lighter_target": 1.5"#, "target label from 1"),
+            (r#", "lighter_target": 2"#, "both label 2"),
+            ("", "no number lighter_target"),
+        ] {
+            let e = write(bad).unwrap_err().to_string();
+            assert!(e.contains(says) && !e.contains('\n'), "{bad}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn the_high_pass_model_predicts_simultaneous_contrast() {
         let s = contrast_stimulus("sbc", 64, 8.0, Human::EffectStrength { value: 1.0 });
         let config = BenchmarkConfig::new(vec![s], vec![Model::HighPass], "x".into()).unwrap();
