@@ -172,6 +172,129 @@ fn odog_predicts_the_direction_of_whites_effect_on_stimupys_stimuli() {
     assert_error(&bad, 2, "nope");
 }
 
+/// The mean luminance of the free pixels (label 0) that share an edge with target `t`: above
+/// and below it (`.0`), left and right of it (`.1`), and all of them (`.2`).
+fn neighbour_means(s: &bm::BenchmarkStimulus, t: u16) -> (f64, f64, f64) {
+    let (w, h) = (s.image.width(), s.image.height());
+    let (mut vert, mut horiz) = ((0.0, 0usize), (0.0, 0usize));
+    for r in 0..h {
+        for c in 0..w {
+            if *s.targets.get(c, r) != 0 {
+                continue;
+            }
+            let is_t = |dc: isize, dr: isize| {
+                s.targets.checked(c as isize + dc, r as isize + dr) == Some(&t)
+            };
+            let v = *s.image.get(c, r);
+            if is_t(0, -1) || is_t(0, 1) {
+                vert = (vert.0 + v, vert.1 + 1);
+            }
+            if is_t(-1, 0) || is_t(1, 0) {
+                horiz = (horiz.0 + v, horiz.1 + 1);
+            }
+        }
+    }
+    assert!(
+        vert.1 > 0 && horiz.1 > 0,
+        "{}: target {t} has no free neighbour",
+        s.name
+    );
+    let all = (vert.0 + horiz.0) / (vert.1 + horiz.1) as f64;
+    (vert.0 / vert.1 as f64, horiz.0 / horiz.1 as f64, all)
+}
+
+#[test]
+fn the_lighter_target_is_the_one_the_published_illusion_makes_lighter() {
+    let Some(python) = stimupy_python() else {
+        return;
+    };
+    let only: Vec<String> = [
+        "RHS2007/sbc_small",
+        "murray2020/simcon",
+        "RHS2007/WE_thick",
+        "murray2020/white",
+        "RHS2007/checkerboard_094",
+        "murray2020/checkassim",
+        "RHS2007/grating_induction",
+        "RHS2007/benary_cross",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let models = BenchmarkConfig::parse_models("highpass").unwrap();
+    let config = BenchmarkConfig::from_stimupy(&python, models, &only).unwrap();
+    let by_name = |set: &str, name: &str| {
+        config
+            .stimuli
+            .iter()
+            .find(|s| s.set == set && s.name == name)
+            .unwrap_or_else(|| panic!("{set}/{name} not exported"))
+    };
+    // Checked on stimupy's own pixels, not on any model: the two targets have the same value,
+    // and what surrounds each decides which one people see as lighter.
+    for s in &config.stimuli {
+        let (l, d) = (s.lighter, s.darker);
+        let mean_of = |t: u16| {
+            let px: Vec<f64> = (0..s.image.len())
+                .filter(|&i| s.targets.data()[i] == t)
+                .map(|i| s.image.data()[i])
+                .collect();
+            px.iter().sum::<f64>() / px.len() as f64
+        };
+        assert!(
+            (mean_of(l) - mean_of(d)).abs() < 1e-9,
+            "{}: targets differ",
+            s.name
+        );
+    }
+    // Simultaneous contrast: the target on the dark background looks lighter.
+    for (set, name) in [("RHS2007", "sbc_small"), ("murray2020", "simcon")] {
+        let s = by_name(set, name);
+        let (lighter, darker) = (neighbour_means(s, s.lighter), neighbour_means(s, s.darker));
+        assert!(lighter.2 < darker.2, "{name}: {lighter:?} vs {darker:?}");
+        assert!(
+            s.convention_checked && s.convention == "contrast",
+            "{}",
+            s.convention
+        );
+    }
+    // White's effect: the target lying on a dark stripe (the stripe continues beyond its ends,
+    // above and below it in RHS2007, left and right in Murray's rotated version) looks lighter
+    // although its long sides border white.
+    let s = by_name("RHS2007", "WE_thick");
+    let (lighter, darker) = (neighbour_means(s, s.lighter), neighbour_means(s, s.darker));
+    assert!(
+        lighter.0 < darker.0 && lighter.1 > darker.1,
+        "{lighter:?} {darker:?}"
+    );
+    let s = by_name("murray2020", "white");
+    let (lighter, darker) = (neighbour_means(s, s.lighter), neighbour_means(s, s.darker));
+    assert!(
+        lighter.1 < darker.1 && lighter.0 > darker.0,
+        "{lighter:?} {darker:?}"
+    );
+    // Checkerboard contrast: the target among white checks looks lighter (not the one among
+    // black checks, as plain contrast would have it); RHS2007's target 1 is among black checks.
+    for (set, name) in [
+        ("RHS2007", "checkerboard_094"),
+        ("murray2020", "checkassim"),
+    ] {
+        let s = by_name(set, name);
+        let (lighter, darker) = (neighbour_means(s, s.lighter), neighbour_means(s, s.darker));
+        assert!(lighter.2 > darker.2, "{name}: {lighter:?} vs {darker:?}");
+    }
+    assert_eq!(by_name("RHS2007", "checkerboard_094").lighter, 2);
+    // Grating induction: the strip looks modulated in the grating's opposite phase, so the
+    // part with the dark phase above and below it looks lighter.
+    let s = by_name("RHS2007", "grating_induction");
+    let (lighter, darker) = (neighbour_means(s, s.lighter), neighbour_means(s, s.darker));
+    assert!(lighter.0 < darker.0, "{lighter:?} vs {darker:?}");
+    // A stimulus without a verified rule keeps stimupy's order and says so.
+    let s = by_name("RHS2007", "benary_cross");
+    assert!(!s.convention_checked && s.lighter == 1, "{}", s.convention);
+    assert!(s.convention.contains("not checked"), "{}", s.convention);
+}
+
 #[test]
 fn a_missing_python_is_one_line_saying_how_to_install_stimupy() {
     let dir = scratch("benchmark-no-python");

@@ -8,10 +8,14 @@ writes ``DIR/stimuli.json`` and, per stimulus, ``SET_NAME_img.npy`` and
 
 The human values are stimupy's: RHS2007's ``effect_strength`` (stimupy keeps it in
 ``experimental_data`` or, for the bullseyes, at the top of the dict) and murray2020's
-``mean_proportion_expected`` with ``CI95_proportion_expected``. Which target people see as
-lighter is stimupy's order: target 1 in RHS2007, target 2 in murray2020 (checked on the
-classic simultaneous-contrast and White stimuli of both sets: the lighter-looking target is the
-one on the dark surround).
+``mean_proportion_expected`` with ``CI95_proportion_expected``.
+
+Which target people see as lighter is stated per stimulus in ``CONVENTIONS`` below: for the
+classic illusions it follows from the illusion's published direction (a rule, cited there)
+applied to stimupy's own pixel values, so it cannot silently disagree with the picture; for
+the others it is stimupy's order, marked as not checked. Each exported stimulus records the
+targets, the rule or its absence (``convention``) and whether a published rule decided it
+(``convention_checked``).
 """
 
 import json
@@ -27,9 +31,109 @@ def _sets():
     from stimupy.papers import RHS2007, murray2020
 
     return [
-        ("RHS2007", RHS2007, {}, 1, 2),
-        ("murray2020", murray2020, {"ppd": MURRAY_PPD}, 2, 1),
+        ("RHS2007", RHS2007, {}),
+        ("murray2020", murray2020, {"ppd": MURRAY_PPD}),
     ]
+
+
+def _neighbours(img, mask, target):
+    """The luminance just outside ``target`` (pixels of no target sharing an edge with it):
+    ``border`` (all of them), ``ends`` (across the target's short sides: beyond the ends of
+    its long axis) and ``sides`` (across its long sides), each a mean."""
+    import numpy as np
+
+    inside = mask == target
+    free = mask == 0
+    vertical = np.zeros_like(inside)
+    horizontal = np.zeros_like(inside)
+    vertical[1:] |= inside[:-1]
+    vertical[:-1] |= inside[1:]
+    horizontal[:, 1:] |= inside[:, :-1]
+    horizontal[:, :-1] |= inside[:, 1:]
+    vertical &= free
+    horizontal &= free
+    # A target taller than wide has fewer pixels above and below it than beside it: its
+    # ends are above and below.
+    if vertical.sum() <= horizontal.sum():
+        ends, sides = vertical, horizontal
+    else:
+        ends, sides = horizontal, vertical
+    border = vertical | horizontal
+    return {
+        "border": float(img[border].mean()),
+        "ends": float(img[ends].mean()),
+        "sides": float(img[sides].mean()),
+    }
+
+
+# The published direction of each classic illusion, as a rule on stimupy's pixels: which of
+# the two targets people see as lighter. Each returns the key of ``_neighbours`` to compare
+# and whether the target with the *lower* value there is the lighter-looking one.
+RULES = {
+    # Simultaneous contrast: a grey patch looks lighter on a dark background (Adelson 1993,
+    # Science 262:2042, abstract; Zeman, Brooks & Ghebreab 2015, Front. Hum. Neurosci.
+    # 9:368, abstract).
+    "contrast": ("border", True),
+    # White's effect: "a test patch placed on a dark stripe of the grating looks lighter than
+    # one placed on a light stripe" (Betz, Shapley, Wichmann & Maertens 2015, J. Vis.
+    # 15(11):14, abstract). The stripe a patch lies on continues beyond its ends.
+    "white": ("ends", True),
+    # Checkerboard contrast: the grey square surrounded by four white squares looks lighter
+    # than the one surrounded by black squares, contrary to simultaneous contrast (De Valois &
+    # De Valois 1988, as summarised by Hudak & Geier, ECVP abstract 771; assimilation as in
+    # Barkan, Spitzer & Einav 2008, J. Vis. 8(7):27, abstract).
+    "checkerboard": ("border", False),
+    # Grating induction: the grey test strip takes on the grating's opposite phase (Foley &
+    # McCourt 1985, JOSA A 2:1220, abstract: "an opposite phase grating will be perceived in
+    # the test field"; McCourt 1982, cited by stimupy's docstring): the part flanked by the
+    # dark phase looks lighter. The grating lies across the strip's long sides.
+    "grating_induction": ("sides", True),
+}
+
+# Which rule decides each stimulus. Stimuli not listed keep stimupy's order (RHS2007: target
+# 1; murray2020: target 2, the order of Murray's data file, which the rules confirm on simcon,
+# simcon_articulated, white and checkassim) and are marked as not checked: for Anderson's and
+# Howe's White variants, Todorovic's figures, the corrugated Mondrian, Benary's cross and its
+# Todorovic variants, and Murray's argyle, snake and Koffka stimuli, no published statement of
+# which of stimupy's two targets looks lighter was verified for this project.
+CONVENTIONS = {
+    "RHS2007": {
+        "WE_thick": "white",
+        "WE_thin_wide": "white",
+        "grating_induction": "grating_induction",
+        "sbc_large": "contrast",
+        "sbc_small": "contrast",
+        "checkerboard_016": "checkerboard",
+        "checkerboard_094": "checkerboard",
+        "checkerboard_21": "checkerboard",
+    },
+    "murray2020": {
+        "simcon": "contrast",
+        "simcon_articulated": "contrast",
+        "white": "white",
+        "checkassim": "checkerboard",
+    },
+}
+
+# stimupy's order where no rule decides: (lighter, darker).
+DEFAULT_ORDER = {"RHS2007": (1, 2), "murray2020": (2, 1)}
+
+
+def convention(set_name, name, img, mask):
+    """(lighter target, darker target, rule name or None) for one stimulus: the rule's
+    verdict on the pixels where ``CONVENTIONS`` names one, else stimupy's order. Raises
+    ValueError when the rule cannot tell the targets apart."""
+    rule = CONVENTIONS.get(set_name, {}).get(name)
+    if rule is None:
+        lighter, darker = DEFAULT_ORDER[set_name]
+        return lighter, darker, None
+    key, lower_is_lighter = RULES[rule]
+    v1 = _neighbours(img, mask, 1)[key]
+    v2 = _neighbours(img, mask, 2)[key]
+    if abs(v1 - v2) < 1e-6:
+        raise ValueError(f"{set_name}/{name}: rule {rule} cannot tell the targets apart")
+    first = (v1 < v2) == lower_is_lighter
+    return (1, 2, rule) if first else (2, 1, rule)
 
 
 def _human(set_name, stim):
@@ -63,7 +167,7 @@ def export(folder, names=()):
     wanted = set(names)
     found = set()
     stimuli = []
-    for set_name, module, kwargs, lighter, darker in _sets():
+    for set_name, module, kwargs in _sets():
         for name in module.__all__:
             full = f"{set_name}/{name}"
             if wanted and name not in wanted and full not in wanted:
@@ -77,8 +181,11 @@ def export(folder, names=()):
             found.update({name, full})
             image = f"{set_name}_{name}_img.npy"
             mask = f"{set_name}_{name}_mask.npy"
-            np.save(os.path.join(folder, image), np.asarray(stim["img"], dtype=np.float64))
-            np.save(os.path.join(folder, mask), np.asarray(stim["target_mask"], dtype=np.float64))
+            img = np.asarray(stim["img"], dtype=np.float64)
+            labels = np.asarray(stim["target_mask"])
+            lighter, darker, rule = convention(set_name, name, img, labels)
+            np.save(os.path.join(folder, image), img)
+            np.save(os.path.join(folder, mask), labels.astype(np.float64))
             stimuli.append(
                 {
                     "set": set_name,
@@ -88,6 +195,9 @@ def export(folder, names=()):
                     "ppd": float(np.ravel(stim["ppd"])[0]),
                     "lighter_target": lighter,
                     "darker_target": darker,
+                    "convention": rule
+                    or f"stimupy's order (target {lighter} lighter), not checked",
+                    "convention_checked": rule is not None,
                     "human": human,
                 }
             )

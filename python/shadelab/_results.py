@@ -290,8 +290,10 @@ class Bench(Result):
 
 class Benchmark(Result):
     """:func:`shadelab.benchmark`'s result: ``scores`` (per stimulus set and model: direction
-    agreement and Spearman ρ), ``rows`` (every model on every stimulus), the Markdown
-    ``table``, the ``folder`` written (or None) and the report."""
+    agreement and Spearman ρ), ``checked_scores`` (the same over the stimuli whose
+    lighter-looking target a published rule chose), ``conventions`` (per stimulus, which target
+    people see as lighter and how that was established), ``rows`` (every model on every
+    stimulus), the Markdown ``table``, the ``folder`` written (or None) and the report."""
 
     __slots__ = ("table", "folder")
     command = "benchmark"
@@ -304,6 +306,14 @@ class Benchmark(Result):
     @property
     def scores(self) -> List[Dict[str, Any]]:
         return self.report["scores"]
+
+    @property
+    def checked_scores(self) -> List[Dict[str, Any]]:
+        return self.report["checked_scores"]
+
+    @property
+    def conventions(self) -> List[Dict[str, Any]]:
+        return self.report["conventions"]
 
     @property
     def rows(self) -> List[Dict[str, Any]]:

@@ -28,6 +28,15 @@ def test_the_benchmark_scores_stimupys_stimuli_and_matches_the_command_line(tmp_
         ("murray2020", "odog"),
         ("murray2020", "highpass"),
     }
+    # Which target looks lighter, per stimulus: a published rule on the pixels for simultaneous
+    # contrast and White's effect, stimupy's order (not checked) for the snake.
+    conventions = {c["stimulus"]: c for c in result.conventions}
+    assert (conventions["simcon"]["lighter_target"], conventions["simcon"]["convention"]) == (
+        2,
+        "contrast",
+    )
+    assert conventions["white"]["checked"] and not conventions["snake"]["checked"]
+    assert {s["stimuli"] for s in result.checked_scores} == {2}
     assert "| odog |" in result.table
     assert (tmp_path / "py" / "benchmark.csv").is_file()
 

@@ -89,6 +89,11 @@ pub struct BenchmarkStimulus {
     pub lighter: u16,
     /// The label of the other target.
     pub darker: u16,
+    /// How `lighter` was chosen: the published rule applied to the stimulus's pixels (e.g.
+    /// `contrast`, `white`), or a note that it is the stimulus set's order, not checked.
+    pub convention: String,
+    /// Whether a published rule on the pixels chose `lighter` (`false`: the set's order).
+    pub convention_checked: bool,
     /// What people reported.
     pub human: Human,
 }
@@ -156,6 +161,12 @@ impl BenchmarkConfig {
                     s.ppd
                 )));
             }
+            if s.lighter == s.darker {
+                return Err(Error::invalid(format!(
+                    "{what}: the lighter and the darker target are both label {}",
+                    s.lighter
+                )));
+            }
             for l in [s.lighter, s.darker] {
                 if l == 0 || !s.targets.data().contains(&l) {
                     return Err(Error::invalid(format!(
@@ -220,14 +231,31 @@ impl BenchmarkConfig {
             };
             let human: Human = serde_json::from_value(entry["human"].clone())
                 .map_err(|e| bad(&format!("{full}: human data: {e}")))?;
+            let target = |k: &str| -> Result<u16> {
+                let v = number(k)?;
+                if v.fract() != 0.0 || !(1.0..=65535.0).contains(&v) {
+                    return Err(bad(&format!(
+                        "{full}: {k} must be a target label from 1, not {v}"
+                    )));
+                }
+                Ok(v as u16)
+            };
+            // Older exports carry no convention: the set's order, not checked.
+            let convention = entry["convention"]
+                .as_str()
+                .unwrap_or("not recorded by the exporter")
+                .to_string();
+            let convention_checked = entry["convention_checked"].as_bool().unwrap_or(false);
             stimuli.push(BenchmarkStimulus {
                 set,
                 name,
                 image,
                 targets,
                 ppd: number("ppd")?,
-                lighter: number("lighter_target")? as u16,
-                darker: number("darker_target")? as u16,
+                lighter: target("lighter_target")?,
+                darker: target("darker_target")?,
+                convention,
+                convention_checked,
                 human,
             });
         }
@@ -357,6 +385,23 @@ pub struct BenchmarkScore {
     pub stimuli: usize,
 }
 
+/// Which target of a stimulus people see as lighter, and how that was established.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BenchmarkConvention {
+    /// The stimulus set.
+    pub set: String,
+    /// The stimulus.
+    pub stimulus: String,
+    /// The label of the target people see as lighter.
+    pub lighter_target: u16,
+    /// The label of the other target.
+    pub darker_target: u16,
+    /// The published rule applied to the pixels, or a note that it is the set's order.
+    pub convention: String,
+    /// Whether a published rule chose the lighter target.
+    pub checked: bool,
+}
+
 /// What the benchmark found; [`BenchmarkReport::write_into`] writes it.
 #[derive(Debug, Clone, Serialize)]
 pub struct BenchmarkReport {
@@ -374,6 +419,11 @@ pub struct BenchmarkReport {
     pub definitions: Vec<String>,
     /// Each model's scores per stimulus set.
     pub scores: Vec<BenchmarkScore>,
+    /// The same scores over only the stimuli whose lighter-looking target a published rule
+    /// chose from the pixels ([`BenchmarkConvention::checked`]).
+    pub checked_scores: Vec<BenchmarkScore>,
+    /// Per stimulus, which target people see as lighter and how that was established.
+    pub conventions: Vec<BenchmarkConvention>,
     /// Every model on every stimulus.
     pub rows: Vec<BenchmarkRow>,
     /// Seconds taken in all.
@@ -421,6 +471,30 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
         models: config.models.iter().map(|m| m.name().into()).collect(),
         definitions: DEFINITIONS.iter().map(|s| s.to_string()).collect(),
         scores: scores(&rows),
+        checked_scores: scores(
+            &rows
+                .iter()
+                .filter(|r| {
+                    config
+                        .stimuli
+                        .iter()
+                        .any(|s| s.set == r.set && s.name == r.stimulus && s.convention_checked)
+                })
+                .cloned()
+                .collect::<Vec<_>>(),
+        ),
+        conventions: config
+            .stimuli
+            .iter()
+            .map(|s| BenchmarkConvention {
+                set: s.set.clone(),
+                stimulus: s.name.clone(),
+                lighter_target: s.lighter,
+                darker_target: s.darker,
+                convention: s.convention.clone(),
+                checked: s.convention_checked,
+            })
+            .collect(),
         rows,
         seconds: started.elapsed().as_secs_f64(),
     })
@@ -428,7 +502,9 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
 
 const DEFINITIONS: [&str; 4] = [
     "effect: mean model output over the target people see as lighter minus the mean over the \
-     other target (RHS2007: target 1; murray2020: target 2, stimupy's order)",
+     other target; which target that is, is stated per stimulus by the exporter (conventions): \
+     a published rule on the illusion's direction applied to stimupy's pixels where one was \
+     verified (checked), else stimupy's order (RHS2007: target 1; murray2020: target 2)",
     "direction: the model agrees when its effect is positive where people saw the \
      expected-lighter target lighter (negative where they saw the reverse); stimuli with no \
      human effect (effect strength 0, or a proportion whose 95 % interval holds 0.5) are not \
@@ -544,12 +620,8 @@ impl BenchmarkReport {
              direction | murray2020 ρ |\n|---|---|---|---|---|\n",
             self.version, self.stimupy_version
         );
-        let cell = |set: &str, model: &str| -> (String, String) {
-            match self
-                .scores
-                .iter()
-                .find(|s| s.set == set && s.model == model)
-            {
+        let cell = |scores: &[BenchmarkScore], set: &str, model: &str| -> (String, String) {
+            match scores.iter().find(|s| s.set == set && s.model == model) {
                 Some(s) => (
                     format!("{} / {}", s.direction_agrees, s.direction_counted),
                     s.spearman
@@ -560,15 +632,28 @@ impl BenchmarkReport {
             }
         };
         for m in &self.models {
-            let (rd, rr) = cell("RHS2007", m);
-            let (md_, mr) = cell("murray2020", m);
+            let (rd, rr) = cell(&self.scores, "RHS2007", m);
+            let (md_, mr) = cell(&self.scores, "murray2020", m);
             md.push_str(&format!("| {m} | {rd} | {rr} | {md_} | {mr} |\n"));
         }
-        md.push_str("\nEach model's effect per stimulus (✓ = human direction, ✗ = opposite, · = no human effect):\n\n| # | set | stimulus | human |");
+        let checked = self.conventions.iter().filter(|c| c.checked).count();
+        md.push_str(&format!(
+            "\nThe same scores over only the {checked} of {} stimuli whose lighter-looking target \
+             a published rule chose from the pixels (column *lighter* below):\n\n| model | \
+             RHS2007 direction | RHS2007 ρ | murray2020 direction | murray2020 ρ |\n\
+             |---|---|---|---|---|\n",
+            self.conventions.len()
+        ));
+        for m in &self.models {
+            let (rd, rr) = cell(&self.checked_scores, "RHS2007", m);
+            let (md_, mr) = cell(&self.checked_scores, "murray2020", m);
+            md.push_str(&format!("| {m} | {rd} | {rr} | {md_} | {mr} |\n"));
+        }
+        md.push_str("\nEach model's effect per stimulus (✓ = human direction, ✗ = opposite, · = no human effect; *lighter* = the target people see as lighter, with the published rule that chose it, or *order* where it is the set's order, not checked):\n\n| # | set | stimulus | human | lighter |");
         for m in &self.models {
             md.push_str(&format!(" {m} |"));
         }
-        md.push_str("\n|---|---|---|---|");
+        md.push_str("\n|---|---|---|---|---|");
         md.push_str(&"---|".repeat(self.models.len()));
         md.push('\n');
         for (i, (set, name)) in self.stimulus_order().iter().enumerate() {
@@ -583,7 +668,22 @@ impl BenchmarkReport {
                 Some(ci) => format!("{:.3} ± {:.3}", first.human, ci),
                 None => format!("{}", first.human),
             };
-            md.push_str(&format!("| {} | {set} | {name} | {human} |", i + 1));
+            let lighter = self
+                .conventions
+                .iter()
+                .find(|c| &c.set == set && &c.stimulus == name)
+                .map(|c| {
+                    if c.checked {
+                        format!("{} ({})", c.lighter_target, c.convention)
+                    } else {
+                        format!("{} (order)", c.lighter_target)
+                    }
+                })
+                .unwrap_or_else(|| "–".into());
+            md.push_str(&format!(
+                "| {} | {set} | {name} | {human} | {lighter} |",
+                i + 1
+            ));
             for m in &self.models {
                 let cell = self
                     .rows
@@ -776,6 +876,8 @@ pub fn contrast_stimulus(name: &str, size: usize, ppd: f64, human: Human) -> Ben
         ppd,
         lighter: 1,
         darker: 2,
+        convention: "contrast".into(),
+        convention_checked: true,
         human,
     }
 }
@@ -797,10 +899,57 @@ mod tests {
         let s = contrast_stimulus("sbc", 32, 8.0, Human::EffectStrength { value: 1.0 });
         let e = BenchmarkConfig::new(vec![s.clone()], vec![], "x".into()).unwrap_err();
         assert!(e.to_string().starts_with("models:"), "{e}");
+        let mut same = s.clone();
+        same.darker = same.lighter;
+        let e = BenchmarkConfig::new(vec![same], vec![Model::Retinex], "x".into()).unwrap_err();
+        assert!(e.to_string().contains("both label 1"), "{e}");
         let mut wrong = s;
         wrong.darker = 7;
         let e = BenchmarkConfig::new(vec![wrong], vec![Model::Retinex], "x".into()).unwrap_err();
         assert!(e.to_string().contains("label 7"), "{e}");
+    }
+
+    #[test]
+    fn an_exports_conventions_are_read_and_bad_target_labels_are_one_line_errors() {
+        let dir = std::env::temp_dir().join(format!("shadelab-bm-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let s = contrast_stimulus("sbc", 32, 8.0, Human::EffectStrength { value: 1.0 });
+        io::write_image(&dir.join("img.npy"), &s.image).unwrap();
+        io::write_image(&dir.join("mask.npy"), &s.targets.map(|&l| f64::from(l))).unwrap();
+        let write = |extra: &str| {
+            let index = format!(
+                r#"{{"stimupy_version": "1.2.0", "stimuli": [{{"set": "RHS2007", "name": "sbc",
+                "image": "img.npy", "mask": "mask.npy", "ppd": 8, "darker_target": 2,
+                "human": {{"kind": "effect_strength", "value": 1.0}}{extra}}}]}}"#
+            );
+            std::fs::write(dir.join(EXPORT_INDEX), index).unwrap();
+            BenchmarkConfig::from_export(&dir, vec![Model::HighPass], &[])
+        };
+        let c =
+            write(r#", "lighter_target": 1, "convention": "contrast", "convention_checked": true"#)
+                .unwrap();
+        let st = &c.stimuli[0];
+        assert_eq!((st.lighter, st.darker), (1, 2));
+        assert!(st.convention_checked && st.convention == "contrast");
+        let report = run(&c, &NoProgress).unwrap();
+        assert_eq!(report.conventions[0].lighter_target, 1);
+        assert_eq!(report.checked_scores, report.scores);
+        // An export from before the conventions: the set's order, not checked.
+        let c = write(r#", "lighter_target": 1"#).unwrap();
+        assert!(!c.stimuli[0].convention_checked);
+        let report = run(&c, &NoProgress).unwrap();
+        assert!(report.checked_scores.is_empty());
+        assert!(report.markdown().contains("only the 0 of 1 stimuli"));
+        for (bad, says) in [
+            (r#", "lighter_target": 0"#, "target label from 1"),
+            (r#", "lighter_target": 1.5"#, "target label from 1"),
+            (r#", "lighter_target": 2"#, "both label 2"),
+            ("", "no number lighter_target"),
+        ] {
+            let e = write(bad).unwrap_err().to_string();
+            assert!(e.contains(says) && !e.contains('\n'), "{bad}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -21,6 +21,11 @@
 //! adds Adelson's proof: a bar of exactly the squares' shared value joins A to B, so a viewer
 //! sees one uniform gray run from one square to the other.
 //!
+//! The view is orthographic by default. `viewing_distance` > 0 puts the eye that far from
+//! the board's centre instead (central perspective, as in Adelson's figure): the board's far
+//! squares shrink and its edges converge; the picture plane passes through the board's centre,
+//! so the scene keeps about its orthographic size there. A and B keep exactly the same value.
+//!
 //! Lengths are in degrees measured on the board (before foreshortening).
 
 use super::frame::{smoothstep, Frame};
@@ -43,6 +48,81 @@ fn segment_distance(x: f64, y: f64, ax: f64, bx: f64, ay: f64) -> f64 {
         0.0
     };
     dx.hypot(y - ay)
+}
+
+/// The camera, in units of squares: the picture plane passes through the board's centre,
+/// `(u, w, z)` is a point of the scene (u across the view, w along the ground away from the
+/// viewer, z up), a screen point is `(u', y')` (y' up). `dist` = 0 is orthographic.
+#[derive(Clone, Copy)]
+struct View {
+    dist: f64,
+    se: f64,
+    ce: f64,
+}
+
+impl View {
+    /// The screen point of the scene point (u, w, z).
+    fn project(&self, u: f64, w: f64, z: f64) -> (f64, f64) {
+        let (su, sy) = (u, w * self.se + z * self.ce);
+        if self.dist == 0.0 {
+            return (su, sy);
+        }
+        // Depth along the line of sight from the eye, over its depth at the board's centre.
+        let scale = self.dist / (self.dist + w * self.ce - z * self.se);
+        (su * scale, sy * scale)
+    }
+
+    /// Traces the ray through the screen point (su, sy) (perspective only): the cylinder's
+    /// normal where the ray meets it first (its side or its top), and where the ray meets the
+    /// ground (u, w), if it does (below the horizon).
+    fn trace(
+        &self,
+        su: f64,
+        sy: f64,
+        (uc, wc): (f64, f64),
+        rc: f64,
+        hc: f64,
+    ) -> (Option<[f64; 3]>, Option<(f64, f64)>) {
+        let (d, se, ce) = (self.dist, self.se, self.ce);
+        // Eye at (0, −d·cos e, d·sin e); ray direction toward the picture point.
+        let eye = [0.0, -d * ce, d * se];
+        let dir = [su, sy * se + d * ce, sy * ce - d * se];
+        let at = |t: f64| {
+            [
+                eye[0] + t * dir[0],
+                eye[1] + t * dir[1],
+                eye[2] + t * dir[2],
+            ]
+        };
+        let ground = (dir[2] < 0.0).then(|| {
+            let p = at(-eye[2] / dir[2]);
+            (p[0], p[1])
+        });
+        let mut best: Option<(f64, [f64; 3])> = None;
+        // The side: (u − uc)² + (w − wc)² = rc², 0 ≤ z ≤ hc; the nearer root faces the eye.
+        let (ou, ow) = (eye[0] - uc, eye[1] - wc);
+        let a = dir[0] * dir[0] + dir[1] * dir[1];
+        let b = 2.0 * (ou * dir[0] + ow * dir[1]);
+        let c = ou * ou + ow * ow - rc * rc;
+        let disc = b * b - 4.0 * a * c;
+        if a > 0.0 && disc >= 0.0 {
+            let t = (-b - disc.sqrt()) / (2.0 * a);
+            let p = at(t);
+            if t > 0.0 && (0.0..=hc).contains(&p[2]) {
+                best = Some((t, [(p[0] - uc) / rc, (p[1] - wc) / rc, 0.0]));
+            }
+        }
+        // The top: z = hc within the radius.
+        if dir[2] != 0.0 {
+            let t = (hc - eye[2]) / dir[2];
+            let p = at(t);
+            let inside = (p[0] - uc).powi(2) + (p[1] - wc).powi(2) <= rc * rc;
+            if t > 0.0 && inside && best.map_or(true, |(tb, _)| t < tb) {
+                best = Some((t, [0.0, 0.0, 1.0]));
+            }
+        }
+        (best.map(|(_, n)| n), ground)
+    }
 }
 
 param_choice! {
@@ -68,6 +148,9 @@ stimulus_params! {
         square: f64 = 0.8, range 0.01..=30.0;
         /// angle of the line of sight above the board (deg)
         view_elevation: f64 = 40.0, range 10.0..=90.0;
+        /// distance from the eye to the board's centre (deg on the board's scale); 0 =
+        /// orthographic (an eye infinitely far), else central perspective
+        viewing_distance: f64 = 0.0, range 0.0..=10000.0;
         /// angle of the light above the board (deg)
         light_elevation: f64 = 40.0, range 10.0..=89.0;
         /// luminance of a light square in light
@@ -135,10 +218,34 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     let shadow_end = cx - hc * cl / sl;
     // Board (X, Y) → (u, w): turned by 45°; w runs away from the viewer.
     let (uc, wc) = ((cx - cy) / SQRT_2, (cx + cy) / SQRT_2);
-    let top = (half * SQRT_2 * se).max((wc + rc) * se + hc * ce);
-    let bottom = -half * SQRT_2 * se;
+    let dist = in_squares(p.viewing_distance);
+    let view = View { dist, se, ce };
+    if dist > 0.0 {
+        // The eye must be outside the scene, beyond the board's far corner and the cylinder.
+        let reach = (half * SQRT_2).max(wc.abs() + rc) + hc;
+        if dist <= 2.0 * reach {
+            return Err(Error::invalid(format!(
+                "checker-shadow: viewing_distance {}° puts the eye too close to the board; use 0 (orthographic) or more than {:.2}°",
+                p.viewing_distance,
+                2.0 * reach * sq_deg
+            )));
+        }
+    }
+    // The picture's extent: the board's corners and the cylinder's rims, as projected.
+    let mut extent = (0.0f64, f64::INFINITY, f64::NEG_INFINITY);
+    let corners = [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)]
+        .map(|(u, w)| (u * half * SQRT_2, w * half * SQRT_2, 0.0));
+    let rims = (0..64).flat_map(|k| {
+        let a = k as f64 * std::f64::consts::TAU / 64.0;
+        [0.0, hc].map(|z| (uc + rc * a.cos(), wc + rc * a.sin(), z))
+    });
+    for (u, w, z) in corners.into_iter().chain(rims) {
+        let (su, sy) = view.project(u, w, z);
+        extent = (extent.0.max(su.abs()), extent.1.min(sy), extent.2.max(sy));
+    }
+    let (top, bottom) = (extent.2, extent.1);
     let y_off = -(top + bottom) / 2.0;
-    let content_w = 2.0 * half * SQRT_2 * side;
+    let content_w = 2.0 * extent.0 * side;
     let content_h = (top - bottom) * side;
     if content_w > frame.w as f64 + 0.5 || content_h > frame.h as f64 + 0.5 {
         let (fw, fh) = frame.degrees();
@@ -164,7 +271,10 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             let u = frame.x(col) / side;
             let yv = frame.y(row) / side - y_off;
             let du = u - uc;
-            let cyl = if du.abs() < rc {
+            let hit = (dist > 0.0).then(|| view.trace(u, yv, (uc, wc), rc, hc));
+            let cyl = if let Some((cyl_normal, _)) = hit {
+                cyl_normal.map(|[nu, nw, nz]| cylinder_value(nu, nw, nz))
+            } else if du.abs() < rc {
                 let root = (rc * rc - du * du).sqrt();
                 let w_top = (yv - hc * ce) / se;
                 let w_front = wc - root;
@@ -178,7 +288,12 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             } else {
                 None
             };
-            let w = yv / se;
+            let (u, w) = match hit {
+                Some((_, Some(ground))) => ground,
+                // Above the horizon: no ground there.
+                Some((_, None)) => (f64::INFINITY, f64::INFINITY),
+                None => (u, yv / se),
+            };
             let (x, y) = ((u + w) / SQRT_2, (w - u) / SQRT_2);
             let on_board = x >= -half && x < half && y >= -half && y < half;
             let square = on_board.then(|| {
@@ -247,7 +362,8 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     let square_centre = |i: usize, j: usize| {
         let (x, y) = (centre(i), centre(j));
         let (u, w) = ((x - y) / SQRT_2, (x + y) / SQRT_2);
-        frame.svg_xy(u * side, (w * se + y_off) * side)
+        let (su, sy) = view.project(u, w, 0.0);
+        frame.svg_xy(su * side, (sy + y_off) * side)
     };
     let (a_at, b_at) = (square_centre(ia, ja), square_centre(ib, jb));
     if p.proof {
@@ -495,6 +611,39 @@ mod tests {
         }
         let a: [usize; 2] = serde_json::from_value(out.notes["squares_ij"]["A"].clone()).unwrap();
         assert!(!squares.contains(&a));
+    }
+
+    #[test]
+    fn perspective_shrinks_the_far_square_and_keeps_a_and_b_equal() {
+        let count = |out: &Output, label: u16| {
+            let t = out.targets.as_ref().unwrap();
+            t.labels.data().iter().filter(|&&l| l == label).count() as f64
+        };
+        // Orthographic: every square covers the same area (to its edge pixels).
+        let flat = generate(&[], 40.0).unwrap();
+        let (a, b) = (count(&flat, 1), count(&flat, 2));
+        assert!((a / b - 1.0).abs() < 0.03, "{a} {b}");
+        // With the eye 16° away, A (farther from the eye than B) covers fewer pixels.
+        let near = generate(&["viewing_distance=16"], 40.0).unwrap();
+        let (a, b) = (count(&near, 1), count(&near, 2));
+        assert!(a < 0.97 * b, "{a} {b}");
+        let Pixels::Gray(img) = &near.pixels else {
+            panic!()
+        };
+        let t = near.targets.as_ref().unwrap();
+        let dark = near.notes["a_and_b_value"].as_f64().unwrap();
+        for (v, l) in img.data().iter().zip(t.labels.data()) {
+            assert!(*l == 0 || *v == dark);
+        }
+        // The picture is not the orthographic one.
+        let Pixels::Gray(flat_img) = &flat.pixels else {
+            panic!()
+        };
+        assert_ne!(flat_img.data(), img.data());
+        let e = generate(&["viewing_distance=2"], 40.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("too close"), "{e}");
     }
 
     #[test]
