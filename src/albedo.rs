@@ -45,9 +45,9 @@
 //! error into 6°; see docs/evaluation.md).
 //!
 //! ```
-//! use shadelab::albedo::estimate;
-//! use shadelab::grid::Grid;
-//! use shadelab::surface::sphere;
+//! use shadelab::internal::albedo::estimate;
+//! use shadelab::Grid;
+//! use shadelab::internal::surface::sphere;
 //! // A matte sphere of albedo 0.6 lit from the front: I = 0.6·n_z.
 //! let s = sphere(101, 101, 45.0)?;
 //! let image = s.normals.map(|n| 0.6 * n.z.max(0.0));
@@ -57,7 +57,7 @@
 //! let half = image.map(|v| 0.5 * v);
 //! assert!((estimate(&half, &s.mask)?.value - 0.5 * a.value).abs() < 1e-12);
 //! // Normalised by its 90th percentile and clipped at 1: the same albedo in its units.
-//! let top = shadelab::albedo::brightness_quantile(&image, &s.mask, 0.9)?;
+//! let top = shadelab::internal::albedo::brightness_quantile(&image, &s.mask, 0.9)?;
 //! let clipped = image.map(|v| (v / top).min(1.0));
 //! let c = estimate(&clipped, &s.mask)?;
 //! assert!((c.value * top / a.value - 1.0).abs() < 0.01, "{}", c.value * top);
@@ -220,7 +220,7 @@ pub fn in_albedo_units(value: f64, albedo: f64) -> f64 {
 /// ([`crate::solver::SolveOptions::saturation`]). Parsed from `auto`, `none` or a number.
 ///
 /// ```
-/// use shadelab::albedo::Saturation;
+/// use shadelab::Saturation;
 /// assert_eq!("auto".parse::<Saturation>()?, Saturation::Auto);
 /// assert_eq!("0.98".parse::<Saturation>()?, Saturation::Level(0.98));
 /// assert!("-1".parse::<Saturation>().is_err());

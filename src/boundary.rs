@@ -489,7 +489,7 @@ pub struct LimbTest {
 /// shading, not a dark level).
 ///
 /// ```
-/// use shadelab::boundary::dark_level;
+/// use shadelab::internal::boundary::dark_level;
 ///
 /// // A render: the shadowed limb reads exactly 0.
 /// assert_eq!(dark_level(&[0.0; 40]), 0.0);
@@ -539,11 +539,11 @@ pub fn dark_level(readings: &[f64]) -> f64 {
 /// On a true limb under any light nothing changes.
 ///
 /// ```
-/// use shadelab::boundary::{boundary_conditions, limb_conditions, Boundary};
-/// use shadelab::gradient_space::normal_from_fg;
-/// use shadelab::reflectance::Lambertian;
-/// use shadelab::render::{render, RenderOptions};
-/// use shadelab::surface::sphere;
+/// use shadelab::internal::boundary::{boundary_conditions, limb_conditions, Boundary};
+/// use shadelab::internal::gradient_space::normal_from_fg;
+/// use shadelab::Lambertian;
+/// use shadelab::internal::render::{render, RenderOptions};
+/// use shadelab::internal::surface::sphere;
 /// use shadelab::Light;
 ///
 /// let ball = sphere(64, 64, 28.0).unwrap();

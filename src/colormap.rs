@@ -48,7 +48,7 @@ impl Colormap {
     /// The colour of `t` in 0..1 (clamped; NaN as 0), as linear RGB.
     ///
     /// ```
-    /// use shadelab::colormap::Colormap;
+    /// use shadelab::Colormap;
     /// assert_eq!(Colormap::Gray.linear(0.25), [0.25; 3]);
     /// assert_eq!(Colormap::Gray.linear(2.0), [1.0; 3]);
     /// ```

@@ -57,7 +57,7 @@ pub fn fg_from_pq(p: f64, q: f64) -> (f64, f64) {
 /// The derivatives of [`fg_from_pq`], analytic: [∂f/∂p, ∂f/∂q, ∂g/∂p, ∂g/∂q].
 ///
 /// ```
-/// use shadelab::gradient_space::{fg_from_pq, fg_pq_jacobian};
+/// use shadelab::internal::gradient_space::{fg_from_pq, fg_pq_jacobian};
 /// let (p, q, h) = (0.7, -1.3, 1e-6);
 /// let [fp, fq, gp, gq] = fg_pq_jacobian(p, q);
 /// let (f1, g1) = fg_from_pq(p + h, q);

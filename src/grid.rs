@@ -73,8 +73,8 @@ pub const PROBE_BYTES_PER_PIXEL: usize = 32;
 /// hold is an error here rather than an abort half-way. Sizes under 256 MiB are not probed.
 ///
 /// ```
-/// assert!(shadelab::grid::check_memory(4000, 3000).is_ok());
-/// let e = shadelab::grid::check_memory(usize::MAX / 2, 2).unwrap_err().to_string();
+/// assert!(shadelab::internal::grid::check_memory(4000, 3000).is_ok());
+/// let e = shadelab::internal::grid::check_memory(usize::MAX / 2, 2).unwrap_err().to_string();
 /// assert!(e.contains("more memory than this machine can give"), "{e}");
 /// ```
 pub fn check_memory(width: usize, height: usize) -> Result<()> {
@@ -179,7 +179,7 @@ impl<T> Grid<T> {
     /// verb ("the mask is", "normals are"), so the message reads as a sentence.
     ///
     /// ```
-    /// use shadelab::grid::Grid;
+    /// use shadelab::Grid;
     /// let image = Grid::new(3, 2, 0.5);
     /// assert!(image
     ///     .check_same_size("image is", &Grid::new(3, 2, true), "the mask is")

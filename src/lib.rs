@@ -85,7 +85,7 @@ pub use light::{FrontLight, Light};
 pub use message::{Message, Setting};
 pub use params::{ParamKind, ParamSet, ParamSpec, Params};
 pub use progress::{NoProgress, Progress};
-pub use visual_size::{Geometry, SizeRequest};
+pub use visual_size::{parse_size, Geometry, SizeRequest};
 
 // Files: what a picture's pixels mean when read, and how they are written.
 pub use colormap::Colormap;
@@ -116,6 +116,7 @@ pub use stimulus::{Pixels, SurfaceLayers, Targets};
 pub use lightness::Model as LightnessModel;
 pub use pipeline::bench::{BenchConfig, BenchReport};
 pub use pipeline::benchmark::{BenchmarkConfig, BenchmarkReport};
+pub use pipeline::evaluation::Config as EvaluationConfig;
 pub use pipeline::experiment::{Config as ExperimentConfig, Report as ExperimentReport};
 pub use pipeline::fading::{FadingConfig, FadingReport};
 pub use pipeline::fit::{Config as FitConfig, Report as FitReport};
@@ -219,6 +220,9 @@ pub mod internal {
         pub use crate::solver::*;
     }
     pub mod stimulus {
+        pub mod bundle {
+            pub use crate::stimulus::bundle::*;
+        }
         pub mod face {
             pub use crate::stimulus::face::*;
         }

@@ -230,11 +230,11 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
 /// fit; without such a limb, by the moments (see the module documentation).
 ///
 /// ```
-/// use shadelab::light::Light;
-/// use shadelab::light_estimation::{estimate_light_with, EstimateMethod, Outline};
-/// use shadelab::reflectance::Lambertian;
-/// use shadelab::render::{render, RenderOptions};
-/// use shadelab::surface::sphere;
+/// use shadelab::Light;
+/// use shadelab::internal::light_estimation::{estimate_light_with, EstimateMethod, Outline};
+/// use shadelab::Lambertian;
+/// use shadelab::internal::render::{render, RenderOptions};
+/// use shadelab::internal::surface::sphere;
 ///
 /// let s = sphere(64, 64, 28.0).unwrap();
 /// let light = Light::from_tilt_slant(30.0, 35.0).unwrap();

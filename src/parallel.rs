@@ -27,7 +27,7 @@ pub fn thread_cap() -> usize {
 /// `asked` worker threads limited to [`thread_cap`]: the count to use, and whether it was cut.
 ///
 /// ```
-/// use shadelab::parallel::{capped_threads, thread_cap};
+/// use shadelab::internal::parallel::{capped_threads, thread_cap};
 /// assert_eq!(capped_threads(2), (2, false));
 /// assert_eq!(capped_threads(usize::MAX), (thread_cap(), true));
 /// ```

@@ -12,8 +12,8 @@
 //!
 //! ```
 //! use shadelab::{Boundary, Lambertian, Light, Problem, ReconstructOptions, Reconstructor};
-//! use shadelab::render::{render, RenderOptions};
-//! use shadelab::surface::sphere;
+//! use shadelab::internal::render::{render, RenderOptions};
+//! use shadelab::internal::surface::sphere;
 //!
 //! // A sphere lit from the front, reconstructed with an occluding boundary.
 //! let surface = sphere(48, 48, 20.0)?;

@@ -78,12 +78,12 @@ pub trait ReflectanceMap: Send + Sync + std::fmt::Debug {
     /// compiler vectorises, without a call per point.
     ///
     /// ```
-    /// use shadelab::light::Light;
-    /// use shadelab::reflectance::{Lambertian, ReflectanceMap, Sample};
+    /// use shadelab::Light;
+    /// use shadelab::{Lambertian, ReflectanceMap, ReflectanceSample};
     ///
     /// let map = Lambertian::unit(Light::from_tilt_slant(30.0, 40.0).unwrap());
     /// let (f, g) = ([0.0, 0.5, -1.2], [0.0, -0.3, 0.4]);
-    /// let mut out = [Sample::ZERO; 3];
+    /// let mut out = [ReflectanceSample::ZERO; 3];
     /// map.fg_batch(&f, &g, &mut out);
     /// for i in 0..3 {
     ///     assert_eq!(out[i], map.fg(f[i], g[i]));
@@ -152,8 +152,8 @@ impl Lambertian {
     /// shading assumes for an image divided by its albedo.
     ///
     /// ```
-    /// use shadelab::light::Light;
-    /// use shadelab::reflectance::Lambertian;
+    /// use shadelab::Light;
+    /// use shadelab::Lambertian;
     ///
     /// let map = Lambertian::unit(Light::from_vector(0.0, 0.0, 1.0).unwrap());
     /// assert_eq!((map.albedo, map.ambient), (1.0, 0.0));
@@ -366,7 +366,7 @@ crate::params::param_choice! {
 /// with every parameter, used by the model or not.
 ///
 /// ```
-/// use shadelab::reflectance::{BrdfModel, BrdfSpec};
+/// use shadelab::{BrdfModel, BrdfSpec};
 /// let spec = BrdfSpec::named("phong").unwrap();
 /// assert_eq!(spec.model, BrdfModel::BlinnPhong);
 /// let json = serde_json::to_value(&spec).unwrap();

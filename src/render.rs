@@ -95,14 +95,14 @@ pub const SHADOW_BLOCKS: [u32; 2] = [5, 3];
 /// bit (the reference twin in the tests checks it), at a fraction of its cost.
 ///
 /// ```
-/// use shadelab::grid::Grid;
-/// use shadelab::render::ShadowCaster;
-/// use shadelab::surface::Surface;
+/// use shadelab::Grid;
+/// use shadelab::internal::render::ShadowCaster;
+/// use shadelab::internal::surface::Surface;
 /// // A wall 10 pixels high in columns 18..22 of a flat floor, lit from the left at 80°.
 /// let depth = Grid::from_fn(40, 9, |c, _| if (18..22).contains(&c) { 10.0 } else { 0.0 });
 /// let wall = Surface::from_depth(depth, Grid::new(40, 9, true)).unwrap();
 /// let caster = ShadowCaster::new(&wall);
-/// let light = shadelab::light::Light::from_tilt_slant(90.0, 80.0).unwrap();
+/// let light = shadelab::Light::from_tilt_slant(90.0, 80.0).unwrap();
 /// let shadow = caster.cast(light.direction());
 /// assert!(*shadow.get(25, 4) && !*shadow.get(10, 4)); // behind the wall, not in front
 /// ```

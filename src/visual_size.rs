@@ -223,7 +223,7 @@ pub fn parse_pair<T: std::str::FromStr + Copy>(text: &str, what: &str) -> Result
 /// library's (height, width); both sides must be positive.
 ///
 /// ```
-/// use shadelab::visual_size::parse_size;
+/// use shadelab::parse_size;
 /// assert_eq!(parse_size::<usize>("256x128", "--size").unwrap(), (128, 256));
 /// let zero = parse_size::<usize>("0x128", "--size").unwrap_err().to_string();
 /// assert!(zero.starts_with("--size '0x128'"), "{zero}");

@@ -223,7 +223,7 @@ pub fn evaluate(
     force: bool,
     settings: EvalArgs,
 ) -> PyResult<(String, String, Option<String>)> {
-    use shadelab::internal::evaluation::{report, Config, Set};
+    use shadelab::pipeline::evaluation::{self as report, Config, Set};
     let (
         only,
         objects,

@@ -80,7 +80,7 @@ impl Token {
     /// The token's centroid (column, row) in pixels, in a picture `width` pixels wide.
     ///
     /// ```
-    /// use shadelab::analysis::convexity::Token;
+    /// use shadelab::internal::analysis::convexity::Token;
     /// assert_eq!(Token::whole(4, 3)?.centroid(4), (1.5, 1.0));
     /// # Ok::<(), shadelab::Error>(())
     /// ```
@@ -103,7 +103,7 @@ impl Token {
     /// P(convex | θ). An evenly lit token gives tilt 0 and strength 0.
     ///
     /// ```
-    /// use shadelab::analysis::convexity::Token;
+    /// use shadelab::internal::analysis::convexity::Token;
     /// use shadelab::Grid;
     /// // Brighter toward the top row: the bright side faces up (tilt 0).
     /// let image = Grid::from_fn(9, 9, |_, r| 1.0 - r as f64 / 10.0);
@@ -162,7 +162,7 @@ pub(crate) fn moment_tilt(dx: f64, dy: f64) -> f64 {
 /// [`CONVEXITY_ZERO`] of zero.
 ///
 /// ```
-/// use shadelab::analysis::convexity::Verdict;
+/// use shadelab::internal::analysis::convexity::Verdict;
 /// assert_eq!(Verdict::of(0.3), Verdict::Convex);
 /// assert_eq!(Verdict::of(-0.3).to_string(), "concave");
 /// assert_eq!(Verdict::of(0.0), Verdict::Flat);
@@ -206,7 +206,7 @@ impl std::fmt::Display for Verdict {
 /// single judgement is about.
 ///
 /// ```
-/// use shadelab::analysis::convexity::{central_token, tokens_from_labels};
+/// use shadelab::internal::analysis::convexity::{central_token, tokens_from_labels};
 /// use shadelab::Grid;
 /// // Two 4x4 squares in a 12x4 picture: label 1 on the left, label 2 in the middle.
 /// let labels = Grid::from_fn(12, 4, |c, _| if c < 4 { 1u16 } else if (4..8).contains(&c) { 2 } else { 0 });

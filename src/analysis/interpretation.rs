@@ -342,9 +342,9 @@ fn lambertian(tilt_deg: f64, lighting: &Lighting) -> Result<Lambertian> {
 /// by `degrees`, where [`Interpreter::turns_with_light`] holds. Quarter turns are exact.
 ///
 /// ```
-/// use shadelab::analysis::interpretation::turned;
-/// use shadelab::reconstruct::Shape;
-/// use shadelab::solver::{Method, Solution};
+/// use shadelab::internal::analysis::interpretation::turned;
+/// use shadelab::Shape;
+/// use shadelab::{Method, Solution};
 /// use shadelab::Grid;
 /// let solution = Solution {
 ///     f: Grid::new(2, 1, 1.0),

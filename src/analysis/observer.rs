@@ -110,8 +110,8 @@ impl ObserverOptions {
     /// `noise`. Fails on a convexity prior of exactly 0 or 1 (an infinite bias).
     ///
     /// ```
-    /// use shadelab::analysis::observer::ObserverOptions;
-    /// use shadelab::analysis::observer_model::ModelParams;
+    /// use shadelab::internal::analysis::observer::ObserverOptions;
+    /// use shadelab::internal::analysis::observer_model::ModelParams;
     /// let m = ModelParams { tilt_deg: 26.0, kappa: 1.5, convexity_prior: 0.75, lapse: 0.04 };
     /// let o = ObserverOptions::from_model(&m, 0.01).unwrap();
     /// assert_eq!(o.prior.mean_tilt_deg, 26.0);
@@ -213,7 +213,7 @@ pub fn posterior(sweep: &Sweep, options: &ObserverOptions, rotation_deg: f64) ->
 /// Checks that `tilts` cover the circle in equal steps, as the observer needs.
 ///
 /// ```
-/// use shadelab::analysis::observer::check_circle;
+/// use shadelab::internal::analysis::observer::check_circle;
 /// assert!(check_circle(&[0.0, 90.0, 180.0, 270.0]).is_ok());
 /// assert!(check_circle(&[0.0, 90.0, 180.0]).is_err());
 /// ```
@@ -232,7 +232,7 @@ pub fn check_circle(tilts: &[f64]) -> Result<()> {
 /// Parses concentrations κ of the tilt prior: one number ≥ 0 or a comma-separated list.
 ///
 /// ```
-/// use shadelab::analysis::observer::parse_kappas;
+/// use shadelab::internal::analysis::observer::parse_kappas;
 /// assert_eq!(parse_kappas("0, 2").unwrap(), [0.0, 2.0]);
 /// assert!(parse_kappas("-1").is_err());
 /// assert!(parse_kappas("nan").is_err());

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 /// The parameters of the observer model.
 ///
 /// ```
-/// use shadelab::analysis::observer_model::ModelParams;
+/// use shadelab::internal::analysis::observer_model::ModelParams;
 /// let m = ModelParams { tilt_deg: 26.0, kappa: 2.0, convexity_prior: 0.5, lapse: 0.0 };
 /// // Bright side toward the prior's mean: mostly convex; the opposite way: mostly concave.
 /// assert!(m.p_convex(26.0) > 0.95);
@@ -117,7 +117,7 @@ pub fn with_lapse(lapse: f64, p: f64) -> f64 {
 /// and 0).
 ///
 /// ```
-/// use shadelab::analysis::observer_model::{convexity_bias, convexity_prior};
+/// use shadelab::internal::analysis::observer_model::{convexity_bias, convexity_prior};
 /// assert_eq!(convexity_bias(0.5), 0.0);
 /// assert!((convexity_prior(convexity_bias(0.8)) - 0.8).abs() < 1e-12);
 /// ```

@@ -262,7 +262,7 @@ pub fn outline_profile(token: &Token, width: usize, fit: &ProfileFit) -> Result<
 /// step a banded solve).
 ///
 /// ```
-/// use shadelab::analysis::outline::fit_profile;
+/// use shadelab::internal::analysis::outline::fit_profile;
 /// // A zigzag keeps its corner: the slope turns from +1 to −1 at i = 10, and most of that
 /// // turn (a second difference of 2) stays at the corner pixel, where a quadratic penalty
 /// // would spread it; a straight line is kept exactly.

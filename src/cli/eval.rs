@@ -2,7 +2,7 @@
 
 use super::output::Output;
 use super::{flags::SolverFlags, progress::Bar, CliResult, Global};
-use shadelab::internal::evaluation::{self, report, Config, Set};
+use shadelab::pipeline::evaluation::{self, Config, Set};
 use shadelab::Boundary;
 use shadelab::Method;
 use std::path::PathBuf;
@@ -42,7 +42,7 @@ pub struct Args {
     /// A photograph's albedo: at the default, the library's rule (`solve --albedo estimate`:
     /// the bright tail below this quantile extrapolated); any other value takes this quantile
     /// of its brightness on its mask (a comparison).
-    #[arg(long, value_name = "Q", default_value_t = shadelab::internal::evaluation::albedo::BRIGHT_QUANTILE,
+    #[arg(long, value_name = "Q", default_value_t = evaluation::BRIGHT_QUANTILE,
         allow_hyphen_values = true
     )]
     pub albedo_quantile: f64,
@@ -128,7 +128,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         None => git_commit().unwrap_or_else(|| "unknown".into()),
     };
 
-    let record = report::Record {
+    let record = evaluation::Record {
         out: args
             .out
             .as_ref()
@@ -136,7 +136,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         commit,
         command: std::env::args().collect(),
     };
-    let (results, written) = report::run_into(&config, &record, &Bar::new(global.quiet))?;
+    let (results, written) = evaluation::run_into(&config, &record, &Bar::new(global.quiet))?;
     let out = Output::new(global);
     if let Some(target) = written {
         out.note(format!(
@@ -146,7 +146,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             started.elapsed().as_secs_f64()
         ));
     }
-    out.results(&report::markdown_table(&results), &results)
+    out.results(&evaluation::markdown_table(&results), &results)
 }
 
 /// The short commit of the git checkout in the current folder, `-dirty` when tracked files

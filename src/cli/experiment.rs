@@ -2,7 +2,7 @@
 
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
-use shadelab::internal::visual_size::parse_size;
+use shadelab::parse_size;
 use shadelab::pipeline::experiment::{
     prolific_completion_url, run as build, Config, Install, SaveFormat,
 };

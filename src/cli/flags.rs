@@ -3,13 +3,13 @@
 //! Defaults are the library's: a flag left out leaves the library's value in place.
 
 use super::CliError;
-use shadelab::internal::analysis::interpretation::MULTIGRID_CYCLES;
-use shadelab::internal::solver::{
-    SolveOptions, INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS,
-    MULTIGRID_MAX_CYCLES,
-};
+use shadelab::pipeline::perception::MULTIGRID_CYCLES;
 use shadelab::pipeline::perception::{BadSetting, DomainSpec, DEFAULT_BOUNDARY};
 use shadelab::pipeline::solve::BoundarySource;
+use shadelab::pipeline::solve::{
+    INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES,
+};
+use shadelab::SolveOptions;
 
 /// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
 /// the library's configuration of the command already holds).
@@ -135,7 +135,7 @@ pub fn say_input_note(out: &super::output::Output, note: Option<String>) {
 
 /// Angles in degrees from `START:STOP:STEP` or a list, for `flag`.
 pub fn angles(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
-    Ok(shadelab::internal::analysis::parse_angles(text, flag)?)
+    Ok(shadelab::pipeline::perception::parse_angles(text, flag)?)
 }
 
 /// A usage error about `flag`.

@@ -2,8 +2,7 @@
 
 use super::progress::Bar;
 use super::{CliResult, Global};
-use shadelab::internal::gallery;
-use shadelab::pipeline::gallery::{run as build, GalleryConfig, GalleryReport};
+use shadelab::pipeline::gallery::{self, run as build, GalleryConfig, GalleryReport};
 use shadelab::CommandReport;
 use std::path::PathBuf;
 

@@ -3,7 +3,7 @@
 use super::{CliError, CliResult, Global};
 use clap::builder::TypedValueParser;
 use serde_json::Value;
-use shadelab::internal::visual_size::parse_size;
+use shadelab::parse_size;
 use shadelab::pipeline::render::{self, RenderConfig};
 use shadelab::stimulus::Range;
 use shadelab::BitDepth;

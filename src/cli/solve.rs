@@ -3,10 +3,11 @@
 use super::flags::{input_gamma, say_input_note, usage, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
-use shadelab::internal::reconstruct::{check_albedo, NonConvergence, ReconstructOptions};
+use shadelab::pipeline::solve::check_albedo;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord};
 use shadelab::BrdfSpec;
 use shadelab::{Method, SolveOptions};
+use shadelab::{NonConvergence, ReconstructOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -87,7 +88,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     // Said once the picture was read and solved: a refusal stays one line.
     say_input_note(
         &out,
-        shadelab::internal::io::assumed_srgb_note(&config.image, config.input_encoding),
+        shadelab::pipeline::source::assumed_srgb_note(&config.image, config.input_encoding),
     );
     let solver = &report.solver;
     let unit = solver.iteration_unit;

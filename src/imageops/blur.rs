@@ -8,8 +8,8 @@ use crate::parallel::prelude::*;
 /// of zero or less returns the image unchanged.
 ///
 /// ```
-/// use shadelab::imageops::gaussian_blur;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::gaussian_blur;
+/// use shadelab::Grid;
 /// // A constant stays constant (the borders repeat the edge), and a blur keeps the sum of
 /// // an impulse far from the edges.
 /// let flat = gaussian_blur(&Grid::new(4, 3, 0.25), 1.0);

@@ -6,8 +6,8 @@ use crate::grid::{Grid, RgbImage};
 /// shorter one padded with `fill` below).
 ///
 /// ```
-/// use shadelab::imageops::side_by_side;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::side_by_side;
+/// use shadelab::Grid;
 /// let (a, b) = ([1.0; 3], [0.5; 3]);
 /// let left = Grid::new(1, 2, a);
 /// let right = Grid::new(2, 1, b);
@@ -39,8 +39,8 @@ pub fn side_by_side(left: &RgbImage, right: &RgbImage, gap: usize, fill: [f64; 3
 /// average what they hold); a factor of 0 or 1 returns it unchanged.
 ///
 /// ```
-/// use shadelab::imageops::shrink;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::shrink;
+/// use shadelab::Grid;
 /// let img = Grid::from_vec(3, 2, vec![[0.0; 3], [1.0; 3], [0.5; 3],
 ///                                     [1.0; 3], [0.0; 3], [0.25; 3]]).unwrap();
 /// let small = shrink(&img, 2);

@@ -30,7 +30,7 @@ const BLOCK: usize = 16;
 /// that the real transform splits in half.
 ///
 /// ```
-/// use shadelab::imageops::fft::fast_len;
+/// use shadelab::internal::imageops::fft::fast_len;
 /// assert_eq!(fast_len(2047), 2048);
 /// assert_eq!(fast_len(73), 80);
 /// assert_eq!(fast_len(1), 2);
@@ -56,7 +56,7 @@ pub fn fast_len(n: usize) -> usize {
 /// Forward and inverse plans of an `mx` × `my` real 2-D transform.
 ///
 /// ```
-/// use shadelab::imageops::RealFft2;
+/// use shadelab::internal::imageops::RealFft2;
 /// // A 3×2 image on a 4×2 grid (one padding column): the DC term is the sum, and the
 /// // inverse returns the image.
 /// let data = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
@@ -237,7 +237,7 @@ impl RealFft2 {
 /// first `m / 2 + 1` when `half`.
 ///
 /// ```
-/// use shadelab::imageops::fft::dft_1d;
+/// use shadelab::internal::imageops::fft::dft_1d;
 /// let s = dft_1d(&[1.0, 1.0], 4, true);
 /// assert_eq!(s.len(), 3);
 /// assert_eq!((s[0].re, s[2].re), (2.0, 0.0));
@@ -259,7 +259,7 @@ pub fn dft_1d(values: &[f64], m: usize, half: bool) -> Vec<C64> {
 /// exp(−2πi·f·c/m) for f = 0..n: the spectrum of a shift by `c` samples (c may be fractional).
 ///
 /// ```
-/// use shadelab::imageops::fft::shift_phase;
+/// use shadelab::internal::imageops::fft::shift_phase;
 /// let p = shift_phase(1.0, 4, 2);
 /// assert_eq!(p[0].re, 1.0);
 /// assert!((p[1].im + 1.0).abs() < 1e-15); // a quarter turn back

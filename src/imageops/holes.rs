@@ -7,8 +7,8 @@ use crate::grid::Mask;
 /// image is a hole and becomes part of the mask.
 ///
 /// ```
-/// use shadelab::imageops::fill_holes;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::fill_holes;
+/// use shadelab::Grid;
 /// // A ring with a one-pixel hole, and a notch open to the frame at the top right.
 /// let ring = Grid::from_vec(5, 4, vec![
 ///     true, true,  true, false, false,

@@ -10,8 +10,8 @@ use crate::grid::Mask;
 /// The connected parts of a graph or mask, numbered 0.. in the order of their first node.
 ///
 /// ```
-/// use shadelab::imageops::parts;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::parts;
+/// use shadelab::Grid;
 /// // Two parts: the L on the left (4-connected) and the single pixel at the right; the
 /// // diagonal neighbour of the L's foot is not connected to it.
 /// let mask = Grid::from_vec(4, 3, vec![
@@ -76,8 +76,8 @@ impl Parts {
     /// outside every part are left alone.
     ///
     /// ```
-    /// use shadelab::imageops::{parts, parts::SumOrder};
-    /// use shadelab::grid::Grid;
+    /// use shadelab::internal::imageops::{parts, parts::SumOrder};
+    /// use shadelab::Grid;
     /// let mask = Grid::from_vec(3, 1, vec![true, false, true]).unwrap();
     /// let mut v = vec![1.0, 7.0, 4.0];
     /// parts(&mask).subtract_means(&mut v, SumOrder::Visit);
@@ -152,7 +152,7 @@ pub fn parts(mask: &Mask) -> Parts {
 /// at or above `n` are ignored); every node belongs to a part.
 ///
 /// ```
-/// use shadelab::imageops::graph_parts;
+/// use shadelab::internal::imageops::graph_parts;
 /// let neighbours = vec![vec![2], vec![], vec![0, 3], vec![2]];
 /// let p = graph_parts(&neighbours);
 /// assert_eq!(p.count(), 2);

@@ -6,8 +6,8 @@ use crate::grid::Image;
 /// nearest pixel centres; positions outside the image are clamped to its edge.
 ///
 /// ```
-/// use shadelab::imageops::bilinear;
-/// use shadelab::grid::Grid;
+/// use shadelab::internal::imageops::bilinear;
+/// use shadelab::Grid;
 /// let img = Grid::from_vec(2, 2, vec![0.0, 1.0, 2.0, 3.0]).unwrap();
 /// assert_eq!(bilinear(&img, 0.5, 0.0), 0.5);
 /// assert_eq!(bilinear(&img, 0.5, 0.5), 1.5);

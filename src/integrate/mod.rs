@@ -79,7 +79,7 @@ pub fn rest_on_zero(depth: &mut Image, mask: &Mask) -> Result<f64> {
 /// The smallest and largest of `values` inside `mask`, or `None` for an empty mask.
 ///
 /// ```
-/// use shadelab::{integrate::masked_range, Grid};
+/// use shadelab::{internal::integrate::masked_range, Grid};
 /// let z = Grid::from_vec(3, 1, vec![5.0, -1.0, 9.0])?;
 /// let m = Grid::from_vec(3, 1, vec![true, true, false])?;
 /// assert_eq!(masked_range(&z, &m), Some((-1.0, 5.0)));

@@ -7,7 +7,7 @@ use std::path::Path;
 /// doubled.
 ///
 /// ```
-/// use shadelab::io::csv_field;
+/// use shadelab::internal::io::csv_field;
 /// assert_eq!(csv_field("bump r1c1"), "bump r1c1");
 /// assert_eq!(csv_field("tilt=0,slant=45"), "\"tilt=0,slant=45\"");
 /// assert_eq!(csv_field("a\"b"), "\"a\"\"b\"");
@@ -87,7 +87,7 @@ fn next_record(
 /// an unquoted field, or text after a closing quote.
 ///
 /// ```
-/// use shadelab::io::parse_csv;
+/// use shadelab::internal::io::parse_csv;
 /// let rows = parse_csv("a,b\r\n1,\"x, \"\"y\"\"\"\n\n2,z\n").unwrap();
 /// assert_eq!(rows[1], (2, vec!["1".to_string(), "x, \"y\"".to_string()]));
 /// assert_eq!(rows[2].0, 4);
@@ -115,7 +115,7 @@ pub fn parse_csv(text: &str) -> std::result::Result<Vec<(usize, Vec<String>)>, S
 /// quote that is not closed, a quote inside an unquoted field or text after a closing quote.
 ///
 /// ```
-/// use shadelab::io::csv_record;
+/// use shadelab::internal::io::csv_record;
 /// assert_eq!(csv_record("3,\"tilt=0,slant=45\",x").unwrap(), ["3", "tilt=0,slant=45", "x"]);
 /// assert_eq!(csv_record("a,\"b\"\"c\",").unwrap(), ["a", "b\"c", ""]);
 /// assert!(csv_record("a,\"b").is_err());

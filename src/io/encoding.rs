@@ -9,7 +9,7 @@ use std::str::FromStr;
 /// How the codes of an input picture (scaled to 0..1) become linear luminance.
 ///
 /// ```
-/// use shadelab::io::InputEncoding;
+/// use shadelab::InputEncoding;
 /// assert_eq!("srgb".parse::<InputEncoding>()?, InputEncoding::Srgb);
 /// assert_eq!("2.2".parse::<InputEncoding>()?, InputEncoding::Gamma(2.2));
 /// assert_eq!(InputEncoding::Gamma(2.2).to_string(), "2.2");

@@ -12,7 +12,7 @@
 //! old folder is deleted.
 //!
 //! ```
-//! use shadelab::io::AtomicDir;
+//! use shadelab::internal::io::AtomicDir;
 //! let dir = std::env::temp_dir().join(format!("shadelab-doc-keep-{}", std::process::id()));
 //! # let _ = std::fs::remove_dir_all(&dir);
 //! for run in 0..2 {

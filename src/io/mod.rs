@@ -148,9 +148,9 @@ pub fn read_luminance_as(
 /// ```
 /// use std::path::Path;
 /// let mut values = vec![0.5; 8];
-/// assert!(shadelab::io::check_luminance_range(&values, Path::new("a.npy")).is_ok());
+/// assert!(shadelab::internal::io::check_luminance_range(&values, Path::new("a.npy")).is_ok());
 /// values[1] = 200.0;
-/// let e = shadelab::io::check_luminance_range(&values, Path::new("a.npy")).unwrap_err();
+/// let e = shadelab::internal::io::check_luminance_range(&values, Path::new("a.npy")).unwrap_err();
 /// assert_eq!(
 ///     e.to_string(),
 ///     "a.npy: 1 of 8 values are outside 0..1 (from 0.5 to 200): a picture must be linear \
@@ -193,8 +193,8 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 /// let dir = std::env::temp_dir().join(format!("shadelab-doc-capped-{}", std::process::id()));
 /// std::fs::create_dir_all(&dir)?;
 /// std::fs::write(dir.join("a.json"), b"{}")?;
-/// assert_eq!(shadelab::io::read_capped(&dir.join("a.json"), 2)?, b"{}");
-/// let e = shadelab::io::read_capped(&dir.join("a.json"), 1).unwrap_err().to_string();
+/// assert_eq!(shadelab::internal::io::read_capped(&dir.join("a.json"), 2)?, b"{}");
+/// let e = shadelab::internal::io::read_capped(&dir.join("a.json"), 1).unwrap_err().to_string();
 /// assert!(e.ends_with("a.json: is larger than 1 byte, the most shadelab reads from such a file"), "{e}");
 /// # std::fs::remove_dir_all(&dir)?;
 /// # Ok::<(), Box<dyn std::error::Error>>(())

@@ -45,12 +45,12 @@ impl IntegerScale {
 /// why for every other integer type.
 ///
 /// ```
-/// let scale = shadelab::io::npy_scale("|u1").unwrap().unwrap();
+/// let scale = shadelab::internal::io::npy_scale("|u1").unwrap().unwrap();
 /// assert_eq!((scale.dtype.as_str(), scale.max), ("uint8", 255.0));
-/// assert_eq!(shadelab::io::npy_scale("<u2").unwrap().unwrap().max, 65535.0);
-/// assert_eq!(shadelab::io::npy_scale("<f4").unwrap(), None);
-/// assert_eq!(shadelab::io::npy_scale("|b1").unwrap(), None);
-/// assert!(shadelab::io::npy_scale("<i8").unwrap_err().starts_with("int64 pictures are refused"));
+/// assert_eq!(shadelab::internal::io::npy_scale("<u2").unwrap().unwrap().max, 65535.0);
+/// assert_eq!(shadelab::internal::io::npy_scale("<f4").unwrap(), None);
+/// assert_eq!(shadelab::internal::io::npy_scale("|b1").unwrap(), None);
+/// assert!(shadelab::internal::io::npy_scale("<i8").unwrap_err().starts_with("int64 pictures are refused"));
 /// ```
 pub fn npy_scale(descr: &str) -> std::result::Result<Option<IntegerScale>, String> {
     let rest = descr.trim_start_matches(['<', '>', '|', '=']);

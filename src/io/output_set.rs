@@ -26,7 +26,7 @@
 //! only while its old version (if any) is still kept aside to be put back.
 //!
 //! ```
-//! use shadelab::io::{self, OutputSet};
+//! use shadelab::internal::io::{self, OutputSet};
 //! let dir = std::env::temp_dir().join(format!("shadelab-doc-set-{}", std::process::id()));
 //! std::fs::create_dir_all(&dir)?;
 //! let (picture, sidecar) = (dir.join("a.txt"), dir.join("a.json"));

@@ -18,7 +18,7 @@ pub const SILHOUETTE_NOTE: &str = "target_is_silhouette";
 /// What a shadelab render sidecar says about its picture.
 ///
 /// ```
-/// use shadelab::io::RenderSidecar;
+/// use shadelab::internal::io::RenderSidecar;
 /// use std::path::Path;
 /// let text = r#"{"program": "shadelab", "stimulus": "crater", "ppd": 40.0,
 ///   "targets": [{"label": 1, "name": "crater"}, {"label": 2, "name": "mound"}],

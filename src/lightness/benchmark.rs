@@ -15,8 +15,8 @@ use crate::grid::{Image, Labels};
 /// `darker`; `None` when either label has no pixel.
 ///
 /// ```
-/// use shadelab::grid::Grid;
-/// use shadelab::lightness::benchmark::effect;
+/// use shadelab::Grid;
+/// use shadelab::internal::lightness::benchmark::effect;
 /// let labels = Grid::from_vec(4, 1, vec![1u16, 1, 0, 2]).unwrap();
 /// let output = Grid::from_vec(4, 1, vec![0.5, 0.7, 9.0, 0.2]).unwrap();
 /// assert!((effect(&output, &labels, 1, 2).unwrap().unwrap() - 0.4).abs() < 1e-12);
@@ -40,7 +40,7 @@ pub fn effect(output: &Image, labels: &Labels, lighter: u16, darker: u16) -> Res
 /// The ranks of `values` from 1, ties given the mean of the ranks they span.
 ///
 /// ```
-/// use shadelab::lightness::benchmark::ranks;
+/// use shadelab::internal::lightness::benchmark::ranks;
 /// assert_eq!(ranks(&[3.0, 1.0, 3.0, 2.0]), vec![3.5, 1.0, 3.5, 2.0]);
 /// ```
 pub fn ranks(values: &[f64]) -> Vec<f64> {
@@ -67,7 +67,7 @@ pub fn ranks(values: &[f64]) -> Vec<f64> {
 /// constant.
 ///
 /// ```
-/// use shadelab::lightness::benchmark::spearman;
+/// use shadelab::internal::lightness::benchmark::spearman;
 /// assert_eq!(spearman(&[1.0, 2.0, 3.0], &[10.0, 20.0, 90.0]), Some(1.0));
 /// assert_eq!(spearman(&[1.0, 2.0, 3.0], &[3.0, 2.0, 1.0]), Some(-1.0));
 /// assert_eq!(spearman(&[1.0, 1.0, 1.0], &[3.0, 2.0, 1.0]), None);
@@ -92,7 +92,7 @@ pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
 /// (no effect reported) are left out. Returns (agreeing, counted).
 ///
 /// ```
-/// use shadelab::lightness::benchmark::direction_agreement;
+/// use shadelab::internal::lightness::benchmark::direction_agreement;
 /// let pairs = [(4.0, 0.1), (2.0, -0.3), (0.0, 0.5), (-1.0, -2.0)];
 /// assert_eq!(direction_agreement(&pairs), (2, 3));
 /// ```

@@ -30,8 +30,8 @@ impl HighPass {
     /// image minus its blur, in luminance units (positive = brighter than the neighbourhood).
     ///
     /// ```
-    /// use shadelab::grid::Grid;
-    /// use shadelab::lightness::HighPass;
+    /// use shadelab::Grid;
+    /// use shadelab::internal::lightness::HighPass;
     /// // Two equal grey patches, one on black and one on white: the one on black comes out
     /// // brighter (simultaneous contrast).
     /// let image = Grid::from_fn(16, 8, |c, r| {

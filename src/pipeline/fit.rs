@@ -724,7 +724,7 @@ pub const RESPONSES_HEADER: &str = super::experiment::CSV_HEADER;
 /// (nothing was shown).
 ///
 /// ```
-/// use shadelab::analysis::observer_model::ModelParams;
+/// use shadelab::internal::analysis::observer_model::ModelParams;
 /// use shadelab::pipeline::fit::{parse_responses, simulated_responses};
 /// let m = ModelParams { tilt_deg: 26.0, kappa: 2.0, convexity_prior: 0.5, lapse: 0.02 };
 /// let csv = simulated_responses(&m, &[0.0, 90.0, 180.0, 270.0], 5, 1, "sim");

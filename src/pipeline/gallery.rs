@@ -18,7 +18,7 @@
 //! ```
 
 // The parts of this command's configuration and report that other modules define.
-pub use crate::gallery::{Options, Preset, Rendered};
+pub use crate::gallery::{Options, Preset, Rendered, DOCS_BASE};
 
 use super::CommandReport;
 use crate::error::Result;

@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod benchmark;
+pub mod evaluation;
 pub mod experiment;
 pub mod fading;
 pub mod fit;

@@ -3,14 +3,14 @@
 //! prior concentration κ.
 
 // The parts of this command's configuration and report that other modules define.
-pub use crate::analysis::observer::{Curve, LightPrior, ObserverOptions, Percept};
+pub use crate::analysis::observer::{
+    parse_kappas, Curve, LightPrior, ObserverOptions, Percept, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
+    DEFAULT_PRIOR_TILT_DEG,
+};
 
 use super::perception::{self, field, interpretations_of, write_outputs, BadSetting, Header};
 use super::CommandReport;
-use crate::analysis::observer::{
-    check_circle, curves_csv, p_convex_plot, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA,
-    DEFAULT_PRIOR_TILT_DEG,
-};
+use crate::analysis::observer::{check_circle, curves_csv, p_convex_plot};
 use crate::analysis::{observe, parse_angles, Sweep};
 use crate::error::{Error, Result};
 use crate::plot::Figure;

@@ -207,7 +207,7 @@ pub struct OutlineReport {
 /// ```no_run
 /// use shadelab::pipeline::outline::{run, OutlineConfig};
 /// use shadelab::pipeline::PictureSource;
-/// use shadelab::progress::NoProgress;
+/// use shadelab::NoProgress;
 ///
 /// let source = PictureSource {
 ///     stimulus: Some("boundary-strips".into()),

@@ -8,6 +8,10 @@ pub use crate::analysis::convexity::Token;
 pub use crate::analysis::interpretation::{Lighting, Scene};
 pub use crate::analysis::{Domain, Interpretation, TokenPicture, TokenReading};
 
+// The syntax of angle lists and the solver budget every perception command shares.
+pub use crate::analysis::interpretation::MULTIGRID_CYCLES;
+pub use crate::analysis::parse_angles;
+
 use super::solve::BoundarySource;
 use super::source::PictureSource;
 use crate::analysis::interpretation::analysis_solve_options;

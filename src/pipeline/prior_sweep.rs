@@ -71,7 +71,7 @@ impl Config {
 /// degrees.
 ///
 /// ```
-/// use shadelab::analysis::binding::GlobalLight;
+/// use shadelab::internal::analysis::binding::GlobalLight;
 /// use shadelab::pipeline::prior_sweep::parse_global_light;
 /// assert_eq!(parse_global_light("estimate").unwrap(), GlobalLight::Estimated);
 /// assert_eq!(parse_global_light(" 90 ").unwrap(), GlobalLight::Given(90.0));

@@ -7,6 +7,13 @@
 //! feature) and `report.json`.
 
 use super::{CommandReport, Output};
+// The albedo rule this command's configuration is checked by, defined in reconstruct.
+pub use crate::reconstruct::check_albedo;
+// The solver's budgets, the defaults of its options.
+pub use crate::solver::{
+    INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES,
+};
+
 use crate::albedo::{AlbedoEstimate, Saturation};
 use crate::boundary::{Boundary, LimbTest, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};

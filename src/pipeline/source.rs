@@ -7,8 +7,8 @@
 //! ambient level and true light are taken, and a recorded display gamma or PsychoPy range is
 //! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
-// The parts of this command's configuration and report that other modules define.
-pub use crate::io::{Beside, Declared, RenderSidecar, TrueLight};
+// What a loaded picture's sidecar says, and the note on an untagged file, defined in io.
+pub use crate::io::{assumed_srgb_note, Beside, Declared, RenderSidecar, TrueLight};
 
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels};

@@ -3,7 +3,7 @@
 //! exactly the files one run writes. See [`crate::analysis::study`] for the spec and the grid.
 //!
 //! ```
-//! use shadelab::analysis::study::{Shard, StudySpec};
+//! use shadelab::internal::analysis::study::{Shard, StudySpec};
 //! use shadelab::pipeline::study::{run, StudyRunConfig};
 //! use shadelab::NoProgress;
 //!

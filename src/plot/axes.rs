@@ -148,7 +148,7 @@ pub(super) fn tick_text(v: f64, decimals: usize) -> String {
 /// value (or of the first, when they are all equal).
 ///
 /// ```
-/// use shadelab::plot::span;
+/// use shadelab::internal::plot::span;
 /// assert_eq!(span(&[30.0, 0.0, 90.0]), (0.0, 90.0));
 /// assert_eq!(span(&[5.0]), (4.0, 6.0));
 /// ```

@@ -95,7 +95,7 @@ impl LinePlot {
     /// it closed them.
     ///
     /// ```
-    /// use shadelab::plot::{LinePlot, Series, Ticks};
+    /// use shadelab::internal::plot::{LinePlot, Series, Ticks};
     /// let mut plot = LinePlot::new("t", "tilt (°)", "y", (0.0, 330.0));
     /// plot.series.push(Series {
     ///     name: "a".into(),

@@ -57,7 +57,7 @@ impl Smoothness {
     /// The penalty φ(d) of a change `d` ≥ 0.
     ///
     /// ```
-    /// use shadelab::solver::crease::Smoothness;
+    /// use shadelab::Smoothness;
     /// let tv = Smoothness::Charbonnier { epsilon: 0.01 };
     /// // Small changes cost what Horn's term charges; a large jump costs ½ ε d, not ¼ d².
     /// assert!((tv.penalty(1e-4) / Smoothness::Quadratic.penalty(1e-4) - 1.0).abs() < 1e-3);
@@ -184,11 +184,11 @@ pub struct CreaseSolution {
 /// [`FrontLight`](crate::FrontLight)).
 ///
 /// ```
-/// use shadelab::boundary::{boundary_conditions, Boundary};
-/// use shadelab::grid::{Grid, Mask};
-/// use shadelab::light::Light;
-/// use shadelab::reflectance::Lambertian;
-/// use shadelab::solver::crease::{solve, CreaseOptions};
+/// use shadelab::internal::boundary::{boundary_conditions, Boundary};
+/// use shadelab::{Grid, Mask};
+/// use shadelab::Light;
+/// use shadelab::Lambertian;
+/// use shadelab::internal::solver::crease::{solve, CreaseOptions};
 ///
 /// // A strip whose left column faces left and right column faces right, with no data
 /// // (λ = 0): the smoothness alone fills the middle.

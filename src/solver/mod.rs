@@ -182,7 +182,7 @@ impl SolveOptions {
     /// ([`Method::default_max_iter`]).
     ///
     /// ```
-    /// use shadelab::solver::{Method, SolveOptions};
+    /// use shadelab::{Method, SolveOptions};
     /// assert_eq!(SolveOptions::for_method(Method::Multigrid).max_iter, 1_000);
     /// assert_eq!(SolveOptions::for_method(Method::Jacobi).max_iter, 100_000);
     /// assert_eq!(SolveOptions::default(), SolveOptions::for_method(Method::Multigrid));
@@ -239,7 +239,7 @@ impl SolveOptions {
 /// descent, the integrable method); the others carry smoothness only.
 ///
 /// ```
-/// use shadelab::solver::carries_data;
+/// use shadelab::internal::solver::carries_data;
 /// assert!(carries_data(0.5, 0.0, None));
 /// assert!(!carries_data(0.0, 0.0, None)); // attached shadow
 /// assert!(!carries_data(0.9, 0.0, Some(0.9))); // clipped

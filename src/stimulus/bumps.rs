@@ -81,7 +81,7 @@ stimulus_params! {
     /// Parameters of [`bumps`].
     ///
     /// ```
-    /// use shadelab::params::{ParamSet, Params};
+    /// use shadelab::{ParamSet, Params};
     /// use shadelab::stimulus::BumpsParams;
     ///
     /// let p = BumpsParams::default();
@@ -130,7 +130,7 @@ stimulus_params! {
 ///
 /// ```
 /// use shadelab::stimulus::{bumps, BumpsParams, Pixels};
-/// use shadelab::visual_size::Geometry;
+/// use shadelab::Geometry;
 ///
 /// let mut p = BumpsParams::default();
 /// (p.discs.rows, p.discs.columns) = (1, 1);

@@ -63,7 +63,8 @@ impl Field {
 /// The fields of the bundle of a render (see the [module](self) for the list).
 ///
 /// ```
-/// use shadelab::stimulus::{bundle, generate, ExportOptions};
+/// use shadelab::internal::stimulus::bundle;
+/// use shadelab::stimulus::{generate, ExportOptions};
 /// use shadelab::SizeRequest;
 /// let size = SizeRequest { visual_size: Some((4.0, 8.0)), ppd: Some(8.0), shape: None };
 /// let (request, output) = generate("checkerboard", &Default::default(), &size, 0, 1 << 20)?;

@@ -122,7 +122,7 @@ fn check_name(r: usize, c: usize) -> String {
 ///
 /// ```
 /// use shadelab::stimulus::{checkerboard, CheckerboardParams, Pixels};
-/// use shadelab::visual_size::Geometry;
+/// use shadelab::Geometry;
 ///
 /// // 0.5° checks at 4 ppd are 2 pixels wide: columns 0-1 dark, 2-3 light.
 /// let p = CheckerboardParams { check: 0.5, ..Default::default() };
@@ -291,7 +291,7 @@ fn round8(v: f64) -> f64 {
 ///
 /// ```
 /// use shadelab::stimulus::{disc, DiscParams, Pixels};
-/// use shadelab::visual_size::Geometry;
+/// use shadelab::Geometry;
 ///
 /// // 6 x 4 pixels at 2 ppd: x = -1.5, -0.9, -0.3, 0.3, 0.9, 1.5 and y = ±1, ±1/3 degrees, so
 /// // a disc of radius 1° holds the 8 pixels of the two middle rows but their end columns.

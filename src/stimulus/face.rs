@@ -47,7 +47,7 @@ pub struct FaceRelief {
 /// depth multiplied by `relief`.
 ///
 /// ```
-/// use shadelab::stimulus::face::face_relief;
+/// use shadelab::internal::stimulus::face::face_relief;
 /// let face = face_relief(60, 80, 50.0, 1.0).unwrap();
 /// let (col, row) = face.nose_tip;
 /// // The nose tip sits on the vertical midline, just below the frame's centre.

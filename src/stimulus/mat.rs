@@ -120,7 +120,7 @@ fn matrix_body(name: &str, value: &MatValue) -> Result<Vec<u8>> {
 /// Octave's `load` read them all).
 ///
 /// ```
-/// use shadelab::stimulus::mat::{decode_all, encode_vars, MatValue};
+/// use shadelab::internal::stimulus::mat::{decode_all, encode_vars, MatValue};
 /// let vars = vec![
 ///     ("ppd".to_string(), MatValue::Double { dims: vec![1, 1], data: vec![32.0] }),
 ///     ("stimulus".to_string(), MatValue::Char("checkerboard".into())),

@@ -112,9 +112,9 @@ stimulus_params! {
 /// A hemisphere under one light, the classic shape-from-shading benchmark.
 ///
 /// ```
-/// use shadelab::params::ParamSet;
+/// use shadelab::ParamSet;
 /// use shadelab::stimulus::{sphere, Pixels, SphereParams};
-/// use shadelab::visual_size::Geometry;
+/// use shadelab::Geometry;
 ///
 /// let g = Geometry { width: 9, height: 9, ppd: 1.0 };
 /// let mut p = SphereParams::default();

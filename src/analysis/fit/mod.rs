@@ -85,7 +85,7 @@ impl Bin {
     /// The Wilson score interval of the proportion at 95 %.
     ///
     /// ```
-    /// use shadelab::analysis::fit::Bin;
+    /// use shadelab::internal::analysis::fit::Bin;
     /// let b = Bin { rotation_deg: 0.0, trials: 20, convex: 20 };
     /// let [lo, hi] = b.wilson95();
     /// assert!((lo - 0.8389).abs() < 1e-4 && hi == 1.0);
@@ -272,8 +272,8 @@ fn softplus(x: f64) -> f64 {
 /// The log-likelihood of `model` on the counts `data`.
 ///
 /// ```
-/// use shadelab::analysis::fit::{log_likelihood, Bin};
-/// use shadelab::analysis::observer_model::ModelParams;
+/// use shadelab::internal::analysis::fit::{log_likelihood, Bin};
+/// use shadelab::internal::analysis::observer_model::ModelParams;
 /// let m = ModelParams { tilt_deg: 0.0, kappa: 0.0, convexity_prior: 0.5, lapse: 0.0 };
 /// let data = [Bin { rotation_deg: 0.0, trials: 10, convex: 3 }];
 /// assert!((log_likelihood(&m, &data) - 10.0 * 0.5f64.ln()).abs() < 1e-12);
@@ -294,7 +294,7 @@ pub fn log_likelihood(model: &ModelParams, data: &[Bin]) -> f64 {
 /// value. Deterministic.
 ///
 /// ```
-/// use shadelab::analysis::fit::nelder_mead;
+/// use shadelab::internal::analysis::fit::nelder_mead;
 /// let rosenbrock = |z: &[f64]| (1.0 - z[0]).powi(2) + 100.0 * (z[1] - z[0] * z[0]).powi(2);
 /// let (z, v) = nelder_mead(&rosenbrock, &[-1.2, 1.0], 0.5, 20_000);
 /// assert!((z[0] - 1.0).abs() < 1e-4 && (z[1] - 1.0).abs() < 1e-4 && v < 1e-8);
@@ -647,8 +647,8 @@ pub fn check_identifiable(data: &[Bin], options: &FitOptions, what: &str) -> Res
 /// that cannot identify it ([`check_identifiable`]).
 ///
 /// ```
-/// use shadelab::analysis::fit::{fit, simulate, FitOptions};
-/// use shadelab::analysis::observer_model::ModelParams;
+/// use shadelab::internal::analysis::fit::{fit, simulate, FitOptions};
+/// use shadelab::internal::analysis::observer_model::ModelParams;
 /// let truth = ModelParams { tilt_deg: 26.0, kappa: 1.5, convexity_prior: 0.6, lapse: 0.04 };
 /// let rotations: Vec<f64> = (0..24).map(|i| 15.0 * i as f64).collect();
 /// let data = simulate(&truth, &rotations, 40, 1);

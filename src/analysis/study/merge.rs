@@ -63,7 +63,7 @@ fn layout(file: &str) -> (&'static str, &'static [Column]) {
 /// of the study's `point_count` that `shard` runs. Errors name `path` and the line.
 ///
 /// ```
-/// use shadelab::analysis::study::{merge::shard_rows, Shard, SWEEP_HEADER};
+/// use shadelab::internal::analysis::study::{merge::shard_rows, Shard, SWEEP_HEADER};
 /// use std::path::Path;
 /// let path = Path::new("s1/sweep.csv");
 /// let row = "1,bumps,rows=1,30,0,bump,1,0.1,0.2,0.3,true\n";

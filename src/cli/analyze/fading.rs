@@ -6,8 +6,8 @@ use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::internal::lightness::fading::{AdaptationOptions, DogBand};
 use shadelab::pipeline::fading::{self, FadingConfig};
+use shadelab::pipeline::fading::{AdaptationOptions, DogBand};
 use shadelab::{CommandReport, FadingReport};
 
 /// Arguments of `analyze fading`.

@@ -8,10 +8,10 @@ use crate::cli::destination;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::internal::analysis::observer::{
+use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS};
+use shadelab::pipeline::observer::{
     parse_kappas, LightPrior, DEFAULT_NOISE, DEFAULT_PRIOR_KAPPA, DEFAULT_PRIOR_TILT_DEG,
 };
-use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS};
 use shadelab::{CommandReport, ObserverReport};
 use std::path::PathBuf;
 use std::time::Instant;

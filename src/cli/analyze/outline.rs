@@ -7,7 +7,7 @@ use crate::cli::destination;
 use crate::cli::flags::usage;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::internal::visual_size::parse_size;
+use shadelab::parse_size;
 use shadelab::pipeline::outline::{self, OutlineConfig, OutlineReport};
 use shadelab::CommandReport;
 use std::path::PathBuf;

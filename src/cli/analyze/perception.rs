@@ -3,7 +3,7 @@
 
 use super::{CliError, Global, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
-use shadelab::internal::visual_size::parse_size;
+use shadelab::parse_size;
 use shadelab::pipeline::perception::{Config, Header};
 
 /// The picture and how to interpret it.
