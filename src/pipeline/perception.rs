@@ -172,7 +172,7 @@ pub struct Config {
     /// Ambient level; `None`: the stimulus's own, else 0.
     pub ambient: Option<f64>,
     /// The solver settings (default: [`analysis_solve_options`], at most
-    /// [`MULTIGRID_CYCLES`](crate::analysis::interpretation::MULTIGRID_CYCLES) multigrid cycles per solve, after which a solve that has not
+    /// [`MULTIGRID_CYCLES`] multigrid cycles per solve, after which a solve that has not
     /// converged is repeated with Jacobi sweeps).
     pub solver: SolveOptions,
 }

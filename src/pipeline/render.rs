@@ -298,7 +298,7 @@ pub struct Description {
     /// Its parameters.
     pub params: Vec<ParamDescription>,
     /// stimupy's names it accepts for its parameters: stimupy's → shadelab's
-    /// ([`stimulus::stimupy_names::ALIASES`]).
+    /// (docs/python.md lists them).
     pub stimupy_names: std::collections::BTreeMap<&'static str, &'static str>,
 }
 

@@ -60,7 +60,7 @@ impl Field {
     }
 }
 
-/// The fields of the bundle of a render (see the [module](self) for the list).
+/// The fields of the bundle of a render (the module documentation lists them).
 ///
 /// ```
 /// use shadelab::internal::stimulus::bundle;
@@ -195,7 +195,7 @@ fn variable_name(key: &str) -> String {
     name
 }
 
-/// The bundle as a MATLAB v5 MAT-file (see [`super::mat`]): scalars 1 × 1, rows 1 × n, text
+/// The bundle as a MATLAB v5 MAT-file (see the `mat` module): scalars 1 × 1, rows 1 × n, text
 /// as char arrays and lists of text as cell arrays.
 pub fn to_mat(fields: &[(String, Field)]) -> Result<Vec<u8>> {
     use super::mat::{encode_vars, to_column_major, MatValue};

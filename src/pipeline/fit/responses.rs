@@ -71,7 +71,7 @@ pub fn read_responses(path: &Path) -> Result<Responses> {
     read_responses_with(path, None)
 }
 
-/// [`read_responses`] with a key mapping (see [`Config::keys`]).
+/// [`read_responses`] with a key mapping (see [`Config::keys`](super::Config::keys)).
 pub fn read_responses_with(path: &Path, keys: Option<&KeyMap>) -> Result<Responses> {
     if !path.is_dir() {
         let text = read_text(path)?;
