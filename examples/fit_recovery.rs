@@ -13,17 +13,9 @@
 //! simulated responses instead (a 26°-left prior, the same design).
 
 use rayon::prelude::*;
-use shadelab::pipeline::fit::{fit, simulate, simulated_responses, FitOptions, ModelParams};
-
-/// An angle in (−180°, 180°].
-fn wrap_180(angle: f64) -> f64 {
-    let a = angle.rem_euclid(360.0);
-    if a > 180.0 {
-        a - 360.0
-    } else {
-        a
-    }
-}
+use shadelab::pipeline::fit::{
+    fit, simulate, simulated_responses, wrap_180, FitOptions, ModelParams,
+};
 
 fn design() -> Vec<f64> {
     (0..24).map(|i| 15.0 * i as f64).collect()

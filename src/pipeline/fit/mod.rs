@@ -20,6 +20,8 @@ pub use crate::analysis::fit::{
     fit, simulate, Bin, BinSummary, Criteria, Estimate, FitOptions, ObserverFit, SmoothPrior,
 };
 pub use crate::analysis::observer_model::ModelParams;
+// The fit's angles are reported in (−180°, 180°], the one wrapping rule.
+pub use crate::analysis::wrap_180;
 
 mod responses;
 
