@@ -1,7 +1,15 @@
 //! Writing the experiment folder: the page, its scripts and styles, the images, `design.json`
 //! and a README that says how to run it, whole or not at all.
 
-use super::*;
+use super::{
+    package_json, Design, Report, DATA_COLUMNS, JSPSYCH_PACKAGES, MARKER, MODEL, PAGE_HTML,
+    RUNNER_CSS, RUNNER_JS, TIMELINE_JS,
+};
+use crate::error::{Error, Result};
+use crate::io::{self, BitDepth};
+use crate::parallel::prelude::*;
+use crate::stimulus::{self, ExportOptions};
+use std::path::{Path, PathBuf};
 
 impl Report {
     /// Writes the experiment folder whole (or not at all) and returns its path: `index.html`,

@@ -44,16 +44,15 @@ pub use folder::{Install, Written};
 use super::perception::{field, BadSetting};
 use crate::analysis::convexity;
 use crate::error::{Error, Result};
-use crate::io::{self, BitDepth};
+use crate::io;
 use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::random::SplitMix64;
-use crate::stimulus::{self, ExportOptions, Output, Pixels, Request};
+use crate::stimulus::{self, Output, Pixels, Request};
 use crate::visual_size::{Geometry, SizeRequest};
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 
 /// The file that marks a folder as a shadelab experiment (its `program` is `shadelab`).
 pub const MARKER: &str = "design.json";
