@@ -223,7 +223,7 @@ pub fn evaluate(
     force: bool,
     settings: EvalArgs,
 ) -> PyResult<(String, String, Option<String>)> {
-    use shadelab::pipeline::evaluation::{self as report, Config, Set};
+    use shadelab::pipeline::evaluation::{self, Config, Set};
     let (
         only,
         objects,
@@ -284,7 +284,7 @@ pub fn evaluate(
     config.options.tol = tol.unwrap_or(config.options.tol);
     config.max_iter = max_iter;
     config.validate().map_err(to_py)?;
-    let record = report::Record {
+    let record = evaluation::Record {
         out: out.map(|o| Output::new(o).force(force)),
         commit: "unknown".into(),
         command: vec![format!(
@@ -292,10 +292,11 @@ pub fn evaluate(
             shadelab::internal::io::PROGRAM_VERSION
         )],
     };
-    let (results, written) = run_released(py, || report::run_into(&config, &record, &NoProgress))?;
+    let (results, written) =
+        run_released(py, || evaluation::run_into(&config, &record, &NoProgress))?;
     Ok((
         json_text(&results)?,
-        report::markdown_table(&results),
+        evaluation::markdown_table(&results),
         written.map(|p| p.display().to_string()),
     ))
 }
