@@ -98,7 +98,7 @@ impl Report {
 pub enum Install {
     /// `npm install` ran: `node_modules/` holds jsPsych and its plugins.
     Installed,
-    /// Not asked for ([`Config::install`] false).
+    /// Not asked for ([`Config::install`](super::Config::install) false).
     NotAsked,
     /// Asked for, but it could not be done: why (npm missing, no network); the README says the
     /// one command to run.
