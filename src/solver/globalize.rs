@@ -45,7 +45,7 @@
 // The loops below walk several arrays indexed by the unknown's slot together.
 #![allow(clippy::needless_range_loop)]
 
-use super::{Progress, Solution, SolveOptions, SolveStats, Solver};
+use super::{Posed, Progress, Solution, SolveOptions, SolveStats, Solver};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::grid::Image;
 use crate::reflectance::ReflectanceMap;
@@ -159,16 +159,17 @@ impl Solver {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn descend(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         start: (&Image, &Image),
         cycles_before: usize,
         progress: &mut dyn FnMut(&Progress),
     ) -> Solution {
+        let Posed {
+            bc, reflectance, ..
+        } = posed;
         let lambda = options.lambda;
-        let n = self.build(image, bc, reflectance, lambda);
+        let n = self.build(posed, lambda);
         for j in 0..n {
             let p = self.pixels[j] as usize;
             let (f, g) = (start.0.data()[p], start.1.data()[p]);
@@ -248,9 +249,7 @@ impl Solver {
             });
         }
         let mut solution = self.solution(
-            image,
-            bc,
-            reflectance,
+            posed,
             SolveStats {
                 iterations: cycles_before + steps,
                 converged,

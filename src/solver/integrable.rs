@@ -126,10 +126,10 @@
 //! last iteration's change (below `tol` once converged).
 
 use super::{
-    iterate, sweep_chunks, Method, Node, Progress, Solution, SolveOptions, Solver,
+    iterate, sweep_chunks, Method, Node, Posed, Progress, Solution, SolveOptions, Solver,
     MULTIGRID_MAX_CYCLES,
 };
-use crate::boundary::{BoundaryConditions, Role};
+use crate::boundary::Role;
 use crate::error::Result;
 use crate::gradient_space::fg_from_pq;
 use crate::grid::{Image, Mask};
@@ -180,13 +180,11 @@ impl Solver {
     /// The integrable method on a domain already built (see the module documentation).
     pub(super) fn solve_integrable(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
-        self.integrable_with_history(image, bc, reflectance, options, ANDERSON_DEPTH, progress)
+        self.integrable_with_history(posed, options, ANDERSON_DEPTH, progress)
     }
 
     /// Lays out the unknowns for `image` and starts them at the slopes `(f, g)`: returns the
@@ -195,13 +193,12 @@ impl Solver {
     /// infinite, capped at 1/DEFAULT_MIN_NZ) would bend it near the boundary.
     fn start_at(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         lambda: f64,
         (f, g): (&Image, &Image),
     ) -> (usize, Mask, Vec<f64>) {
-        let n = self.build(image, bc, reflectance, lambda);
+        let bc = posed.bc;
+        let n = self.build(posed, lambda);
         for (j, &p) in self.pixels.iter().enumerate() {
             self.cur_f[j] = f.data()[p as usize];
             self.cur_g[j] = g.data()[p as usize];
@@ -217,19 +214,18 @@ impl Solver {
     /// the plain alternation, for comparison).
     fn integrable_with_history(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         history: usize,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
+        let reflectance = posed.reflectance;
         let warm = SolveOptions {
             method: Method::Multigrid,
             max_iter: MULTIGRID_MAX_CYCLES,
             ..*options
         };
-        let start = self.solve_conditions(image, bc, reflectance, &warm, &mut |_| {})?;
+        let start = self.solve_conditions(posed, &warm, &mut |_| {})?;
         if start.diverged || crate::cancel::requested() {
             return Ok(start);
         }
@@ -241,11 +237,10 @@ impl Solver {
                 weight: 1.0,
             };
             return self
-                .minimise_from(image, bc, reflectance, options, lm, progress)
+                .minimise_from(posed, options, lm, progress)
                 .map(|(solution, _)| solution);
         }
-        let (n, domain, pull) =
-            self.start_at(image, bc, reflectance, options.lambda, (&start.f, &start.g));
+        let (n, domain, pull) = self.start_at(posed, options.lambda, (&start.f, &start.g));
         // The domain's Poisson hierarchy and parts, built once for every depth solve.
         let prepared = PreparedMask::new(&domain)?;
         // φ(I) of each unknown, which the sweeps read ten times per iteration.
@@ -301,7 +296,7 @@ impl Solver {
             self.cur_g[..n].copy_from_slice(&x.1[n..]);
             Ok(last_update)
         })?;
-        Ok(self.solution(image, bc, reflectance, stats))
+        Ok(self.solution(posed, stats))
     }
 
     /// The integrable energy minimised by Levenberg–Marquardt steps ([`Method::IntegrableLm`])
@@ -311,15 +306,15 @@ impl Solver {
     /// the coarse levels of [`Method::NestedLm`] weight both by the pixels each stands for.
     pub(super) fn minimise_from(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         start: LmStart<'_>,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<(Solution, Image)> {
-        let (n, domain, mut pull) =
-            self.start_at(image, bc, reflectance, options.lambda, (start.f, start.g));
+        let Posed {
+            image, reflectance, ..
+        } = posed;
+        let (n, domain, mut pull) = self.start_at(posed, options.lambda, (start.f, start.g));
         if start.weight != 1.0 {
             pull.iter_mut().for_each(|w| *w *= start.weight);
         }
@@ -371,7 +366,7 @@ impl Solver {
         for (j, &p) in self.pixels.iter().enumerate() {
             depth.data_mut()[p as usize] = x[2 * n + j];
         }
-        Ok((self.solution(image, bc, reflectance, stats), depth))
+        Ok((self.solution(posed, stats), depth))
     }
 
     /// One sweep of the screened update from `cur` into `next` (see the module documentation).

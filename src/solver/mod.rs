@@ -385,6 +385,31 @@ struct Node {
     intensity: f64,
 }
 
+/// One problem on a domain already built: the image, its boundary conditions and the
+/// reflectance map, which every solver's entry point takes together (sizes checked by
+/// [`Solver::solve_with_progress`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Posed<'a> {
+    pub(crate) image: &'a Image,
+    pub(crate) bc: &'a BoundaryConditions,
+    pub(crate) reflectance: &'a dyn ReflectanceMap,
+}
+
+impl<'a> Posed<'a> {
+    /// The problem of `image` on `bc` under `reflectance`.
+    pub(crate) fn new(
+        image: &'a Image,
+        bc: &'a BoundaryConditions,
+        reflectance: &'a dyn ReflectanceMap,
+    ) -> Posed<'a> {
+        Posed {
+            image,
+            bc,
+            reflectance,
+        }
+    }
+}
+
 /// An Ikeuchi–Horn solver for images of one size; its buffers are allocated once and reused
 /// by every [`Solver::solve`].
 #[derive(Debug, Clone)]
@@ -502,7 +527,7 @@ impl Solver {
         }
         if !matches!(boundary, Boundary::Occluding | Boundary::Limb) {
             let bc = boundary_conditions(mask, boundary)?;
-            return self.solve_conditions(image, &bc, reflectance, options, progress);
+            return self.solve_conditions(Posed::new(image, &bc, reflectance), options, progress);
         }
         let bc = match self.occluding.take() {
             Some(bc) if same_domain(&bc, mask) => bc,
@@ -510,13 +535,17 @@ impl Solver {
         };
         let solution = if *boundary == Boundary::Limb {
             let limb = limb_conditions(&bc, image, reflectance, options.saturation);
-            self.solve_conditions(image, &limb.conditions, reflectance, options, progress)
-                .map(|solution| Solution {
-                    limb: Some(limb.test),
-                    ..solution
-                })
+            self.solve_conditions(
+                Posed::new(image, &limb.conditions, reflectance),
+                options,
+                progress,
+            )
+            .map(|solution| Solution {
+                limb: Some(limb.test),
+                ..solution
+            })
         } else {
-            self.solve_conditions(image, &bc, reflectance, options, progress)
+            self.solve_conditions(Posed::new(image, &bc, reflectance), options, progress)
         };
         self.occluding = Some(bc);
         solution
@@ -525,36 +554,31 @@ impl Solver {
     /// [`Solver::solve_with_progress`] on a domain already built (checked sizes assumed).
     fn solve_conditions(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         if matches!(options.method, Method::Integrable | Method::IntegrableLm) {
-            return self.solve_integrable(image, bc, reflectance, options, progress);
+            return self.solve_integrable(posed, options, progress);
         }
         if options.method == Method::NestedLm {
-            return self.solve_nested(image, bc, reflectance, options, progress);
+            return self.solve_nested(posed, options, progress);
         }
         if options.method == Method::Multigrid {
             let (w, h) = (self.width, self.height);
             let mg = self
                 .multigrid
                 .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
-            let (f, g, stats) = mg.solve(image, bc, reflectance, options, progress);
+            let (f, g, stats) = mg.solve(posed, options, progress);
             // Stalled or blown up (not stopped by the caller's cap or a cancel): globalise.
             let stalled = stats.cycles < options.max_iter;
             if !stats.converged && (stats.diverged || stalled) && !crate::cancel::requested() {
-                return Ok(self.globalise(
-                    image,
-                    bc,
-                    reflectance,
-                    options,
-                    (f, g),
-                    &stats,
-                    progress,
-                ));
+                return Ok(self.globalise(posed, options, (f, g), &stats, progress));
             }
             return Ok(finish(
                 f,
@@ -572,7 +596,7 @@ impl Solver {
                 },
             ));
         }
-        let n_unknown = self.build(image, bc, reflectance, options.lambda);
+        let n_unknown = self.build(posed, options.lambda);
         let literal = options.method == Method::Literal;
         let stats = iterate(n_unknown, options, progress, |_| {
             let update = self.sweep(n_unknown, reflectance, literal);
@@ -580,7 +604,7 @@ impl Solver {
             std::mem::swap(&mut self.cur_g, &mut self.next_g);
             Ok(update)
         })?;
-        Ok(self.solution(image, bc, reflectance, stats))
+        Ok(self.solution(posed, stats))
     }
 
     /// The globalisation (`globalize.rs`) of a multigrid solve that stalled or blew up: the
@@ -589,9 +613,7 @@ impl Solver {
     #[allow(clippy::too_many_arguments)]
     fn globalise(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         values: (Image, Image),
         stats: &multigrid::MultigridStats,
@@ -604,32 +626,23 @@ impl Solver {
             let mg = self
                 .multigrid
                 .get_or_insert_with(|| multigrid::Multigrid::new(w, h));
-            let (cf, cg, start) = mg.solve(image, bc, reflectance, &gentle, &mut |_| {});
+            let (cf, cg, start) = mg.solve(posed, &gentle, &mut |_| {});
             (f, g) = if start.diverged {
                 (Grid::new(w, h, 0.0), Grid::new(w, h, 0.0))
             } else {
                 (cf, cg)
             };
         }
-        self.descend(
-            image,
-            bc,
-            reflectance,
-            options,
-            (&f, &g),
-            stats.cycles,
-            progress,
-        )
+        self.descend(posed, options, (&f, &g), stats.cycles, progress)
     }
 
     /// Lays out the value slots and the nodes for `bc`; returns the number of unknowns.
-    fn build(
-        &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
-        lambda: f64,
-    ) -> usize {
+    fn build(&mut self, posed: Posed<'_>, lambda: f64) -> usize {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         let (w, h) = (self.width, self.height);
         let roles = bc.roles.data();
         self.slot.clear();
@@ -712,13 +725,12 @@ impl Solver {
     }
 
     /// The solution grids and energies from the current values.
-    fn solution(
-        &self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
-        stats: SolveStats,
-    ) -> Solution {
+    fn solution(&self, posed: Posed<'_>, stats: SolveStats) -> Solution {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         let (f, g) = self.current_fg();
         let data = DataRange::new(reflectance, self.saturation);
         finish(f, g, image, bc, data, reflectance, stats)

@@ -49,11 +49,10 @@
 
 use super::integrable::LmStart;
 use super::multigrid::half_size_problem;
-use super::{Method, Progress, Solution, SolveOptions, Solver, MULTIGRID_MAX_CYCLES};
+use super::{Method, Posed, Progress, Solution, SolveOptions, Solver, MULTIGRID_MAX_CYCLES};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::error::Result;
 use crate::grid::{Grid, Image};
-use crate::reflectance::ReflectanceMap;
 
 /// The coarsest grid's shorter side is at least this (pixels): the pyramid stops halving
 /// before a grid would be smaller.
@@ -77,12 +76,15 @@ impl Solver {
     /// documentation).
     pub(super) fn solve_nested(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         let finest = SolveOptions {
             method: Method::IntegrableLm,
             ..*options
@@ -102,7 +104,7 @@ impl Solver {
         }
         if coarse.is_empty() {
             // Too small to coarsen: integrable-lm itself.
-            return self.solve_integrable(image, bc, reflectance, &finest, progress);
+            return self.solve_integrable(posed, &finest, progress);
         }
         let problems: Vec<(&Image, &BoundaryConditions)> = std::iter::once((image, bc))
             .chain(coarse.iter().map(|(i, b)| (i, b)))
@@ -117,9 +119,9 @@ impl Solver {
             max_iter: MULTIGRID_MAX_CYCLES,
             ..*options
         };
-        let s = solver.solve_conditions(img, b, reflectance, &warm, &mut |_| {})?;
+        let s = solver.solve_conditions(Posed::new(img, b, reflectance), &warm, &mut |_| {})?;
         if s.diverged || crate::cancel::requested() {
-            return self.solve_integrable(image, bc, reflectance, &finest, progress);
+            return self.solve_integrable(posed, &finest, progress);
         }
         let start = LmStart {
             f: &s.f,
@@ -135,13 +137,17 @@ impl Solver {
             ..*options
         };
         let mut quiet = |_: &Progress| {};
-        let (mut found, mut depth) =
-            solver.minimise_from(img, b, reflectance, &options_at(top), start, &mut quiet)?;
+        let (mut found, mut depth) = solver.minimise_from(
+            Posed::new(img, b, reflectance),
+            &options_at(top),
+            start,
+            &mut quiet,
+        )?;
         let mut own: Solver;
         // Each finer grid from the coarser one's minimum; the finest (level 0) last.
         for level in (0..top).rev() {
             if found.diverged || crate::cancel::requested() {
-                return self.solve_integrable(image, bc, reflectance, &finest, progress);
+                return self.solve_integrable(posed, &finest, progress);
             }
             let (img, b) = problems[level];
             let below = problems[level + 1].1;
@@ -163,8 +169,12 @@ impl Solver {
                     own = coarse;
                     (options_at(level), &mut own, &mut quiet)
                 };
-            (found, depth) =
-                solver.minimise_from(img, b, reflectance, &level_options, start, report)?;
+            (found, depth) = solver.minimise_from(
+                Posed::new(img, b, reflectance),
+                &level_options,
+                start,
+                report,
+            )?;
         }
         Ok(found)
     }

@@ -226,7 +226,12 @@ fn solve_with_history(
         ..SolveOptions::for_method(Method::Integrable)
     };
     solver
-        .integrable_with_history(&image, &bc, &map, &options, history, &mut |_| {})
+        .integrable_with_history(
+            Posed::new(&image, &bc, &map),
+            &options,
+            history,
+            &mut |_| {},
+        )
         .unwrap()
 }
 

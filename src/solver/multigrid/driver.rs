@@ -13,13 +13,12 @@ impl Multigrid {
     /// problem's either way: only the start differs. λ is kept on the coarse grid (the
     /// continuum scaling 4λ would break the sweep's stability bound λ·R_f² < 2); a coarse
     /// solve that diverges is ignored.
-    pub(super) fn start_from_coarse_solution(
-        &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
-        options: &SolveOptions,
-    ) {
+    pub(super) fn start_from_coarse_solution(&mut self, posed: Posed<'_>, options: &SolveOptions) {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         if self.levels[0].unknowns < NESTED_MIN_UNKNOWNS {
             return;
         }
@@ -37,9 +36,7 @@ impl Multigrid {
             ..*options
         };
         let (cf, cg, stats) = coarse.solve(
-            &coarse_image,
-            &coarse_bc,
-            reflectance,
+            Posed::new(&coarse_image, &coarse_bc, reflectance),
             &coarse_options,
             &mut |_| {},
         );
@@ -90,12 +87,15 @@ impl Multigrid {
     /// the caller); `progress` is called after every cycle.
     pub(crate) fn solve(
         &mut self,
-        image: &Image,
-        bc: &BoundaryConditions,
-        reflectance: &dyn ReflectanceMap,
+        posed: Posed<'_>,
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> (Image, Image, MultigridStats) {
+        let Posed {
+            image,
+            bc,
+            reflectance,
+        } = posed;
         let lambda = options.lambda;
         let ctx = Context::new(image, reflectance, lambda);
         self.work = 0.0;
@@ -106,7 +106,7 @@ impl Multigrid {
         );
         self.find_band();
         if self.nested {
-            self.start_from_coarse_solution(image, bc, reflectance, options);
+            self.start_from_coarse_solution(posed, options);
         }
         let mut stats = MultigridStats {
             cycles: 0,

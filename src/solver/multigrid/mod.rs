@@ -88,7 +88,7 @@
 //! work can be split across threads in any way; the only reduction is a maximum, which is exact.
 //! The result is bit-identical for any number of threads.
 
-use super::{Progress, SolveOptions, DIVERGENCE_UPDATE};
+use super::{Posed, Progress, SolveOptions, DIVERGENCE_UPDATE};
 use crate::boundary::{BoundaryConditions, Role};
 use crate::grid::{Grid, Image};
 use crate::parallel::prelude::*;

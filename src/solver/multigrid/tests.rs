@@ -30,7 +30,7 @@ fn every_depth_reaches_the_same_fixed_point() {
         mg.max_levels = max_levels;
         // The pieces from the same start as Jacobi's; nested iteration is checked below.
         mg.nested = false;
-        let (f, g, stats) = mg.solve(&image, &bc, &map, &opts, &mut |_| {});
+        let (f, g, stats) = mg.solve(Posed::new(&image, &bc, &map), &opts, &mut |_| {});
         assert!(stats.converged && stats.residual < 1e-10, "{stats:?}");
         assert_eq!(stats.levels, max_levels.min(4), "{stats:?}");
         if max_levels > 1 {
@@ -58,7 +58,7 @@ fn every_depth_reaches_the_same_fixed_point() {
         ..opts
     };
     let jacobi = solver
-        .solve_conditions(&image, &bc, &map, &jacobi_options, &mut |_| {})
+        .solve_conditions(Posed::new(&image, &bc, &map), &jacobi_options, &mut |_| {})
         .unwrap();
     assert!(largest(&answers[0].0, &jacobi.f) < 1e-7);
     assert!(largest(&answers[0].1, &jacobi.g) < 1e-7);
@@ -75,7 +75,7 @@ fn every_depth_reaches_the_same_fixed_point() {
     assert!(sum / (n as f64) < 0.01, "{}°", sum / n as f64);
     // Nested iteration starts elsewhere and ends at the same fixed point.
     let mut mg = Multigrid::new(size, size);
-    let (f, g, stats) = mg.solve(&image, &bc, &map, &opts, &mut |_| {});
+    let (f, g, stats) = mg.solve(Posed::new(&image, &bc, &map), &opts, &mut |_| {});
     assert!(stats.converged, "{stats:?}");
     let d = mean_angle(&bc, (&f, &g), (&jacobi.f, &jacobi.g));
     // It may settle beside the terminator differently, within the 0.1° bound.
@@ -187,7 +187,11 @@ fn local_relaxation_saves_a_cycle(light: Light) {
     for band_sweeps in [0, BAND_SWEEPS] {
         let mut mg = Multigrid::new(size, size);
         mg.band_sweeps = band_sweeps;
-        let (f, g, stats) = mg.solve(&image, &bc, &map, &SolveOptions::default(), &mut |_| {});
+        let (f, g, stats) = mg.solve(
+            Posed::new(&image, &bc, &map),
+            &SolveOptions::default(),
+            &mut |_| {},
+        );
         assert!(stats.converged, "{stats:?}");
         runs.push((f, g, stats));
     }
@@ -217,7 +221,11 @@ fn a_passing_rise_does_not_halve_the_coarse_correction_for_good() {
     for restores in [0, RESTORES] {
         let mut mg = Multigrid::new(size, size);
         mg.restores = restores;
-        let (f, g, stats) = mg.solve(&image, &bc, &map, &SolveOptions::default(), &mut |_| {});
+        let (f, g, stats) = mg.solve(
+            Posed::new(&image, &bc, &map),
+            &SolveOptions::default(),
+            &mut |_| {},
+        );
         assert!(stats.converged, "{stats:?}");
         runs.push((f, g, stats));
     }
@@ -261,7 +269,11 @@ fn nested_iteration_removes_the_crawl_of_a_mismatched_light() {
     for nested in [false, true] {
         let mut mg = Multigrid::new(size, size);
         mg.nested = nested;
-        let (f, g, stats) = mg.solve(&image, &bc, &map, &SolveOptions::default(), &mut |_| {});
+        let (f, g, stats) = mg.solve(
+            Posed::new(&image, &bc, &map),
+            &SolveOptions::default(),
+            &mut |_| {},
+        );
         assert!(stats.converged, "nested {nested}: {stats:?}");
         runs.push((f, g, stats));
     }

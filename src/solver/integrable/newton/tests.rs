@@ -30,7 +30,7 @@ fn case_with(size: usize, boundary: &Boundary, (tilt, slant): (f64, f64)) -> Cas
     let (image, map) = picture(&surface, Light::from_tilt_slant(tilt, slant).unwrap());
     let bc = boundary_conditions(&surface.mask, boundary).unwrap();
     let mut solver = Solver::new(size, size).unwrap();
-    let n = solver.build(&image, &bc, &map, 1.0);
+    let n = solver.build(crate::solver::Posed::new(&image, &bc, &map), 1.0);
     let domain: Mask = bc.roles.map(|r| *r == Role::Unknown);
     let pull = pull_weights(&domain, &solver.pixels);
     let scale = AngleScale::of(&map);
