@@ -36,7 +36,7 @@ pub use png::{
     BitDepth, DisplayCodes, GrayInfo, PngPicture, LUMINANCE_FORMULA,
 };
 pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight, SILHOUETTE_NOTE};
-pub use sidecar::{conventions_json, image_md5, write_json, PROGRAM_VERSION};
+pub use sidecar::{conventions_json, image_md5, write_json, Stamp, PROGRAM_VERSION};
 
 use crate::error::{Error, Result};
 use crate::grid::Image;

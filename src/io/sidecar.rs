@@ -9,6 +9,29 @@ use std::path::Path;
 /// The program version recorded in every sidecar.
 pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// Who wrote a report, and as which command: the first three keys of a command's JSON report
+/// (flattened into it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Stamp {
+    /// Always `shadelab`.
+    pub program: &'static str,
+    /// The version that wrote it.
+    pub version: &'static str,
+    /// The command, e.g. `analyze outline`.
+    pub command: &'static str,
+}
+
+impl Stamp {
+    /// The stamp of `command` in this version.
+    pub(crate) fn of(command: &'static str) -> Stamp {
+        Stamp {
+            program: "shadelab",
+            version: PROGRAM_VERSION,
+            command,
+        }
+    }
+}
+
 /// The conventions every output follows, as recorded in sidecars (see docs/conventions.md).
 pub fn conventions_json() -> Value {
     json!({

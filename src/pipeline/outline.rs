@@ -28,6 +28,7 @@ use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{Grid, Image, Mask};
+use crate::io::Stamp;
 use crate::io::{self, csv_field};
 use crate::light::FrontLight;
 use crate::parallel::prelude::*;
@@ -170,12 +171,9 @@ pub struct Layers {
 /// What the outline analysis found; serialised, it is `outline.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct OutlineReport {
-    /// "shadelab".
-    pub program: &'static str,
-    /// The program's version.
-    pub version: &'static str,
-    /// "analyze outline".
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The coordinate conventions.
     pub conventions: Value,
     /// Where the picture came from.
@@ -301,9 +299,7 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
         Smoothness::Quadratic => 0.0,
     };
     Ok(OutlineReport {
-        program: "shadelab",
-        version: io::PROGRAM_VERSION,
-        command: "analyze outline",
+        stamp: Stamp::of("analyze outline"),
         conventions: io::conventions_json(),
         input: loaded.origin.clone(),
         width: w,

@@ -19,6 +19,7 @@ use crate::analysis::{sweep, Sweep};
 use crate::boundary::Boundary;
 use crate::error::{Error, Result};
 use crate::grid::Mask;
+use crate::io::Stamp;
 use crate::io::{self, TrueLight};
 use crate::plot::Figure;
 use crate::progress::Progress;
@@ -376,9 +377,7 @@ impl Setup {
     /// What every perception report begins with, for `command`.
     pub fn header(&self, command: &'static str) -> Header {
         Header {
-            program: "shadelab",
-            version: io::PROGRAM_VERSION,
-            command,
+            stamp: Stamp::of(command),
             conventions: io::conventions_json(),
             input: self.origin.clone(),
             width: self.picture.image.width(),
@@ -393,12 +392,9 @@ impl Setup {
 /// picture and the settings.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Header {
-    /// "shadelab".
-    pub program: &'static str,
-    /// The program's version.
-    pub version: &'static str,
-    /// The command, e.g. "analyze prior-sweep".
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The coordinate conventions.
     pub conventions: Value,
     /// Where the picture came from.

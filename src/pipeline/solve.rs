@@ -19,6 +19,7 @@ use crate::boundary::{Boundary, LimbTest, BOUNDARY_NAMES, OCCLUDING_SHRINK};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_fg;
 use crate::grid::{size_mismatch, Grid, Image, Mask};
+use crate::io::Stamp;
 use crate::io::{self, BitDepth, RenderSidecar, TrueLight};
 use crate::light::FrontLight;
 use crate::light_estimation::LightEstimate;
@@ -203,12 +204,9 @@ impl SolveConfig {
 /// The report of a solve (`report.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SolveReport {
-    /// `shadelab`.
-    pub program: &'static str,
-    /// The program's version.
-    pub version: &'static str,
-    /// `solve`.
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The axes and light conventions.
     pub conventions: Value,
     /// What was read.
@@ -696,9 +694,7 @@ fn report(
         );
     }
     SolveReport {
-        program: "shadelab",
-        version: io::PROGRAM_VERSION,
-        command: "solve",
+        stamp: Stamp::of("solve"),
         conventions: io::conventions_json(),
         input: SolveInput {
             image: config.image.display().to_string(),

@@ -28,6 +28,7 @@ use super::CommandReport;
 use crate::analysis::study::{self, REPORT, RESULTS, SWEEP};
 use crate::error::{Error, Result};
 use crate::io;
+use crate::io::Stamp;
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;
@@ -70,12 +71,9 @@ impl StudyRunConfig {
 /// What a study run did: the content of `study.json`, with the two tables beside it.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyRunReport {
-    /// Always `shadelab`.
-    pub program: &'static str,
-    /// shadelab's version.
-    pub version: &'static str,
-    /// Always `study run`.
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The spec as given.
     pub spec: StudySpec,
     /// The md5 of the spec's canonical JSON: shards of one study share it.
@@ -107,9 +105,7 @@ pub fn run(config: &StudyRunConfig, progress: &dyn Progress) -> Result<StudyRunR
     progress.finish();
     let output = output?;
     Ok(StudyRunReport {
-        program: "shadelab",
-        version: io::PROGRAM_VERSION,
-        command: "study run",
+        stamp: Stamp::of("study run"),
         spec: study.spec.clone(),
         spec_md5: study.spec_md5.clone(),
         shard: config.shard,
@@ -177,12 +173,9 @@ pub struct MergedShard {
 /// What a merge did: the content of the merged `study.json`, with the two tables beside it.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyMergeReport {
-    /// Always `shadelab`.
-    pub program: &'static str,
-    /// shadelab's version.
-    pub version: &'static str,
-    /// Always `study merge`.
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The spec, as the shards recorded it.
     pub spec: Value,
     /// The md5 of the spec.
@@ -208,9 +201,7 @@ pub fn merge(config: &StudyMergeConfig, progress: &dyn Progress) -> Result<Study
     progress.finish();
     let merged = merged?;
     Ok(StudyMergeReport {
-        program: "shadelab",
-        version: io::PROGRAM_VERSION,
-        command: "study merge",
+        stamp: Stamp::of("study merge"),
         spec: merged.spec,
         spec_md5: merged.spec_md5,
         shard: Shard::WHOLE,

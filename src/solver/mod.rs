@@ -558,11 +558,7 @@ impl Solver {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         if matches!(options.method, Method::Integrable | Method::IntegrableLm) {
             return self.solve_integrable(posed, options, progress);
         }
@@ -638,11 +634,7 @@ impl Solver {
 
     /// Lays out the value slots and the nodes for `bc`; returns the number of unknowns.
     fn build(&mut self, posed: Posed<'_>, lambda: f64) -> usize {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         let (w, h) = (self.width, self.height);
         let roles = bc.roles.data();
         self.slot.clear();
@@ -726,11 +718,7 @@ impl Solver {
 
     /// The solution grids and energies from the current values.
     fn solution(&self, posed: Posed<'_>, stats: SolveStats) -> Solution {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         let (f, g) = self.current_fg();
         let data = DataRange::new(reflectance, self.saturation);
         finish(f, g, image, bc, data, reflectance, stats)

@@ -80,11 +80,7 @@ impl Solver {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         let finest = SolveOptions {
             method: Method::IntegrableLm,
             ..*options

@@ -36,6 +36,7 @@ use super::CommandReport;
 use crate::analysis::fit::bins;
 use crate::error::{Error, Result};
 use crate::io;
+use crate::io::Stamp;
 use crate::plot::{IntervalSeries, LineAndPolar, LinePlot, Marker, PolarPlot, Series};
 use crate::progress::Progress;
 use serde::Serialize;
@@ -193,12 +194,9 @@ pub struct ParticipantFit {
 /// trials, or the only participant's), with `participants` beside it.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
-    /// "shadelab".
-    pub program: &'static str,
-    /// The program's version.
-    pub version: &'static str,
-    /// "fit observer".
-    pub command: &'static str,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The responses file.
     pub responses: String,
     /// The model, in words.
@@ -317,9 +315,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         "lapse": m.lapse,
     });
     Ok(Report {
-        program: "shadelab",
-        version: io::PROGRAM_VERSION,
-        command: "fit observer",
+        stamp: Stamp::of("fit observer"),
         responses: name,
         model: MODEL,
         design: Design {

@@ -14,11 +14,7 @@ impl Multigrid {
     /// continuum scaling 4λ would break the sweep's stability bound λ·R_f² < 2); a coarse
     /// solve that diverges is ignored.
     pub(super) fn start_from_coarse_solution(&mut self, posed: Posed<'_>, options: &SolveOptions) {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         if self.levels[0].unknowns < NESTED_MIN_UNKNOWNS {
             return;
         }
@@ -91,11 +87,7 @@ impl Multigrid {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> (Image, Image, MultigridStats) {
-        let Posed {
-            image,
-            bc,
-            reflectance,
-        } = posed;
+        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
         let lambda = options.lambda;
         let ctx = Context::new(image, reflectance, lambda);
         self.work = 0.0;

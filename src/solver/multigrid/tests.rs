@@ -178,6 +178,13 @@ fn local_relaxation_at_the_rim_and_the_terminator_saves_a_cycle() {
     }
 }
 
+/// `mg`'s solve of `posed` with the default options, which must converge.
+fn converged(mg: &mut Multigrid, posed: Posed<'_>) -> (Image, Image, MultigridStats) {
+    let (f, g, stats) = mg.solve(posed, &SolveOptions::default(), &mut |_| {});
+    assert!(stats.converged, "{stats:?}");
+    (f, g, stats)
+}
+
 fn local_relaxation_saves_a_cycle(light: Light) {
     let size = 256;
     let s = sphere(size, size, 0.45 * size as f64).unwrap();
@@ -187,13 +194,7 @@ fn local_relaxation_saves_a_cycle(light: Light) {
     for band_sweeps in [0, BAND_SWEEPS] {
         let mut mg = Multigrid::new(size, size);
         mg.band_sweeps = band_sweeps;
-        let (f, g, stats) = mg.solve(
-            Posed::new(&image, &bc, &map),
-            &SolveOptions::default(),
-            &mut |_| {},
-        );
-        assert!(stats.converged, "{stats:?}");
-        runs.push((f, g, stats));
+        runs.push(converged(&mut mg, Posed::new(&image, &bc, &map)));
     }
     let (plain, local) = (&runs[0], &runs[1]);
     assert!(
@@ -221,13 +222,7 @@ fn a_passing_rise_does_not_halve_the_coarse_correction_for_good() {
     for restores in [0, RESTORES] {
         let mut mg = Multigrid::new(size, size);
         mg.restores = restores;
-        let (f, g, stats) = mg.solve(
-            Posed::new(&image, &bc, &map),
-            &SolveOptions::default(),
-            &mut |_| {},
-        );
-        assert!(stats.converged, "{stats:?}");
-        runs.push((f, g, stats));
+        runs.push(converged(&mut mg, Posed::new(&image, &bc, &map)));
     }
     let (halved, restored) = (&runs[0], &runs[1]);
     assert!(
