@@ -192,3 +192,11 @@ pub fn setting(bad: BadSetting) -> CliError {
         None => bad.error.into(),
     }
 }
+
+/// The `--out` folder of a command that writes one: the output-set rule stated in one place.
+#[derive(Debug, Clone, clap::Args)]
+pub struct OutFolder {
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
+    #[arg(long, value_name = "DIR")]
+    pub out: std::path::PathBuf,
+}

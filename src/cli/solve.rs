@@ -3,6 +3,7 @@
 use super::flags::{input_gamma, say_input_note, usage, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
+use crate::cli::flags::OutFolder;
 use shadelab::pipeline::solve::check_albedo;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord};
 use shadelab::BrdfSpec;
@@ -67,9 +68,8 @@ pub struct Args {
     pub method: String,
     #[command(flatten)]
     pub solver: SolverFlags,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `solve`: flags → [`SolveConfig`] → [`solve::run`] → the output folder.
@@ -82,7 +82,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         out.note(super::flags::worded(&line));
     }
     // The folder is claimed before the long part, so an unwritable one fails at once.
-    let dest = super::output_to(&args.out, global, config.files());
+    let dest = super::output_to(&args.output.out, global, config.files());
     let report = solve::run_into(&config, &dest, &Bar::new(global.quiet))?;
     let target = dest.path().to_path_buf();
     // Said once the picture was read and solved: a refusal stays one line.
@@ -190,7 +190,7 @@ fn config(args: &Args, global: &Global) -> Result<SolveConfig, CliError> {
         record: SolveRecord {
             light: args.light.clone(),
             boundary: args.boundary.clone(),
-            out: args.out.display().to_string(),
+            out: args.output.out.display().to_string(),
         },
     })
 }

@@ -4,6 +4,7 @@
 
 use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
+use crate::cli::flags::OutFolder;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::fading::{self, FadingConfig};
@@ -75,9 +76,8 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     border: f64,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    out: std::path::PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `analyze fading`.
@@ -112,7 +112,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..AdaptationOptions::default()
     };
     let config = FadingConfig::new(args.source.to_library(global)?, band, adaptation)?;
-    let dest = destination::<FadingReport>(&args.out, global, config.source.files())?;
+    let dest = destination::<FadingReport>(&args.output.out, global, config.source.files())?;
     let report = fading::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&dest)?;
     let out = Output::new(global);

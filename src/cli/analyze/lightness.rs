@@ -4,6 +4,7 @@
 
 use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
+use crate::cli::flags::OutFolder;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::lightness::{self, LightnessConfig};
@@ -17,9 +18,8 @@ pub struct Args {
     /// The model: odog, lodog, flodog, retinex, highpass, or all (each in turn).
     #[arg(long, value_name = "odog|lodog|flodog|retinex|highpass|all")]
     model: String,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    out: std::path::PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `analyze lightness`.
@@ -36,7 +36,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         }
     }
     let config = LightnessConfig::new(args.source.to_library(global)?, models)?;
-    let dest = destination::<LightnessReport>(&args.out, global, config.source.files())?;
+    let dest = destination::<LightnessReport>(&args.output.out, global, config.source.files())?;
     let report = lightness::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&dest)?;
     let out = Output::new(global);

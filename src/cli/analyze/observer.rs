@@ -5,6 +5,7 @@
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::destination;
+use crate::cli::flags::OutFolder;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
@@ -59,9 +60,8 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     tilts: String,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `analyze observer`.
@@ -83,7 +83,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.check().map_err(flags::setting)?;
     let mut inputs = config.picture.source.files();
     inputs.extend(args.prior.clone());
-    let dest = destination::<ObserverReport>(&args.out, global, inputs)?;
+    let dest = destination::<ObserverReport>(&args.output.out, global, inputs)?;
     let report = observer::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&dest)?;
     let out = Output::new(global);

@@ -5,12 +5,12 @@
 use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
 use crate::cli::flags::usage;
+use crate::cli::flags::OutFolder;
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::parse_size;
 use shadelab::pipeline::outline::{self, OutlineConfig, OutlineReport};
 use shadelab::CommandReport;
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `analyze outline`.
@@ -46,9 +46,8 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     lambda: f64,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `analyze outline`.
@@ -69,7 +68,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         .validate()
         .map_err(|e| usage("--depth-scale", e))?;
     config.crease.validate().map_err(|e| usage("--lambda", e))?;
-    let dest = destination::<OutlineReport>(&args.out, global, config.source.files())?;
+    let dest = destination::<OutlineReport>(&args.output.out, global, config.source.files())?;
     let report = outline::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&dest)?;
     let out = Output::new(global);

@@ -5,12 +5,12 @@
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::destination;
+use crate::cli::flags::OutFolder;
 use crate::cli::flags::{self, usage};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::prior_sweep::{self, parse_global_light, Config, DEFAULT_TILTS};
 use shadelab::{CommandReport, PriorSweepReport};
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `analyze prior-sweep`.
@@ -26,9 +26,8 @@ pub struct Args {
     /// a light estimated from each token alone.
     #[arg(long, value_name = "estimate|TILT", allow_hyphen_values = true)]
     binding: Option<String>,
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file).
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
+    #[command(flatten)]
+    pub output: OutFolder,
 }
 
 /// Runs `analyze prior-sweep`.
@@ -45,7 +44,8 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         ..Config::new(args.picture.config(global)?)?
     };
     config.check().map_err(flags::setting)?;
-    let dest = destination::<PriorSweepReport>(&args.out, global, config.picture.source.files())?;
+    let dest =
+        destination::<PriorSweepReport>(&args.output.out, global, config.picture.source.files())?;
     let report = prior_sweep::run(&config, &Bar::new(global.quiet))?;
     let target = report.write(&dest)?;
     let out = Output::new(global);
