@@ -49,7 +49,12 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+// No plots: the plotting backend needs fonts that a bare machine may not have.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 
 fn main() {
     if let Ok(name) = std::env::var("SHADELAB_ODOG_ONCE") {
@@ -70,5 +75,8 @@ fn main() {
         return;
     }
     benches();
-    Criterion::default().configure_from_args().final_summary();
+    Criterion::default()
+        .without_plots()
+        .configure_from_args()
+        .final_summary();
 }

@@ -96,5 +96,10 @@ fn bench(c: &mut Criterion) {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-criterion_group!(benches, bench);
+// No plots: the plotting backend needs fonts that a bare machine may not have.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);
