@@ -122,6 +122,8 @@ fn eval_writes_table_report_and_pictures() {
             "occluding",
             "--commit",
             "abc1234",
+            "--method",
+            "multigrid,integrable,integrable-lm",
             "--out",
             "res",
             "--quiet",
@@ -173,6 +175,40 @@ fn eval_writes_table_report_and_pictures() {
     let (w, h) = image_size(&res.join("ball-052-occluding.png"));
     assert_eq!(h, 146);
     assert_eq!(w, 5 * 146 + (14 + 46) + 5 * 4);
+}
+
+/// Without `--method`, eval solves each case once, with the method `shadelab solve` uses by
+/// default (issue 43: the evaluation runs the default; the other methods are asked for).
+#[test]
+fn eval_runs_the_solve_default_alone_unless_asked() {
+    let Some(dir) = data() else { return };
+    let d = scratch("eval-default");
+    let data = dir.display().to_string();
+    let args = [
+        "eval",
+        "--data",
+        &data,
+        "--only",
+        "ball",
+        "--ball-images",
+        "052",
+        "--boundary",
+        "occluding",
+        "--json",
+        "--quiet",
+    ];
+    let out = shadelab(&d, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cases: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cases = cases.as_array().unwrap();
+    assert_eq!(cases.len(), 1, "{cases:?}");
+    let default = shadelab::SolveOptions::default().method;
+    assert_eq!(cases[0]["method"], default.to_string());
+    assert_eq!(default, Method::default());
 }
 
 fn image_size(path: &std::path::Path) -> (usize, usize) {

@@ -168,7 +168,8 @@ def evaluate(
     """The shape-from-shading engine measured on real data (``shadelab eval``): the bunny,
     Mozart, DiLiGenT, Beethoven and the ball, from the data folder ``data``
     (docs/evaluation.md). ``only`` the sets, ``objects`` the DiLiGenT objects,
-    ``ball_images`` the ball photographs, ``methods`` the solvers (a row each), and the other
+    ``ball_images`` the ball photographs, ``methods`` the solvers (a row each; by default
+    the one ``solve`` uses), and the other
     settings as the command line's flags. With ``out``, the folder (the table, every number,
     a picture per row) is written as the command line writes it. Returns an
     :class:`Evaluation` (``cases``, ``table``, ``folder``)."""

@@ -68,20 +68,16 @@ pub struct Args {
     pub commit: Option<String>,
 }
 
-/// The `--method` help, with the library's default methods.
+/// The `--method` help, with the library's default (`shadelab solve`'s method).
 fn methods_help() -> String {
-    let defaults: Vec<String> = evaluation::DEFAULT_METHODS
-        .iter()
-        .map(Method::to_string)
-        .collect();
     format!(
         "The methods each case is solved with, a row each (comma separated): multigrid \
          (Ikeuchi–Horn), integrable (depth and gradients together, from the multigrid \
          solution), integrable-lm (the integrable method's energy minimised by \
          Levenberg–Marquardt; slower), nested-lm (the same energy, solved coarse to fine; \
          integrable-lm's accuracy in fewer steps), jacobi (Ikeuchi–Horn's fixed point, slowly; for \
-         comparison) [default: {}]",
-        defaults.join(",")
+         comparison) [default: {}, the method of `shadelab solve`]",
+        Method::default()
     )
 }
 

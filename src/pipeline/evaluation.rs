@@ -8,6 +8,5 @@ pub use crate::evaluation::albedo::BRIGHT_QUANTILE;
 pub use crate::evaluation::metrics::DepthError;
 pub use crate::evaluation::report::{markdown_table, run_into, Record, MARKER};
 pub use crate::evaluation::{
-    Albedo, CaseResult, Config, Set, BALL_IMAGES, DEFAULT_METHODS, DILIGENT_OBJECTS, SETS,
-    SET_NAMES,
+    Albedo, CaseResult, Config, Set, BALL_IMAGES, DILIGENT_OBJECTS, SETS, SET_NAMES,
 };

@@ -173,7 +173,7 @@ pub const BLOWN_UP: f64 = 1e30;
 impl Default for SolveOptions {
     /// Multigrid, λ = 1, tolerance 10⁻⁶, at most [`MULTIGRID_MAX_CYCLES`] cycles.
     fn default() -> Self {
-        SolveOptions::for_method(Method::Multigrid)
+        SolveOptions::for_method(Method::default())
     }
 }
 
