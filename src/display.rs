@@ -27,6 +27,9 @@
 //! assert!((l[0] - 10.0).abs() < 0.5 && (l[1] - 50.0).abs() < 0.5 && (l[2] - 90.0).abs() < 0.5);
 //! ```
 
+// Linear RGB to 8-bit display RGBA through a gamma: how a preview reaches a screen.
+pub use crate::io::display_rgba8;
+
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels};
 use serde::Serialize;

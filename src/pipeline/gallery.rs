@@ -18,7 +18,7 @@
 //! ```
 
 // The parts of this command's configuration and report that other modules define.
-pub use crate::gallery::{Options, Preset, Rendered, DOCS_BASE};
+pub use crate::gallery::{Options, Preset, Rendered, DOCS_BASE, THUMBNAIL_GAMMA};
 
 use super::CommandReport;
 use crate::error::Result;

@@ -8,6 +8,12 @@ pub use crate::analysis::convexity::Token;
 pub use crate::analysis::interpretation::{Lighting, Scene};
 pub use crate::analysis::{Domain, Interpretation, TokenPicture, TokenReading};
 
+// One picture read as the sweep reads it, for an interactive front end (the teaching page):
+// the picture turned, interpreted under one light, its central token's verdict.
+pub use crate::analysis::convexity::{central_token, Verdict};
+pub use crate::analysis::rotation::rotate_quarter_turns;
+pub use crate::analysis::{wrap_360, Interpreter};
+
 // The syntax of angle lists and the solver budget every perception command shares.
 pub use crate::analysis::interpretation::MULTIGRID_CYCLES;
 pub use crate::analysis::parse_angles;

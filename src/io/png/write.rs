@@ -43,7 +43,7 @@ fn encode(v: f64, gamma: Option<f64>, max: f64) -> f64 {
 /// browser's `ImageData`. Fails on a gamma outside (0, 10].
 ///
 /// ```
-/// use shadelab::{internal::io::display_rgba8, Grid};
+/// use shadelab::{display::display_rgba8, Grid};
 /// let image = Grid::from_vec(2, 1, vec![[0.0, 0.5, 1.0], [0.25; 3]])?;
 /// assert_eq!(display_rgba8(&image, None)?, [0, 128, 255, 255, 64, 64, 64, 255]);
 /// assert_eq!(display_rgba8(&image, Some(2.0))?[4], 128); // 0.25^(1/2) = 0.5

@@ -3,11 +3,11 @@
 //! One call, [`frame`], does a frame's work with the library's own pipelines and nothing
 //! else: it renders the chosen stimulus under the true light
 //! ([`shadelab::pipeline::source::PictureSource`], as `shadelab render` renders it), turns it by
-//! 180° when asked ([`shadelab::internal::analysis::rotation`]), solves it under the *assumed* light
+//! 180° when asked ([`rotate_quarter_turns`]), solves it under the *assumed* light
 //! with the Ikeuchi–Horn engine and integrates the result to depth
-//! ([`shadelab::pipeline::perception`] and [`shadelab::internal::analysis::Interpreter`], as
+//! ([`shadelab::pipeline::perception`] and [`Interpreter`], as
 //! `shadelab analyze prior-sweep` does for each tilt), and reads the central target
-//! ([`shadelab::internal::analysis::convexity`]): its signed convexity and verdict, and the direction its
+//! ([`central_token`]): its signed convexity and verdict, and the direction its
 //! bright side faces ([`shadelab::pipeline::perception::Token::bright_side`]). [`p_convex_model`] is the observer's
 //! P(convex) for that direction.
 //!
@@ -17,11 +17,10 @@
 //! the build to one `cargo build` (see docs/teaching.md).
 
 use serde_json::{json, Value};
-use shadelab::internal::analysis::convexity::{central_token, Verdict};
-use shadelab::internal::analysis::rotation::rotate_quarter_turns;
-use shadelab::internal::analysis::Interpreter;
 use shadelab::pipeline::fit::ModelParams;
-use shadelab::pipeline::perception;
+use shadelab::pipeline::perception::{
+    self, central_token, rotate_quarter_turns, wrap_360, Interpreter, Verdict,
+};
 use shadelab::pipeline::source::PictureSource;
 use shadelab::Colormap;
 use shadelab::{Error, Pixels, Result};
@@ -221,7 +220,7 @@ impl Frame {
 }
 
 /// The display gamma of the page's pictures (the gallery's).
-const DISPLAY_GAMMA: f64 = shadelab::internal::gallery::THUMBNAIL_GAMMA;
+const DISPLAY_GAMMA: f64 = shadelab::pipeline::gallery::THUMBNAIL_GAMMA;
 
 fn check_dial(what: &str, d: Dial) -> Result<()> {
     if !d.tilt_deg.is_finite() {
@@ -247,7 +246,7 @@ fn params(s: &Stimulus, light: Dial) -> Result<serde_json::Map<String, Value>> {
             .map_err(|e| Error::Compute(format!("parameter {k} of {}: {e}", s.name)))?;
         map.insert((*k).to_string(), value);
     }
-    let tilt = shadelab::internal::analysis::wrap_360(light.tilt_deg);
+    let tilt = wrap_360(light.tilt_deg);
     match s.lit {
         Lit::Light => {
             map.insert(
@@ -338,7 +337,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
 
     // Pictures for the page.
     let picture_rgba =
-        shadelab::internal::io::display_rgba8(&image.map(|&v| [v; 3]), Some(DISPLAY_GAMMA))?;
+        shadelab::display::display_rgba8(&image.map(|&v| [v; 3]), Some(DISPLAY_GAMMA))?;
     let (lo, hi) = depth
         .data()
         .iter()
@@ -346,7 +345,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
             (lo.min(z), hi.max(z))
         });
     let colours = Colormap::Viridis.paint(&depth, (lo, hi), None, [0.0; 3]);
-    let depth_rgba = shadelab::internal::io::display_rgba8(&colours, Some(DISPLAY_GAMMA))?;
+    let depth_rgba = shadelab::display::display_rgba8(&colours, Some(DISPLAY_GAMMA))?;
     Ok(Frame {
         width: w,
         height: h,
