@@ -89,7 +89,7 @@ pub use visual_size::{parse_size, Geometry, SizeRequest};
 
 // Files: what a picture's pixels mean when read, and how they are written.
 pub use colormap::Colormap;
-pub use io::{read_display, BitDepth, InputEncoding, Stamp};
+pub use io::{read_display, BitDepth, InputEncoding, Stamp, PROGRAM_VERSION};
 
 // The engine: reflectance, boundary, solver, integration, and the one reconstruction over them.
 pub use albedo::{AlbedoEstimate, Saturation};

@@ -289,7 +289,7 @@ pub fn evaluate(
         commit: "unknown".into(),
         command: vec![format!(
             "shadelab.evaluate (Python, shadelab {})",
-            shadelab::internal::io::PROGRAM_VERSION
+            shadelab::PROGRAM_VERSION
         )],
     };
     let (results, written) =

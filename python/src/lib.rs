@@ -300,9 +300,8 @@ fn render<'py>(
         extra.set_item("display_json", record.to_string())?;
     } else if export.gamma.is_some() || bit_depth.is_some() {
         if let Pixels::Gray(i) = &output.pixels {
-            let codes =
-                shadelab::internal::io::stimulus_codes(i.data(), export.bit_depth, export.gamma)
-                    .map_err(to_py)?;
+            let codes = shadelab::display::stimulus_codes(i.data(), export.bit_depth, export.gamma)
+                .map_err(to_py)?;
             let grid = Grid::from_vec(i.width(), i.height(), codes).map_err(to_py)?;
             extra.set_item("codes", image_array(py, grid))?;
         }
@@ -379,7 +378,7 @@ fn export_options(
             let value: Value = serde_json::from_str(&text)
                 .map_err(|e| PyValueError::new_err(format!("display: {e}")))?;
             Some(
-                shadelab::internal::io::display_from_value(&value, std::path::Path::new("."))
+                shadelab::display::display_from_value(&value, std::path::Path::new("."))
                     .map_err(to_py)?,
             )
         }

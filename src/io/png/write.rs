@@ -6,13 +6,12 @@ use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
 use std::path::Path;
 
-/// Encodes a linear value 0..1 (clamped; NaN becomes 0) with an optional display gamma.
 /// The codes a stimulus PNG holds for linear `values` at `depth`, display-encoded with
 /// v^(1/gamma) when `gamma` is given: what [`write_stimulus`] writes, for a caller that shows
 /// them itself (the Python module's `codes`). Fails on a gamma outside (0, 10].
 ///
 /// ```
-/// use shadelab::internal::io::{stimulus_codes, BitDepth};
+/// use shadelab::{display::stimulus_codes, BitDepth};
 /// assert_eq!(stimulus_codes(&[0.0, 0.5, 1.0], BitDepth::Eight, None)?, [0, 128, 255]);
 /// assert_eq!(stimulus_codes(&[0.25], BitDepth::Sixteen, Some(2.0))?, [32768]);
 /// # Ok::<(), shadelab::Error>(())
@@ -29,6 +28,8 @@ pub fn stimulus_codes(values: &[f64], depth: BitDepth, gamma: Option<f64>) -> Re
         .collect())
 }
 
+/// Encodes a linear value 0..1 (clamped; NaN becomes 0) with an optional display gamma, as a
+/// code up to `max`.
 fn encode(v: f64, gamma: Option<f64>, max: f64) -> f64 {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     let v = match gamma {
