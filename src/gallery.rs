@@ -206,21 +206,13 @@ impl Rendered {
     pub fn files(&self) -> Vec<String> {
         // In the order `write_output` lists them: companions, image, sidecar.
         let image = PathBuf::from(format!("{}.png", self.preset.name));
-        let mut files = stimulus::planned_files(&image, &self.output, &image_options());
+        let mut files = stimulus::planned_files(&image, &self.output, &ExportOptions::default());
         files.rotate_left(1);
         files.push(io::sibling(&image, "", "json"));
         files
             .iter()
             .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
             .collect()
-    }
-}
-
-/// How a preset's image is written: 16-bit linear PNG with its sidecar and mask.
-fn image_options() -> ExportOptions {
-    ExportOptions {
-        force: true,
-        ..ExportOptions::default()
     }
 }
 
@@ -308,7 +300,9 @@ fn write_one(r: &Rendered, dir: &Path) -> Result<()> {
         &r.request,
         &r.output,
         &dir.join(format!("{name}.png")),
-        &image_options(),
+        // 16-bit linear PNG with its sidecar and mask, into the gallery's own fresh folder.
+        &ExportOptions::default(),
+        true,
     )?;
     io::write_rgb(
         &dir.join("thumbs").join(format!("{name}.png")),

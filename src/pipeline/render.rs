@@ -229,16 +229,13 @@ impl RenderReport {
                  when forced): give the output another name",
             ));
         }
-        let options = ExportOptions {
-            force: out.forced(),
-            ..self.export.clone()
-        };
         stimulus::write_output(
             &self.stimulus,
             &self.request,
             &self.output,
             out.path(),
-            &options,
+            &self.export,
+            out.forced(),
         )
     }
 }

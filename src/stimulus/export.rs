@@ -40,8 +40,6 @@ pub struct ExportOptions {
     pub range: Range,
     /// Also write the ground-truth layers (depth, normals, albedo, shading).
     pub layers: bool,
-    /// Replace an existing file that shadelab did not write.
-    pub force: bool,
     /// Write the codes of this display (PNG only): the stimulus shown through its inverse
     /// response at the luminances of `luminance`, at the display's bit depth.
     pub display: Option<Display>,
@@ -57,7 +55,6 @@ impl Default for ExportOptions {
             gamma: None,
             range: Range::Unit,
             layers: false,
-            force: false,
             display: None,
             luminance: None,
         }
@@ -176,7 +173,8 @@ pub const MAT_VARIABLE: &str = "img";
 
 /// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
 /// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
-/// layers. Returns every file written. The files are committed as a set ([`io::OutputSet`]):
+/// layers, replacing a file shadelab did not write only with `force` (the caller's output
+/// policy, as [`crate::pipeline::Output`] holds it). Returns every file written. The files are committed as a set ([`io::OutputSet`]):
 /// whatever stops the write, the old set or the new set is there whole, never a mix; a second
 /// run writing the same output meanwhile fails with [`Error::Locked`].
 pub fn write_output(
@@ -185,6 +183,7 @@ pub fn write_output(
     output: &Output,
     path: &Path,
     options: &ExportOptions,
+    force: bool,
 ) -> Result<Vec<PathBuf>> {
     let ext = options.check(path)?;
     if ext == "svg" && output.svg.is_none() {
@@ -207,7 +206,7 @@ pub fn write_output(
     // its companions are replaced only when the sidecar beside them is shadelab's, and the
     // sidecar only when it is one.
     for target in &files {
-        io::check_overwrite(target, &sidecar, options.force)?;
+        io::check_overwrite(target, &sidecar, force)?;
     }
     // Under the lock: the companions of the old set that the new one lacks (a render with
     // `layers` replaced by one without), as the old sidecar lists them.

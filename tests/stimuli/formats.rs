@@ -251,7 +251,15 @@ fn the_sidecar_holds_every_parameter_of_every_stimulus() {
             continue;
         };
         let path = d.join(format!("{name}.npy"));
-        stimulus::write_output(name, &request, &out, &path, &ExportOptions::default()).unwrap();
+        stimulus::write_output(
+            name,
+            &request,
+            &out,
+            &path,
+            &ExportOptions::default(),
+            false,
+        )
+        .unwrap();
         let meta = sidecar(&d.join(format!("{name}.json")));
         let info = stimulus::find(name).unwrap().info();
         let keys: BTreeSet<&str> = meta["parameters"]

@@ -29,7 +29,6 @@ impl Report {
         let options = ExportOptions {
             bit_depth: BitDepth::Eight,
             gamma: report.design.display.gamma,
-            force: true,
             ..ExportOptions::default()
         };
         let design = &report.design;
@@ -44,6 +43,8 @@ impl Report {
                     &r.output,
                     &dir.path().join(&entry.file),
                     &options,
+                    // Into the run's own fresh folder.
+                    true,
                 )
                 .map(|_| ())
             })
