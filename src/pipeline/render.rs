@@ -390,7 +390,6 @@ fn from_sidecar(v: &Value) -> Result<RenderConfig> {
             layers,
             display,
             luminance,
-            ..ExportOptions::default()
         },
         ..RenderConfig::new(stimulus)
     })
