@@ -3,14 +3,17 @@
 
 use crate::cli::{assert_error, scratch, shadelab};
 use serde_json::{Map, Value};
-use shadelab::internal::analysis::binding::{binding, GlobalLight};
+use shadelab::internal::analysis::binding::binding;
 use shadelab::internal::analysis::convexity::tokens_from_labels;
 use shadelab::internal::analysis::interpretation::analysis_solve_options;
-use shadelab::internal::analysis::observer::{observe, LightPrior, ObserverOptions};
-use shadelab::internal::analysis::rotation::rotate_quarter_turns;
-use shadelab::internal::analysis::{
-    sweep, Domain, Interpretation, Interpreter, Lighting, Scene, Sweep, TokenPicture,
+use shadelab::internal::analysis::observer::observe;
+use shadelab::internal::analysis::sweep;
+use shadelab::pipeline::observer::{LightPrior, ObserverOptions};
+use shadelab::pipeline::perception::{
+    parse_angles, rotate_quarter_turns, Domain, Interpretation, Interpreter, Lighting, Scene,
+    TokenPicture,
 };
+use shadelab::pipeline::prior_sweep::{GlobalLight, Sweep};
 use shadelab::stimulus;
 use shadelab::Boundary;
 use shadelab::Mask;
@@ -792,7 +795,7 @@ fn the_prior_sweep_pipeline_writes_what_the_command_writes() {
     use shadelab::pipeline::prior_sweep;
     let d = scratch("pipeline-prior-sweep");
     let config = prior_sweep::Config {
-        tilts: shadelab::internal::analysis::parse_angles("0:360:90", "tilts").unwrap(),
+        tilts: parse_angles("0:360:90", "tilts").unwrap(),
         binding: Some(GlobalLight::Given(0.0)),
         ..prior_sweep::Config::new(bump_config()).unwrap()
     };
@@ -815,7 +818,7 @@ fn the_observer_pipeline_writes_what_the_command_writes() {
     use shadelab::pipeline::observer;
     let d = scratch("pipeline-observer");
     let config = observer::Config {
-        tilts: shadelab::internal::analysis::parse_angles("0:360:45", "tilts").unwrap(),
+        tilts: parse_angles("0:360:45", "tilts").unwrap(),
         rotations: vec![0.0, 180.0],
         kappas: vec![1.0, 4.0],
         ..observer::Config::new(bump_config()).unwrap()

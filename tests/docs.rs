@@ -502,7 +502,7 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
         report.write(&Output::new(d.join(dir))).unwrap();
         read(&d.join(dir).join("index.html"))
     };
-    assert!(html("g", shadelab::internal::gallery::DOCS_BASE)
+    assert!(html("g", shadelab::pipeline::gallery::DOCS_BASE)
         .contains(r##"<a href="../docs/priors.md#light-from-above">"##));
     assert!(
         html("h", "https://example.org/shadelab/blob/main").contains(

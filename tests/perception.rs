@@ -2,10 +2,10 @@
 //! and the hollow mask read the same at any framing.
 
 use serde_json::{Map, Value};
-use shadelab::internal::analysis::Domain;
 use shadelab::internal::light_estimation::{
     estimate_light_with, EstimateMethod, LightEstimate, Outline,
 };
+use shadelab::pipeline::perception::Domain;
 use shadelab::pipeline::perception::{self, DomainSpec};
 use shadelab::pipeline::source::PictureSource;
 use shadelab::stimulus;
@@ -332,8 +332,9 @@ fn without_a_limb_the_moments_run() {
 }
 
 mod hollow {
-    use shadelab::internal::analysis::observer::{observe, LightPrior, ObserverOptions};
-    use shadelab::internal::analysis::Sweep;
+    use shadelab::internal::analysis::observer::observe;
+    use shadelab::pipeline::observer::{LightPrior, ObserverOptions};
+    use shadelab::pipeline::prior_sweep::Sweep;
 
     /// (P(convex), P(light from above), most probable tilt) upright, with convexity bias `bias`.
     pub fn percept(s: &Sweep, bias: f64) -> (f64, f64, f64) {
