@@ -103,6 +103,25 @@ fn errors_on_real_data_stay_within_measured_bounds() {
     );
 }
 
+/// `shadelab eval` on ball photograph 052 with the occluding boundary (one quick case), quiet,
+/// with `more` flags.
+fn ball_052<'a>(data: &'a str, more: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "eval",
+        "--data",
+        data,
+        "--only",
+        "ball",
+        "--ball-images",
+        "052",
+        "--boundary",
+        "occluding",
+        "--quiet",
+    ];
+    args.extend_from_slice(more);
+    args
+}
+
 #[test]
 fn eval_writes_table_report_and_pictures() {
     let Some(dir) = data() else { return };
@@ -110,24 +129,17 @@ fn eval_writes_table_report_and_pictures() {
     let data = dir.display().to_string();
     let out = shadelab(
         &d,
-        &[
-            "eval",
-            "--data",
+        &ball_052(
             &data,
-            "--only",
-            "ball",
-            "--ball-images",
-            "052",
-            "--boundary",
-            "occluding",
-            "--commit",
-            "abc1234",
-            "--method",
-            "multigrid,integrable,integrable-lm",
-            "--out",
-            "res",
-            "--quiet",
-        ],
+            &[
+                "--commit",
+                "abc1234",
+                "--method",
+                "multigrid,integrable,integrable-lm",
+                "--out",
+                "res",
+            ],
+        ),
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -184,20 +196,7 @@ fn eval_runs_the_solve_default_alone_unless_asked() {
     let Some(dir) = data() else { return };
     let d = scratch("eval-default");
     let data = dir.display().to_string();
-    let args = [
-        "eval",
-        "--data",
-        &data,
-        "--only",
-        "ball",
-        "--ball-images",
-        "052",
-        "--boundary",
-        "occluding",
-        "--json",
-        "--quiet",
-    ];
-    let out = shadelab(&d, &args);
+    let out = shadelab(&d, &ball_052(&data, &["--json"]));
     assert!(
         out.status.success(),
         "{}",
