@@ -156,7 +156,6 @@ impl Solver {
     /// Minimises the energy from the start `start` ((f, g) grids; values that are not finite
     /// start at 0), after `cycles_before` multigrid cycles, reporting each step to `progress`.
     /// See the module documentation.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn descend(
         &mut self,
         posed: Posed<'_>,

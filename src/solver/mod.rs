@@ -606,7 +606,6 @@ impl Solver {
     /// The globalisation (`globalize.rs`) of a multigrid solve that stalled or blew up: the
     /// energy descent from the multigrid solution at λ = 1 when λ is larger (λ continuation),
     /// else from the cycles' last values.
-    #[allow(clippy::too_many_arguments)]
     fn globalise(
         &mut self,
         posed: Posed<'_>,
