@@ -10,7 +10,7 @@
 use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels};
-use crate::io;
+use crate::io::{self, Stamp};
 use crate::lightness::benchmark::{direction_agreement, effect, spearman};
 use crate::lightness::Model;
 use crate::plot::{Figure, IntervalSeries, LinePlot, Series, Ticks};
@@ -405,12 +405,9 @@ pub struct BenchmarkConvention {
 /// What the benchmark found; [`BenchmarkReport::write_into`] writes it.
 #[derive(Debug, Clone, Serialize)]
 pub struct BenchmarkReport {
-    /// "shadelab".
-    pub program: String,
-    /// The program's version.
-    pub version: String,
-    /// "benchmark".
-    pub command: String,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// The stimupy version the stimuli and human data came from.
     pub stimupy_version: String,
     /// The models, in order.
@@ -464,9 +461,7 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
     }
     progress.finish();
     Ok(BenchmarkReport {
-        program: "shadelab".into(),
-        version: io::PROGRAM_VERSION.into(),
-        command: "benchmark".into(),
+        stamp: Stamp::of("benchmark"),
         stimupy_version: config.stimupy_version.clone(),
         models: config.models.iter().map(|m| m.name().into()).collect(),
         definitions: DEFINITIONS.iter().map(|s| s.to_string()).collect(),
@@ -618,7 +613,7 @@ impl BenchmarkReport {
              has the human sign / stimuli with a human effect; ρ = Spearman rank correlation \
              with the human values.\n\n| model | RHS2007 direction | RHS2007 ρ | murray2020 \
              direction | murray2020 ρ |\n|---|---|---|---|---|\n",
-            self.version, self.stimupy_version
+            self.stamp.version, self.stimupy_version
         );
         let cell = |scores: &[BenchmarkScore], set: &str, model: &str| -> (String, String) {
             match scores.iter().find(|s| s.set == set && s.model == model) {

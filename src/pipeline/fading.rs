@@ -15,7 +15,7 @@ use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
-use crate::io;
+use crate::io::{self, Stamp};
 use crate::lightness::fading::{adaptation_time_course, border_energy, Disk, PerceivedFrames};
 use crate::parallel::prelude::*;
 use crate::plot::{LinePlot, Series};
@@ -111,12 +111,9 @@ pub struct Animation {
 /// What the fading analysis found; [`FadingReport::write`] writes it as a folder.
 #[derive(Debug, Clone, Serialize)]
 pub struct FadingReport {
-    /// "shadelab".
-    pub program: String,
-    /// The program's version.
-    pub version: String,
-    /// "analyze fading".
-    pub command: String,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// Where the picture(s) came from.
     pub input: Value,
     /// Pixels per degree.
@@ -230,9 +227,7 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
 
     let last = course.times.len() - 1;
     Ok(FadingReport {
-        program: "shadelab".into(),
-        version: io::PROGRAM_VERSION.into(),
-        command: "analyze fading".into(),
+        stamp: Stamp::of("analyze fading"),
         input: origin,
         ppd,
         band_pass: *band,

@@ -11,7 +11,7 @@ use super::CommandReport;
 use crate::colormap::Colormap;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Labels, Mask};
-use crate::io::{self, BitDepth};
+use crate::io::{self, BitDepth, Stamp};
 use crate::lightness::checker::{self};
 use crate::lightness::{target_means, Model};
 use crate::plot::{ColourBar, MapFigure, Outline};
@@ -126,12 +126,9 @@ pub struct Seconds {
 /// What the lightness analysis found; [`LightnessReport::write`] writes it as a folder.
 #[derive(Debug, Clone, Serialize)]
 pub struct LightnessReport {
-    /// "shadelab".
-    pub program: String,
-    /// The program's version.
-    pub version: String,
-    /// "analyze lightness".
-    pub command: String,
+    /// The program, its version and the command.
+    #[serde(flatten)]
+    pub stamp: Stamp,
     /// Where the picture came from.
     pub input: Value,
     /// Width in pixels.
@@ -205,9 +202,7 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
         Some(checker_section(&image, labels, a, b, &images))
     });
     Ok(LightnessReport {
-        program: "shadelab".into(),
-        version: io::PROGRAM_VERSION.into(),
-        command: "analyze lightness".into(),
+        stamp: Stamp::of("analyze lightness"),
         input: input.origin,
         width: image.width(),
         height: image.height(),

@@ -27,8 +27,7 @@ pub use crate::analysis::study::{PriorGrid, Shard, StimulusEntry, Study, StudyOu
 use super::CommandReport;
 use crate::analysis::study::{self, REPORT, RESULTS, SWEEP};
 use crate::error::{Error, Result};
-use crate::io;
-use crate::io::Stamp;
+use crate::io::{self, Stamp};
 use crate::progress::Progress;
 use serde::Serialize;
 use serde_json::Value;

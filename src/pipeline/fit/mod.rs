@@ -35,8 +35,7 @@ pub use responses::{
 use super::CommandReport;
 use crate::analysis::fit::bins;
 use crate::error::{Error, Result};
-use crate::io;
-use crate::io::Stamp;
+use crate::io::{self, Stamp};
 use crate::plot::{IntervalSeries, LineAndPolar, LinePlot, Marker, PolarPlot, Series};
 use crate::progress::Progress;
 use serde::Serialize;
