@@ -102,7 +102,7 @@ pub fn main() -> ExitCode {
     let _ = ctrlc::set_handler(|| {
         if shadelab::cancel::requested() {
             output::stderr_line("error: interrupted twice; stopped at once");
-            std::process::exit(130);
+            std::process::exit(i32::from(INTERRUPTED));
         }
         shadelab::cancel::request();
     });

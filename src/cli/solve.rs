@@ -1,9 +1,8 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
-use super::flags::{input_gamma, say_input_note, usage, SolverFlags};
+use super::flags::{input_gamma, say_input_note, usage, OutFolder, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
-use crate::cli::flags::OutFolder;
 use shadelab::pipeline::solve::check_albedo;
 use shadelab::pipeline::solve::{self, LightChoice, SolveConfig, SolveRecord};
 use shadelab::BrdfSpec;

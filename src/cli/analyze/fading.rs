@@ -77,7 +77,7 @@ pub struct Args {
     )]
     border: f64,
     #[command(flatten)]
-    pub output: OutFolder,
+    output: OutFolder,
 }
 
 /// Runs `analyze fading`.

@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long, value_name = "odog|lodog|flodog|retinex|highpass|all")]
     model: String,
     #[command(flatten)]
-    pub output: OutFolder,
+    output: OutFolder,
 }
 
 /// Runs `analyze lightness`.

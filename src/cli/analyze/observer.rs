@@ -5,8 +5,7 @@
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::destination;
-use crate::cli::flags::OutFolder;
-use crate::cli::flags::{self, usage};
+use crate::cli::flags::{self, usage, OutFolder};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::observer::{self, Config, DEFAULT_ROTATIONS, DEFAULT_TILTS};
@@ -61,7 +60,7 @@ pub struct Args {
     )]
     tilts: String,
     #[command(flatten)]
-    pub output: OutFolder,
+    output: OutFolder,
 }
 
 /// Runs `analyze observer`.

@@ -4,8 +4,7 @@
 
 use super::{CliError, CliResult, Global, Source};
 use crate::cli::destination;
-use crate::cli::flags::usage;
-use crate::cli::flags::OutFolder;
+use crate::cli::flags::{usage, OutFolder};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::parse_size;
@@ -47,7 +46,7 @@ pub struct Args {
     )]
     lambda: f64,
     #[command(flatten)]
-    pub output: OutFolder,
+    output: OutFolder,
 }
 
 /// Runs `analyze outline`.

@@ -5,8 +5,7 @@
 use super::perception::{true_light_line, PictureArgs};
 use super::{CliResult, Global};
 use crate::cli::destination;
-use crate::cli::flags::OutFolder;
-use crate::cli::flags::{self, usage};
+use crate::cli::flags::{self, usage, OutFolder};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
 use shadelab::pipeline::prior_sweep::{self, parse_global_light, Config, DEFAULT_TILTS};
@@ -27,7 +26,7 @@ pub struct Args {
     #[arg(long, value_name = "estimate|TILT", allow_hyphen_values = true)]
     binding: Option<String>,
     #[command(flatten)]
-    pub output: OutFolder,
+    output: OutFolder,
 }
 
 /// Runs `analyze prior-sweep`.
