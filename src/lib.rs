@@ -132,19 +132,21 @@ pub use pipeline::study::{StudyMergeConfig, StudyMergeReport, StudyRunConfig, St
 pub use pipeline::{CommandReport, Output, Picture, PictureSource};
 
 // Each command's run, under the command's name (the Python module's names).
-pub use pipeline::bench::run as bench;
-pub use pipeline::benchmark::run as benchmark;
-pub use pipeline::experiment::run as experiment;
-pub use pipeline::fading::run as fading;
-pub use pipeline::fit::run as fit_observer;
-pub use pipeline::gallery::run as gallery;
-pub use pipeline::lightness::run as lightness;
-pub use pipeline::observer::run as observer;
-pub use pipeline::outline::run as outline;
-pub use pipeline::prior_sweep::run as prior_sweep;
-pub use pipeline::render::run as render;
-pub use pipeline::solve::run as solve;
-pub use pipeline::study::{merge as study_merge, run as study_run};
+pub use pipeline::{
+    bench::run as bench,
+    benchmark::run as benchmark,
+    experiment::run as experiment,
+    fading::run as fading,
+    fit::run as fit_observer,
+    gallery::run as gallery,
+    lightness::run as lightness,
+    observer::run as observer,
+    outline::run as outline,
+    prior_sweep::run as prior_sweep,
+    render::run as render,
+    solve::run as solve,
+    study::{merge as study_merge, run as study_run},
+};
 
 /// The modules behind the surface, for this repository's own front ends and tests (the
 /// command line, the Python and WebAssembly bindings, `tests/`) while they move onto the
@@ -153,72 +155,42 @@ pub use pipeline::study::{merge as study_merge, run as study_run};
 #[cfg(not(shadelab_surface))]
 pub mod internal {
     #![allow(missing_docs)]
-    pub mod albedo {
-        pub use crate::albedo::*;
+
+    /// Each named module's whole contents under `internal::`.
+    macro_rules! reexport {
+        ($($module:ident),* $(,)?) => {
+            $(pub mod $module {
+                pub use crate::$module::*;
+            })*
+        };
     }
-    pub mod analysis {
-        pub use crate::analysis::*;
-    }
-    pub mod boundary {
-        pub use crate::boundary::*;
-    }
-    pub mod colormap {
-        pub use crate::colormap::*;
-    }
-    pub mod evaluation {
-        pub use crate::evaluation::*;
-    }
-    pub mod gallery {
-        pub use crate::gallery::*;
-    }
-    pub mod gradient_space {
-        pub use crate::gradient_space::*;
-    }
-    pub mod grid {
-        pub use crate::grid::*;
-    }
-    pub mod imageops {
-        pub use crate::imageops::*;
-    }
-    pub mod integrate {
-        pub use crate::integrate::*;
-    }
-    pub mod io {
-        pub use crate::io::*;
-    }
-    pub mod light {
-        pub use crate::light::*;
-    }
-    pub mod light_estimation {
-        pub use crate::light_estimation::*;
-    }
-    pub mod lightness {
-        pub use crate::lightness::*;
-    }
-    pub mod parallel {
-        pub use crate::parallel::*;
-    }
-    pub mod params {
-        pub use crate::params::*;
-    }
-    pub mod plot {
-        pub use crate::plot::*;
-    }
-    pub mod progress {
-        pub use crate::progress::*;
-    }
-    pub mod reconstruct {
-        pub use crate::reconstruct::*;
-    }
-    pub mod reflectance {
-        pub use crate::reflectance::*;
-    }
-    pub mod render {
-        pub use crate::render::*;
-    }
-    pub mod solver {
-        pub use crate::solver::*;
-    }
+
+    reexport!(
+        albedo,
+        analysis,
+        boundary,
+        colormap,
+        evaluation,
+        gallery,
+        gradient_space,
+        grid,
+        imageops,
+        integrate,
+        io,
+        light,
+        light_estimation,
+        lightness,
+        parallel,
+        params,
+        plot,
+        progress,
+        reconstruct,
+        reflectance,
+        render,
+        solver,
+        surface,
+        visual_size,
+    );
     pub mod stimulus {
         pub mod bundle {
             pub use crate::stimulus::bundle::*;
@@ -229,11 +201,5 @@ pub mod internal {
         pub mod mat {
             pub use crate::stimulus::mat::*;
         }
-    }
-    pub mod surface {
-        pub use crate::surface::*;
-    }
-    pub mod visual_size {
-        pub use crate::visual_size::*;
     }
 }

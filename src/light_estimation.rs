@@ -370,17 +370,34 @@ fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     } else {
         90.0
     };
-    Ok(Some(LightEstimate {
+    let pixels = keep.iter().filter(|&&k| k).count();
+    let (tilt, slant) = ((tilt_deg, tilt_se_deg), (slant_deg, slant_se_deg));
+    limb_light(image, mask, EstimateMethod::Limb, tilt, slant, rho, pixels).map(Some)
+}
+
+/// A limb fit's estimate from its tilt and slant (each in degrees with its standard error), its
+/// albedo and the limb pixels it kept; the tilt confidence is the image's mean unit gradient
+/// over the mask.
+fn limb_light(
+    image: &Image,
+    mask: &Mask,
+    method: EstimateMethod,
+    (tilt_deg, tilt_se_deg): (f64, f64),
+    (slant_deg, slant_se_deg): (f64, f64),
+    albedo: f64,
+    limb_pixels: usize,
+) -> Result<LightEstimate> {
+    Ok(LightEstimate {
         light: FrontLight::new(Light::from_tilt_slant(tilt_deg, slant_deg)?)?,
         tilt_deg,
         slant_deg,
-        albedo: rho,
+        albedo,
         tilt_confidence: mean_unit_gradient(image, mask).length(),
-        method: EstimateMethod::Limb,
+        method,
         tilt_se_deg,
         slant_se_deg: Some(slant_se_deg),
-        limb_pixels: keep.iter().filter(|&&k| k).count(),
-    }))
+        limb_pixels,
+    })
 }
 
 /// One limb pixel's ray into the band.
@@ -596,17 +613,9 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     let cov_hz = ua * cov[(0, 2)] + ub * cov[(1, 2)];
     let slant_var = jh * jh * var_h + 2.0 * jh * jz * cov_hz + jz * jz * cov[(2, 2)];
     let slant_se_deg = slant_var.max(0.0).sqrt().to_degrees().min(90.0);
-    Ok(Some(LightEstimate {
-        light: FrontLight::new(Light::from_tilt_slant(tilt_deg, slant_deg)?)?,
-        tilt_deg,
-        slant_deg,
-        albedo: rho,
-        tilt_confidence: mean_unit_gradient(image, mask).length(),
-        method: EstimateMethod::LimbBand,
-        tilt_se_deg,
-        slant_se_deg: Some(slant_se_deg),
-        limb_pixels: kept,
-    }))
+    let (tilt, slant) = ((tilt_deg, tilt_se_deg), (slant_deg, slant_se_deg));
+    let method = EstimateMethod::LimbBand;
+    limb_light(image, mask, method, tilt, slant, rho, kept).map(Some)
 }
 
 /// The slant σ (radians) from the limb fit's amplitude u = |(a, b)|/ρ and constant v = c/ρ.

@@ -65,6 +65,29 @@ impl Command {
     }
 }
 
+/// The size to render a stimulus at (`--size`, with --stimulus).
+#[derive(Debug, clap::Args)]
+pub struct RenderSize {
+    /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
+    #[arg(
+        long,
+        value_name = "N|WxH",
+        requires = "stimulus",
+        allow_hyphen_values = true
+    )]
+    size: Option<String>,
+}
+
+impl RenderSize {
+    /// The size as the library takes it, (height, width); `None` when not given.
+    pub fn get(&self) -> Result<Option<(usize, usize)>, CliError> {
+        match &self.size {
+            Some(text) => Ok(Some(shadelab::parse_size(text, "--size")?)),
+            None => Ok(None),
+        }
+    }
+}
+
 /// Where the picture comes from: a file or a stimulus rendered on the spot.
 #[derive(Debug, clap::Args)]
 pub struct Source {

@@ -44,6 +44,7 @@ use crate::render::{render, RenderOptions};
 use crate::solver::{Method, SolveOptions};
 use crate::surface::Surface;
 use crop::Crop;
+use datasets::Photo;
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
@@ -423,8 +424,9 @@ pub fn run(
                 let normals = crop.apply(&ball.truth.normals);
                 let boundaries = config.boundaries_compared();
                 for photo in &ball.photos {
-                    let image = crop.apply(&photo.image);
-                    let fitted = albedo::albedo_with_normals(&image, &normals, &mask, &photo.light);
+                    let input = PhotoInput::new("ball", photo, &crop, &mask, Some(&normals));
+                    let fitted =
+                        albedo::albedo_with_normals(&input.image, &normals, &mask, &photo.light);
                     let albedo = match (config.ball_albedo_from_truth, fitted) {
                         (true, Some(value)) => Albedo {
                             value,
@@ -433,7 +435,7 @@ pub fn run(
                         },
                         _ => {
                             let (value, method) =
-                                albedo::photo_albedo(&image, &mask, config.albedo_quantile)?;
+                                albedo::photo_albedo(&input.image, &mask, config.albedo_quantile)?;
                             Albedo {
                                 value,
                                 method,
@@ -442,19 +444,8 @@ pub fn run(
                         }
                     };
                     for boundary in &boundaries {
-                        let case = photo_case(
-                            "ball",
-                            "ball",
-                            &photo.name,
-                            &image,
-                            &mask,
-                            photo.light,
-                            boundary.clone(),
-                            albedo.clone(),
-                            Some(normals.clone()),
-                        );
                         let file = format!("ball-{}-{}.png", photo.name, boundary.name());
-                        finish(case, file, &mut results)?;
+                        finish(input.case(boundary.clone(), &albedo), file, &mut results)?;
                     }
                 }
             }
@@ -463,28 +454,17 @@ pub fn run(
                 let crop = Crop::around(&b.mask, CROP_MARGIN)?;
                 let mask = crop.apply(&b.mask);
                 for photo in &b.photos {
-                    let image = crop.apply(&photo.image);
+                    let input = PhotoInput::new("beethoven", photo, &crop, &mask, None);
                     let (value, method) =
-                        albedo::photo_albedo(&image, &mask, config.albedo_quantile)?;
+                        albedo::photo_albedo(&input.image, &mask, config.albedo_quantile)?;
                     let albedo = Albedo {
                         value,
                         method,
                         with_true_normals: None,
                     };
                     for boundary in config.boundaries_of_objects() {
-                        let case = photo_case(
-                            "beethoven",
-                            "beethoven",
-                            &photo.name,
-                            &image,
-                            &mask,
-                            photo.light,
-                            boundary.clone(),
-                            albedo.clone(),
-                            None,
-                        );
                         let file = format!("beethoven-{}{}.png", photo.name, suffix(&boundary));
-                        finish(case, file, &mut results)?;
+                        finish(input.case(boundary, &albedo), file, &mut results)?;
                     }
                 }
             }
@@ -523,31 +503,50 @@ fn rendered_case(
     })
 }
 
-/// A case from a photograph (already cropped), divided by its estimated albedo.
-#[allow(clippy::too_many_arguments)]
-fn photo_case(
+/// A photograph's part of its cases: the set, the photograph cropped to its object, the mask
+/// and the true normals where known.
+struct PhotoInput<'a> {
     set: &'static str,
-    object: &str,
-    name: &str,
-    image: &Image,
-    mask: &Mask,
-    light: Light,
-    boundary: Boundary,
-    albedo: Albedo,
-    truth_normals: Option<Grid<Normal>>,
-) -> Case {
-    Case {
-        set,
-        object: object.into(),
-        light_label: format!("{name} (slant {:.0}°)", light.slant_deg()),
-        image: crate::albedo::normalise(image, albedo.value),
-        domain: mask.clone(),
-        scored: mask.clone(),
-        light,
-        boundary,
-        truth_normals,
-        truth_depth: None,
-        albedo,
+    photo: &'a Photo,
+    image: Image,
+    mask: &'a Mask,
+    truth_normals: Option<&'a Grid<Normal>>,
+}
+
+impl<'a> PhotoInput<'a> {
+    /// `photo` of `set` cropped by `crop` (`mask` and `truth_normals` are already cropped).
+    fn new(
+        set: &'static str,
+        photo: &'a Photo,
+        crop: &Crop,
+        mask: &'a Mask,
+        truth_normals: Option<&'a Grid<Normal>>,
+    ) -> Self {
+        PhotoInput {
+            set,
+            photo,
+            image: crop.apply(&photo.image),
+            mask,
+            truth_normals,
+        }
+    }
+
+    /// The case with `boundary`, the photograph divided by `albedo`.
+    fn case(&self, boundary: Boundary, albedo: &Albedo) -> Case {
+        let light = self.photo.light;
+        Case {
+            set: self.set,
+            object: self.set.into(),
+            light_label: format!("{} (slant {:.0}°)", self.photo.name, light.slant_deg()),
+            image: crate::albedo::normalise(&self.image, albedo.value),
+            domain: self.mask.clone(),
+            scored: self.mask.clone(),
+            light,
+            boundary,
+            truth_normals: self.truth_normals.cloned(),
+            truth_depth: None,
+            albedo: albedo.clone(),
+        }
     }
 }
 

@@ -23,4 +23,4 @@ pub mod source;
 pub mod study;
 
 pub use output::{CommandReport, Output};
-pub use source::{Picture, PictureSource};
+pub use source::{Picture, PictureInfo, PictureSource};

@@ -15,7 +15,7 @@
 // The parts of this command's configuration and report that other modules define.
 pub use crate::analysis::outline::{ProfileFit, ShadingFit};
 
-use super::source::PictureSource;
+use super::source::{PictureInfo, PictureSource};
 use super::CommandReport;
 use crate::analysis::convexity::Token;
 use crate::analysis::outline::{
@@ -36,7 +36,6 @@ use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::solver::crease::{self, CreaseOptions, CreaseSolution, Smoothness};
 use serde::Serialize;
-use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
@@ -173,14 +172,9 @@ pub struct OutlineReport {
     /// The program, its version and the command.
     #[serde(flatten)]
     pub stamp: Stamp,
-    /// The coordinate conventions.
-    pub conventions: Value,
-    /// Where the picture came from.
-    pub input: Value,
-    /// The picture's width, pixels.
-    pub width: usize,
-    /// The picture's height, pixels.
-    pub height: usize,
+    /// The conventions, where the picture came from and its size.
+    #[serde(flatten)]
+    pub picture: PictureInfo,
     /// The light as given, or `null` when fitted per target.
     pub light: Option<FrontLight>,
     /// How the profiles were read.
@@ -299,10 +293,7 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
     };
     Ok(OutlineReport {
         stamp: Stamp::of("analyze outline"),
-        conventions: io::conventions_json(),
-        input: loaded.origin.clone(),
-        width: w,
-        height: h,
+        picture: PictureInfo::new(&loaded.origin, w, h),
         light: config.light,
         profile: config.profile,
         lambda: config.crease.lambda,

@@ -19,7 +19,7 @@ pub use crate::analysis::interpretation::MULTIGRID_CYCLES;
 pub use crate::analysis::parse_angles;
 
 use super::solve::BoundarySource;
-use super::source::PictureSource;
+use super::source::{PictureInfo, PictureSource};
 use crate::analysis::interpretation::analysis_solve_options;
 use crate::analysis::{sweep, Sweep};
 use crate::boundary::Boundary;
@@ -383,10 +383,11 @@ impl Setup {
     pub fn header(&self, command: &'static str) -> Header {
         Header {
             stamp: Stamp::of(command),
-            conventions: io::conventions_json(),
-            input: self.origin.clone(),
-            width: self.picture.image.width(),
-            height: self.picture.image.height(),
+            picture: PictureInfo::new(
+                &self.origin,
+                self.picture.image.width(),
+                self.picture.image.height(),
+            ),
             true_light: self.true_light,
             parameters: self.parameters.clone(),
         }
@@ -400,14 +401,9 @@ pub struct Header {
     /// The program, its version and the command.
     #[serde(flatten)]
     pub stamp: Stamp,
-    /// The coordinate conventions.
-    pub conventions: Value,
-    /// Where the picture came from.
-    pub input: Value,
-    /// The picture's width, pixels.
-    pub width: usize,
-    /// The picture's height, pixels.
-    pub height: usize,
+    /// The conventions, where the picture came from and its size.
+    #[serde(flatten)]
+    pub picture: PictureInfo,
     /// The light the picture was rendered under (its stimulus's or sidecar's), beside the
     /// assumed ones; `null` when unknown.
     pub true_light: Option<TrueLight>,

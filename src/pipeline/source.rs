@@ -16,6 +16,7 @@ use crate::io::{self, InputEncoding};
 use crate::message::{Message, Setting};
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
+use serde::Serialize;
 use serde_json::{json, Map, Value};
 use std::path::PathBuf;
 
@@ -52,6 +53,32 @@ pub struct PictureSource {
     pub pixels: Option<Pixels>,
     /// Target labels in memory (0 = background, 1..N = targets), instead of a `mask` file.
     pub labels: Option<Labels>,
+}
+
+/// What a report says of the picture it analysed: the coordinate conventions, where the picture
+/// came from and its size (flattened into the outline and perception reports).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PictureInfo {
+    /// The coordinate conventions.
+    pub conventions: Value,
+    /// Where the picture came from.
+    pub input: Value,
+    /// The picture's width, pixels.
+    pub width: usize,
+    /// The picture's height, pixels.
+    pub height: usize,
+}
+
+impl PictureInfo {
+    /// The description of a picture from `origin` of `width` × `height` pixels.
+    pub(crate) fn new(origin: &Value, width: usize, height: usize) -> Self {
+        PictureInfo {
+            conventions: crate::io::conventions_json(),
+            input: origin.clone(),
+            width,
+            height,
+        }
+    }
 }
 
 /// A loaded picture with what is known about it.

@@ -6,6 +6,7 @@ use {
     crate::error::Result,
     crate::grid::Grid,
     crate::io::{self, BitDepth},
+    plotters::coord::Shift,
     plotters::prelude::*,
     std::path::Path,
 };
@@ -23,17 +24,14 @@ pub struct Figure {
 /// A figure of several panels drawn into one picture, written by [`write_png_of`] and
 /// [`write_svg_of`].
 pub(super) trait Drawn {
-    /// Size in pixels of the whole picture.
-    fn size(&self) -> (u32, u32);
     /// Draws the figure on `root`, a backend's whole area.
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>)
-        -> Result<()>;
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>;
 }
 
 #[cfg(feature = "plots")]
-/// Draws `figure` into an RGB buffer and writes it as an 8-bit PNG, atomically.
-pub(super) fn write_png_of(figure: &impl Drawn, path: &Path) -> Result<()> {
-    let (w, h) = figure.size();
+/// Draws `figure` into an RGB buffer of `(w, h)` pixels and writes it as an 8-bit PNG,
+/// atomically.
+pub(super) fn write_png_of(figure: &impl Drawn, (w, h): (u32, u32), path: &Path) -> Result<()> {
     let mut buf = vec![0u8; w as usize * h as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
@@ -43,11 +41,11 @@ pub(super) fn write_png_of(figure: &impl Drawn, path: &Path) -> Result<()> {
 }
 
 #[cfg(feature = "plots")]
-/// Draws `figure` as SVG text and writes it, atomically.
-pub(super) fn write_svg_of(figure: &impl Drawn, path: &Path) -> Result<()> {
+/// Draws `figure` as SVG text of `size` pixels and writes it, atomically.
+pub(super) fn write_svg_of(figure: &impl Drawn, size: (u32, u32), path: &Path) -> Result<()> {
     let mut text = String::new();
     {
-        let root = SVGBackend::with_string(&mut text, figure.size()).into_drawing_area();
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
         figure.draw(root)?;
     }
     io::write_text(path, &text)
@@ -55,14 +53,7 @@ pub(super) fn write_svg_of(figure: &impl Drawn, path: &Path) -> Result<()> {
 
 #[cfg(feature = "plots")]
 impl Drawn for Figure {
-    fn size(&self) -> (u32, u32) {
-        self.size
-    }
-
-    fn draw<DB: DrawingBackend>(
-        &self,
-        root: DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<()> {
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()> {
         let areas = root.split_evenly((self.panels.len().max(1), 1));
         for (panel, area) in self.panels.iter().zip(areas) {
             panel.draw(area)?;
@@ -75,13 +66,13 @@ impl Figure {
     #[cfg(feature = "plots")]
     /// Writes the figure as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        write_png_of(self, path)
+        write_png_of(self, self.size, path)
     }
 
     #[cfg(feature = "plots")]
     /// Writes the figure as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
-        write_svg_of(self, path)
+        write_svg_of(self, self.size, path)
     }
 }
 

@@ -10,9 +10,9 @@ use super::{LinePlot, Marker, Series};
 #[cfg(feature = "plots")]
 use crate::error::Result;
 #[cfg(feature = "plots")]
-use plotters::prelude::*;
-#[cfg(feature = "plots")]
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+#[cfg(feature = "plots")]
+use plotters::{coord::Shift, prelude::*};
 #[cfg(feature = "plots")]
 use std::path::Path;
 
@@ -190,14 +190,7 @@ impl PolarPlot {
 
 #[cfg(feature = "plots")]
 impl Drawn for LineAndPolar {
-    fn size(&self) -> (u32, u32) {
-        self.size
-    }
-
-    fn draw<DB: DrawingBackend>(
-        &self,
-        root: DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<()> {
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()> {
         let (w, _) = root.dim_in_pixel();
         let (left, right) = root.split_horizontally(w * 62 / 100);
         self.line.draw(left)?;
@@ -209,11 +202,11 @@ impl Drawn for LineAndPolar {
 impl LineAndPolar {
     /// Writes the figure as an 8-bit PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        write_png_of(self, path)
+        write_png_of(self, self.size, path)
     }
 
     /// Writes the figure as SVG, atomically.
     pub fn write_svg(&self, path: &Path) -> Result<()> {
-        write_svg_of(self, path)
+        write_svg_of(self, self.size, path)
     }
 }

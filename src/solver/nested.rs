@@ -80,7 +80,7 @@ impl Solver {
         options: &SolveOptions,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Solution> {
-        let (image, bc, reflectance) = (posed.image, posed.bc, posed.reflectance);
+        let reflectance = posed.reflectance;
         let finest = SolveOptions {
             method: Method::IntegrableLm,
             ..*options
@@ -88,7 +88,9 @@ impl Solver {
         // The coarser problems, finest first.
         let mut coarse: Vec<(Image, BoundaryConditions)> = Vec::new();
         loop {
-            let (img, b) = coarse.last().map_or((image, bc), |(i, b)| (i, b));
+            let (img, b) = coarse
+                .last()
+                .map_or((posed.image, posed.bc), |(i, b)| (i, b));
             if img.width().min(img.height()) / 2 < COARSEST_SIDE {
                 break;
             }
@@ -102,7 +104,7 @@ impl Solver {
             // Too small to coarsen: integrable-lm itself.
             return self.solve_integrable(posed, &finest, progress);
         }
-        let problems: Vec<(&Image, &BoundaryConditions)> = std::iter::once((image, bc))
+        let problems: Vec<(&Image, &BoundaryConditions)> = std::iter::once((posed.image, posed.bc))
             .chain(coarse.iter().map(|(i, b)| (i, b)))
             .collect();
         let top = problems.len() - 1;

@@ -213,7 +213,7 @@ pub(super) fn interval(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::design;
+    use super::super::tests::{design, interval_truth};
     use super::super::{fit_point, simulate};
     use super::*;
 
@@ -246,12 +246,7 @@ mod tests {
 
     #[test]
     fn each_endpoint_lies_where_the_profile_deviance_reaches_the_chi2_quantile() {
-        let truth = ModelParams {
-            tilt_deg: 26.0,
-            kappa: 1.5,
-            convexity_prior: 0.6,
-            lapse: 0.05,
-        };
+        let truth = interval_truth();
         let data = simulate(&truth, &design(), 20, 11);
         let fitted = fit_point(&data, None, false).params;
         for (which, value) in [

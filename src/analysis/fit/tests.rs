@@ -5,6 +5,17 @@ pub(super) fn design() -> Vec<f64> {
     (0..24).map(|i| 15.0 * i as f64).collect()
 }
 
+/// The observer whose intervals are tested here and in `profile`'s tests: Mamassian &
+/// Goutcher's mean prior tilt (26° to the left), a moderate concentration and lapse.
+pub(super) fn interval_truth() -> ModelParams {
+    ModelParams {
+        tilt_deg: 26.0,
+        kappa: 1.5,
+        convexity_prior: 0.6,
+        lapse: 0.05,
+    }
+}
+
 /// Recovery on a few seeded data sets, within bounds that a correct fit meets easily (the
 /// full table with coverage is `examples/fit_recovery.rs`, in docs/experiments.md).
 #[test]
@@ -50,12 +61,7 @@ fn simulated_observers_are_recovered() {
 
 #[test]
 fn intervals_are_the_same_bits_every_time_and_cover_the_estimate() {
-    let truth = ModelParams {
-        tilt_deg: 26.0,
-        kappa: 1.5,
-        convexity_prior: 0.6,
-        lapse: 0.05,
-    };
+    let truth = interval_truth();
     let data = simulate(&truth, &design(), 20, 7);
     let options = FitOptions {
         bootstrap: 40,

@@ -2,12 +2,11 @@
 //! outline implies, the shading that shape predicts, and the split of the picture into what
 //! the shape explains and what is left as paint (the work is [`shadelab::pipeline::outline`]).
 
-use super::{CliError, CliResult, Global, Source};
+use super::{CliResult, Global, RenderSize, Source};
 use crate::cli::destination;
 use crate::cli::flags::{usage, OutFolder};
 use crate::cli::output::Output;
 use crate::cli::progress::Bar;
-use shadelab::parse_size;
 use shadelab::pipeline::outline::{self, OutlineConfig, OutlineReport};
 use shadelab::CommandReport;
 use std::time::Instant;
@@ -17,14 +16,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pub source: Source,
-    /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
-    #[arg(
-        long,
-        value_name = "N|WxH",
-        requires = "stimulus",
-        allow_hyphen_values = true
-    )]
-    size: Option<String>,
+    #[command(flatten)]
+    size: RenderSize,
     /// The light: x,y,z or tilt=T,slant=S or a name, with z > 0 (default: fitted per target
     /// in the plane of its outline's profile).
     #[arg(long, value_name = "L", allow_hyphen_values = true)]
@@ -53,10 +46,7 @@ pub struct Args {
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
     let mut config = OutlineConfig::new(args.source.to_library(global)?);
-    config.size = match &args.size {
-        Some(text) => Some(parse_size(text, "--size").map_err(CliError::from)?),
-        None => None,
-    };
+    config.size = args.size.get()?;
     if let Some(text) = &args.light {
         config.light = Some(text.parse().map_err(|e| usage("--light", e))?);
     }

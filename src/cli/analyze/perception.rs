@@ -1,9 +1,8 @@
 //! The flags `analyze prior-sweep` and `analyze observer` share: the picture and how to
 //! interpret it, turned into the library's [`shadelab::pipeline::perception::Config`].
 
-use super::{CliError, Global, Source};
+use super::{CliError, Global, RenderSize, Source};
 use crate::cli::flags::{AnalysisFlags, SolverFlags};
-use shadelab::parse_size;
 use shadelab::pipeline::perception::{Config, Header};
 
 /// The picture and how to interpret it.
@@ -11,14 +10,8 @@ use shadelab::pipeline::perception::{Config, Header};
 pub struct PictureArgs {
     #[command(flatten)]
     pub source: Source,
-    /// Size of the rendered stimulus in pixels: N (square) or WxH (with --stimulus).
-    #[arg(
-        long,
-        value_name = "N|WxH",
-        requires = "stimulus",
-        allow_hyphen_values = true
-    )]
-    pub size: Option<String>,
+    #[command(flatten)]
+    size: RenderSize,
     #[command(flatten)]
     pub analysis: AnalysisFlags,
     #[command(flatten)]
@@ -46,10 +39,7 @@ impl PictureArgs {
     /// The library's configuration, from the flags (not yet checked as a whole).
     pub fn config(&self, global: &Global) -> Result<Config, CliError> {
         let mut config = Config::new(self.source.to_library(global)?);
-        config.size = match &self.size {
-            Some(text) => Some(parse_size(text, "--size").map_err(CliError::from)?),
-            None => None,
-        };
+        config.size = self.size.get()?;
         config.domain = self.analysis.domain()?;
         config.boundary = self.analysis.boundary()?;
         config.slant_deg = self.analysis.slant;

@@ -164,18 +164,15 @@ impl<'a> Context<'a> {
     /// (c = 2j + `start`, j in `span`) in `row`, moved to their Jacobi targets from the other
     /// colour's values `other` (without `WRITE` only measured). Returns the largest change.
     #[inline(never)]
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn fine_row<const TRACK: bool, const WRITE: bool>(
         &self,
         kind_row: &[u8],
         image_row: &[f64],
         other: &[Pair],
-        hw: usize,
-        r: usize,
-        start: usize,
-        span: (usize, usize),
+        half: HalfRow,
         row: &mut [Pair],
     ) -> f64 {
+        let HalfRow { hw, r, start, span } = half;
         let mut worst = 0.0;
         let mut samples = [Sample::ZERO; BLOCK];
         let mut j0 = span.0;

@@ -261,7 +261,7 @@ mod transfer;
 pub(super) use levels::half_size_problem;
 use levels::Level;
 use linearisation::{Averages, Context, BLOCK};
-use smoother::{neighbour_sum, over_rows, track, worst_of};
+use smoother::{neighbour_sum, over_rows, track, worst_of, HalfRow};
 #[cfg(test)]
 use transfer::residual_at;
 use transfer::unknown_columns;

@@ -75,21 +75,26 @@ pub(super) fn solve2(k: f64, a: Sym, b: Pair) -> Pair {
     ]
 }
 
+/// Where a half-sweep works in a level's colour arrays: padded row `r` of arrays `hw` cells
+/// wide, the cells c = 2j + `start` for j in `span` (one colour's cells of the row).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct HalfRow {
+    pub(super) hw: usize,
+    pub(super) r: usize,
+    pub(super) start: usize,
+    pub(super) span: (usize, usize),
+}
+
 /// One half-sweep of padded row `r` of a coarse level (kinds `kind_row`, right-hand sides
 /// `rhs_row`, reaction matrices `reaction_row`): the cells of one colour (c = 2j + `start`, j in
 /// `span`) in `row` solved pointwise from the other colour's values `other`. Returns the largest
 /// change.
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn coarse_row<const TRACK: bool>(
     kind_row: &[u8],
-    rhs_row: &[Pair],
-    reaction_row: &[Sym],
+    (rhs_row, reaction_row): (&[Pair], &[Sym]),
     other: &[Pair],
-    hw: usize,
-    r: usize,
-    start: usize,
-    span: (usize, usize),
+    HalfRow { hw, r, start, span }: HalfRow,
     row: &mut [Pair],
 ) -> f64 {
     let mut worst = 0.0;
@@ -205,26 +210,20 @@ impl Multigrid {
             if lo >= hi || r == 0 || r + 1 >= hp {
                 return 0.0;
             }
-            let span = (lo as usize, hi as usize);
-            let start = (r + colour) & 1;
+            let half = HalfRow {
+                hw,
+                r,
+                start: (r + colour) & 1,
+                span: (lo as usize, hi as usize),
+            };
             let kind_row = &kind[r * wp..(r + 1) * wp];
             if l == 0 {
                 let image_row = &ctx.image[(r - 1) * w..r * w];
-                return ctx
-                    .fine_row::<TRACK, WRITE>(kind_row, image_row, other, hw, r, start, span, row);
+                return ctx.fine_row::<TRACK, WRITE>(kind_row, image_row, other, half, row);
             }
             let at = r * wp..(r + 1) * wp;
-            coarse_row::<TRACK>(
-                kind_row,
-                &rhs[at.clone()],
-                &reaction[at],
-                other,
-                hw,
-                r,
-                start,
-                span,
-                row,
-            )
+            let coarse = (&rhs[at.clone()], &reaction[at]);
+            coarse_row::<TRACK>(kind_row, coarse, other, half, row)
         })
     }
 
