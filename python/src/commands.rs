@@ -425,7 +425,7 @@ pub fn experiment(
     settings_json: &str,
     force: bool,
 ) -> PyResult<(String, String, Vec<String>, Option<String>)> {
-    use pl::experiment::{Config, Install, SaveFormat};
+    use pl::experiment::{Config, Install};
     let s: ExperimentArgs = serde_json::from_str(settings_json)
         .map_err(|e| PyValueError::new_err(format!("experiment: {e}")))?;
     let mut config = Config::new();
@@ -443,27 +443,18 @@ pub fn experiment(
     set(&mut config.viewing_distance_cm, s.viewing_distance);
     config.seed = s.seed.unwrap_or(config.seed);
     if let Some(keys) = &s.keys {
-        let chars: Vec<char> = keys.chars().filter(|c| *c != ',').collect();
-        let [convex, concave] = chars[..] else {
-            return Err(PyValueError::new_err(format!(
-                "keys '{keys}' must be two keys, bump then dimple (e.g. 'fj')"
-            )));
-        };
-        config.keys.convex = convex.to_ascii_lowercase();
-        config.keys.concave = concave.to_ascii_lowercase();
+        config.keys = keys
+            .parse()
+            .map_err(|e| PyValueError::new_err(format!("keys {e}")))?;
     }
     config.break_every = s.break_every.unwrap_or(config.break_every);
     config.counterbalance_keys = s.counterbalance_keys.unwrap_or(false);
     config.save_url = s.save_url;
-    config.save_format = match s.save_format.as_deref() {
-        None | Some("json") => SaveFormat::Json,
-        Some("csv") => SaveFormat::Csv,
-        Some(f) => {
-            return Err(PyValueError::new_err(format!(
-                "save_format '{f}' must be 'json' or 'csv'"
-            )))
-        }
-    };
+    if let Some(f) = &s.save_format {
+        config.save_format = f
+            .parse()
+            .map_err(|e| PyValueError::new_err(format!("save_format {e}")))?;
+    }
     if let Some(code) = &s.prolific_code {
         config.completion_url = Some(
             pl::experiment::prolific_completion_url(code)

@@ -3,9 +3,7 @@
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
 use shadelab::parse_size;
-use shadelab::pipeline::experiment::{
-    prolific_completion_url, run as build, Config, Install, SaveFormat,
-};
+use shadelab::pipeline::experiment::{prolific_completion_url, run as build, Config, Install};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -106,14 +104,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         config.seed = seed;
     }
     if let Some(keys) = &args.keys {
-        let chars: Vec<char> = keys.chars().filter(|c| *c != ',').collect();
-        let [convex, concave] = chars[..] else {
-            return Err(CliError::usage(format!(
-                "--keys '{keys}' must be two keys, bump then dimple (e.g. fj)"
-            )));
-        };
-        config.keys.convex = convex.to_ascii_lowercase();
-        config.keys.concave = concave.to_ascii_lowercase();
+        config.keys = keys
+            .parse()
+            .map_err(|e| CliError::usage(format!("--keys {e}")))?;
     }
     if let Some(n) = args.break_every {
         config.break_every = n;
@@ -121,15 +114,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.counterbalance_keys = args.counterbalance_keys;
     config.save_url = args.save_url.clone();
     if let Some(f) = &args.save_format {
-        config.save_format = match f.as_str() {
-            "json" => SaveFormat::Json,
-            "csv" => SaveFormat::Csv,
-            _ => {
-                return Err(CliError::usage(format!(
-                    "--save-format '{f}' must be json or csv"
-                )))
-            }
-        };
+        config.save_format = f
+            .parse()
+            .map_err(|e| CliError::usage(format!("--save-format {e}")))?;
     }
     if let Some(code) = &args.prolific_code {
         config.completion_url = Some(

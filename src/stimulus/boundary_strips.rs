@@ -11,7 +11,6 @@
 //! identical. The curves (peak at mid-period, amplitude `amplitude`): sinusoidal −cos(2πu),
 //! sawtooth (a zigzag) 1 − 4|u − ½|, arched 2√(1 − (2u − 1)²) − 1, straight 0.
 
-use super::frame::Frame;
 use super::svg::{document, gray, num};
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
@@ -96,7 +95,7 @@ stimulus_params! {
 /// One shading pattern inside sinusoidal, sawtooth, arched or straight outlines.
 pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let kinds = parse_boundaries(&p.boundary)?;
     let shading = p.shading;
     let period = frame.px(p.period);
@@ -121,9 +120,9 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     let band = height + 2.0 * amplitude;
     let n = kinds.len();
     let stack = n as f64 * band + (n as f64 - 1.0) * gap;
-    let (fw, fh) = (frame.w as f64, frame.h as f64);
+    let (fw, fh) = (frame.width as f64, frame.height as f64);
     if width > fw || stack > fh {
-        let (dw, dh) = frame.degrees();
+        let (dw, dh) = (frame.width_deg(), frame.height_deg());
         return Err(Error::invalid(format!(
             "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge the visual size or shorten them",
             width / frame.ppd,
@@ -134,8 +133,8 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     let centre_y = |i: usize| stack / 2.0 - band / 2.0 - i as f64 * (band + gap);
     let phase = |x: f64| ((x - x0) / period).rem_euclid(1.0);
     let level = |u: f64| mean * (1.0 + contrast * shade(shading, u));
-    let mut image = Grid::new(frame.w, frame.h, background);
-    let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    let mut image = Grid::new(frame.width, frame.height, background);
+    let mut labels = Grid::new(frame.width, frame.height, 0u16);
     for col in frame.cols(x0, x0 + width) {
         let x = frame.x(col);
         if x < x0 || x >= x0 + width {
@@ -182,7 +181,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
             );
         }
         let mut doc =
-            document(&frame, "boundary-strips", background).add(Definitions::new().add(gradient));
+            document(frame, "boundary-strips", background).add(Definitions::new().add(gradient));
         let samples = 64 * periods;
         for (i, kind) in kinds.iter().enumerate() {
             let curve = |k: usize, offset: f64| -> (f64, f64) {

@@ -12,7 +12,7 @@
 //! Disc centres are snapped to pixel corners, so every disc covers the same pixel pattern and
 //! is mirror-symmetric on the pixel lattice.
 
-use super::frame::{grid_centres, Frame};
+use super::frame::grid_centres;
 use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
@@ -179,7 +179,7 @@ fn polarities(pattern: DiscPattern, rows: usize, cols: usize, seed: u64) -> Vec<
 }
 
 fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light) -> Result<Output> {
-    let frame = Frame::new(g);
+    let frame = g;
     let radius = frame.px(p.radius);
     let spacing = frame.px(p.spacing);
     let (rows, cols) = (p.rows, p.columns);
@@ -200,7 +200,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
             2.0 * p.radius
         )));
     }
-    let centres = grid_centres(&frame, rows, cols, spacing);
+    let centres = grid_centres(frame, rows, cols, spacing);
     frame.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
     let sign = polarities(p.pattern, rows, cols, seed);
     let s = light.direction();
@@ -222,7 +222,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
     }
     let albedo = background / s.z;
     let (dx, dy) = (s.x / tilt_len.max(1e-300), s.y / tilt_len.max(1e-300));
-    let (w, h) = (frame.w, frame.h);
+    let (w, h) = (frame.width, frame.height);
     let mut depth = Grid::new(w, h, 0.0);
     let mut normals = Grid::new(w, h, Vector3::z());
     let mut labels = Grid::new(w, h, 0u16);

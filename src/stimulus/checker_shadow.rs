@@ -28,7 +28,7 @@
 //!
 //! Lengths are in degrees measured on the board (before foreshortening).
 
-use super::frame::{smoothstep, Frame};
+use super::frame::smoothstep;
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
@@ -182,7 +182,7 @@ stimulus_params! {
 /// Adelson's checker-shadow: squares A and B have the same value, B looks much lighter.
 pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let n = p.squares;
     let sq_deg = p.square;
     let side = frame.px(sq_deg);
@@ -247,8 +247,8 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     let y_off = -(top + bottom) / 2.0;
     let content_w = 2.0 * extent.0 * side;
     let content_h = (top - bottom) * side;
-    if content_w > frame.w as f64 + 0.5 || content_h > frame.h as f64 + 0.5 {
-        let (fw, fh) = frame.degrees();
+    if content_w > frame.width as f64 + 0.5 || content_h > frame.height as f64 + 0.5 {
+        let (fw, fh) = (frame.width_deg(), frame.height_deg());
         return Err(Error::invalid(format!(
             "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or shrink `square`",
             content_w / frame.ppd,
@@ -261,12 +261,12 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         let cos_i = (nu * lu + nw * lw + nz * lz).max(0.0);
         cyl_albedo * (k + (1.0 - k) * cos_i / sl)
     };
-    let mut image = Grid::new(frame.w, frame.h, p.background);
-    let mut labels = Grid::new(frame.w, frame.h, 0u16);
-    let mut on_cylinder = Grid::new(frame.w, frame.h, false);
+    let mut image = Grid::new(frame.width, frame.height, p.background);
+    let mut labels = Grid::new(frame.width, frame.height, 0u16);
+    let mut on_cylinder = Grid::new(frame.width, frame.height, false);
     let mut problems = Vec::new();
-    for row in 0..frame.h {
-        for col in 0..frame.w {
+    for row in 0..frame.height {
+        for col in 0..frame.width {
             // Pixel → (u, y') in squares.
             let u = frame.x(col) / side;
             let yv = frame.y(row) / side - y_off;
@@ -370,7 +370,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         // A bar of the shared value from A's centre to B's; the squares keep their own pixels
         // (of that value already), so A and B stay exactly equal.
         let bar = coverage(
-            &frame,
+            frame,
             |pb| {
                 pb.move_to(a_at.0 as f32, a_at.1 as f32);
                 pb.line_to(b_at.0 as f32, b_at.1 as f32);
@@ -386,7 +386,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         let stroke = 0.14 * height;
         for (at, glyph) in [(a_at, glyph_a as Glyph), (b_at, glyph_b as Glyph)] {
             let ink = coverage(
-                &frame,
+                frame,
                 |pb| glyph(pb, at, height),
                 stroke,
                 tiny_skia::LineCap::Round,
@@ -408,7 +408,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             .zip(on_cylinder.data())
             .map(|(&v, &cyl)| if cyl { tint.map(|t| v * t) } else { [v; 3] })
             .collect();
-        Pixels::Rgb(Grid::from_vec(frame.w, frame.h, data)?)
+        Pixels::Rgb(Grid::from_vec(frame.width, frame.height, data)?)
     };
     let mut notes = Map::new();
     notes.insert("a_and_b_value".into(), json!(dark));
@@ -484,15 +484,15 @@ fn glyph_b(pb: &mut tiny_skia::PathBuilder, (cx, cy): (f64, f64), h: f64) {
 /// The anti-aliased coverage (0..1 per pixel) of the path `draw` builds, stroked `width`
 /// pixels wide with round joins and `cap`.
 fn coverage(
-    frame: &Frame,
+    frame: &Geometry,
     draw: impl FnOnce(&mut tiny_skia::PathBuilder),
     width: f64,
     cap: tiny_skia::LineCap,
 ) -> Result<Grid<f64>> {
     let internal = || Error::Compute("checker-shadow: could not draw the letters".into());
     let mut pixmap = tiny_skia::Pixmap::new(
-        u32::try_from(frame.w).map_err(|_| internal())?,
-        u32::try_from(frame.h).map_err(|_| internal())?,
+        u32::try_from(frame.width).map_err(|_| internal())?,
+        u32::try_from(frame.height).map_err(|_| internal())?,
     )
     .ok_or_else(internal)?;
     let mut pb = tiny_skia::PathBuilder::new();
@@ -519,7 +519,7 @@ fn coverage(
         .iter()
         .map(|p| f64::from(p.alpha()) / 255.0)
         .collect();
-    Grid::from_vec(frame.w, frame.h, alpha)
+    Grid::from_vec(frame.width, frame.height, alpha)
 }
 
 /// Paints `value` over `image` with the coverage `cover`, except on target pixels.

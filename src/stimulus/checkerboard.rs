@@ -11,7 +11,6 @@
 //! `target_mask`) unless `targets` names checks as stimupy's `target_indices` do, and then its
 //! mask is stimupy's `target_mask` (those checks, drawn with `intensity_target`).
 
-use super::frame::Frame;
 use super::svg::{document, gray, num};
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
@@ -57,27 +56,27 @@ stimulus_params! {
 /// until `paint(row, values, labels)` fills row `row` (rows in parallel, the same bytes for any
 /// thread count).
 fn paint_rows(
-    frame: &Frame,
+    frame: &Geometry,
     background: f64,
     paint: impl Fn(usize, &mut [f64], &mut [u16]) + Send + Sync,
 ) -> Result<(Image, Labels)> {
-    let mut data = vec![background; frame.w * frame.h];
-    let mut labels = vec![0u16; frame.w * frame.h];
-    data.par_chunks_mut(frame.w * ROWS_PER_TASK)
-        .zip(labels.par_chunks_mut(frame.w * ROWS_PER_TASK))
+    let mut data = vec![background; frame.width * frame.height];
+    let mut labels = vec![0u16; frame.width * frame.height];
+    data.par_chunks_mut(frame.width * ROWS_PER_TASK)
+        .zip(labels.par_chunks_mut(frame.width * ROWS_PER_TASK))
         .enumerate()
         .for_each(|(task, (chunk, lab))| {
             for (k, (row, lrow)) in chunk
-                .chunks_mut(frame.w)
-                .zip(lab.chunks_mut(frame.w))
+                .chunks_mut(frame.width)
+                .zip(lab.chunks_mut(frame.width))
                 .enumerate()
             {
                 paint(task * ROWS_PER_TASK + k, row, lrow);
             }
         });
     Ok((
-        Grid::from_vec(frame.w, frame.h, data)?,
-        Grid::from_vec(frame.w, frame.h, labels)?,
+        Grid::from_vec(frame.width, frame.height, data)?,
+        Grid::from_vec(frame.width, frame.height, labels)?,
     ))
 }
 
@@ -142,7 +141,7 @@ fn check_name(r: usize, c: usize) -> String {
 /// ```
 pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let check = frame.px(p.check);
     if check < 1.0 {
         return Err(Error::invalid(format!(
@@ -153,8 +152,8 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     let (first, second) = (p.intensity_first, p.intensity_second);
     let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
     let (nx, ny) = (
-        (frame.w as f64 / check).ceil() as usize,
-        (frame.h as f64 / check).ceil() as usize,
+        (frame.width as f64 / check).ceil() as usize,
+        (frame.height as f64 / check).ceil() as usize,
     );
     let chosen = parse_targets(&p.targets, ny, nx)?;
     if chosen.len() > usize::from(u16::MAX) {
@@ -177,8 +176,8 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     let names: Vec<String> = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
     let targets_drawn = !chosen.is_empty();
     let target_value = p.intensity_target;
-    let cols: Vec<usize> = (0..frame.w).map(index).collect();
-    let (image, labels) = paint_rows(&frame, 0.0, |y, row, lrow| {
+    let cols: Vec<usize> = (0..frame.width).map(index).collect();
+    let (image, labels) = paint_rows(frame, 0.0, |y, row, lrow| {
         let r = index(y);
         for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
             *l = check_labels[r * nx + c];
@@ -205,7 +204,7 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     } else {
         let drawn: &[(usize, usize)] = if targets_drawn { &chosen } else { &[] };
         Some(checks_svg(
-            &frame,
+            frame,
             check,
             (nx, ny),
             (first, second),
@@ -226,7 +225,7 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
 const MAX_SVG_CHECKS: usize = 500_000;
 
 fn checks_svg(
-    frame: &Frame,
+    frame: &Geometry,
     check: f64,
     (nx, ny): (usize, usize),
     (first, second): (f64, f64),
@@ -240,8 +239,8 @@ fn checks_svg(
             if (i + j) % 2 == 1 || is_target {
                 let (x0, y0) = (i as f64 * check, j as f64 * check);
                 let (x1, y1) = (
-                    ((i + 1) as f64 * check).min(frame.w as f64),
-                    ((j + 1) as f64 * check).min(frame.h as f64),
+                    ((i + 1) as f64 * check).min(frame.width as f64),
+                    ((j + 1) as f64 * check).min(frame.height as f64),
                 );
                 let fill = if is_target { target_value } else { second };
                 doc = doc.add(
@@ -303,18 +302,18 @@ fn round8(v: f64) -> f64 {
 /// ```
 pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let (inside, outside) = (p.intensity_disc, p.intensity_background);
-    let xs2: Vec<f64> = stimupy_axis(frame.w, frame.ppd)
+    let xs2: Vec<f64> = stimupy_axis(frame.width, frame.ppd)
         .iter()
         .map(|x| x * x)
         .collect();
-    let ys2: Vec<f64> = stimupy_axis(frame.h, frame.ppd)
+    let ys2: Vec<f64> = stimupy_axis(frame.height, frame.ppd)
         .iter()
         .map(|y| y * y)
         .collect();
     let radius = p.radius;
-    let (image, labels) = paint_rows(&frame, outside, |y, row, lrow| {
+    let (image, labels) = paint_rows(frame, outside, |y, row, lrow| {
         let y2 = ys2[y];
         for ((v, l), x2) in row.iter_mut().zip(lrow.iter_mut()).zip(&xs2) {
             if round8((x2 + y2).sqrt()) <= radius {
@@ -327,9 +326,9 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
     // (n − 1)/n against pixel units, so the circle is an ellipse when width ≠ height.
     let (cx, cy) = frame.svg_xy(0.0, 0.0);
     let semi = |n: usize| frame.px(radius) * (n.max(2) - 1) as f64 / n.max(2) as f64;
-    let (rx, ry) = (semi(frame.w), semi(frame.h));
+    let (rx, ry) = (semi(frame.width), semi(frame.height));
     let shape_svg = if rx == ry {
-        document(&frame, "disc", outside).add(
+        document(frame, "disc", outside).add(
             Circle::new()
                 .set("cx", num(cx))
                 .set("cy", num(cy))
@@ -337,7 +336,7 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
                 .set("fill", gray(inside)),
         )
     } else {
-        document(&frame, "disc", outside).add(
+        document(frame, "disc", outside).add(
             Ellipse::new()
                 .set("cx", num(cx))
                 .set("cy", num(cy))

@@ -7,7 +7,7 @@
 //! line: a binary circle has exactly two values inside, in equal halves. Layout is a grid or a
 //! seeded random placement (SplitMix64), so the same seed gives the same array.
 
-use super::frame::{grid_centres, random_centres, Frame};
+use super::frame::{grid_centres, random_centres};
 use super::svg::{document, gray, num};
 use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
@@ -113,7 +113,7 @@ impl Circles {
 
     fn generate(&self, p: &CirclesParams, g: &Geometry, seed: u64) -> Result<Output> {
         let name = self.name();
-        let frame = Frame::new(g);
+        let frame = g;
         let radius = frame.px(p.radius);
         let spacing = frame.px(p.spacing);
         let (contrast, background) = (p.contrast, p.background);
@@ -140,9 +140,9 @@ impl Circles {
         }
         // Layout and polarity draw from separate streams so that changing one keeps the other.
         let centres = if random_layout {
-            random_centres(name, &frame, count, radius, spacing, seed)?
+            random_centres(name, frame, count, radius, spacing, seed)?
         } else {
-            let c = grid_centres(&frame, rows, cols, spacing);
+            let c = grid_centres(frame, rows, cols, spacing);
             frame.check_inside(&format!("{name}: {rows}x{cols} circles"), &c, radius)?;
             c
         };
@@ -165,8 +165,8 @@ impl Circles {
         };
         let vertical = p.axis == ShadingAxis::Vertical;
         let (light, dark) = (background * (1.0 + contrast), background * (1.0 - contrast));
-        let mut image = Grid::new(frame.w, frame.h, background);
-        let mut labels = Grid::new(frame.w, frame.h, 0u16);
+        let mut image = Grid::new(frame.width, frame.height, background);
+        let mut labels = Grid::new(frame.width, frame.height, 0u16);
         let mut names = Vec::with_capacity(count);
         for (i, (&(cx, cy), &up)) in centres.iter().zip(&light_top).enumerate() {
             let label = u16::try_from(i + 1).map_err(|_| Error::invalid("too many circles"))?;
@@ -205,7 +205,7 @@ impl Circles {
             }
         }
         let svg = self.svg(
-            &frame, &centres, &light_top, radius, vertical, background, light, dark,
+            frame, &centres, &light_top, radius, vertical, background, light, dark,
         );
         let mut notes = Map::new();
         notes.insert("light_level".into(), json!(light));
@@ -229,7 +229,7 @@ impl Circles {
     #[allow(clippy::too_many_arguments)]
     fn svg(
         &self,
-        frame: &Frame,
+        frame: &Geometry,
         centres: &[(f64, f64)],
         light_top: &[bool],
         radius: f64,

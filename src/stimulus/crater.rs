@@ -14,7 +14,6 @@
 //! directions spread evenly over the disc on a sunflower spiral). With `light_size=0` the
 //! light is a point and the shadow is hard (V is 0 or 1).
 
-use super::frame::Frame;
 use super::{Output, Pixels, Stimulus, SurfaceLayers, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::gradient_space::normal_from_pq;
@@ -67,7 +66,7 @@ stimulus_params! {
 /// A mound with a crater on top, lit from above (or turned by 180°).
 pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let sm = frame.px(p.mound_radius);
     let sc = frame.px(p.crater_radius);
     let (hh, dd) = (p.height * sm, p.depth * sm);
@@ -106,7 +105,7 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
             edge = rho;
         }
     }
-    let (w, h) = (frame.w, frame.h);
+    let (w, h) = (frame.width, frame.height);
     let mut depth = Grid::new(w, h, 0.0);
     let mut normals = Grid::new(w, h, Vector3::z());
     let mut labels = Grid::new(w, h, 0u16);

@@ -7,7 +7,6 @@
 //! r − blur/2, 0 outside r + blur/2, (1 + cos(π·t))/2 between; each channel is
 //! field + weight · (disk − field). Colours are linear RGB 0..1.
 
-use super::frame::Frame;
 use super::{Output, Pixels, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
@@ -87,7 +86,7 @@ stimulus_params! {
 /// A blurred disk in a field that fades under steady fixation (Troxler).
 pub fn fading_disk(p: &FadingDiskParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let radius = frame.px(p.radius);
     let blur = frame.px(p.blur);
     if blur > 2.0 * radius {
@@ -110,10 +109,10 @@ pub fn fading_disk(p: &FadingDiskParams, g: &Geometry) -> Result<Output> {
     let fix_colour = colour("fixation_colour", &p.fixation_colour)?;
     let fix_r = frame.px(p.fixation_radius);
     let fix_x = frame.px(p.fixation_offset);
-    let mut rgb = Grid::new(frame.w, frame.h, field);
-    let mut labels = Grid::new(frame.w, frame.h, 0u16);
-    for row in 0..frame.h {
-        for col in 0..frame.w {
+    let mut rgb = Grid::new(frame.width, frame.height, field);
+    let mut labels = Grid::new(frame.width, frame.height, 0u16);
+    for row in 0..frame.height {
+        for col in 0..frame.width {
             let (x, y) = (frame.x(col), frame.y(row));
             let rho = x.hypot(y);
             let px = rgb.get_mut(col, row);

@@ -10,73 +10,51 @@ use crate::random::SplitMix64;
 use crate::visual_size::Geometry;
 use std::ops::Range;
 
-/// A stimulus frame: its size in pixels and its resolution.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Frame {
-    /// Width in pixels.
-    pub w: usize,
-    /// Height in pixels.
-    pub h: usize,
-    /// Pixels per degree.
-    pub ppd: f64,
-}
-
-impl Frame {
-    pub fn new(g: &Geometry) -> Frame {
-        Frame {
-            w: g.width,
-            h: g.height,
-            ppd: g.ppd,
-        }
-    }
-
+/// A stimulus's picture as the drawing code sees it: the [`Geometry`] (size in pixels, pixels
+/// per degree) with its pixel-centre coordinates.
+impl Geometry {
     /// x of column `col`'s centre.
-    pub fn x(&self, col: usize) -> f64 {
-        col as f64 - (self.w as f64 - 1.0) / 2.0
+    pub(crate) fn x(&self, col: usize) -> f64 {
+        col as f64 - (self.width as f64 - 1.0) / 2.0
     }
 
     /// y of row `row`'s centre.
-    pub fn y(&self, row: usize) -> f64 {
-        (self.h as f64 - 1.0) / 2.0 - row as f64
-    }
-
-    /// A length in degrees, in pixels.
-    pub fn px(&self, degrees: f64) -> f64 {
-        degrees * self.ppd
+    pub(crate) fn y(&self, row: usize) -> f64 {
+        (self.height as f64 - 1.0) / 2.0 - row as f64
     }
 
     /// The pixel corner nearest `(x, y)`. Elements centred on corners are mirror-symmetric on
     /// the pixel lattice, and every copy of an element covers the same pixel pattern.
-    pub fn snap(&self, x: f64, y: f64) -> (f64, f64) {
-        let (hw, hh) = (self.w as f64 / 2.0, self.h as f64 / 2.0);
+    pub(crate) fn snap(&self, x: f64, y: f64) -> (f64, f64) {
+        let (hw, hh) = (self.width as f64 / 2.0, self.height as f64 / 2.0);
         ((x + hw).round() - hw, (y + hh).round() - hh)
     }
 
     /// The columns whose centres may lie in `x0..=x1`.
-    pub fn cols(&self, x0: f64, x1: f64) -> Range<usize> {
-        let off = (self.w as f64 - 1.0) / 2.0;
-        span(x0 + off, x1 + off, self.w)
+    pub(crate) fn cols(&self, x0: f64, x1: f64) -> Range<usize> {
+        let off = (self.width as f64 - 1.0) / 2.0;
+        span(x0 + off, x1 + off, self.width)
     }
 
     /// The rows whose centres may lie in `y0..=y1` (y up).
-    pub fn rows(&self, y0: f64, y1: f64) -> Range<usize> {
-        let off = (self.h as f64 - 1.0) / 2.0;
-        span(off - y1, off - y0, self.h)
+    pub(crate) fn rows(&self, y0: f64, y1: f64) -> Range<usize> {
+        let off = (self.height as f64 - 1.0) / 2.0;
+        span(off - y1, off - y0, self.height)
     }
 
     /// SVG user coordinates (pixels from the top-left corner, y down) of the point `(x, y)`.
-    pub fn svg_xy(&self, x: f64, y: f64) -> (f64, f64) {
-        (x + self.w as f64 / 2.0, self.h as f64 / 2.0 - y)
-    }
-
-    /// Width and height in degrees.
-    pub fn degrees(&self) -> (f64, f64) {
-        (self.w as f64 / self.ppd, self.h as f64 / self.ppd)
+    pub(crate) fn svg_xy(&self, x: f64, y: f64) -> (f64, f64) {
+        (x + self.width as f64 / 2.0, self.height as f64 / 2.0 - y)
     }
 
     /// Fails unless a disc of `radius` pixels at each of `centres` lies inside the frame.
-    pub fn check_inside(&self, what: &str, centres: &[(f64, f64)], radius: f64) -> Result<()> {
-        let (hw, hh) = (self.w as f64 / 2.0, self.h as f64 / 2.0);
+    pub(crate) fn check_inside(
+        &self,
+        what: &str,
+        centres: &[(f64, f64)],
+        radius: f64,
+    ) -> Result<()> {
+        let (hw, hh) = (self.width as f64 / 2.0, self.height as f64 / 2.0);
         let fits = centres.iter().all(|&(x, y)| {
             x - radius >= -hw && x + radius <= hw && y - radius >= -hh && y + radius <= hh
         });
@@ -94,7 +72,7 @@ impl Frame {
         );
         let need_w = (max_x - min_x + 2.0 * radius) / self.ppd;
         let need_h = (max_y - min_y + 2.0 * radius) / self.ppd;
-        let (fw, fh) = self.degrees();
+        let (fw, fh) = (self.width_deg(), self.height_deg());
         Err(Error::invalid(format!(
             "{what} need {need_w:.2}x{need_h:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer"
         )))
@@ -113,7 +91,7 @@ fn span(lo: f64, hi: f64, n: usize) -> Range<usize> {
 /// Centres of a `rows` × `cols` array `spacing` pixels apart, centred in the frame and snapped
 /// to pixel corners, in reading order (top row first).
 pub(crate) fn grid_centres(
-    frame: &Frame,
+    frame: &Geometry,
     rows: usize,
     cols: usize,
     spacing: f64,
@@ -134,7 +112,7 @@ pub(crate) fn grid_centres(
 /// returned in reading order. Fails, naming the stimulus, when they cannot all be placed.
 pub(crate) fn random_centres(
     what: &str,
-    frame: &Frame,
+    frame: &Geometry,
     count: usize,
     radius: f64,
     min_distance: f64,
@@ -142,8 +120,8 @@ pub(crate) fn random_centres(
 ) -> Result<Vec<(f64, f64)>> {
     let mut rng = SplitMix64::new(seed);
     let (hw, hh) = (
-        frame.w as f64 / 2.0 - radius - 0.5,
-        frame.h as f64 / 2.0 - radius - 0.5,
+        frame.width as f64 / 2.0 - radius - 0.5,
+        frame.height as f64 / 2.0 - radius - 0.5,
     );
     let mut placed: Vec<(f64, f64)> = Vec::with_capacity(count);
     if hw > 0.0 && hh > 0.0 {
@@ -162,7 +140,7 @@ pub(crate) fn random_centres(
         }
     }
     if placed.len() < count {
-        let (fw, fh) = frame.degrees();
+        let (fw, fh) = (frame.width_deg(), frame.height_deg());
         return Err(Error::invalid(format!(
             "{what}: cannot place {count} discs of radius {:.2}° at least {:.2}° apart in {fw:.2}x{fh:.2} degrees (placed {}): enlarge the frame or lower the count",
             radius / frame.ppd,
@@ -190,8 +168,12 @@ pub(crate) fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
 mod tests {
     use super::*;
 
-    fn frame(w: usize, h: usize) -> Frame {
-        Frame { w, h, ppd: 10.0 }
+    fn frame(w: usize, h: usize) -> Geometry {
+        Geometry {
+            width: w,
+            height: h,
+            ppd: 10.0,
+        }
     }
 
     #[test]

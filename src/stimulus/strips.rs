@@ -8,7 +8,6 @@
 //! L = background · (1 ± contrast · t(u)) with u running from −1 to 1 across the strip and
 //! t(u) = u (linear) or sin(πu/2) (sinusoidal).
 
-use super::frame::Frame;
 use super::svg::{document, gray, num};
 use super::{Output, Stimulus, Targets, Typed};
 use crate::error::{Error, Result};
@@ -84,7 +83,7 @@ stimulus_params! {
 /// Parallel strips with opposite luminance gradients: one light for the whole scene.
 pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = Frame::new(g);
+    let frame = g;
     let n = p.strips;
     let horizontal = p.orientation == StripOrientation::Horizontal;
     let kind = p.profile;
@@ -105,13 +104,13 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     }
     // Across = the axis the strips are stacked along; along = the axis they run.
     let (across_px, along_px) = if horizontal {
-        (frame.h, frame.w)
+        (frame.height, frame.width)
     } else {
-        (frame.w, frame.h)
+        (frame.width, frame.height)
     };
     let total = n * width + n.saturating_sub(1) * gap;
     if total > across_px || length > along_px {
-        let (fw, fh) = frame.degrees();
+        let (fw, fh) = (frame.width_deg(), frame.height_deg());
         return Err(Error::invalid(format!(
             "strips: {n} strips need {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer",
             if horizontal { length } else { total } as f64 / frame.ppd,
@@ -126,8 +125,8 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
         background * (1.0 + contrast * sign * profile(kind, u))
     };
     let sign = |i: usize| if i % 2 == 0 { 1.0 } else { -1.0 };
-    let mut image = Grid::new(frame.w, frame.h, background);
-    let mut labels = Grid::new(frame.w, frame.h, 0u16);
+    let mut image = Grid::new(frame.width, frame.height, background);
+    let mut labels = Grid::new(frame.width, frame.height, 0u16);
     let mut names = Vec::with_capacity(n);
     for i in 0..n {
         let first = start + i * (width + gap);
@@ -172,7 +171,7 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
             }
             defs = defs.add(g);
         }
-        let mut doc = document(&frame, "strips", background).add(defs);
+        let mut doc = document(frame, "strips", background).add(defs);
         for i in 0..n {
             let first = start + i * (width + gap);
             let (x, y, w, h) = if horizontal {

@@ -5,24 +5,24 @@
 //! linear luminance values written as percentages with four decimals (no display gamma, as in
 //! the default PNG); gradients interpolate linearly in those values.
 
-use super::frame::Frame;
+use crate::visual_size::Geometry;
 use svg::node::element::{Rectangle, Title};
 use svg::Document;
 
 /// An empty document the size of `frame`, filled with `background`.
-pub(crate) fn document(frame: &Frame, title: &str, background: f64) -> Document {
+pub(crate) fn document(frame: &Geometry, title: &str, background: f64) -> Document {
     Document::new()
-        .set("width", frame.w)
-        .set("height", frame.h)
-        .set("viewBox", (0, 0, frame.w, frame.h))
+        .set("width", frame.width)
+        .set("height", frame.height)
+        .set("viewBox", (0, 0, frame.width, frame.height))
         .set("shape-rendering", "crispEdges")
         .add(Title::new(title))
         .add(
             Rectangle::new()
                 .set("x", 0)
                 .set("y", 0)
-                .set("width", frame.w)
-                .set("height", frame.h)
+                .set("width", frame.width)
+                .set("height", frame.height)
                 .set("fill", gray(background)),
         )
 }
@@ -59,9 +59,9 @@ mod tests {
         assert_eq!(num(1.23456), 1.235);
         assert_eq!(num(-0.0001), 0.0);
         let d = document(
-            &Frame {
-                w: 4,
-                h: 3,
+            &Geometry {
+                width: 4,
+                height: 3,
                 ppd: 1.0,
             },
             "t",

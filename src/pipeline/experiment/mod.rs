@@ -53,6 +53,7 @@ use crate::visual_size::{Geometry, SizeRequest};
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
+use std::str::FromStr;
 
 /// The file that marks a folder as a shadelab experiment (its `program` is `shadelab`).
 pub const MARKER: &str = "design.json";
@@ -190,6 +191,47 @@ impl Default for Keys {
             convex: 'f',
             concave: 'j',
         }
+    }
+}
+
+impl FromStr for SaveFormat {
+    type Err = Error;
+
+    /// `json` or `csv`; the message begins with the text given, for the caller to prefix with
+    /// its flag or keyword.
+    fn from_str(text: &str) -> Result<Self> {
+        match text {
+            "json" => Ok(SaveFormat::Json),
+            "csv" => Ok(SaveFormat::Csv),
+            _ => Err(Error::invalid(format!("'{text}' must be json or csv"))),
+        }
+    }
+}
+
+impl FromStr for Keys {
+    type Err = Error;
+
+    /// Two keys, bump then dimple, with or without a comma between (`fj`, `f,j`), lower-cased;
+    /// whether they may be used is [`Config::check`]'s. The message begins with the text
+    /// given, for the caller to prefix with its flag or keyword.
+    ///
+    /// ```
+    /// use shadelab::pipeline::experiment::Keys;
+    /// let keys: Keys = "F,J".parse().unwrap();
+    /// assert_eq!((keys.convex, keys.concave), ('f', 'j'));
+    /// assert!("fjk".parse::<Keys>().is_err());
+    /// ```
+    fn from_str(text: &str) -> Result<Self> {
+        let chars: Vec<char> = text.chars().filter(|c| *c != ',').collect();
+        let [convex, concave] = chars[..] else {
+            return Err(Error::invalid(format!(
+                "'{text}' must be two keys, bump then dimple (e.g. fj)"
+            )));
+        };
+        Ok(Keys {
+            convex: convex.to_ascii_lowercase(),
+            concave: concave.to_ascii_lowercase(),
+        })
     }
 }
 
