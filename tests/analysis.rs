@@ -454,6 +454,66 @@ fn prior_sweep_writes_its_table_report_and_plots() {
     assert!(svg.contains("convexity"));
 }
 
+/// The sideways discs' flips under `--method`: a lone disc lit from the side is mirror-symmetric
+/// top to bottom, so under either method its convexity changes sign exactly where the assumed
+/// light turns above or below (0° and 180°); under the default (Ikeuchi–Horn) a disc beside
+/// another keeps those flips (token-local verdicts); the report records the method. Why the
+/// analyses keep Ikeuchi–Horn (the integrable methods move the two-disc flips): docs/perception.md.
+#[test]
+fn prior_sweep_method_flips_a_lone_sideways_disc_at_the_vertical() {
+    let d = scratch("prior-sweep-method");
+    let flips_of = |rows: &str, method: &str| -> Vec<f64> {
+        let out_dir = format!("sweep-{rows}-{method}");
+        let out = shadelab(
+            &d,
+            &[
+                "analyze",
+                "prior-sweep",
+                "--stimulus",
+                "sideways",
+                "--set",
+                &format!("rows={rows}"),
+                "--set",
+                "columns=1",
+                "--ppd",
+                "12",
+                "--method",
+                method,
+                "--out",
+                &out_dir,
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: Value =
+            serde_json::from_slice(&read(&d.join(&out_dir).join("sweep.json"))).unwrap();
+        assert_eq!(report["parameters"]["method"], method);
+        report["tokens"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|t| t["flips_deg"].as_array().unwrap().clone())
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let at_vertical = |flips: &[f64]| {
+        flips
+            .iter()
+            .all(|f| [0.0, 180.0, 360.0].iter().any(|v| (f - v).abs() < 0.01))
+    };
+    for method in ["multigrid", "integrable-lm"] {
+        let flips = flips_of("1", method);
+        assert_eq!(flips.len(), 2, "{method}: {flips:?}");
+        assert!(at_vertical(&flips), "{method}: {flips:?}");
+    }
+    let flips = flips_of("2", "multigrid");
+    assert_eq!(flips.len(), 4, "{flips:?}");
+    assert!(at_vertical(&flips), "{flips:?}");
+}
+
 #[test]
 fn observer_writes_p_convex_against_rotation() {
     let d = scratch("observer");

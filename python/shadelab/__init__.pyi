@@ -188,6 +188,7 @@ def prior_sweep(
     slant: float = ...,
     albedo: Optional[float] = ...,
     ambient: Optional[float] = ...,
+    method: Optional[str] = ...,
     seed: Optional[int] = ...,
     **params: Any,
 ) -> PriorSweep: ...
@@ -208,6 +209,7 @@ def observer(
     slant: float = ...,
     albedo: Optional[float] = ...,
     ambient: Optional[float] = ...,
+    method: Optional[str] = ...,
     seed: Optional[int] = ...,
     **params: Any,
 ) -> Observer: ...

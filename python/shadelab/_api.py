@@ -216,9 +216,18 @@ def _luminance_arg(luminance: Any) -> Optional[str]:
     return f"{pair[0]!r},{pair[1]!r}"
 
 
-def _assumptions(domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any) -> Tuple[Any, ...]:
-    """What the perception analyses assume, as the compiled module takes it."""
-    return (str(domain), str(boundary), float(slant), _opt(float, albedo), _opt(float, ambient))
+def _assumptions(
+    domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any, method: Any
+) -> Tuple[Any, ...]:
+    """What the perception analyses assume and how they solve, as the compiled module takes it."""
+    return (
+        str(domain),
+        str(boundary),
+        float(slant),
+        _opt(float, albedo),
+        _opt(float, ambient),
+        _opt(str, method),
+    )
 
 
 def _floats(values: Optional[Sequence[float]]) -> Optional[List[float]]:
@@ -565,6 +574,7 @@ def prior_sweep(
     slant: float = 45.0,
     albedo: Optional[float] = None,
     ambient: Optional[float] = None,
+    method: Optional[str] = None,
     seed: Optional[int] = None,
     **params: Any,
 ) -> PriorSweep:
@@ -576,7 +586,9 @@ def prior_sweep(
     default, as the CLI: the targets of an object on a backdrop such as the sphere or the hollow
     mask, the whole picture otherwise), ``"image"``, ``"tokens"`` or a PNG mask's path. ``tilts`` in degrees (0 = from above, +90 = from the
     left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
-    light. Returns a :class:`PriorSweep`: the report (what sweep.json holds) with two arrays,
+    light. ``method``: the reconstruction method, as ``solve`` names them (default
+    ``"multigrid"``, Ikeuchi–Horn; docs/perception.md says why the analyses keep it). Returns a
+    :class:`PriorSweep`: the report (what sweep.json holds) with two arrays,
     ``tilts`` and ``convexities`` (tokens × tilts, positive convex, negative concave);
     ``save(out)`` writes the command line's folder, ``figures()`` its plots as arrays.
 
@@ -586,7 +598,7 @@ def prior_sweep(
     """
     report_json, tilt_array, convexity, handle = _shadelab.prior_sweep(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
-        _assumptions(domain, boundary, slant, albedo, ambient),
+        _assumptions(domain, boundary, slant, albedo, ambient, method),
         _floats(tilts),
         _opt(str, binding),
     )
@@ -612,6 +624,7 @@ def observer(
     slant: float = 45.0,
     albedo: Optional[float] = None,
     ambient: Optional[float] = None,
+    method: Optional[str] = None,
     seed: Optional[int] = None,
     **params: Any,
 ) -> Observer:
@@ -620,14 +633,14 @@ def observer(
     observer.json holds it (``save(out)`` writes the command line's folder).
 
     ``picture``, ``ppd``, ``shape``, ``mask``, ``domain``, ``boundary``, ``slant``, ``albedo``,
-    ``ambient``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
+    ``ambient``, ``method``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
     and ``kappas`` describe the von Mises prior over the light's tilt, ``convexity_bias`` the
     log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
     judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
     """
     report_json, handle = _shadelab.observer(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
-        _assumptions(domain, boundary, slant, albedo, ambient),
+        _assumptions(domain, boundary, slant, albedo, ambient, method),
         (
             _opt(float, prior_tilt),
             _floats(kappas),

@@ -68,7 +68,7 @@ PictureArgs = Tuple[
     Optional[npt.NDArray[np.uint16]],
 ]
 #: (domain, boundary, slant, albedo, ambient)
-AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float]]
+AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float], Optional[str]]
 
 def prior_sweep(
     picture: PictureArgs,

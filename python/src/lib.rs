@@ -520,8 +520,16 @@ pub(crate) type PictureArgs<'py> = (
     Option<PyReadonlyArray2<'py, u16>>,
 );
 
-/// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
-type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
+/// What the perception analyses assume and how they solve: domain, boundary, slant, albedo,
+/// ambient, reconstruction method.
+type AssumptionArgs = (
+    String,
+    String,
+    f64,
+    Option<f64>,
+    Option<f64>,
+    Option<String>,
+);
 
 /// The library's description of a picture, and the rendered shape (the library's order).
 pub(crate) fn picture_source(
@@ -547,8 +555,11 @@ fn perception_config(
     assumptions: AssumptionArgs,
 ) -> PyResult<perception::Config> {
     let (source, size) = picture_source(picture)?;
-    let (domain, boundary, slant, albedo, ambient) = assumptions;
+    let (domain, boundary, slant, albedo, ambient, method) = assumptions;
     let mut config = perception::Config::new(source);
+    if let Some(method) = method {
+        config.solver.method = method.parse().map_err(to_py)?;
+    }
     config.size = size;
     config.domain = domain.parse().map_err(to_py)?;
     config.boundary = boundary.parse().map_err(to_py)?;

@@ -37,6 +37,18 @@ def test_the_default_domain_is_the_clis_auto():
         shadelab.prior_sweep("sphere", shape=48, tilts=[0], domain="everything")
 
 
+def test_prior_sweep_method_is_recorded_and_a_lone_sideways_disc_flips_at_the_vertical():
+    # A disc lit from the side is mirror-symmetric top to bottom: under either method its
+    # convexity changes sign exactly where the assumed light turns above or below.
+    for method in ["multigrid", "integrable-lm"]:
+        r = shadelab.prior_sweep("sideways", ppd=12, rows=1, columns=1, method=method)
+        assert r["parameters"]["method"] == method
+        flips = r["tokens"][0]["flips_deg"]
+        assert len(flips) == 2 and all(min(abs(f - v) for v in (0, 180, 360)) < 0.01 for f in flips), flips
+    with pytest.raises(ValueError, match="solver method"):
+        shadelab.prior_sweep("sideways", ppd=12, tilts=[0], method="newton")
+
+
 def test_prior_sweep_bad_tilt_is_a_value_error():
     with pytest.raises(ValueError, match="tilt"):
         shadelab.prior_sweep("bumps", shape=32, tilts=[float("nan")])

@@ -2,7 +2,7 @@
 //! interpret it, turned into the library's [`shadelab::pipeline::perception::Config`].
 
 use super::{CliError, Global, RenderSize, Source};
-use crate::cli::flags::{AnalysisFlags, SolverFlags};
+use crate::cli::flags::{usage, AnalysisFlags, SolverFlags};
 use shadelab::pipeline::perception::{Config, Header};
 
 /// The picture and how to interpret it.
@@ -16,6 +16,10 @@ pub struct PictureArgs {
     pub analysis: AnalysisFlags,
     #[command(flatten)]
     pub solver: SolverFlags,
+    /// The reconstruction method, as `solve --method` names them (default multigrid,
+    /// Ikeuchi–Horn; docs/perception.md says why the analyses keep it).
+    #[arg(long, value_name = "METHOD")]
+    pub method: Option<String>,
 }
 
 /// The first line of a perception summary: the assumed slant, albedo and ambient, and the true
@@ -46,6 +50,9 @@ impl PictureArgs {
         config.albedo = self.analysis.albedo;
         config.ambient = self.analysis.ambient;
         self.solver.apply(&mut config.solver)?;
+        if let Some(method) = &self.method {
+            config.solver.method = method.parse().map_err(|e| usage("--method", e))?;
+        }
         Ok(config)
     }
 }
