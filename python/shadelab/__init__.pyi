@@ -189,6 +189,9 @@ def prior_sweep(
     albedo: Optional[float] = ...,
     ambient: Optional[float] = ...,
     method: Optional[str] = ...,
+    lam: Optional[float] = ...,
+    tol: Optional[float] = ...,
+    max_iter: Optional[int] = ...,
     seed: Optional[int] = ...,
     **params: Any,
 ) -> PriorSweep: ...
@@ -210,6 +213,9 @@ def observer(
     albedo: Optional[float] = ...,
     ambient: Optional[float] = ...,
     method: Optional[str] = ...,
+    lam: Optional[float] = ...,
+    tol: Optional[float] = ...,
+    max_iter: Optional[int] = ...,
     seed: Optional[int] = ...,
     **params: Any,
 ) -> Observer: ...

@@ -216,18 +216,14 @@ def _luminance_arg(luminance: Any) -> Optional[str]:
     return f"{pair[0]!r},{pair[1]!r}"
 
 
-def _assumptions(
-    domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any, method: Any
-) -> Tuple[Any, ...]:
-    """What the perception analyses assume and how they solve, as the compiled module takes it."""
-    return (
-        str(domain),
-        str(boundary),
-        float(slant),
-        _opt(float, albedo),
-        _opt(float, ambient),
-        _opt(str, method),
-    )
+def _assumptions(domain: Any, boundary: Any, slant: Any, albedo: Any, ambient: Any) -> Tuple[Any, ...]:
+    """What the perception analyses assume, as the compiled module takes it."""
+    return (str(domain), str(boundary), float(slant), _opt(float, albedo), _opt(float, ambient))
+
+
+def _solver(method: Any, lam: Any, tol: Any, max_iter: Any) -> Tuple[Any, ...]:
+    """How the perception analyses solve, as the compiled module takes it (None: the default)."""
+    return (_opt(str, method), _opt(float, lam), _opt(float, tol), _opt(int, max_iter))
 
 
 def _floats(values: Optional[Sequence[float]]) -> Optional[List[float]]:
@@ -575,6 +571,9 @@ def prior_sweep(
     albedo: Optional[float] = None,
     ambient: Optional[float] = None,
     method: Optional[str] = None,
+    lam: Optional[float] = None,
+    tol: Optional[float] = None,
+    max_iter: Optional[int] = None,
     seed: Optional[int] = None,
     **params: Any,
 ) -> PriorSweep:
@@ -587,7 +586,8 @@ def prior_sweep(
     mask, the whole picture otherwise), ``"image"``, ``"tokens"`` or a PNG mask's path. ``tilts`` in degrees (0 = from above, +90 = from the
     left); ``binding``: ``"estimate"`` or a global light tilt, to also read the tokens under one
     light. ``method``: the reconstruction method, as ``solve`` names them (default
-    ``"multigrid"``, Ikeuchi–Horn; docs/perception.md says why the analyses keep it). Returns a
+    ``"multigrid"``, Ikeuchi–Horn; docs/perception.md says why the analyses keep it); ``lam``,
+    ``tol`` and ``max_iter`` as for :func:`solve` (defaults: the analyses', as the CLI's). Returns a
     :class:`PriorSweep`: the report (what sweep.json holds) with two arrays,
     ``tilts`` and ``convexities`` (tokens × tilts, positive convex, negative concave);
     ``save(out)`` writes the command line's folder, ``figures()`` its plots as arrays.
@@ -598,7 +598,8 @@ def prior_sweep(
     """
     report_json, tilt_array, convexity, handle = _shadelab.prior_sweep(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
-        _assumptions(domain, boundary, slant, albedo, ambient, method),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        _solver(method, lam, tol, max_iter),
         _floats(tilts),
         _opt(str, binding),
     )
@@ -625,6 +626,9 @@ def observer(
     albedo: Optional[float] = None,
     ambient: Optional[float] = None,
     method: Optional[str] = None,
+    lam: Optional[float] = None,
+    tol: Optional[float] = None,
+    max_iter: Optional[int] = None,
     seed: Optional[int] = None,
     **params: Any,
 ) -> Observer:
@@ -633,14 +637,16 @@ def observer(
     observer.json holds it (``save(out)`` writes the command line's folder).
 
     ``picture``, ``ppd``, ``shape``, ``mask``, ``domain``, ``boundary``, ``slant``, ``albedo``,
-    ``ambient``, ``method``, ``seed`` and ``params`` as for :func:`prior_sweep`; ``prior_tilt`` (degrees)
+    ``ambient``, ``method``, ``lam``, ``tol``, ``max_iter``, ``seed`` and ``params`` as for
+    :func:`prior_sweep`; ``prior_tilt`` (degrees)
     and ``kappas`` describe the von Mises prior over the light's tilt, ``convexity_bias`` the
     log prior odds of convex, ``noise`` the image noise σ; ``rotations`` of the picture to
     judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
     """
     report_json, handle = _shadelab.observer(
         _picture_args(picture, False, params, seed, ppd, shape, mask),
-        _assumptions(domain, boundary, slant, albedo, ambient, method),
+        _assumptions(domain, boundary, slant, albedo, ambient),
+        _solver(method, lam, tol, max_iter),
         (
             _opt(float, prior_tilt),
             _floats(kappas),

@@ -68,17 +68,20 @@ PictureArgs = Tuple[
     Optional[npt.NDArray[np.uint16]],
 ]
 #: (domain, boundary, slant, albedo, ambient)
-AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float], Optional[str]]
+AssumptionArgs = Tuple[str, str, float, Optional[float], Optional[float]]
+SolverArgs = Tuple[Optional[str], Optional[float], Optional[float], Optional[int]]
 
 def prior_sweep(
     picture: PictureArgs,
     assumptions: AssumptionArgs,
+    solver: SolverArgs,
     tilts: Optional[List[float]],
     binding: Optional[str],
 ) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64], ReportHandle]: ...
 def observer(
     picture: PictureArgs,
     assumptions: AssumptionArgs,
+    solver: SolverArgs,
     settings: Tuple[
         Optional[float],
         Optional[List[float]],

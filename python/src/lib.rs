@@ -520,16 +520,12 @@ pub(crate) type PictureArgs<'py> = (
     Option<PyReadonlyArray2<'py, u16>>,
 );
 
-/// What the perception analyses assume and how they solve: domain, boundary, slant, albedo,
-/// ambient, reconstruction method.
-type AssumptionArgs = (
-    String,
-    String,
-    f64,
-    Option<f64>,
-    Option<f64>,
-    Option<String>,
-);
+/// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
+type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
+
+/// How the perception analyses solve, each left to the library's default when `None`:
+/// reconstruction method, λ, tolerance, iteration cap.
+type SolverArgs = (Option<String>, Option<f64>, Option<f64>, Option<usize>);
 
 /// The library's description of a picture, and the rendered shape (the library's order).
 pub(crate) fn picture_source(
@@ -553,13 +549,19 @@ pub(crate) fn picture_source(
 fn perception_config(
     picture: PictureArgs<'_>,
     assumptions: AssumptionArgs,
+    solver: SolverArgs,
 ) -> PyResult<perception::Config> {
     let (source, size) = picture_source(picture)?;
-    let (domain, boundary, slant, albedo, ambient, method) = assumptions;
+    let (domain, boundary, slant, albedo, ambient) = assumptions;
     let mut config = perception::Config::new(source);
+    let (method, lambda, tol, max_iter) = solver;
     if let Some(method) = method {
         config.solver.method = method.parse().map_err(to_py)?;
     }
+    config.solver.lambda = lambda.unwrap_or(config.solver.lambda);
+    config.solver.tol = tol.unwrap_or(config.solver.tol);
+    config.solver.max_iter = max_iter.unwrap_or(config.solver.max_iter);
+    config.solver.validate().map_err(to_py)?;
     config.size = size;
     config.domain = domain.parse().map_err(to_py)?;
     config.boundary = boundary.parse().map_err(to_py)?;
@@ -576,6 +578,7 @@ fn prior_sweep<'py>(
     py: Python<'py>,
     picture: PictureArgs<'py>,
     assumptions: AssumptionArgs,
+    solver: SolverArgs,
     tilts: Option<Vec<f64>>,
     binding: Option<&str>,
 ) -> PyResult<(
@@ -584,8 +587,8 @@ fn prior_sweep<'py>(
     Bound<'py, PyArray2<f64>>,
     ReportHandle,
 )> {
-    let mut config =
-        pl::prior_sweep::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
+    let mut config = pl::prior_sweep::Config::new(perception_config(picture, assumptions, solver)?)
+        .map_err(to_py)?;
     if let Some(t) = tilts {
         config.tilts = t;
     }
@@ -627,10 +630,11 @@ fn observer(
     py: Python<'_>,
     picture: PictureArgs<'_>,
     assumptions: AssumptionArgs,
+    solver: SolverArgs,
     settings: ObserverArgs,
 ) -> PyResult<(String, ReportHandle)> {
-    let mut config =
-        pl::observer::Config::new(perception_config(picture, assumptions)?).map_err(to_py)?;
+    let mut config = pl::observer::Config::new(perception_config(picture, assumptions, solver)?)
+        .map_err(to_py)?;
     let (prior_tilt, kappas, convexity_bias, noise, rotations, tilts) = settings;
     config.prior_tilt_deg = prior_tilt.unwrap_or(config.prior_tilt_deg);
     config.kappas = kappas.unwrap_or(config.kappas);

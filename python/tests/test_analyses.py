@@ -49,6 +49,17 @@ def test_prior_sweep_method_is_recorded_and_a_lone_sideways_disc_flips_at_the_ve
         shadelab.prior_sweep("sideways", ppd=12, tilts=[0], method="newton")
 
 
+def test_prior_sweep_solver_settings_are_the_clis():
+    default = shadelab.prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0])
+    cli_defaults = {k: default["parameters"][k] for k in ("lambda", "tol", "max_iter")}
+    r = shadelab.prior_sweep("bumps", shape=(64, 96), ppd=8, tilts=[0], lam=10, tol=1e-5, max_iter=7)
+    assert {k: r["parameters"][k] for k in cli_defaults} == {"lambda": 10, "tol": 1e-5, "max_iter": 7}
+    assert cli_defaults != {"lambda": 10, "tol": 1e-5, "max_iter": 7}
+    for bad, word in [({"lam": 0}, "lambda"), ({"tol": float("nan")}, "tol"), ({"max_iter": 0}, "max_iter")]:
+        with pytest.raises(ValueError, match=word):
+            shadelab.observer("bumps", shape=(64, 96), ppd=8, **bad)
+
+
 def test_prior_sweep_bad_tilt_is_a_value_error():
     with pytest.raises(ValueError, match="tilt"):
         shadelab.prior_sweep("bumps", shape=32, tilts=[float("nan")])
