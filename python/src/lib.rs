@@ -523,8 +523,8 @@ pub(crate) type PictureArgs<'py> = (
 /// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
 type AssumptionArgs = (String, String, f64, Option<f64>, Option<f64>);
 
-/// How the perception analyses solve, each left to the library's default when `None`:
-/// reconstruction method, λ, tolerance, iteration cap.
+/// How the perception analyses solve: reconstruction method, λ, tolerance, iteration cap; each
+/// `None` keeps the library's default, and the config's `check` checks them with the rest.
 type SolverArgs = (Option<String>, Option<f64>, Option<f64>, Option<usize>);
 
 /// The library's description of a picture, and the rendered shape (the library's order).
@@ -561,7 +561,6 @@ fn perception_config(
     config.solver.lambda = lambda.unwrap_or(config.solver.lambda);
     config.solver.tol = tol.unwrap_or(config.solver.tol);
     config.solver.max_iter = max_iter.unwrap_or(config.solver.max_iter);
-    config.solver.validate().map_err(to_py)?;
     config.size = size;
     config.domain = domain.parse().map_err(to_py)?;
     config.boundary = boundary.parse().map_err(to_py)?;
