@@ -27,9 +27,12 @@ pip() {
 pip --no-deps "psychopy==2026.2.5" || { echo "pip could not install psychopy"; exit 3; }
 pip pillow scipy "pyglet==1.5.27" packaging six json_tricks pyyaml i18next python-bidi pandas \
   arabic_reshaper freetype-py requests pyserial || { echo "pip could not install PsychoPy's imports"; exit 3; }
-# The import needs a display.
-if ! xvfb-run -a "$py" -c "from psychopy import visual" >/dev/null 2>&1; then
+# The import needs a display. PsychoPy writes its preferences under the home folder
+# (~/.psychopy3): the check runs with a home of its own, removed after.
+home=$(mktemp -d)
+trap 'rm -rf "$home"' EXIT
+if ! HOME=$home PSYCHOPY_USERDIR=$home/.psychopy3 xvfb-run -a "$py" -c "from psychopy import visual" >/dev/null 2>&1; then
   echo "'from psychopy import visual' fails under Xvfb"
   exit 3
 fi
-echo "PsychoPy $("$py" -c 'import psychopy; print(psychopy.__version__)') and Xvfb ready"
+echo "PsychoPy $(HOME=$home PSYCHOPY_USERDIR=$home/.psychopy3 "$py" -c 'import psychopy; print(psychopy.__version__)') and Xvfb ready"

@@ -266,13 +266,29 @@ fn pip_install(py: &Path, options: &[&str], what: &Path) -> Command {
 /// the installed wheel), `adjust` setting its environment; fails with pytest's report unless
 /// it passes, and returns pytest's summary line.
 fn pytest_suite(py: &Path, dir: &Path, adjust: &mut dyn FnMut(&mut Command)) -> String {
+    // PsychoPy keeps its preferences, fonts and monitors under the home folder (~/.psychopy3),
+    // matplotlib its caches: the suite runs with a home of its own, so that testing writes
+    // nothing into the user's.
+    let home = dir.join("home");
+    let _ = std::fs::remove_dir_all(&home);
+    std::fs::create_dir_all(&home).expect("a scratch home folder");
     let mut cmd = Command::new(py);
     cmd.args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(root().join("python").join("tests"))
         .current_dir(dir)
+        .env("HOME", &home)
+        .env("PSYCHOPY_USERDIR", home.join(".psychopy3"))
         // `shadelab.save` is compared byte for byte with the command line's `render`.
         .env("SHADELAB_BIN", env!("CARGO_BIN_EXE_shadelab"));
     adjust(&mut cmd);
+    // What the suite sees of SHADELAB_REQUIRE_PSYCHOPY: set or removed here, else inherited.
+    let required = match cmd
+        .get_envs()
+        .find(|(k, _)| *k == "SHADELAB_REQUIRE_PSYCHOPY")
+    {
+        Some((_, v)) => v.is_some_and(|v| v == "1"),
+        None => std::env::var("SHADELAB_REQUIRE_PSYCHOPY").as_deref() == Ok("1"),
+    };
     let pytest = cmd.output().expect("pytest runs");
     let report = text(&pytest);
     assert!(
@@ -280,6 +296,15 @@ fn pytest_suite(py: &Path, dir: &Path, adjust: &mut dyn FnMut(&mut Command)) -> 
         "the pytest suite failed with {}:\n{report}",
         py.display()
     );
+    if required {
+        // The window test ran (it fails rather than skips when PsychoPy is required): its
+        // preferences went to the scratch home.
+        assert!(
+            home.join(".psychopy3").is_dir(),
+            "PsychoPy ran but wrote no ~/.psychopy3 under the suite's home {}: where did it write?",
+            home.display()
+        );
+    }
     let summary = report.lines().rev().find(|l| l.contains("passed"));
     summary.unwrap_or("pytest passed").to_string()
 }
