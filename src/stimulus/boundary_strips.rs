@@ -95,14 +95,13 @@ stimulus_params! {
 /// One shading pattern inside sinusoidal, sawtooth, arched or straight outlines.
 pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
     let kinds = parse_boundaries(&p.boundary)?;
     let shading = p.shading;
-    let period = frame.px(p.period);
+    let period = g.px(p.period);
     let periods = p.periods;
-    let height = frame.px(p.height);
-    let amplitude = frame.px(p.amplitude);
-    let gap = frame.px(p.gap);
+    let height = g.px(p.height);
+    let amplitude = g.px(p.amplitude);
+    let gap = g.px(p.gap);
     let (contrast, mean, background) = (p.contrast, p.mean, p.background);
     if mean * (1.0 + contrast) > 1.0 {
         return Err(Error::invalid(format!(
@@ -112,7 +111,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     if period < 2.0 || height < 1.0 {
         return Err(Error::invalid(format!(
             "boundary-strips: period and height must span at least 2 and 1 pixels at {} ppd",
-            frame.ppd
+            g.ppd
         )));
     }
     let width = period * periods as f64;
@@ -120,23 +119,23 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     let band = height + 2.0 * amplitude;
     let n = kinds.len();
     let stack = n as f64 * band + (n as f64 - 1.0) * gap;
-    let (fw, fh) = (frame.width as f64, frame.height as f64);
+    let (fw, fh) = (g.width as f64, g.height as f64);
     if width > fw || stack > fh {
-        let (dw, dh) = (frame.width_deg(), frame.height_deg());
+        let (dw, dh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
             "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge the visual size or shorten them",
-            width / frame.ppd,
-            stack / frame.ppd
+            width / g.ppd,
+            stack / g.ppd
         )));
     }
-    let x0 = frame.snap(-width / 2.0, 0.0).0;
+    let x0 = g.snap(-width / 2.0, 0.0).0;
     let centre_y = |i: usize| stack / 2.0 - band / 2.0 - i as f64 * (band + gap);
     let phase = |x: f64| ((x - x0) / period).rem_euclid(1.0);
     let level = |u: f64| mean * (1.0 + contrast * shade(shading, u));
-    let mut image = Grid::new(frame.width, frame.height, background);
-    let mut labels = Grid::new(frame.width, frame.height, 0u16);
-    for col in frame.cols(x0, x0 + width) {
-        let x = frame.x(col);
+    let mut image = Grid::new(g.width, g.height, background);
+    let mut labels = Grid::new(g.width, g.height, 0u16);
+    for col in g.cols(x0, x0 + width) {
+        let x = g.x(col);
         if x < x0 || x >= x0 + width {
             continue;
         }
@@ -145,8 +144,8 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
         for (i, kind) in kinds.iter().enumerate() {
             let yc = centre_y(i) + amplitude * boundary(kind, u);
             let (lo, hi) = (yc - height / 2.0, yc + height / 2.0);
-            for row in frame.rows(lo, hi) {
-                let y = frame.y(row);
+            for row in g.rows(lo, hi) {
+                let y = g.y(row);
                 if y > lo && y <= hi {
                     *image.get_mut(col, row) = v;
                     *labels.get_mut(col, row) = i as u16 + 1;
@@ -155,7 +154,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
         }
     }
     let svg = {
-        let (gx0, _) = frame.svg_xy(x0, 0.0);
+        let (gx0, _) = g.svg_xy(x0, 0.0);
         let mut gradient = LinearGradient::new()
             .set("id", "shading")
             .set("gradientUnits", "userSpaceOnUse")
@@ -181,13 +180,13 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
             );
         }
         let mut doc =
-            document(frame, "boundary-strips", background).add(Definitions::new().add(gradient));
+            document(g, "boundary-strips", background).add(Definitions::new().add(gradient));
         let samples = 64 * periods;
         for (i, kind) in kinds.iter().enumerate() {
             let curve = |k: usize, offset: f64| -> (f64, f64) {
                 let x = x0 + width * k as f64 / samples as f64;
                 let u = if k == samples { 1.0 } else { phase(x) };
-                frame.svg_xy(x, centre_y(i) + amplitude * boundary(kind, u) + offset)
+                g.svg_xy(x, centre_y(i) + amplitude * boundary(kind, u) + offset)
             };
             let start = curve(0, height / 2.0);
             let mut data = Data::new().move_to((num(start.0), num(start.1)));
@@ -210,7 +209,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     };
     let mut notes = Map::new();
     notes.insert("boundaries".into(), json!(kinds));
-    notes.insert("strip_left_px".into(), json!(frame.svg_xy(x0, 0.0).0));
+    notes.insert("strip_left_px".into(), json!(g.svg_xy(x0, 0.0).0));
     Ok(Output {
         pixels: Pixels::Gray(image),
         targets: Some(Targets {

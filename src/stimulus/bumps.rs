@@ -179,9 +179,8 @@ fn polarities(pattern: DiscPattern, rows: usize, cols: usize, seed: u64) -> Vec<
 }
 
 fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light) -> Result<Output> {
-    let frame = g;
-    let radius = frame.px(p.radius);
-    let spacing = frame.px(p.spacing);
+    let radius = g.px(p.radius);
+    let spacing = g.px(p.spacing);
     let (rows, cols) = (p.rows, p.columns);
     let profile = p.profile;
     let linear = profile == DiscProfile::Linear;
@@ -190,7 +189,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
     if radius < 1.0 {
         return Err(Error::invalid(format!(
             "{name}: radius {}° is under one pixel at {} ppd",
-            p.radius, frame.ppd
+            p.radius, g.ppd
         )));
     }
     if (rows > 1 || cols > 1) && spacing < 2.0 * radius {
@@ -200,8 +199,8 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
             2.0 * p.radius
         )));
     }
-    let centres = grid_centres(frame, rows, cols, spacing);
-    frame.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
+    let centres = grid_centres(g, rows, cols, spacing);
+    g.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
     let sign = polarities(p.pattern, rows, cols, seed);
     let s = light.direction();
     let tilt_len = s.x.hypot(s.y);
@@ -222,7 +221,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
     }
     let albedo = background / s.z;
     let (dx, dy) = (s.x / tilt_len.max(1e-300), s.y / tilt_len.max(1e-300));
-    let (w, h) = (frame.width, frame.height);
+    let (w, h) = (g.width, g.height);
     let mut depth = Grid::new(w, h, 0.0);
     let mut normals = Grid::new(w, h, Vector3::z());
     let mut labels = Grid::new(w, h, 0u16);
@@ -232,9 +231,9 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
         let kind = if sg > 0.0 { "bump" } else { "dimple" };
         names.push(format!("{kind} r{}c{}", i / cols + 1, i % cols + 1));
         let label = u16::try_from(i + 1).map_err(|_| Error::invalid("too many discs"))?;
-        for row in frame.rows(cy - radius, cy + radius) {
-            for col in frame.cols(cx - radius, cx + radius) {
-                let (x, y) = (frame.x(col) - cx, frame.y(row) - cy);
+        for row in g.rows(cy - radius, cy + radius) {
+            for col in g.cols(cx - radius, cx + radius) {
+                let (x, y) = (g.x(col) - cx, g.y(row) - cy);
                 let rho2 = x * x + y * y;
                 if rho2 >= radius * radius {
                     continue;
@@ -299,7 +298,7 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
         "centres_px".into(),
         json!(centres
             .iter()
-            .map(|&(x, y)| frame.svg_xy(x, y))
+            .map(|&(x, y)| g.svg_xy(x, y))
             .map(|(x, y)| [x, y])
             .collect::<Vec<_>>()),
     );

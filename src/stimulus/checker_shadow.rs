@@ -182,14 +182,13 @@ stimulus_params! {
 /// Adelson's checker-shadow: squares A and B have the same value, B looks much lighter.
 pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
     let n = p.squares;
     let sq_deg = p.square;
-    let side = frame.px(sq_deg);
+    let side = g.px(sq_deg);
     if side < 4.0 {
         return Err(Error::invalid(format!(
             "checker-shadow: square {sq_deg}° is under 4 pixels at {} ppd",
-            frame.ppd
+            g.ppd
         )));
     }
     let (light, dark) = (p.light_square, p.dark_square);
@@ -199,7 +198,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         )));
     }
     let k = dark / light;
-    // Everything below is in squares, in the board's frame, origin at its centre.
+    // Everything below is in squares, in the board's g, origin at its centre.
     let in_squares = |degrees: f64| degrees / sq_deg;
     let (rc, hc, offset, pen) = (
         in_squares(p.cylinder_radius),
@@ -247,12 +246,12 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     let y_off = -(top + bottom) / 2.0;
     let content_w = 2.0 * extent.0 * side;
     let content_h = (top - bottom) * side;
-    if content_w > frame.width as f64 + 0.5 || content_h > frame.height as f64 + 0.5 {
-        let (fw, fh) = (frame.width_deg(), frame.height_deg());
+    if content_w > g.width as f64 + 0.5 || content_h > g.height as f64 + 0.5 {
+        let (fw, fh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
             "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or shrink `square`",
-            content_w / frame.ppd,
-            content_h / frame.ppd
+            content_w / g.ppd,
+            content_h / g.ppd
         )));
     }
     let (lu, lw, lz) = (cl / SQRT_2, cl / SQRT_2, sl);
@@ -261,15 +260,15 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         let cos_i = (nu * lu + nw * lw + nz * lz).max(0.0);
         cyl_albedo * (k + (1.0 - k) * cos_i / sl)
     };
-    let mut image = Grid::new(frame.width, frame.height, p.background);
-    let mut labels = Grid::new(frame.width, frame.height, 0u16);
-    let mut on_cylinder = Grid::new(frame.width, frame.height, false);
+    let mut image = Grid::new(g.width, g.height, p.background);
+    let mut labels = Grid::new(g.width, g.height, 0u16);
+    let mut on_cylinder = Grid::new(g.width, g.height, false);
     let mut problems = Vec::new();
-    for row in 0..frame.height {
-        for col in 0..frame.width {
+    for row in 0..g.height {
+        for col in 0..g.width {
             // Pixel → (u, y') in squares.
-            let u = frame.x(col) / side;
-            let yv = frame.y(row) / side - y_off;
+            let u = g.x(col) / side;
+            let yv = g.y(row) / side - y_off;
             let du = u - uc;
             let hit = (dist > 0.0).then(|| view.trace(u, yv, (uc, wc), rc, hc));
             let cyl = if let Some((cyl_normal, _)) = hit {
@@ -363,14 +362,14 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         let (x, y) = (centre(i), centre(j));
         let (u, w) = ((x - y) / SQRT_2, (x + y) / SQRT_2);
         let (su, sy) = view.project(u, w, 0.0);
-        frame.svg_xy(su * side, (sy + y_off) * side)
+        g.svg_xy(su * side, (sy + y_off) * side)
     };
     let (a_at, b_at) = (square_centre(ia, ja), square_centre(ib, jb));
     if p.proof {
         // A bar of the shared value from A's centre to B's; the squares keep their own pixels
         // (of that value already), so A and B stay exactly equal.
         let bar = coverage(
-            frame,
+            g,
             |pb| {
                 pb.move_to(a_at.0 as f32, a_at.1 as f32);
                 pb.line_to(b_at.0 as f32, b_at.1 as f32);
@@ -386,7 +385,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         let stroke = 0.14 * height;
         for (at, glyph) in [(a_at, glyph_a as Glyph), (b_at, glyph_b as Glyph)] {
             let ink = coverage(
-                frame,
+                g,
                 |pb| glyph(pb, at, height),
                 stroke,
                 tiny_skia::LineCap::Round,
@@ -408,7 +407,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
             .zip(on_cylinder.data())
             .map(|(&v, &cyl)| if cyl { tint.map(|t| v * t) } else { [v; 3] })
             .collect();
-        Pixels::Rgb(Grid::from_vec(frame.width, frame.height, data)?)
+        Pixels::Rgb(Grid::from_vec(g.width, g.height, data)?)
     };
     let mut notes = Map::new();
     notes.insert("a_and_b_value".into(), json!(dark));

@@ -141,19 +141,18 @@ fn check_name(r: usize, c: usize) -> String {
 /// ```
 pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
-    let check = frame.px(p.check);
+    let check = g.px(p.check);
     if check < 1.0 {
         return Err(Error::invalid(format!(
             "checkerboard: check {}° is under one pixel at {} ppd",
-            p.check, frame.ppd
+            p.check, g.ppd
         )));
     }
     let (first, second) = (p.intensity_first, p.intensity_second);
     let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
     let (nx, ny) = (
-        (frame.width as f64 / check).ceil() as usize,
-        (frame.height as f64 / check).ceil() as usize,
+        (g.width as f64 / check).ceil() as usize,
+        (g.height as f64 / check).ceil() as usize,
     );
     let chosen = parse_targets(&p.targets, ny, nx)?;
     if chosen.len() > usize::from(u16::MAX) {
@@ -176,8 +175,8 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     let names: Vec<String> = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
     let targets_drawn = !chosen.is_empty();
     let target_value = p.intensity_target;
-    let cols: Vec<usize> = (0..frame.width).map(index).collect();
-    let (image, labels) = paint_rows(frame, 0.0, |y, row, lrow| {
+    let cols: Vec<usize> = (0..g.width).map(index).collect();
+    let (image, labels) = paint_rows(g, 0.0, |y, row, lrow| {
         let r = index(y);
         for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
             *l = check_labels[r * nx + c];
@@ -204,7 +203,7 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     } else {
         let drawn: &[(usize, usize)] = if targets_drawn { &chosen } else { &[] };
         Some(checks_svg(
-            frame,
+            g,
             check,
             (nx, ny),
             (first, second),
@@ -302,18 +301,14 @@ fn round8(v: f64) -> f64 {
 /// ```
 pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
     let (inside, outside) = (p.intensity_disc, p.intensity_background);
-    let xs2: Vec<f64> = stimupy_axis(frame.width, frame.ppd)
-        .iter()
-        .map(|x| x * x)
-        .collect();
-    let ys2: Vec<f64> = stimupy_axis(frame.height, frame.ppd)
+    let xs2: Vec<f64> = stimupy_axis(g.width, g.ppd).iter().map(|x| x * x).collect();
+    let ys2: Vec<f64> = stimupy_axis(g.height, g.ppd)
         .iter()
         .map(|y| y * y)
         .collect();
     let radius = p.radius;
-    let (image, labels) = paint_rows(frame, outside, |y, row, lrow| {
+    let (image, labels) = paint_rows(g, outside, |y, row, lrow| {
         let y2 = ys2[y];
         for ((v, l), x2) in row.iter_mut().zip(lrow.iter_mut()).zip(&xs2) {
             if round8((x2 + y2).sqrt()) <= radius {
@@ -324,11 +319,11 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
     })?;
     // The SVG's edge passes where the raster's rule puts it: stimupy's axes are stretched by
     // (n − 1)/n against pixel units, so the circle is an ellipse when width ≠ height.
-    let (cx, cy) = frame.svg_xy(0.0, 0.0);
-    let semi = |n: usize| frame.px(radius) * (n.max(2) - 1) as f64 / n.max(2) as f64;
-    let (rx, ry) = (semi(frame.width), semi(frame.height));
+    let (cx, cy) = g.svg_xy(0.0, 0.0);
+    let semi = |n: usize| g.px(radius) * (n.max(2) - 1) as f64 / n.max(2) as f64;
+    let (rx, ry) = (semi(g.width), semi(g.height));
     let shape_svg = if rx == ry {
-        document(frame, "disc", outside).add(
+        document(g, "disc", outside).add(
             Circle::new()
                 .set("cx", num(cx))
                 .set("cy", num(cy))
@@ -336,7 +331,7 @@ pub fn disc(p: &DiscParams, g: &Geometry) -> Result<Output> {
                 .set("fill", gray(inside)),
         )
     } else {
-        document(frame, "disc", outside).add(
+        document(g, "disc", outside).add(
             Ellipse::new()
                 .set("cx", num(cx))
                 .set("cy", num(cy))

@@ -113,9 +113,8 @@ impl Circles {
 
     fn generate(&self, p: &CirclesParams, g: &Geometry, seed: u64) -> Result<Output> {
         let name = self.name();
-        let frame = g;
-        let radius = frame.px(p.radius);
-        let spacing = frame.px(p.spacing);
+        let radius = g.px(p.radius);
+        let spacing = g.px(p.spacing);
         let (contrast, background) = (p.contrast, p.background);
         if background * (1.0 + contrast) > 1.0 {
             return Err(Error::invalid(format!(
@@ -125,7 +124,7 @@ impl Circles {
         if radius < 1.0 {
             return Err(Error::invalid(format!(
                 "{name}: radius {}° is under one pixel at {} ppd",
-                p.radius, frame.ppd
+                p.radius, g.ppd
             )));
         }
         let random_layout = p.layout == CircleLayout::Random;
@@ -140,10 +139,10 @@ impl Circles {
         }
         // Layout and polarity draw from separate streams so that changing one keeps the other.
         let centres = if random_layout {
-            random_centres(name, frame, count, radius, spacing, seed)?
+            random_centres(name, g, count, radius, spacing, seed)?
         } else {
-            let c = grid_centres(frame, rows, cols, spacing);
-            frame.check_inside(&format!("{name}: {rows}x{cols} circles"), &c, radius)?;
+            let c = grid_centres(g, rows, cols, spacing);
+            g.check_inside(&format!("{name}: {rows}x{cols} circles"), &c, radius)?;
             c
         };
         let mut rng = SplitMix64::new(seed ^ 0x0005_EED0_FC1B_C1E5);
@@ -151,7 +150,7 @@ impl Circles {
             CirclePolarity::Same => vec![true; count],
             CirclePolarity::Random => (0..count).map(|_| rng.next_u64() >> 63 == 0).collect(),
             _ if random_layout => {
-                // Rows of a scattered array: above or below the middle of the frame.
+                // Rows of a scattered array: above or below the middle of the g.
                 centres.iter().map(|&(_, y)| y >= 0.0).collect()
             }
             _ => (0..count).map(|i| (i / cols) % 2 == 0).collect(),
@@ -165,8 +164,8 @@ impl Circles {
         };
         let vertical = p.axis == ShadingAxis::Vertical;
         let (light, dark) = (background * (1.0 + contrast), background * (1.0 - contrast));
-        let mut image = Grid::new(frame.width, frame.height, background);
-        let mut labels = Grid::new(frame.width, frame.height, 0u16);
+        let mut image = Grid::new(g.width, g.height, background);
+        let mut labels = Grid::new(g.width, g.height, 0u16);
         let mut names = Vec::with_capacity(count);
         for (i, (&(cx, cy), &up)) in centres.iter().zip(&light_top).enumerate() {
             let label = u16::try_from(i + 1).map_err(|_| Error::invalid("too many circles"))?;
@@ -179,9 +178,9 @@ impl Circles {
             let odd_mark = if odd == Some(i) { ", odd one out" } else { "" };
             names.push(format!("circle {} ({side}{odd_mark})", i + 1));
             let sign = if up { 1.0 } else { -1.0 };
-            for row in frame.rows(cy - radius, cy + radius) {
-                for col in frame.cols(cx - radius, cx + radius) {
-                    let (x, y) = (frame.x(col) - cx, frame.y(row) - cy);
+            for row in g.rows(cy - radius, cy + radius) {
+                for col in g.cols(cx - radius, cx + radius) {
+                    let (x, y) = (g.x(col) - cx, g.y(row) - cy);
                     if x * x + y * y >= radius * radius {
                         continue;
                     }
@@ -205,7 +204,7 @@ impl Circles {
             }
         }
         let svg = self.svg(
-            frame, &centres, &light_top, radius, vertical, background, light, dark,
+            g, &centres, &light_top, radius, vertical, background, light, dark,
         );
         let mut notes = Map::new();
         notes.insert("light_level".into(), json!(light));
@@ -218,7 +217,7 @@ impl Circles {
             json!(centres
                 .iter()
                 .map(|&(x, y)| {
-                    let (x, y) = frame.svg_xy(x, y);
+                    let (x, y) = g.svg_xy(x, y);
                     [x, y]
                 })
                 .collect::<Vec<_>>()),

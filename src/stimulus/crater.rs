@@ -66,14 +66,13 @@ stimulus_params! {
 /// A mound with a crater on top, lit from above (or turned by 180°).
 pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
-    let sm = frame.px(p.mound_radius);
-    let sc = frame.px(p.crater_radius);
+    let sm = g.px(p.mound_radius);
+    let sc = g.px(p.crater_radius);
     let (hh, dd) = (p.height * sm, p.depth * sm);
     if sm < 1.0 || sc < 0.5 {
         return Err(Error::invalid(format!(
             "crater: mound_radius and crater_radius must span at least a pixel at {} ppd",
-            frame.ppd
+            g.ppd
         )));
     }
     let light = p.light;
@@ -105,13 +104,13 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
             edge = rho;
         }
     }
-    let (w, h) = (frame.width, frame.height);
+    let (w, h) = (g.width, g.height);
     let mut depth = Grid::new(w, h, 0.0);
     let mut normals = Grid::new(w, h, Vector3::z());
     let mut labels = Grid::new(w, h, 0u16);
     for row in 0..h {
         for col in 0..w {
-            let (x, y) = (frame.x(col), frame.y(row));
+            let (x, y) = (g.x(col), g.y(row));
             let rho2 = x * x + y * y;
             let (z, k) = profile(rho2);
             *depth.get_mut(col, row) = z;
@@ -160,7 +159,7 @@ pub fn crater(p: &CraterParams, g: &Geometry) -> Result<Output> {
     let mut notes = Map::new();
     notes.insert("light_vector".into(), json!([s.x, s.y, s.z]));
     notes.insert("albedo".into(), json!(albedo));
-    notes.insert("rim_radius_deg".into(), json!(rim / frame.ppd));
+    notes.insert("rim_radius_deg".into(), json!(rim / g.ppd));
     let names = vec!["crater".to_string(), "mound".to_string()];
     let mut out = Output::rendered(surface, rendering, Targets { labels, names }, notes);
     if p.rotation == CraterRotation::Turned {

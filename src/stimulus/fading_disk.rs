@@ -86,9 +86,8 @@ stimulus_params! {
 /// A blurred disk in a field that fades under steady fixation (Troxler).
 pub fn fading_disk(p: &FadingDiskParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
-    let radius = frame.px(p.radius);
-    let blur = frame.px(p.blur);
+    let radius = g.px(p.radius);
+    let blur = g.px(p.blur);
     if blur > 2.0 * radius {
         return Err(Error::invalid(format!(
             "fading-disk: blur {}° exceeds the disk's diameter {}°",
@@ -107,13 +106,13 @@ pub fn fading_disk(p: &FadingDiskParams, g: &Geometry) -> Result<Output> {
         )
     };
     let fix_colour = colour("fixation_colour", &p.fixation_colour)?;
-    let fix_r = frame.px(p.fixation_radius);
-    let fix_x = frame.px(p.fixation_offset);
-    let mut rgb = Grid::new(frame.width, frame.height, field);
-    let mut labels = Grid::new(frame.width, frame.height, 0u16);
-    for row in 0..frame.height {
-        for col in 0..frame.width {
-            let (x, y) = (frame.x(col), frame.y(row));
+    let fix_r = g.px(p.fixation_radius);
+    let fix_x = g.px(p.fixation_offset);
+    let mut rgb = Grid::new(g.width, g.height, field);
+    let mut labels = Grid::new(g.width, g.height, 0u16);
+    for row in 0..g.height {
+        for col in 0..g.width {
+            let (x, y) = (g.x(col), g.y(row));
             let rho = x.hypot(y);
             let px = rgb.get_mut(col, row);
             if (x - fix_x).hypot(y) < fix_r {

@@ -83,7 +83,6 @@ stimulus_params! {
 /// Parallel strips with opposite luminance gradients: one light for the whole scene.
 pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let frame = g;
     let n = p.strips;
     let horizontal = p.orientation == StripOrientation::Horizontal;
     let kind = p.profile;
@@ -93,28 +92,28 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
             "strips: background {background} × (1 + contrast {contrast}) exceeds 1; lower one of them"
         )));
     }
-    let width = frame.px(p.strip_width).round() as usize;
-    let gap = frame.px(p.gap).round() as usize;
-    let length = frame.px(p.length).round() as usize;
+    let width = g.px(p.strip_width).round() as usize;
+    let gap = g.px(p.gap).round() as usize;
+    let length = g.px(p.length).round() as usize;
     if width == 0 || length == 0 {
         return Err(Error::invalid(format!(
             "strips: strip_width and length must be at least one pixel at {} ppd",
-            frame.ppd
+            g.ppd
         )));
     }
     // Across = the axis the strips are stacked along; along = the axis they run.
     let (across_px, along_px) = if horizontal {
-        (frame.height, frame.width)
+        (g.height, g.width)
     } else {
-        (frame.width, frame.height)
+        (g.width, g.height)
     };
     let total = n * width + n.saturating_sub(1) * gap;
     if total > across_px || length > along_px {
-        let (fw, fh) = (frame.width_deg(), frame.height_deg());
+        let (fw, fh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
             "strips: {n} strips need {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer",
-            if horizontal { length } else { total } as f64 / frame.ppd,
-            if horizontal { total } else { length } as f64 / frame.ppd,
+            if horizontal { length } else { total } as f64 / g.ppd,
+            if horizontal { total } else { length } as f64 / g.ppd,
         )));
     }
     let start = (across_px - total) / 2;
@@ -125,8 +124,8 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
         background * (1.0 + contrast * sign * profile(kind, u))
     };
     let sign = |i: usize| if i % 2 == 0 { 1.0 } else { -1.0 };
-    let mut image = Grid::new(frame.width, frame.height, background);
-    let mut labels = Grid::new(frame.width, frame.height, 0u16);
+    let mut image = Grid::new(g.width, g.height, background);
+    let mut labels = Grid::new(g.width, g.height, 0u16);
     let mut names = Vec::with_capacity(n);
     for i in 0..n {
         let first = start + i * (width + gap);
@@ -171,7 +170,7 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
             }
             defs = defs.add(g);
         }
-        let mut doc = document(frame, "strips", background).add(defs);
+        let mut doc = document(g, "strips", background).add(defs);
         for i in 0..n {
             let first = start + i * (width + gap);
             let (x, y, w, h) = if horizontal {
