@@ -1,10 +1,12 @@
 //! `shadelab experiment`: the design (every rotation repeated, a seeded order), the images (their
 //! bright side faces θ), refusals, the folder, the command line, and the jsPsych study itself in
-//! headless Chromium: a participant pressing keys, the pilot mode's data fitted back by `shadelab
-//! fit observer` to the simulated prior, each participant's own order, the data POSTed to a real
-//! local server (and the download when it refuses), JATOS through a double of its `jatos`
-//! object, and a lab's own jsPsych page embedding the timeline. The browser tests skip, saying
-//! why, where Chromium is not installed or npm cannot install jsPsych (into target/jspsych/, once).
+//! headless Chromium: a participant pressing keys, the study as a participant's link opens it
+//! (fullscreen asked for, the card calibration's pixels per degree, the images drawn at their
+//! degrees), the pilot mode's data fitted back by `shadelab fit observer` to the simulated prior,
+//! each participant's own order, the data POSTed to a real local server (and the download when it
+//! refuses), JATOS through a double of its `jatos` object, and a lab's own jsPsych page embedding
+//! the timeline. The browser tests skip, saying why, where Chromium is not installed or npm
+//! cannot install jsPsych (into target/jspsych/, once).
 
 use crate::chromium::{chromium, run, Server};
 use crate::cli::{assert_error, scratch, shadelab};
@@ -464,20 +466,45 @@ const ARGS: [&str; 4] = [
     "--v=0",
 ];
 
-/// A page that frames the study and plays a participant: every 100 ms it clicks the screen's
-/// button if it has one, else presses the space bar, F or J in turn (keydown and keyup, where
-/// jsPsych listens), until the end screen, and copies its `<pre id="results">` out.
-const PARTICIPANT: &str = r#"<!DOCTYPE html>
+/// A page that frames the study (`index.html?` + `query`) and plays a participant: every 100 ms,
+/// on the card calibration's screen it drags the card's corner until the card is `CARD_PX` wide
+/// and goes on; elsewhere it clicks the screen's button if it has one, else presses the space
+/// bar, F or J in turn (keydown and keyup, where jsPsych listens), until the end screen. It
+/// copies the `<pre id="results">` out into `<pre id="result">`, and into `<pre id="sizes">`
+/// the size on the page (CSS pixels) of each trial's image, as `width x height` lines.
+fn participant(query: &str) -> String {
+    r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><link rel="icon" href="data:,"><title>participant</title></head><body>
 <pre id="result">pending</pre>
-<iframe id="page" src="index.html?participant=T1&fullscreen=0&calibration=none" style="width:1000px;height:800px"></iframe>
+<pre id="sizes"></pre>
+<iframe id="page" src="index.html?QUERY" style="width:1000px;height:800px"></iframe>
 <script>
 const frame = document.getElementById('page');
 frame.addEventListener('load', async () => {
   const w = frame.contentWindow, doc = frame.contentDocument;
   const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+  const sizes = [];
+  const mouse = (target, type, x) => target.dispatchEvent(
+    new w.MouseEvent(type, { clientX: x, clientY: 300, bubbles: true }));
   for (let i = 0; i < 3000 && !doc.getElementById('results'); i++) {
     await sleep(100);
+    const card = doc.getElementById('item');
+    const handle = doc.getElementById('jspsych-resize-handle');
+    if (card && handle) {
+      // The plugin widens the card by twice the drag.
+      const from = parseInt(card.style.width, 10);
+      mouse(handle, 'mousedown', 100);
+      mouse(handle, 'mousemove', 100 + (CARD_PX - from) / 2);
+      mouse(doc, 'mouseup', 100 + (CARD_PX - from) / 2);
+      doc.getElementById('end_resize_phase').click();
+      continue;
+    }
+    const image = doc.getElementById('jspsych-image-keyboard-response-stimulus');
+    if (image && image.dataset.seen !== '1') {
+      image.dataset.seen = '1';
+      const r = image.getBoundingClientRect();
+      sizes.push(`${r.width} x ${r.height}`);
+    }
     const button = doc.querySelector('.jspsych-btn');
     if (button) { button.click(); continue; }
     const key = i % 3 === 0 ? ' ' : (i % 3 === 1 ? 'f' : 'j');
@@ -488,10 +515,17 @@ frame.addEventListener('load', async () => {
   }
   await sleep(500);
   const r = doc.getElementById('results');
+  document.getElementById('sizes').textContent = sizes.join('\n');
   document.getElementById('result').textContent = r ? r.textContent : 'no results';
 });
 </script></body></html>
-"#;
+"#
+    .replace("QUERY", query)
+    .replace("CARD_PX", &CARD_PX.to_string())
+}
+
+/// The width (CSS pixels) the participant of [`participant`] drags the calibration's card to.
+const CARD_PX: u32 = 400;
 
 #[test]
 fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
@@ -503,7 +537,8 @@ fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
     config.practice = 1;
     config.break_every = 3;
     let (report, folder) = study(&config, &d.join("e"), &modules);
-    let server = Server::start(&folder, &[("__participant.html", PARTICIPANT)]);
+    let page = participant("participant=T1&fullscreen=0&calibration=none");
+    let server = Server::start(&folder, &[("__participant.html", &page)]);
     let page = run(
         &server.url("__participant.html"),
         &d.join("profile"),
@@ -570,6 +605,12 @@ fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
         let rt: f64 = r["rt"].parse().unwrap();
         assert!((0.0..=1000.0).contains(&rt), "{r:?}");
     }
+    // Without a calibration, one image pixel is one CSS pixel: the images' own size.
+    let (h, w) = report.design.display.visual_size;
+    let own = format!("{} x {}", (w * 32.0).round(), (h * 32.0).round());
+    let sizes = element(&page.stdout, "pre", "sizes").unwrap();
+    assert_eq!(sizes.lines().count(), 9, "{sizes}");
+    assert!(sizes.lines().all(|l| l == own), "{sizes} (expected {own})");
     // The fit reads the data as they are: the key mapping from the rows.
     std::fs::write(d.join("t1.csv"), &csv).unwrap();
     let r = shadelab::pipeline::fit::read_responses(&d.join("t1.csv")).unwrap();
@@ -578,6 +619,88 @@ fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
     assert_eq!(r.participants[0].1.len(), 8);
     assert_eq!(r.practice_rows, 1);
     assert!(r.other_rows > 10, "{}", r.other_rows);
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn the_card_calibration_sets_pixels_per_degree_and_the_images_subtend_their_degrees() {
+    let Some(modules) = jspsych() else { return };
+    let d = scratch("experiment-card");
+    let mut config = Config::new();
+    config.rotations = vec![0.0, 180.0];
+    config.repeats = 1;
+    config.practice = 0;
+    let (report, folder) = study(&config, &d.join("e"), &modules);
+    // The study as a participant's link opens it: fullscreen and the card calibration on.
+    let page = participant("participant=T2");
+    let server = Server::start(&folder, &[("__participant.html", &page)]);
+    let page = run(
+        &server.url("__participant.html"),
+        &d.join("profile"),
+        &ARGS,
+        Duration::from_secs(120),
+    );
+    // A scripted click is no user gesture, so Chromium refuses fullscreen (what a participant's
+    // click would grant); that refusal, said twice, is all the console may hold: the study goes
+    // on without it.
+    let refused = |l: &&str| {
+        l.contains("can only be initiated by a user gesture")
+            || l.contains("Uncaught (in promise) TypeError: Permissions check failed")
+    };
+    let console = page.console();
+    assert!(console.iter().all(refused), "console: {console:#?}");
+    let csv = element(&page.stdout, "pre", "result").unwrap();
+    let all = rows(&csv);
+    // Fullscreen asked for before the calibration and left after the test.
+    let fullscreen: Vec<_> = all
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r["shadelab"] == "fullscreen")
+        .map(|(i, _)| i)
+        .collect();
+    let calibration = all.iter().position(|r| r["shadelab"] == "calibration");
+    let last_trial = all.iter().rposition(|r| r["shadelab"] == "trial");
+    assert_eq!(fullscreen.len(), 2, "{csv}");
+    assert!(
+        Some(fullscreen[0]) < calibration && last_trial < Some(fullscreen[1]),
+        "{csv}"
+    );
+    // The card screen's row: the card as wide as the participant made it (a credit card is
+    // 85.6 mm wide).
+    let card: Vec<_> = all
+        .iter()
+        .filter(|r| r["shadelab"] == "calibration")
+        .collect();
+    assert_eq!(card.len(), 1, "{csv}");
+    assert_eq!(card[0]["item_width_px"], CARD_PX.to_string(), "{csv}");
+    assert_eq!(card[0]["item_width_mm"], "85.6", "{csv}");
+    // Pixels per degree at the viewing distance D: the card's pixels per cm times the length
+    // that subtends one degree, 2 D tan(0.5°), exact (not from jsPsych's px2mm, rounded to
+    // two decimals).
+    let distance = report.design.display.viewing_distance_cm;
+    let ppd = f64::from(CARD_PX) / 8.56 * 2.0 * distance * 0.5_f64.to_radians().tan();
+    let shown = trials(&all);
+    assert_eq!(shown.len(), 2, "{csv}");
+    for r in &shown {
+        let got: f64 = r["ppd"].parse().unwrap();
+        assert!(
+            (got - ppd).abs() < 1e-9 * ppd,
+            "ppd {got}, expected {ppd}: {r:?}"
+        );
+        assert_eq!(r["ppd_method"], "virtual-chinrest card", "{r:?}");
+        assert_eq!(r["fullscreen"], "false", "{r:?}");
+    }
+    // Each image is drawn at its visual size in degrees times that ppd, in CSS pixels.
+    let (h, w) = report.design.display.visual_size;
+    let expected = format!("{} x {}", (w * ppd).round(), (h * ppd).round());
+    assert_ne!(ppd.round(), 32.0, "the card must change the images' scale");
+    let sizes = element(&page.stdout, "pre", "sizes").unwrap();
+    assert_eq!(sizes.lines().count(), 2, "{sizes}");
+    assert!(
+        sizes.lines().all(|l| l == expected),
+        "{sizes} (expected {expected})"
+    );
     drop(server);
     let _ = std::fs::remove_dir_all(&d);
 }
