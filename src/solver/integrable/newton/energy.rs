@@ -155,8 +155,11 @@ impl<'a> Energy<'a> {
     }
 
     /// Where each unknown of a point sits for the preconditioner's aggregation: f and g at
-    /// their pixels, the depth by its sublattice (central differences leave the depth's four
-    /// sublattices uncoupled), at the cell of a grid half as fine.
+    /// their pixels, the depth by its sublattice of column and row parity, at the cell of a
+    /// grid half as fine. Central differences never couple neighbouring depths: a pixel's p
+    /// reads the depths two columns apart, its q those two rows apart, and t(p, q) couples the
+    /// two, so the four sublattices fall into two coupled pairs (c + r even, c + r odd); an
+    /// aggregate keeps to one sublattice.
     pub(super) fn places(&self) -> Vec<Place> {
         let mut places: Vec<Place> = Vec::with_capacity(3 * self.len());
         for field in 0..2u8 {
