@@ -606,8 +606,8 @@ fn a_participant_answers_by_key_and_the_jspsych_data_are_complete() {
         assert!((0.0..=1000.0).contains(&rt), "{r:?}");
     }
     // Without a calibration, one image pixel is one CSS pixel: the images' own size.
-    let (h, w) = report.design.display.visual_size;
-    let own = format!("{} x {}", (w * 32.0).round(), (h * 32.0).round());
+    let ((h, w), ppd) = (report.design.display.visual_size, report.design.display.ppd);
+    let own = format!("{} x {}", (w * ppd).round(), (h * ppd).round());
     let sizes = element(&page.stdout, "pre", "sizes").unwrap();
     assert_eq!(sizes.lines().count(), 9, "{sizes}");
     assert!(sizes.lines().all(|l| l == own), "{sizes} (expected {own})");

@@ -208,7 +208,7 @@
         on_finish: (data) => {
           // Pixels per degree at distance d: the card's pixels per cm times the length that
           // subtends one degree, 2 d tan(0.5 deg). From the card's own width in pixels and mm:
-          // the plugin's px2mm is rounded to two decimals (0.1 % of ppd at 96 dpi).
+          // the plugin's px2mm is rounded to two decimals (up to 0.13 % of ppd at 96 dpi).
           const perCm = data.item_width_px / (data.item_width_mm / 10);
           session.ppd = perCm * 2 * d * Math.tan(0.5 * DEG);
           session.method = 'virtual-chinrest card';
