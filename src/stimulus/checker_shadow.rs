@@ -198,7 +198,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
         )));
     }
     let k = dark / light;
-    // Everything below is in squares, in the board's g, origin at its centre.
+    // Everything below is in squares, in the board's frame, origin at its centre.
     let in_squares = |degrees: f64| degrees / sq_deg;
     let (rc, hc, offset, pen) = (
         in_squares(p.cylinder_radius),

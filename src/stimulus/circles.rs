@@ -150,7 +150,7 @@ impl Circles {
             CirclePolarity::Same => vec![true; count],
             CirclePolarity::Random => (0..count).map(|_| rng.next_u64() >> 63 == 0).collect(),
             _ if random_layout => {
-                // Rows of a scattered array: above or below the middle of the g.
+                // Rows of a scattered array: above or below the middle of the frame.
                 centres.iter().map(|&(_, y)| y >= 0.0).collect()
             }
             _ => (0..count).map(|i| (i / cols) % 2 == 0).collect(),
