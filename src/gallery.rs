@@ -165,26 +165,126 @@ pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
         .collect()
 }
 
-/// Where the links to the explanations point by default: a gallery folder one level below the
-/// repository root (README's `gallery/`) reaches `docs/` as `../docs/`.
-pub const DOCS_BASE: &str = "../";
+/// The docs pages compiled into shadelab, whose sections the gallery's cards carry with them
+/// (see [`explanation`]): every page a built-in preset's `docs` names.
+const DOCS: &[(&str, &str)] = &[
+    ("docs/priors.md", include_str!("../docs/priors.md")),
+    ("docs/lightness.md", include_str!("../docs/lightness.md")),
+    (
+        "docs/ikeuchi-horn.md",
+        include_str!("../docs/ikeuchi-horn.md"),
+    ),
+    ("docs/problem.md", include_str!("../docs/problem.md")),
+];
+
+/// GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens.
+fn slug(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, ' ' | '-' | '_'))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The explanation a preset's `docs` link (`docs/priors.md#light-from-above`) points to, from
+/// the docs compiled into shadelab: the section's heading and its prose paragraphs up to the
+/// next heading (figures, their captions, tables and code left out; links reduced to their
+/// text), as plain text. `None` for a page or section shadelab does not carry.
+pub fn explanation(docs: &str) -> Option<(String, Vec<String>)> {
+    let (page, anchor) = docs.split_once('#')?;
+    let text = DOCS.iter().find(|(p, _)| *p == page)?.1;
+    let mut lines = text.lines();
+    let heading = lines.by_ref().find_map(|l| {
+        let title = l.trim_start_matches('#');
+        (l.starts_with('#') && title.starts_with(' ') && slug(title) == anchor)
+            .then(|| title.trim().to_string())
+    })?;
+    let mut paragraphs = Vec::new();
+    let mut current = String::new();
+    let (mut fenced, mut caption) = (false, false);
+    for line in lines {
+        let t = line.trim();
+        if t.starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if fenced {
+            continue;
+        }
+        if t.starts_with('#') {
+            break;
+        }
+        // A figure's caption: an emphasised paragraph, over one line or several.
+        if caption {
+            caption = !(t.is_empty() || t.ends_with('*'));
+            continue;
+        }
+        if t.is_empty() || t.starts_with('!') || t.starts_with('|') {
+            if !current.is_empty() {
+                paragraphs.push(plain(&std::mem::take(&mut current)));
+            }
+            continue;
+        }
+        if current.is_empty() && t.starts_with('*') {
+            caption = !(t.len() > 1 && t.ends_with('*'));
+            continue;
+        }
+        if !current.is_empty() {
+            current.push(' ');
+        }
+        current.push_str(t);
+    }
+    if !current.is_empty() {
+        paragraphs.push(plain(&current));
+    }
+    Some((heading, paragraphs))
+}
+
+/// Markdown's links reduced to their text (`[a](b)` to `a`) and its emphasis and code marks
+/// dropped.
+fn plain(markdown: &str) -> String {
+    let mut out = String::new();
+    let mut rest = markdown;
+    while let Some(open) = rest.find('[') {
+        let tail = &rest[open..];
+        match tail
+            .find("](")
+            .and_then(|mid| tail[mid..].find(')').map(|close| (mid, mid + close)))
+        {
+            Some((mid, close)) => {
+                out.push_str(&rest[..open]);
+                out.push_str(&tail[1..mid]);
+                rest = &tail[close + 1..];
+            }
+            None => {
+                out.push_str(&rest[..=open]);
+                rest = &rest[open + 1..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out.replace(['*', '`'], "")
+}
 
 /// How to build a gallery.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     /// Largest image made, in pixels.
     pub max_pixels: usize,
-    /// The prefix put before each preset's `docs` link (`docs/priors.md#…`, relative to the
-    /// repository root): [`DOCS_BASE`], or a URL of the repository's files, or an absolute path,
-    /// for a gallery rendered elsewhere.
-    pub docs_base: String,
+    /// Links from each picture to its explanation in shadelab's docs: the prefix put before the
+    /// preset's `docs` path (`docs/priors.md#…`, relative to the repository root), e.g. a URL
+    /// of the repository's files, or `../` for a gallery one level below a checkout. `None`
+    /// (the default): no link leaves the gallery's folder; each card carries its explanation.
+    pub docs_base: Option<String>,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Options {
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
-            docs_base: DOCS_BASE.to_string(),
+            docs_base: None,
         }
     }
 }
@@ -254,8 +354,14 @@ pub fn render(
 /// Writes the gallery of `rendered` into the folder `dir`: per preset `NAME.png` (16-bit
 /// linear), `NAME.json`, `NAME_mask.png` where it has targets, `thumbs/NAME.png`; then
 /// `gallery.png` (all thumbnails) and `index.html` ([`MARKER`]), whose links to the
-/// explanations start with `docs_base`.
-pub fn write_into(dir: &Path, rendered: &[Rendered], docs_base: &str) -> Result<()> {
+/// explanations start with `docs_base` (none without one), and which links the teaching page
+/// only when `teach` (it lies in the gallery's folder, [`TEACHING_PAGE`]).
+pub fn write_into(
+    dir: &Path,
+    rendered: &[Rendered],
+    docs_base: Option<&str>,
+    teach: bool,
+) -> Result<()> {
     let thumbs = dir.join("thumbs");
     std::fs::create_dir(&thumbs).map_err(|e| Error::io(&thumbs, e))?;
     rendered
@@ -263,7 +369,7 @@ pub fn write_into(dir: &Path, rendered: &[Rendered], docs_base: &str) -> Result<
         .map(|r| write_one(r, dir))
         .collect::<Result<Vec<()>>>()?;
     write_sheet(&dir.join("gallery.png"), rendered)?;
-    let html = index_html(rendered, docs_base);
+    let html = index_html(rendered, docs_base, teach);
     io::write_text(&dir.join(MARKER), &html)
 }
 
@@ -433,7 +539,7 @@ pub fn docs_link(base: &str, docs: &str) -> String {
     }
 }
 
-fn index_html(rendered: &[Rendered], docs_base: &str) -> String {
+fn index_html(rendered: &[Rendered], docs_base: Option<&str>, teach: bool) -> String {
     let mut h = String::new();
     let _ = write!(
         h,
@@ -446,6 +552,7 @@ fn index_html(rendered: &[Rendered], docs_base: &str) -> String {
 body {{ font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }}
 .card {{ display: flex; gap: 1.5em; margin: 2em 0; border-top: 1px solid #ccc; padding-top: 1.5em; }}
 .card img {{ max-width: {THUMBNAIL}px; image-rendering: auto; }}
+.explained {{ font-size: 0.92em; color: #333; }}
 table {{ border-collapse: collapse; font-size: 0.85em; }}
 td {{ padding: 0 0.8em 0 0; vertical-align: top; }}
 code {{ background: #f3f3f3; padding: 0 0.2em; }}
@@ -458,16 +565,30 @@ Full images (click a thumbnail) are 16-bit PNGs of <em>linear</em> luminance 0..
 (linearised) display; thumbnails are display-encoded with gamma {gamma} so they look right on an
 ordinary screen. Beside each image lie its JSON sidecar (every parameter, the seed, an md5) and
 its target mask (<code>_mask.png</code>: 0 = background, 1..N = the named targets).
-Each picture links to the page of shadelab's documentation that explains it (the links assume
-this folder sits one level below the repository, as <code>gallery/</code> does; see
-<code>shadelab gallery --help</code>, <code>--docs-base</code>, for a gallery kept elsewhere).</p>
-<p>Move the light yourself: the <a href="{teach}">interactive teaching page</a> renders these
-stimuli and runs shadelab's shape-from-shading engine live in the browser (WebAssembly). Build it
-beside this page with <code>web/build.sh GALLERY/teach</code> (see docs/teaching.md).</p>
+{explained}</p>
+<p>{teach}</p>
 "#,
         version = io::PROGRAM_VERSION,
         gamma = THUMBNAIL_GAMMA,
-        teach = TEACHING_PAGE,
+        explained = match docs_base {
+            Some(_) => "Each picture links to the page of shadelab's documentation that explains it.",
+            None => "Each picture comes with the explanation from shadelab's documentation; this \
+                folder stands alone (copy it anywhere; <code>shadelab gallery --docs-base URL</code> \
+                also links each picture to its page).",
+        },
+        teach = if teach {
+            format!(
+                "Move the light yourself: the <a href=\"{TEACHING_PAGE}\">interactive teaching \
+                 page</a> renders these stimuli and runs shadelab's shape-from-shading engine \
+                 live in the browser (WebAssembly)."
+            )
+        } else {
+            "An interactive teaching page (move the light, run shadelab's shape-from-shading \
+             engine live in the browser) can go into this folder: build it with \
+             <code>web/build.sh GALLERY/teach</code> (see shadelab's docs/teaching.md), then \
+             run <code>shadelab gallery</code> again to link it here."
+                .to_string()
+        },
     );
     for r in rendered {
         let p = &r.preset;
@@ -489,13 +610,29 @@ Reproduce: <code>shadelab render --spec stimuli/{id}.json --out {id}.png</code><
             alt = escape(&title),
             title = escape(&title),
             caption = escape(&caption),
-            explained = match &p.spec.docs {
-                Some(d) => format!(
+            explained = match (&p.spec.docs, docs_base) {
+                (Some(d), Some(base)) => format!(
                     "<p class=\"explained\">Explained in <a href=\"{href}\">{text}</a>.</p>\n",
-                    href = escape(&docs_link(docs_base, d)),
+                    href = escape(&docs_link(base, d)),
                     text = escape(d),
                 ),
-                None => String::new(),
+                (Some(d), None) => match explanation(d) {
+                    Some((heading, paragraphs)) => format!(
+                        "<div class=\"explained\"><h3>{heading}</h3>\n{body}\n<p>From shadelab's {page}.</p></div>\n",
+                        heading = escape(&heading),
+                        body = paragraphs
+                            .iter()
+                            .map(|t| format!("<p>{}</p>", escape(t)))
+                            .collect::<Vec<_>>()
+                            .join("\n"),
+                        page = escape(d.split('#').next().unwrap_or(d)),
+                    ),
+                    None => format!(
+                        "<p class=\"explained\">Explained in shadelab's {}.</p>\n",
+                        escape(d)
+                    ),
+                },
+                (None, _) => String::new(),
             },
             stimulus = escape(&p.spec.stimulus),
             wd = g.width_deg(),
@@ -580,9 +717,38 @@ mod tests {
     }
 
     #[test]
-    fn the_index_links_to_the_teaching_page() {
-        let html = index_html(&[], "..");
-        assert!(html.contains("<a href=\"teach/index.html\">interactive teaching page</a>"));
+    fn the_index_links_to_the_teaching_page_only_when_it_is_there() {
+        let html = index_html(&[], None, true);
+        assert!(html.contains("<a href=\"teach/index.html\">interactive teaching"));
+        let html = index_html(&[], None, false);
+        assert!(!html.contains("href") && html.contains("web/build.sh GALLERY/teach"));
+    }
+
+    #[test]
+    fn every_builtin_presets_explanation_travels_with_it() {
+        for p in builtin_presets().unwrap() {
+            let docs = p.spec.docs.clone().unwrap();
+            let (heading, paragraphs) =
+                explanation(&docs).unwrap_or_else(|| panic!("{}: {docs} not carried", p.name));
+            assert!(!heading.is_empty(), "{docs}");
+            let text = paragraphs.join(" ");
+            assert!(text.len() > 100, "{docs}: {text}");
+            assert!(
+                !text.contains("](") && !text.contains("images/"),
+                "{docs}: {text}"
+            );
+        }
+        let (heading, paragraphs) = explanation("docs/priors.md#light-from-above").unwrap();
+        assert_eq!(heading, "Light from above");
+        assert!(
+            paragraphs[0].starts_with("Discs bright on top look like bumps"),
+            "{paragraphs:?}"
+        );
+        assert!(explanation("docs/priors.md#no-such-section").is_none());
+        assert_eq!(
+            plain("see [the page](a.md#b) and `code`"),
+            "see the page and code"
+        );
     }
 
     #[test]

@@ -104,5 +104,43 @@ fn every_image_of_the_gallery_loads_in_headless_chromium() {
         "broken images in the gallery: {broken:?}"
     );
     assert_eq!(count, presets, "one thumbnail per preset");
+    // The folder stands alone: every link of the index is a file in it (no docs page beside a
+    // checkout, no teaching page that was never built), and each card carries its explanation.
+    let index = std::fs::read_to_string(d.join("g/index.html")).unwrap();
+    let links = links_of(&index);
+    assert!(links.len() > presets * 3, "{links:?}");
+    for link in &links {
+        assert!(
+            !link.contains(':') && !link.starts_with('/') && !link.contains(".."),
+            "{link} leaves the gallery's folder"
+        );
+        let file = link.split('#').next().unwrap();
+        assert!(d.join("g").join(file).is_file(), "{link} is a dead link");
+    }
+    assert_eq!(
+        index.matches("<div class=\"explained\"><h3>").count(),
+        presets
+    );
+    // As a reader sees it (docs/testing.md: look at the page).
+    let shot = std::env::temp_dir().join("shadelab-gallery-index.png");
+    let server = Server::start(&d.join("g"), &[]);
+    let screenshot = format!("--screenshot={}", shot.display());
+    run(
+        &server.url("index.html"),
+        &d.join("profile-shot"),
+        &[screenshot.as_str(), "--window-size=1200,1600"],
+        Duration::from_secs(60),
+    );
+    drop(server);
+    assert!(shot.is_file(), "no screenshot of the gallery");
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The `href`s of a page's links.
+fn links_of(html: &str) -> Vec<String> {
+    html.split("<a href=\"")
+        .skip(1)
+        .filter_map(|rest| rest.split('"').next())
+        .map(str::to_string)
+        .collect()
 }

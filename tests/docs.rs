@@ -489,11 +489,11 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
         spec,
         source: "disc.json".into(),
     }];
-    let html = |dir: &str, base: &str| {
+    let html = |dir: &str, base: Option<&str>| {
         let config = GalleryConfig {
             presets: presets.to_vec(),
             options: Options {
-                docs_base: base.into(),
+                docs_base: base.map(str::to_string),
                 ..Options::default()
             },
             source: None,
@@ -502,10 +502,16 @@ fn the_gallery_page_links_each_picture_to_its_explanation() {
         report.write(&Output::new(d.join(dir))).unwrap();
         read(&d.join(dir).join("index.html"))
     };
-    assert!(html("g", shadelab::pipeline::gallery::DOCS_BASE)
-        .contains(r##"<a href="../docs/priors.md#light-from-above">"##));
+    // By default nothing links outside the folder: the card carries the section's text.
+    let alone = html("f", None);
     assert!(
-        html("h", "https://example.org/shadelab/blob/main").contains(
+        !alone.contains("../") && !alone.contains("docs/priors.md#"),
+        "{alone}"
+    );
+    assert!(alone.contains("<h3>Light from above</h3>") && alone.contains("Discs bright on top"));
+    assert!(html("g", Some("../")).contains(r##"<a href="../docs/priors.md#light-from-above">"##));
+    assert!(
+        html("h", Some("https://example.org/shadelab/blob/main")).contains(
             r##"href="https://example.org/shadelab/blob/main/docs/priors.md#light-from-above""##
         )
     );

@@ -15,9 +15,9 @@ pub struct Args {
     /// A folder of stimulus specs (*.json) to use instead of the built-in presets of stimuli/.
     #[arg(long, value_name = "DIR")]
     pub presets: Option<PathBuf>,
-    /// Prefix of the links from each picture to its explanation in docs/: the default suits a gallery one level below the repository root (README's `gallery/`); elsewhere give the repository's path or a URL of its files (e.g. https://github.com/OWNER/shadelab/blob/main/).
-    #[arg(long, value_name = "PREFIX", default_value = gallery::DOCS_BASE)]
-    pub docs_base: String,
+    /// Also link each picture to its explanation in shadelab's docs/, with this prefix: a URL of the repository's files (e.g. https://github.com/OWNER/shadelab/blob/main/), or ../ for a gallery one level below a checkout. Without it no link leaves the folder; each picture carries its explanation.
+    #[arg(long, value_name = "URL")]
+    pub docs_base: Option<String>,
 }
 
 /// Runs `gallery`.

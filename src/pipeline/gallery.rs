@@ -18,7 +18,7 @@
 //! ```
 
 // The parts of this command's configuration and report that other modules define.
-pub use crate::gallery::{Options, Preset, Rendered, DOCS_BASE, THUMBNAIL_GAMMA};
+pub use crate::gallery::{Options, Preset, Rendered, THUMBNAIL_GAMMA};
 
 use super::CommandReport;
 use crate::error::Result;
@@ -92,9 +92,9 @@ pub struct GalleryReport {
     /// The pictures themselves.
     #[serde(skip)]
     pub rendered: Vec<Rendered>,
-    /// The prefix of the docs links ([`Options::docs_base`]).
+    /// The prefix of the docs links, if any ([`Options::docs_base`]).
     #[serde(skip)]
-    pub docs_base: String,
+    pub docs_base: Option<String>,
 }
 
 /// Renders every preset (in parallel), in memory; one progress step per preset.
@@ -125,9 +125,24 @@ impl CommandReport for GalleryReport {
     const MARKER: &'static str = gallery::MARKER;
 
     /// Writes every picture with its sidecar and mask, the thumbnails, the contact sheet and
-    /// the index page (see [`gallery::write_into`]).
+    /// the index page (see [`gallery::write_into`]); a new folder has no teaching page, so its
+    /// index does not link one.
     fn write_into(&self, dir: &Path) -> Result<()> {
-        gallery::write_into(dir, &self.rendered, &self.docs_base)
+        gallery::write_into(dir, &self.rendered, self.docs_base.as_deref(), false)
+    }
+
+    /// As [`CommandReport::write`]; the index links the teaching page when the folder already
+    /// holds it (built there by `web/build.sh GALLERY/teach`, kept as the user's).
+    fn write(&self, out: &super::Output) -> Result<PathBuf> {
+        let folder = out.folder(Self::MARKER)?;
+        let teach = folder.target().join(gallery::TEACHING_PAGE).is_file();
+        gallery::write_into(
+            folder.path(),
+            &self.rendered,
+            self.docs_base.as_deref(),
+            teach,
+        )?;
+        folder.commit()
     }
 }
 
