@@ -1204,38 +1204,42 @@ fn under_jatos_the_data_go_to_submit_result_data_and_the_study_ends() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A lab's own jsPsych study: its consent and questionnaire around shadelab's timeline, the
-/// study's folder in a subfolder `shadelab/`, the design fetched from it, run in jsPsych's
-/// simulation mode; the lab's page shows its data as JSON.
-const LAB: &str = r#"<!DOCTYPE html>
+/// A lab's own jsPsych study: its consent and questionnaire around shadelab's timeline (with
+/// the timeline's `options`), the study's files under `prefix` (the design fetched from there),
+/// the lab's `extra` scripts, run in jsPsych's simulation mode; at the end the page shows, as
+/// JSON in `<pre id="lab-data">`, `{plugin, data}`: whether the lab's own plugin ran
+/// (`window.labPlugin`) and its data.
+fn lab_page(prefix: &str, extra: &str, options: &str) -> String {
+    r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><link rel="icon" href="data:,"><title>our lab's study</title>
 <script src="node_modules/jspsych/dist/index.browser.min.js"></script>
 <script src="node_modules/@jspsych/plugin-preload/dist/index.browser.min.js"></script>
 <script src="node_modules/@jspsych/plugin-html-button-response/dist/index.browser.min.js"></script>
 <script src="node_modules/@jspsych/plugin-html-keyboard-response/dist/index.browser.min.js"></script>
 <script src="node_modules/@jspsych/plugin-image-keyboard-response/dist/index.browser.min.js"></script>
-<script src="shadelab/shadelab-timeline.js"></script>
+EXTRA<script src="PREFIXshadelab-timeline.js"></script>
 </head><body><script>
 (async () => {
-  const design = await (await fetch('shadelab/design.json')).json();
+  const design = await (await fetch('PREFIXdesign.json')).json();
   const jsPsych = initJsPsych({
     on_finish: () => {
       const pre = document.createElement('pre');
       pre.id = 'lab-data';
-      pre.textContent = jsPsych.data.get().json();
+      pre.textContent = JSON.stringify({ plugin: window.labPlugin || 'missing', data: jsPsych.data.get().values() });
       document.body.replaceChildren(pre);
     },
   });
   const consent = { type: jsPsychHtmlButtonResponse, stimulus: 'Our consent form', choices: ['Yes'], data: { lab: 'consent' } };
   const questionnaire = { type: jsPsychHtmlButtonResponse, stimulus: 'Did the discs look like bumps?', choices: ['Mostly', 'Rarely'], data: { lab: 'questionnaire' } };
-  const shading = shadelabTimeline(design, {
-    participant: 'lab-007', jsPsych: jsPsych, imagePath: 'shadelab/',
-    simulate: shadelabTimeline.parseSimulate('tilt:26,kappa:2,seed:5'),
-  });
+  const shading = shadelabTimeline(design, Object.assign({ jsPsych: jsPsych }, OPTIONS));
   jsPsych.simulate([consent, shading, questionnaire], 'data-only');
 })();
 </script></body></html>
-"#;
+"#
+    .replace("PREFIX", prefix)
+    .replace("EXTRA", extra)
+    .replace("OPTIONS", options)
+}
 
 #[test]
 fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
@@ -1250,27 +1254,71 @@ fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
     let report = experiment::run(&config, &NoProgress).unwrap();
     report.write(&Output::new(lab.join("shadelab"))).unwrap();
     std::os::unix::fs::symlink(&modules, lab.join("node_modules")).unwrap();
-    std::fs::write(lab.join("index.html"), LAB).unwrap();
+    // No calibration and no participant given: Prolific's ids come in the page's URL.
+    let page = lab_page(
+        "shadelab/",
+        "",
+        "{ imagePath: 'shadelab/', simulate: shadelabTimeline.parseSimulate('tilt:26,kappa:2,seed:5') }",
+    );
+    std::fs::write(lab.join("index.html"), page).unwrap();
     let server = Server::start(&lab, &[]);
     let page = run(
-        &server.url("index.html"),
+        &server.url("index.html?PROLIFIC_PID=lab-007&STUDY_ID=study-3&SESSION_ID=session-9"),
         &d.join("profile"),
         &ARGS,
         Duration::from_secs(120),
     );
-    assert!(page.console().is_empty(), "console: {:#?}", page.console());
+    // Uncalibrated: the console says the ppd is assumed, once.
+    let console = page.console();
+    assert_eq!(console.len(), 1, "console: {console:#?}");
+    assert!(
+        console[0].contains("32 pixels per degree are assumed")
+            && console[0].contains("docs/experiments.md"),
+        "{console:?}"
+    );
     let json = element(&page.stdout, "pre", "lab-data")
         .unwrap_or_else(|| panic!("the lab's study did not finish: {}", page.stdout));
-    let data: Vec<serde_json::Value> = serde_json::from_str(&json).unwrap();
+    let out: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let data = out["data"].as_array().unwrap();
+    let json = serde_json::to_string(data).unwrap();
     assert_eq!(data.first().unwrap()["lab"], "consent");
     assert_eq!(data.last().unwrap()["lab"], "questionnaire");
+    // The lab's own rows carry the participant and the session (its Prolific ids).
+    for r in [data.first().unwrap(), data.last().unwrap()] {
+        assert_eq!(r["participant"], "lab-007", "{r}");
+        assert_eq!(r["study_id"], "study-3", "{r}");
+    }
     let shown: Vec<_> = data.iter().filter(|r| r["shadelab"] == "trial").collect();
     assert_eq!(shown.len(), 13);
-    assert!(shown.iter().all(|r| r["participant"] == "lab-007"
-        && r["stimulus"]
+    // Every shadelab row carries the standalone study's columns.
+    for r in data.iter().filter(|r| r["shadelab"].is_string()) {
+        assert_eq!(r["participant"], "lab-007", "{r}");
+        assert_eq!(r["prolific_pid"], "lab-007", "{r}");
+        assert_eq!(r["study_id"], "study-3", "{r}");
+        assert_eq!(r["session_id"], "session-9", "{r}");
+        assert_eq!(r["shadelab_version"], report.design.version, "{r}");
+        assert_eq!(r["viewing_distance_cm"], 57.0, "{r}");
+        assert!(r["user_agent"].as_str().unwrap().contains("Chrome"), "{r}");
+        assert!(r["screen_width"].as_u64().unwrap() > 0, "{r}");
+        assert!(r["screen_height"].as_u64().unwrap() > 0, "{r}");
+        assert_eq!(
+            r["simulated"], "tilt:26,kappa:2,convex:0.5,lapse:0,seed:5",
+            "{r}"
+        );
+        assert_eq!(r["design_hash"], report.design.design_hash.as_str(), "{r}");
+    }
+    for r in &shown {
+        for column in experiment::DATA_COLUMNS.split(',') {
+            assert!(r.get(column).is_some(), "no {column} in {r}");
+        }
+        assert!(r["stimulus"]
             .as_str()
             .unwrap()
-            .starts_with("shadelab/images/")));
+            .starts_with("shadelab/images/"));
+        // Uncalibrated: the images' own ppd, said to be assumed.
+        assert_eq!(r["ppd"], 32.0, "{r}");
+        assert_eq!(r["ppd_method"], "assumed", "{r}");
+    }
     // The preload found every image under the lab's path.
     let preload = data.iter().find(|r| r["shadelab"] == "preload").unwrap();
     assert_eq!(preload["success"], true, "{preload}");
@@ -1335,6 +1383,284 @@ fn counterbalanced_keys_are_swapped_for_half_of_the_participants_and_read_back()
         assignments.iter().any(|k| k == "f") && assignments.iter().any(|k| k == "j"),
         "{assignments:?}"
     );
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_rerun_keeps_the_labs_node_modules_lock_and_plugins_and_updates_its_own_pins() {
+    let d = scratch("experiment-rerun");
+    let small = [
+        "--rotations",
+        "0,90,180,270",
+        "--repeats",
+        "2",
+        "--practice",
+        "1",
+    ];
+    let write_study = |extra: &[&str]| {
+        let mut args = vec!["experiment", "--out", "study"];
+        args.extend(small);
+        args.extend(extra);
+        shadelab(&d, &args)
+    };
+    let first = write_study(&["--no-install"]);
+    assert!(first.status.success(), "{first:?}");
+    let study = d.join("study");
+    // The lab adds a plugin of its own (a local package: no network needed), as npm leaves
+    // it: a dependency in package.json, its files in node_modules/, a package-lock.json; and
+    // an older jsPsych pin.
+    let plugin = study.join("lab-plugins/plugin-lab-note");
+    std::fs::create_dir_all(&plugin).unwrap();
+    let manifest = r#"{"name": "plugin-lab-note", "version": "1.0.0", "main": "index.js"}"#;
+    let script = "window.labPlugin = 'loaded';\n";
+    std::fs::write(plugin.join("package.json"), manifest).unwrap();
+    std::fs::write(plugin.join("index.js"), script).unwrap();
+    let installed = study.join("node_modules/plugin-lab-note");
+    std::fs::create_dir_all(&installed).unwrap();
+    std::fs::write(installed.join("package.json"), manifest).unwrap();
+    std::fs::write(installed.join("index.js"), script).unwrap();
+    let lock = "{\"name\": \"shadelab-experiment\", \"lockfileVersion\": 3, \"lab\": true}\n";
+    std::fs::write(study.join("package-lock.json"), lock).unwrap();
+    let mut package: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(study.join("package.json")).unwrap()).unwrap();
+    package["dependencies"]["plugin-lab-note"] = "file:lab-plugins/plugin-lab-note".into();
+    package["dependencies"]["jspsych"] = "8.0.0".into();
+    package["scripts"] = serde_json::json!({"serve": "python3 -m http.server"});
+    std::fs::write(
+        study.join("package.json"),
+        serde_json::to_string_pretty(&package).unwrap(),
+    )
+    .unwrap();
+    // The lab's page in the study folder, with its plugin from node_modules/.
+    let page = lab_page(
+        "",
+        "<script src=\"node_modules/plugin-lab-note/index.js\"></script>\n",
+        "{ participant: 'lab-008', ppd: 32, ppdMethod: 'lab screen', \
+         simulate: shadelabTimeline.parseSimulate('tilt:26,kappa:2,seed:5') }",
+    );
+    std::fs::write(study.join("lab.html"), page).unwrap();
+    // Without --force the lab's page and plugin folder are refused as collected data? but npm's
+    // files are not among them.
+    let refused = write_study(&["--no-install"]);
+    assert_eq!(refused.status.code(), Some(1), "{refused:?}");
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        why.contains("lab.html") && !why.contains("node_modules") && !why.contains("package-lock"),
+        "{why}"
+    );
+    let check = |what: &str| {
+        let package: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(study.join("package.json")).unwrap()).unwrap();
+        let deps = &package["dependencies"];
+        assert_eq!(
+            deps["plugin-lab-note"], "file:lab-plugins/plugin-lab-note",
+            "{what}: {package}"
+        );
+        assert_eq!(
+            package["scripts"]["serve"], "python3 -m http.server",
+            "{what}"
+        );
+        for (name, version, _) in experiment::JSPSYCH_PACKAGES {
+            assert_eq!(deps[name], *version, "{what}: {package}");
+        }
+        assert_eq!(
+            std::fs::read_to_string(study.join("node_modules/plugin-lab-note/index.js")).unwrap(),
+            script,
+            "{what}"
+        );
+        assert!(study.join("package-lock.json").is_file(), "{what}");
+        assert!(study.join("lab.html").is_file(), "{what}");
+    };
+    // Rerun without installing: npm's files as they were, byte for byte.
+    let again = write_study(&["--no-install", "--force"]);
+    assert!(again.status.success(), "{again:?}");
+    check("--no-install --force");
+    assert_eq!(
+        std::fs::read_to_string(study.join("package-lock.json")).unwrap(),
+        lock
+    );
+    let said = String::from_utf8_lossy(&again.stderr);
+    assert!(
+        !said.contains("node_modules") && !said.contains("package-lock"),
+        "{said}"
+    );
+    // The manifest never claims npm's files, so no later run deletes them.
+    let listed = std::fs::read_to_string(study.join(".shadelab-files.json")).unwrap();
+    assert!(
+        !listed.contains("node_modules") && !listed.contains("package-lock"),
+        "{listed}"
+    );
+    // Rerun with npm install (where npm and Chromium are, to run the lab's page after).
+    if jspsych().is_none() {
+        let _ = std::fs::remove_dir_all(&d);
+        return;
+    }
+    let installed = write_study(&["--force"]);
+    assert!(installed.status.success(), "{installed:?}");
+    let said = String::from_utf8_lossy(&installed.stderr);
+    if said.contains("jsPsych is not installed") {
+        eprintln!("the npm half of the rerun test skipped: {said}");
+        let _ = std::fs::remove_dir_all(&d);
+        return;
+    }
+    check("--force");
+    let lock = std::fs::read_to_string(study.join("package-lock.json")).unwrap();
+    assert!(
+        lock.contains("plugin-lab-note") && lock.contains("\"node_modules/jspsych\""),
+        "{lock}"
+    );
+    // The lab's page runs after: its plugin loaded, shadelab's trials done.
+    let server = Server::start(&study, &[]);
+    let page = run(
+        &server.url("lab.html"),
+        &d.join("profile"),
+        &ARGS,
+        Duration::from_secs(120),
+    );
+    let json = element(&page.stdout, "pre", "lab-data")
+        .unwrap_or_else(|| panic!("the lab's page did not finish: {}", page.stdout));
+    let out: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(out["plugin"], "loaded");
+    let data = out["data"].as_array().unwrap();
+    assert_eq!(data.iter().filter(|r| r["shadelab"] == "trial").count(), 9);
+    assert!(data.iter().all(|r| r["participant"] == "lab-008"));
+    drop(server);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn the_pilot_without_a_browser_writes_the_rows_the_page_writes() {
+    let d = scratch("experiment-pilot-cli");
+    let study = [
+        "experiment",
+        "--out",
+        "study",
+        "--rotations",
+        "0:360:30",
+        "--repeats",
+        "3",
+        "--practice",
+        "4",
+        "--counterbalance-keys",
+        "--no-install",
+        "--quiet",
+    ];
+    assert!(shadelab(&d, &study).status.success());
+    let model = "tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:7";
+    let pilot = |participant: &str, out: &str| {
+        let o = shadelab(
+            &d,
+            &[
+                "experiment",
+                "pilot",
+                "study",
+                "--simulate",
+                model,
+                "--participant",
+                participant,
+                "--out",
+                out,
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(d.join(out)).unwrap()
+    };
+    let csv = pilot("P-odd", "p1.csv");
+    let table = rows(&csv);
+    assert_eq!(table.len(), 4 + 12 * 3);
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        experiment::PILOT_COLUMNS.join(",")
+    );
+    // Same seed, same file; another participant, another order.
+    assert_eq!(pilot("P-odd", "p2.csv"), csv);
+    assert_ne!(pilot("P-even", "p3.csv"), csv);
+    // Refusals: one line each, nothing written.
+    assert_error(
+        &shadelab(
+            &d,
+            &[
+                "experiment",
+                "pilot",
+                "study",
+                "--simulate",
+                "tilt:26",
+                "--out",
+                "x.csv",
+            ],
+        ),
+        2,
+        "--simulate give kappa",
+    );
+    assert_error(
+        &shadelab(
+            &d,
+            &[
+                "experiment",
+                "pilot",
+                "study",
+                "--simulate",
+                model,
+                "--out",
+                "p1.csv",
+            ],
+        ),
+        1,
+        "p1.csv",
+    );
+    assert_error(
+        &shadelab(
+            &d,
+            &[
+                "experiment",
+                "pilot",
+                "nowhere",
+                "--simulate",
+                model,
+                "--out",
+                "x.csv",
+            ],
+        ),
+        1,
+        "nowhere",
+    );
+    assert!(!d.join("x.csv").exists());
+    // fit observer reads the pilot's file as it reads the page's.
+    let read = shadelab::pipeline::fit::read_responses(&d.join("p1.csv")).unwrap();
+    assert_eq!(read.participants[0].0, "P-odd");
+    assert_eq!(read.participants[0].1.len(), 36);
+    // The page, in pilot mode for the same participant and observer, writes the same rows:
+    // its trial rows, cut to the pilot's columns, byte for byte. (The page's other columns
+    // are the browser's: its user agent, screen and window, jsPsych's clock.)
+    let Some(modules) = jspsych() else { return };
+    let folder = d.join("study");
+    std::os::unix::fs::symlink(modules, folder.join("node_modules")).unwrap();
+    let server = Server::start(&folder, &[]);
+    for (participant, file) in [("P-odd", "p1.csv"), ("P-even", "p3.csv")] {
+        let page = run(
+            &server.url(&format!(
+                "index.html?simulate={model}&participant={participant}"
+            )),
+            &d.join(format!("profile-{participant}")),
+            &ARGS,
+            Duration::from_secs(120),
+        );
+        let all = rows(&element(&page.stdout, "pre", "results").unwrap());
+        let mut page_csv = experiment::PILOT_COLUMNS.join(",") + "\n";
+        for r in trials(&all) {
+            let cells: Vec<String> = experiment::PILOT_COLUMNS
+                .iter()
+                .map(|c| experiment::csv_cell(&r[*c]))
+                .collect();
+            page_csv += &(cells.join(",") + "\n");
+        }
+        assert_eq!(
+            page_csv,
+            std::fs::read_to_string(d.join(file)).unwrap(),
+            "{participant}"
+        );
+    }
     drop(server);
     let _ = std::fs::remove_dir_all(&d);
 }

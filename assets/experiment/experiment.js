@@ -126,7 +126,10 @@
       }
       const first = design.trials.find((t) => t.block === 'test');
       const one = Object.assign({}, design, { trials: [first] });
-      initJsPsych().run([shadelabTimeline(one, { participant: 'preview', instructions: false, practice: false })]);
+      initJsPsych().run([shadelabTimeline(one, {
+        participant: 'preview', params: params, instructions: false, practice: false,
+        ppd: design.display.ppd, ppdMethod: 'none: one image pixel per CSS pixel',
+      })]);
       return;
     }
     const saveUrl = get('save_url') || design.save_url || '';
@@ -142,29 +145,16 @@
       message_progress_bar: 'Progress',
       on_finish: () => finish(jsPsych, participant, saveUrl, saveFormat),
     });
+    // The timeline puts the participant and the session's columns on every row.
     const trials = shadelabTimeline(design, {
       participant: participant,
+      params: params,
       jsPsych: jsPsych,
       ppd: () => session.ppd,
       ppdMethod: () => session.method,
       simulate: model,
     });
-    jsPsych.data.addProperties({
-      participant: participant,
-      order_seed: trials.shadelab.order_seed,
-      prolific_pid: get('PROLIFIC_PID'),
-      study_id: get('STUDY_ID'),
-      session_id: get('SESSION_ID'),
-      design_hash: design.design_hash,
-      shadelab_version: design.version,
-      viewing_distance_cm: d,
-      ppd: session.ppd,
-      ppd_method: session.method,
-      user_agent: navigator.userAgent,
-      screen_width: screen.width,
-      screen_height: screen.height,
-      simulated: model ? get('simulate') : '',
-    });
+    jsPsych.data.addProperties({ ppd: session.ppd, ppd_method: session.method });
 
     const timeline = [{
       type: jsPsychBrowserCheck,

@@ -16,8 +16,17 @@
 //   imagePath          a prefix for the design's image paths (e.g. 'shadelab/' when the images
 //                      lie in a subfolder of the lab's study); default ''
 //   ppd                CSS pixels per degree on this display (a number, or a function asked at
-//                      each trial, e.g. after a calibration); default the images' own ppd
+//                      each trial, e.g. after a calibration); without it the images' own ppd
+//                      is assumed (one image pixel per CSS pixel): the console says so and
+//                      every row's ppd_method is 'assumed' (docs/experiments.md shows the
+//                      card calibration to add)
 //   ppdMethod          how ppd was measured (a string, or a function), saved in every row
+//                      (default 'given' when ppd is given)
+//   params             the URL parameters to read PROLIFIC_PID, STUDY_ID and SESSION_ID from
+//                      (an object or URLSearchParams; default the page's own URL's)
+//   participantOnAllRows  with jsPsych given, put the participant and the session's columns
+//                      on every row of the study, the lab's own too (true; false: only on
+//                      shadelab's rows)
 //   instructions       show the task's instructions and the "practice done" screen (true)
 //   practice           run the design's practice trials (true)
 //   breakEvery         a break after every N test trials (default the design's break_every;
@@ -33,8 +42,11 @@
 // `response` and `rt`): shadelab = 'trial', block, practice, shadelab_trial (1, 2, ... in the
 // order shown), rotation_deg, image, key_convex, key_concave, judgement (convex | concave),
 // participant, order_seed, design_hash, stimulus, ppd, ppd_method, fullscreen, window_width and
-// window_height. Fixation and break screens carry shadelab = 'fixation' | 'break' (and
-// break = true); other rows are the lab's.
+// window_height; and, as every row shadelab makes, the session's columns (sessionColumns):
+// prolific_pid, study_id, session_id, shadelab_version, viewing_distance_cm, user_agent,
+// screen_width, screen_height and simulated (the observer model, or '' for a person).
+// Fixation and break screens carry shadelab = 'fixation' | 'break' (and break = true); other
+// rows are the lab's.
 (function (global) {
   'use strict';
 
@@ -71,13 +83,15 @@
 
   // P(convex | theta) = lapse/2 + (1 - lapse) * pi*vM(theta; mu, kappa) /
   //                     (pi*vM(theta; mu, kappa) + (1 - pi)*vM(theta + 180; mu, kappa)),
-  // with vM(x; mu, kappa) taken as exp(kappa cos(x - mu)): the von Mises normaliser cancels.
-  // theta and mu in degrees, tilt convention (0 = up, +90 = left).
+  // theta and mu in degrees, tilt convention (0 = up, +90 = left). The von Mises normaliser
+  // cancels: the log odds are logit(pi) + 2 kappa cos(theta - mu). Computed step for step as
+  // shadelab's ModelParams::p_convex (src/analysis/observer_model.rs), so that
+  // `shadelab experiment pilot` draws the same answers as this page.
   function pConvex(theta, m) {
-    const rad = Math.PI / 180;
-    const lit = m.convex * Math.exp(m.kappa * Math.cos((theta - m.tilt) * rad));
-    const opposite = (1 - m.convex) * Math.exp(m.kappa * Math.cos((theta + 180 - m.tilt) * rad));
-    return m.lapse / 2 + (1 - m.lapse) * lit / (lit + opposite);
+    const x = Math.log(m.convex / (1 - m.convex)) +
+      2 * m.kappa * Math.cos((theta - m.tilt) * (Math.PI / 180));
+    const p = x >= 0 ? 1 / (1 + Math.exp(-x)) : Math.exp(x) / (1 + Math.exp(x));
+    return m.lapse === 0 ? p : 0.5 * m.lapse + (1 - m.lapse) * p;
   }
 
   // Parses `tilt:T,kappa:K,convex:C,lapse:L,seed:S`; throws a one-line message when bad.
@@ -115,6 +129,34 @@
     return model;
   }
 
+  // The observer model as text, `tilt:T,kappa:K,convex:C,lapse:L,seed:S`: the `simulated`
+  // column of its rows ('' for a person).
+  function simulateText(m) {
+    return m ? `tilt:${m.tilt},kappa:${m.kappa},convex:${m.convex},lapse:${m.lapse},seed:${m.seed}` : '';
+  }
+
+  // The columns every row of a session carries besides the participant: Prolific's ids from
+  // the URL parameters `params`, the version, the viewing distance, the browser and screen, and
+  // whether the answers are simulated.
+  function sessionColumns(design, params, model) {
+    const p = params || new URLSearchParams(global.location ? global.location.search : '');
+    const get = (k) => {
+      const v = typeof p.get === 'function' ? p.get(k) : p[k];
+      return v === undefined || v === null ? '' : String(v);
+    };
+    return {
+      prolific_pid: get('PROLIFIC_PID'),
+      study_id: get('STUDY_ID'),
+      session_id: get('SESSION_ID'),
+      shadelab_version: design.version,
+      viewing_distance_cm: design.display.viewing_distance_cm,
+      user_agent: global.navigator ? global.navigator.userAgent : '',
+      screen_width: global.screen ? global.screen.width : '',
+      screen_height: global.screen ? global.screen.height : '',
+      simulated: simulateText(model),
+    };
+  }
+
   // The participant's id: `participant`, else Prolific's `PROLIFIC_PID`, else one drawn here.
   function participantId(params) {
     const p = params || new URLSearchParams(global.location ? global.location.search : '');
@@ -131,20 +173,42 @@
   }
 
   function shadelabTimeline(design, options) {
+    const calibrated = !!options && options.ppd !== undefined && options.ppd !== null;
     const o = Object.assign({
       participant: null,
       jsPsych: null,
       imagePath: '',
-      ppd: design.display.ppd,
-      ppdMethod: 'none: one image pixel per CSS pixel',
+      params: null,
+      participantOnAllRows: true,
       instructions: true,
       practice: true,
       breakEvery: design.break_every || 0,
       counterbalanceKeys: !!design.counterbalance_keys,
       simulate: null,
     }, options || {});
-    const participant = o.participant || participantId();
+    if (!calibrated) {
+      o.ppd = design.display.ppd;
+      o.ppdMethod = 'assumed';
+      if (global.console) {
+        global.console.warn(`shadelab: no calibration, so ${design.display.ppd} pixels per ` +
+          'degree are assumed (one image pixel per CSS pixel) and every row\'s ppd_method is ' +
+          '\'assumed\'; give shadelabTimeline a ppd, e.g. from a card calibration (docs/experiments.md)');
+      }
+    } else if (o.ppdMethod === undefined || o.ppdMethod === null) {
+      o.ppdMethod = 'given';
+    }
+    const participant = o.participant || participantId(o.params);
     const orderSeed = fnv1a(`${design.seed}:${participant}`);
+    // Who, in which design, and the session: on every row shadelab makes (and, with jsPsych
+    // and participantOnAllRows, on the lab's rows too).
+    const columns = Object.assign({
+      participant: participant,
+      order_seed: orderSeed,
+      // design_hash: design.design_hash tells these rows from an earlier design's.
+      design_hash: design.design_hash,
+    }, sessionColumns(design, o.params, o.simulate));
+    const tag = (data) => Object.assign({}, columns, data);
+    if (o.jsPsych && o.participantOnAllRows) o.jsPsych.data.addProperties(columns);
     const random = mulberry32(orderSeed);
     let keys = { convex: design.keys.convex, concave: design.keys.concave };
     if (o.counterbalanceKeys && (orderSeed & 1) === 1) {
@@ -169,7 +233,7 @@
         stimulus: '<div class="shadelab-fixation">+</div>',
         choices: 'NO_KEYS',
         trial_duration: design.timing.fixation_ms,
-        data: { shadelab: 'fixation' },
+        data: tag({ shadelab: 'fixation' }),
       };
       const image = {
         type: jsPsychImageKeyboardResponse,
@@ -181,7 +245,7 @@
         render_on_canvas: false,
         prompt: reminder,
         post_trial_gap: design.timing.blank_ms,
-        data: {
+        data: tag({
           shadelab: 'trial',
           block: t.block,
           practice: t.block === 'practice',
@@ -190,12 +254,8 @@
           image: t.image,
           key_convex: keys.convex,
           key_concave: keys.concave,
-          participant: participant,
-          order_seed: orderSeed,
-          // design_hash: design.design_hash tells these rows from an earlier design's.
-          design_hash: design.design_hash,
           stimulus_name: design.stimulus,
-        },
+        }),
         on_start: () => { if (t.block === 'test') progress(index / count); },
         on_finish: (data) => {
           shown += 1;
@@ -224,8 +284,7 @@
         type: jsPsychHtmlKeyboardResponse,
         stimulus: `<div class="shadelab-text">${html}</div>`,
         choices: [' '],
-        data: { shadelab: 'instructions' },
-      }, extra || {});
+      }, extra || {}, { data: tag((extra && extra.data) || { shadelab: 'instructions' }) });
     }
 
     const timeline = [{
@@ -233,7 +292,7 @@
       images: design.images.map((i) => o.imagePath + i.file),
       message: 'Loading the images\u2026',
       error_message: 'The images could not be loaded: serve this folder from a web server (see README.md).',
-      data: { shadelab: 'preload' },
+      data: tag({ shadelab: 'preload' }),
     }];
     if (o.instructions) {
       timeline.push(screen(
@@ -266,7 +325,7 @@
     // timeline node's own properties on to its trials as parameters).
     const node = { timeline: timeline };
     Object.defineProperty(node, 'shadelab', {
-      value: { participant: participant, order_seed: orderSeed, keys: keys },
+      value: { participant: participant, order_seed: orderSeed, keys: keys, columns: columns },
       enumerable: false,
     });
     return node;
@@ -274,6 +333,7 @@
 
   shadelabTimeline.participantId = participantId;
   shadelabTimeline.parseSimulate = parseSimulate;
+  shadelabTimeline.sessionColumns = sessionColumns;
   shadelabTimeline.orderSeed = (design, participant) => fnv1a(`${design.seed}:${participant}`);
   global.shadelabTimeline = shadelabTimeline;
 })(typeof window !== 'undefined' ? window : globalThis);

@@ -1,18 +1,25 @@
-//! `shadelab experiment --out DIR`: a jsPsych 8 study ("bump or dimple?").
+//! `shadelab experiment --out DIR`: a jsPsych 8 study ("bump or dimple?"); `shadelab experiment
+//! pilot STUDY --simulate …`: its simulated participant's data without a browser.
 
 use super::progress::Bar;
 use super::{CliError, CliResult, Global};
 use shadelab::parse_size;
-use shadelab::pipeline::experiment::{prolific_completion_url, run as build, Config, Install};
+use shadelab::pipeline::experiment::{
+    prolific_completion_url, run as build, run_pilot, Config, Install, PilotConfig,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `experiment`.
 #[derive(Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Args {
-    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file): index.html, jatos.html, experiment.js, shadelab-timeline.js, experiment.css, package.json, design.json, README.md and images/ (and node_modules/ from npm install).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    /// `pilot`: the simulated participant's data without a browser.
+    #[command(subcommand)]
+    pub command: Option<Sub>,
+    /// Output folder (written whole or not at all; it replaces only the files shadelab writes and keeps every other file, npm's node_modules/ and package-lock.json and the lab's own dependencies in package.json too): index.html, jatos.html, experiment.js, shadelab-timeline.js, experiment.css, package.json, design.json, README.md and images/.
+    #[arg(long, value_name = "DIR", required = true)]
+    pub out: Option<PathBuf>,
     /// The stimulus shown (any with a light and one target, e.g. bumps, gaussian, sphere) [default: bumps, one bump].
     #[arg(long, value_name = "NAME")]
     pub stimulus: Option<String>,
@@ -69,8 +76,69 @@ pub struct Args {
     pub no_install: bool,
 }
 
+/// The subcommands of `experiment`.
+#[derive(Debug, clap::Subcommand)]
+pub enum Sub {
+    /// The study's simulated participant without a browser: the trial rows its page writes in pilot mode (index.html?simulate=…) for the same observer, seed and participant, as CSV.
+    Pilot(PilotArgs),
+}
+
+/// Arguments of `experiment pilot`.
+#[derive(Debug, clap::Args)]
+pub struct PilotArgs {
+    /// The study folder `shadelab experiment` wrote (or its design.json).
+    #[arg(value_name = "STUDY")]
+    pub study: PathBuf,
+    /// The observer, as the page's simulate parameter: tilt:T,kappa:K[,convex:C][,lapse:L][,seed:S] (convex 0.5, lapse 0, seed 1 by default).
+    #[arg(long, value_name = "MODEL")]
+    pub simulate: String,
+    /// The participant id (the page's participant parameter) [default: simulated-seedS].
+    #[arg(long, value_name = "ID")]
+    pub participant: Option<String>,
+    /// The CSV file to write (replaced only with --force).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// Runs `experiment pilot`.
+fn pilot(args: PilotArgs, global: &Global) -> CliResult {
+    let started = Instant::now();
+    let config = PilotConfig {
+        study: args.study,
+        simulate: args
+            .simulate
+            .parse()
+            .map_err(|e| CliError::usage(format!("--simulate {e}")))?,
+        participant: args.participant,
+    };
+    config
+        .validate()
+        .map_err(|e| CliError::usage(format!("--participant {e}")))?;
+    let report = run_pilot(&config)?;
+    report.write(&args.out, &config.design_path(), global.force)?;
+    let out = super::output::Output::new(global);
+    out.wrote(&args.out, started.elapsed().as_secs_f64());
+    out.results(
+        &format!(
+            "{} trials of participant {} (order seed {}) answered by {}; fit them with `shadelab fit observer {}`",
+            report.rows.len(),
+            report.participant,
+            report.order_seed,
+            report.simulate.text(),
+            args.out.display()
+        ),
+        &report,
+    )
+}
+
 /// Runs `experiment`.
 pub fn run(args: Args, global: &Global) -> CliResult {
+    if let Some(Sub::Pilot(p)) = args.command {
+        return pilot(p, global);
+    }
+    let Some(out_folder) = args.out.clone() else {
+        return Err(CliError::usage("experiment needs --out DIR"));
+    };
     let started = Instant::now();
     let mut config = Config::new();
     if let Some(name) = &args.stimulus {
@@ -131,7 +199,7 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     config.check().map_err(super::flags::setting)?;
     // Claimed before the work, so that a folder that may not be written fails at once.
     let dest = super::destination_marked(
-        &args.out,
+        &out_folder,
         global,
         Vec::new(),
         shadelab::pipeline::experiment::MARKER,
@@ -165,11 +233,12 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let d = &report.design;
     out.results(
         &format!(
-            "{} trials ({} practice, {} rotations x {} repeats); open {}/index.html from a web server (python3 -m http.server; jatos.html under JATOS), or pilot it with index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1",
+            "{} trials ({} practice, {} rotations x {} repeats); open {}/index.html from a web server (python3 -m http.server; jatos.html under JATOS), or pilot it with index.html?simulate=tilt:26,kappa:2,convex:0.7,lapse:0.02,seed:1 (without a browser: shadelab experiment pilot {} --simulate tilt:26,kappa:2 --out pilot.csv)",
             d.trials.len(),
             d.practice_trials,
             d.rotations_deg.len(),
             d.repeats,
+            folder.display(),
             folder.display()
         ),
         &report,

@@ -229,6 +229,9 @@ pub struct AtomicDir {
     /// Files in the folder that the last run did not write are refused without `force`
     /// (kept with it): the name of what they would be, e.g. "the experiment's design".
     refuse_collected: Option<String>,
+    /// Entries of the folder that another program keeps (npm's `node_modules/`): see
+    /// [`AtomicDir::leaves_to`].
+    tools: Vec<String>,
     /// Files written straight into `temp` are synced at the commit (see [`STAGED`]).
     staged: Staged,
 }
@@ -316,6 +319,7 @@ impl AtomicDir {
             force,
             inputs: Vec::new(),
             refuse_collected: None,
+            tools: Vec::new(),
         })
     }
 
@@ -358,6 +362,16 @@ impl AtomicDir {
         self
     }
 
+    /// Leaves the entries `names` of the folder (top-level names, e.g. npm's `node_modules`
+    /// and `package-lock.json`) to the program that keeps them: they are never shadelab's (not
+    /// in the manifest, even where an earlier version's manifest listed them), always carried
+    /// over as they are, neither "collected data" nor listed among the kept files. The run may
+    /// still have that program fill them once the folder is committed.
+    pub fn leaves_to(mut self, names: &[&str]) -> AtomicDir {
+        self.tools = names.iter().map(|n| n.to_string()).collect();
+        self
+    }
+
     /// Where to write the folder's files until it is committed.
     pub fn path(&self) -> &Path {
         &self.temp
@@ -384,7 +398,7 @@ impl AtomicDir {
                 self.marker
             )));
         }
-        let written = super::keep::write_manifest(&self.temp)?;
+        let written = super::keep::write_manifest(&self.temp, &self.tools)?;
         if let Some((input, rel)) = self
             .inputs
             .iter()
@@ -399,12 +413,14 @@ impl AtomicDir {
                 ),
             ));
         }
-        let kept = if self.target.is_dir() {
-            let ours = super::keep::read_manifest(&self.target);
+        let mut kept = if self.target.is_dir() {
+            let mut ours = super::keep::read_manifest(&self.target);
+            ours.retain(|f| !super::keep::under_any(f, &self.tools));
             super::keep::carry(&self.target, &self.temp, &ours, super::keep::Carry::Link)?
         } else {
             Vec::new()
         };
+        kept.retain(|f| !super::keep::under_any(f, &self.tools));
         if let Some(what) = &self.refuse_collected {
             let collected: Vec<PathBuf> = kept
                 .iter()

@@ -70,9 +70,16 @@ pub(crate) fn files_under(dir: &Path) -> Result<BTreeSet<PathBuf>> {
     Ok(out)
 }
 
-/// Writes the manifest of `dir`: every file in it now.
-pub(crate) fn write_manifest(dir: &Path) -> Result<BTreeSet<PathBuf>> {
-    let files = files_under(dir)?;
+/// Whether `rel` lies under one of the `tools` entries (see [`super::AtomicDir::leaves_to`]).
+pub(crate) fn under_any(rel: &Path, tools: &[String]) -> bool {
+    tools.iter().any(|t| rel.starts_with(t))
+}
+
+/// Writes the manifest of `dir`: every file in it now, but those under the `tools` entries
+/// (another program's, such as npm's `node_modules/`).
+pub(crate) fn write_manifest(dir: &Path, tools: &[String]) -> Result<BTreeSet<PathBuf>> {
+    let mut files = files_under(dir)?;
+    files.retain(|f| !under_any(f, tools));
     let listed: Vec<String> = files
         .iter()
         .map(|p| p.to_string_lossy().replace('\\', "/"))
@@ -260,7 +267,7 @@ mod tests {
         fs::write(d.join("top.txt"), "t").unwrap();
         #[cfg(unix)]
         std::os::unix::fs::symlink("top.txt", d.join("link")).unwrap();
-        let written = write_manifest(&d).unwrap();
+        let written = write_manifest(&d, &[]).unwrap();
         let mut expected: BTreeSet<PathBuf> =
             ["a/b/x.txt", "empty", "top.txt"].map(PathBuf::from).into();
         #[cfg(unix)]
@@ -348,7 +355,7 @@ mod tests {
         )
         .unwrap();
         fs::write(new.join("report.json"), "new report").unwrap();
-        write_manifest(&new).unwrap();
+        write_manifest(&new, &[]).unwrap();
         carry(&old, &new, &read_manifest(&old), Carry::Link).unwrap();
         // Meanwhile the user saves notes.txt by rename (a new file) and adds another.
         fs::write(old.join(".notes.swp"), "v2").unwrap();

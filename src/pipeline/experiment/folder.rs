@@ -18,12 +18,18 @@ impl Report {
     ///
     /// A folder that holds files an earlier run did not write (responses saved beside the design)
     /// is refused unless [`Output::force`](crate::pipeline::Output::force); with it they are kept, as every file shadelab did not
-    /// write always is, and [`Written::kept`] lists them.
+    /// write always is, and [`Written::kept`] lists them. npm's `node_modules/` and
+    /// `package-lock.json` are the lab's: always kept, never listed; `package.json` keeps the
+    /// lab's own dependencies, with shadelab's pins set in it. `npm install` (with
+    /// [`Config::install`](super::Config::install)) runs in the folder once it is in place.
     pub fn write(&self, out: &crate::pipeline::Output) -> Result<Written> {
         let report = self;
         let dir = out
             .folder(MARKER)?
-            .refusing_collected("the experiment's design");
+            .refusing_collected("the experiment's design")
+            .leaves_to(NPM_FILES);
+        // The lab's package.json (its own plugins beside shadelab's pins), read before any work.
+        let package = package_json_over(&dir.target().join("package.json"))?;
         let images = dir.path().join("images");
         std::fs::create_dir(&images).map_err(|e| Error::io(&images, e))?;
         let options = ExportOptions {
@@ -71,7 +77,7 @@ impl Report {
         io::write_text(&dir.path().join("experiment.js"), RUNNER_JS)?;
         io::write_text(&dir.path().join("shadelab-timeline.js"), TIMELINE_JS)?;
         io::write_text(&dir.path().join("experiment.css"), RUNNER_CSS)?;
-        io::write_text(&dir.path().join("package.json"), &package_json())?;
+        io::write_text(&dir.path().join("package.json"), &package)?;
         io::write_text(&dir.path().join("README.md"), &readme(design))?;
         io::write_text(&dir.path().join("index.html"), &page(""))?;
         // JATOS serves its jatos.js beside the study's files; a static host has none, so the
@@ -80,18 +86,54 @@ impl Report {
             &dir.path().join("jatos.html"),
             &page("<script src=\"jatos.js\"></script>\n"),
         )?;
+        let (folder, kept) = dir.commit_keeping()?;
+        // In the folder as committed, where the lab's node_modules/ and package-lock.json were
+        // carried over: npm updates shadelab's pins and keeps the lab's packages.
         let install = if report.install {
-            npm_install(dir.path())
+            npm_install(&folder)
         } else {
             Install::NotAsked
         };
-        let (folder, kept) = dir.commit_keeping()?;
         Ok(Written {
             folder,
             kept,
             install,
         })
     }
+}
+
+/// The entries of a study folder that are npm's, not shadelab's: a rerun keeps them as they
+/// are (with the lab's own plugins), and `npm install` updates them.
+const NPM_FILES: &[&str] = &["node_modules", "package-lock.json"];
+
+/// The package.json to write over `existing` (the folder's, if any): the lab's file as it is,
+/// with shadelab's pins ([`JSPSYCH_PACKAGES`]) set in its `dependencies`; a new one when there
+/// is none. A file that is not a JSON object with an object of `dependencies` is refused,
+/// naming it, rather than replaced with the lab's packages lost.
+fn package_json_over(existing: &Path) -> Result<String> {
+    let Ok(text) = std::fs::read_to_string(existing) else {
+        return Ok(package_json());
+    };
+    let bad = |why: &str| {
+        Error::format(
+            existing,
+            format!("{why}, so shadelab cannot set its jsPsych versions in it (fix or remove it)"),
+        )
+    };
+    let mut json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(&format!("is not JSON ({e})")))?;
+    let object = json
+        .as_object_mut()
+        .ok_or_else(|| bad("is not a JSON object"))?;
+    let deps = object
+        .entry("dependencies")
+        .or_insert_with(|| serde_json::Value::Object(serde_json::Map::new()))
+        .as_object_mut()
+        .ok_or_else(|| bad("has `dependencies` that are not an object"))?;
+    for (name, version, _) in JSPSYCH_PACKAGES {
+        deps.insert(name.to_string(), serde_json::Value::from(*version));
+    }
+    Ok(serde_json::to_string_pretty(&json).unwrap_or_default() + "\n")
 }
 
 /// Whether jsPsych was installed into the folder.
@@ -166,7 +208,10 @@ Each participant sees them in their own order, shuffled with a seed made of the 
 The study runs on jsPsych 8 ({packages}), pinned in `package.json`. In this folder:\n\n\
     npm install\n\n\
 (`shadelab experiment` runs it when npm is on PATH.) Then the folder is a static site that runs \
-offline: `node_modules/` holds everything the pages load.\n\n\
+offline: `node_modules/` holds everything the pages load. Packages you add yourself (`npm install \
+@jspsych/plugin-survey`) stay: running `shadelab experiment` on this folder again keeps \
+`node_modules/`, `package-lock.json` and your dependencies in `package.json`, and sets only \
+shadelab's own versions there.\n\n\
 ## Running it\n\n\
 - Locally: `python3 -m http.server 8000` in this folder, then open http://localhost:8000/.\n\
 - Any static host (a lab server, GitHub Pages, Pavlovia, Cognition.run): upload the folder \

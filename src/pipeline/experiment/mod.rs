@@ -38,8 +38,13 @@
 //! ```
 
 mod folder;
+mod pilot_mode;
 
 pub use folder::{Install, Written};
+pub use pilot_mode::{
+    csv_cell, order_seed, pilot, run_pilot, PilotConfig, PilotReport, Simulate, PILOT_COLUMNS,
+    PILOT_PPD_METHOD,
+};
 
 use super::perception::{field, BadSetting};
 use crate::analysis::convexity;
