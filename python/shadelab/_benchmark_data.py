@@ -97,9 +97,11 @@ def _murray(panel, cell, none=None):
 # per degree, centred), in stimupy's frame; every one lies in or beside the recorded stimupy
 # target and far from the other. Matching by pixels: the source's picture and stimupy's
 # differ on under 5.2 % of the pixels in the frame named (sbc_large, sbc_small: mirrored
-# left-right; in the same frame 37.7 % and 39.2 %); 9.2 % for the corrugated Mondrian, 10.7 % for
-# checkerboard_016 and 17.1 % for the grating induction, whose details stimupy draws
-# differently (for these the position decides, and the surround of the matched targets agrees).
+# left-right; in the same frame 37.7 % and 39.2 %); 9.2 % for the corrugated Mondrian and 17.1 %
+# for the grating induction, whose details stimupy draws differently (region.hi still falls
+# on one stimupy target); checkerboard_016's small checks are out of phase in either frame
+# (10.7 %, mirrored 8.8 %), and there the surround decides: region.hi lies among white checks,
+# as target 2 does. docs/sources/flodog_regions.py ports the make_*.m files and prints these.
 SOURCES = {
     "RHS2007": {
         "WE_thick": _rhs("make_bm_whites_thick.m", 2, 1, (-3.00, 0.02)),
