@@ -290,10 +290,10 @@ class Bench(Result):
 
 class Benchmark(Result):
     """:func:`shadelab.benchmark`'s result: ``scores`` (per stimulus set and model: direction
-    agreement and Spearman ρ), ``checked_scores`` (the same over the stimuli whose
-    lighter-looking target a published rule chose), ``conventions`` (per stimulus, which target
-    people see as lighter and how that was established), ``rows`` (every model on every
-    stimulus), the Markdown ``table``, the ``folder`` written (or None) and the report."""
+    agreement and Spearman ρ), ``directions`` (per stimulus, the target the source expects to
+    look lighter, the one people saw as lighter or None, and the source), ``rows`` (every
+    model on every stimulus), the Markdown ``table``, the ``folder`` written (or None) and the
+    report."""
 
     __slots__ = ("table", "folder")
     command = "benchmark"
@@ -308,12 +308,8 @@ class Benchmark(Result):
         return self.report["scores"]
 
     @property
-    def checked_scores(self) -> List[Dict[str, Any]]:
-        return self.report["checked_scores"]
-
-    @property
-    def conventions(self) -> List[Dict[str, Any]]:
-        return self.report["conventions"]
+    def directions(self) -> List[Dict[str, Any]]:
+        return self.report["directions"]
 
     @property
     def rows(self) -> List[Dict[str, Any]]:

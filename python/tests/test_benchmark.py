@@ -23,20 +23,17 @@ def test_the_benchmark_scores_stimupys_stimuli_and_matches_the_command_line(tmp_
     odog = [r for r in result.rows if r["model"] == "odog"]
     # ODOG predicts the direction people see on White's effect, simultaneous contrast and
     # the snake.
-    assert all(r["agrees"] for r in odog), odog
+    assert all(r["verdict"] == "agrees" for r in odog), odog
     assert {(s["set"], s["model"]) for s in result.scores} == {
         ("murray2020", "odog"),
         ("murray2020", "highpass"),
     }
-    # Which target looks lighter, per stimulus: a published rule on the pixels for simultaneous
-    # contrast and White's effect, stimupy's order (not checked) for the snake.
-    conventions = {c["stimulus"]: c for c in result.conventions}
-    assert (conventions["simcon"]["lighter_target"], conventions["simcon"]["convention"]) == (
-        2,
-        "contrast",
-    )
-    assert conventions["white"]["checked"] and not conventions["snake"]["checked"]
-    assert {s["stimuli"] for s in result.checked_scores} == {2}
+    # Which target looks lighter, per stimulus, from Murray (2020): the leftmost, stimupy's
+    # target 2, the green dot of the paper's Figure 1.
+    directions = {d["stimulus"]: d for d in result.directions}
+    assert directions["simcon"]["expected_lighter"] == 2
+    assert directions["simcon"]["human_lighter_target"] == 2
+    assert "Fig. 1k" in directions["simcon"]["direction_source"]
     assert "| odog |" in result.table
     assert (tmp_path / "py" / "benchmark.csv").is_file()
 
@@ -53,7 +50,10 @@ def test_the_benchmark_scores_stimupys_stimuli_and_matches_the_command_line(tmp_
     strip = lambda d: {k: v for k, v in d.items() if k not in RUN_FIELDS}
     assert strip(report) == strip(result.to_dict())
     csv = (tmp_path / "py" / "benchmark.csv").read_text()
-    assert csv.splitlines()[0] == "set,stimulus,model,human,human_ci95,human_direction,effect,agrees"
+    assert csv.splitlines()[0] == (
+        "set,stimulus,model,human,human_ci95,human_direction,"
+        "human_lighter_target,direction_source,effect,verdict"
+    )
 
 
 def test_an_unknown_stimulus_is_a_value_error():

@@ -3,7 +3,9 @@
 //! A model's *effect* on a stimulus with two targets is the mean model output over the target
 //! people see as lighter minus the mean over the other (Robinson, Hammon & de Sa 2007 compare
 //! models with observers by the difference of the mean model output on the two targets). The
-//! model predicts the human *direction* when its effect is positive. Across stimuli, the
+//! model predicts the human *direction* when its effect is positive (the verdicts, with the
+//! tolerance under which an effect is no prediction, are
+//! [`crate::pipeline::benchmark::Verdict`]'s). Across stimuli, the
 //! Spearman rank correlation between the models' effects and the human effect sizes says
 //! whether the model orders the illusions by strength as people do; it does not depend on
 //! the model's units.
@@ -86,26 +88,6 @@ pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
         syy += (b - my) * (b - my);
     }
     (sxx > 0.0 && syy > 0.0).then_some(sxy / (sxx * syy).sqrt())
-}
-
-/// How many model effects have the human sign: pairs (human, model) whose human value is 0
-/// (no effect reported) are left out. Returns (agreeing, counted).
-///
-/// ```
-/// use shadelab::internal::lightness::benchmark::direction_agreement;
-/// let pairs = [(4.0, 0.1), (2.0, -0.3), (0.0, 0.5), (-1.0, -2.0)];
-/// assert_eq!(direction_agreement(&pairs), (2, 3));
-/// ```
-pub fn direction_agreement(pairs: &[(f64, f64)]) -> (usize, usize) {
-    pairs
-        .iter()
-        .filter(|(h, _)| *h != 0.0)
-        .fold((0, 0), |(agree, n), (h, m)| {
-            (
-                agree + usize::from(h.signum() == m.signum() && *m != 0.0),
-                n + 1,
-            )
-        })
 }
 
 #[cfg(test)]

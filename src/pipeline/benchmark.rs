@@ -11,7 +11,7 @@ use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels};
 use crate::io::{self, Stamp};
-use crate::lightness::benchmark::{direction_agreement, effect, spearman};
+use crate::lightness::benchmark::{effect, spearman};
 use crate::lightness::Model;
 use crate::plot::{Figure, IntervalSeries, LinePlot, Series, Ticks};
 use crate::progress::Progress;
@@ -54,15 +54,15 @@ impl Human {
         }
     }
 
-    /// The human direction: +1 when the expected-lighter target was seen lighter, −1 when the
-    /// other was, 0 when there is no effect (an effect strength of 0, or a proportion whose
-    /// 95 % interval holds ½).
+    /// The direction the data show: +1 when the expected-lighter target was seen lighter, −1
+    /// when the other was, 0 when there is no effect (an effect strength of 0, or a proportion
+    /// whose 95 % interval holds ½; within [`NO_HUMAN_EFFECT`], not by exact equality).
     pub fn direction(&self) -> i8 {
         let (v, half) = match *self {
             Human::EffectStrength { value } => (value, 0.0),
             Human::ProportionExpected { value, ci95 } => (value - 0.5, ci95.abs()),
         };
-        if v.abs() <= half || v == 0.0 {
+        if v.abs() <= half + NO_HUMAN_EFFECT {
             0
         } else if v > 0.0 {
             1
@@ -70,7 +70,18 @@ impl Human {
             -1
         }
     }
+
+    /// Why the data show no direction, when they show none.
+    fn why_no_direction(&self) -> Option<&'static str> {
+        (self.direction() == 0).then_some(match self {
+            Human::EffectStrength { .. } => "the human effect strength is 0",
+            Human::ProportionExpected { .. } => "the proportion's 95 % interval holds 0.5",
+        })
+    }
 }
+
+/// A human effect strength or proportion difference this close to none is none.
+pub const NO_HUMAN_EFFECT: f64 = 1e-12;
 
 /// One stimulus with its human data.
 #[derive(Debug, Clone)]
@@ -85,17 +96,57 @@ pub struct BenchmarkStimulus {
     pub targets: Labels,
     /// Pixels per degree.
     pub ppd: f64,
-    /// The label of the target that is expected to look lighter.
+    /// The label of the target the data's source expects people to see as lighter (RHS2007:
+    /// the authors' `region.hi`; murray2020: the paper's expected target). The effect is
+    /// measured from it, and the human value is stated for it.
     pub lighter: u16,
     /// The label of the other target.
     pub darker: u16,
-    /// How `lighter` was chosen: the published rule applied to the stimulus's pixels (e.g.
-    /// `contrast`, `white`), or a note that it is the stimulus set's order, not checked.
-    pub convention: String,
-    /// Whether a published rule on the pixels chose `lighter` (`false`: the set's order).
-    pub convention_checked: bool,
+    /// Where `lighter` was read: repository, commit and file, or the paper, page and figure
+    /// (one line without commas: it is a CSV field).
+    pub direction_source: String,
+    /// Where the source's lighter region lies in the picture, in degrees from the picture's
+    /// centre (x right, y up), when the exporter recorded it.
+    pub source_position: Option<[f64; 2]>,
+    /// Why the source itself calls the stimulus's direction unreliable (a control figure it
+    /// calls ineffective), or `None`.
+    pub no_direction: Option<String>,
     /// What people reported.
     pub human: Human,
+}
+
+impl BenchmarkStimulus {
+    /// The target people saw as lighter: the expected one where the data show the expected
+    /// effect, the other where they show the reverse, `None` where there is no reliable
+    /// direction ([`BenchmarkStimulus::why_no_direction`]).
+    pub fn human_lighter(&self) -> Option<u16> {
+        if self.no_direction.is_some() {
+            return None;
+        }
+        match self.human.direction() {
+            1 => Some(self.lighter),
+            -1 => Some(self.darker),
+            _ => None,
+        }
+    }
+
+    /// The human direction relative to the expected-lighter target: +1 (as expected), −1
+    /// (reversed) or 0 (none).
+    pub fn human_direction(&self) -> i8 {
+        match self.human_lighter() {
+            Some(l) if l == self.lighter => 1,
+            Some(_) => -1,
+            None => 0,
+        }
+    }
+
+    /// Why there is no human direction: the source's reason, or the data's (an effect
+    /// strength of 0, a proportion whose interval holds ½); `None` when there is one.
+    pub fn why_no_direction(&self) -> Option<String> {
+        self.no_direction
+            .clone()
+            .or_else(|| self.human.why_no_direction().map(str::to_string))
+    }
 }
 
 /// What to run: stimuli, models and where the data came from.
@@ -179,6 +230,21 @@ impl BenchmarkConfig {
                     "{what}: the human value is not finite"
                 )));
             }
+            if s.direction_source.trim().is_empty()
+                || s.direction_source.contains([',', '"', '\n', '\r'])
+            {
+                return Err(Error::invalid(format!(
+                    "{what}: direction_source must be one line without commas or quotes, not {:?}",
+                    s.direction_source
+                )));
+            }
+            if s.source_position
+                .is_some_and(|p| !p.iter().all(|v| v.is_finite()))
+            {
+                return Err(Error::invalid(format!(
+                    "{what}: source_position must be two finite numbers"
+                )));
+            }
         }
         Ok(())
     }
@@ -240,12 +306,23 @@ impl BenchmarkConfig {
                 }
                 Ok(v as u16)
             };
-            // Older exports carry no convention: the set's order, not checked.
-            let convention = entry["convention"]
-                .as_str()
-                .unwrap_or("not recorded by the exporter")
-                .to_string();
-            let convention_checked = entry["convention_checked"].as_bool().unwrap_or(false);
+            let source_position = match &entry["source_position"] {
+                Value::Null => None,
+                v => Some(serde_json::from_value::<[f64; 2]>(v.clone()).map_err(|_| {
+                    bad(&format!(
+                        "{full}: source_position must be [x, y] in degrees"
+                    ))
+                })?),
+            };
+            let no_direction = match &entry["no_direction"] {
+                Value::Null => None,
+                Value::String(why) => Some(why.clone()),
+                _ => {
+                    return Err(bad(&format!(
+                        "{full}: no_direction must be a string or null"
+                    )))
+                }
+            };
             stimuli.push(BenchmarkStimulus {
                 set,
                 name,
@@ -254,8 +331,9 @@ impl BenchmarkConfig {
                 ppd: number("ppd")?,
                 lighter: target("lighter_target")?,
                 darker: target("darker_target")?,
-                convention,
-                convention_checked,
+                direction_source: field("direction_source")?,
+                source_position,
+                no_direction,
                 human,
             });
         }
@@ -346,6 +424,64 @@ pub fn stimupy_available(python: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
+/// How a model's effect on one stimulus compares with what people saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The effect has the human sign.
+    Agrees,
+    /// The effect has the opposite sign.
+    Opposite,
+    /// The effect is zero (within [`NO_MODEL_EFFECT`] of the output's range): the model
+    /// predicts no difference, which is counted neither as agreeing nor as wrong.
+    NoPrediction,
+    /// People saw no reliable direction: not counted.
+    NotCounted,
+}
+
+impl Verdict {
+    /// The verdict on a model's `effect` where people saw the human direction `direction`
+    /// (+1, −1, 0); `scale` is the range of the model's output on the stimulus.
+    pub fn of(direction: i8, effect: f64, scale: f64) -> Verdict {
+        if direction == 0 {
+            Verdict::NotCounted
+        } else if effect.abs() <= NO_MODEL_EFFECT * scale {
+            Verdict::NoPrediction
+        } else if effect.signum() == f64::from(direction) {
+            Verdict::Agrees
+        } else {
+            Verdict::Opposite
+        }
+    }
+
+    /// The name in the CSV and the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Agrees => "agrees",
+            Verdict::Opposite => "opposite",
+            Verdict::NoPrediction => "no_prediction",
+            Verdict::NotCounted => "not_counted",
+        }
+    }
+
+    /// The verdict named `name` (as [`Verdict::name`] writes it).
+    pub fn from_name(name: &str) -> Option<Verdict> {
+        [
+            Verdict::Agrees,
+            Verdict::Opposite,
+            Verdict::NoPrediction,
+            Verdict::NotCounted,
+        ]
+        .into_iter()
+        .find(|v| v.name() == name)
+    }
+}
+
+/// A model effect within this fraction of the range of the model's output on the stimulus is
+/// no prediction (Retinex, for one, gives equal-luminance targets on flat surrounds exactly
+/// or almost exactly the same value): a decision never rests on exact float equality.
+pub const NO_MODEL_EFFECT: f64 = 1e-9;
+
 /// One model on one stimulus.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BenchmarkRow {
@@ -355,16 +491,22 @@ pub struct BenchmarkRow {
     pub stimulus: String,
     /// The model.
     pub model: String,
-    /// The human value (RHS2007: effect strength; murray2020: proportion expected).
+    /// The human value (RHS2007: effect strength; murray2020: proportion expected), stated
+    /// for the expected-lighter target.
     pub human: f64,
     /// Half the 95 % interval of the human value, when the data give one.
     pub human_ci95: Option<f64>,
-    /// The human direction (+1, −1, or 0 for no effect).
+    /// The human direction relative to the expected-lighter target (+1, −1, or 0 for none).
     pub human_direction: i8,
+    /// The target people saw as lighter (`None`: no reliable direction).
+    pub human_lighter_target: Option<u16>,
+    /// Where the expected-lighter target was read (repository, commit, file; or the paper's
+    /// page and figure).
+    pub direction_source: String,
     /// The model's effect: mean output over the expected-lighter target minus the other.
     pub effect: f64,
-    /// Whether the model's effect has the human sign (`None` where people saw no effect).
-    pub agrees: Option<bool>,
+    /// How the effect compares with what people saw.
+    pub verdict: Verdict,
 }
 
 /// One model's scores on one stimulus set.
@@ -376,30 +518,38 @@ pub struct BenchmarkScore {
     pub model: String,
     /// Stimuli on which the model's effect has the human sign.
     pub direction_agrees: usize,
-    /// Stimuli with a human direction (those with no effect are left out).
+    /// Stimuli with a human direction (those with none are left out).
     pub direction_counted: usize,
+    /// Of those, the stimuli on which the model predicts no difference (effect zero): neither
+    /// agreeing nor wrong.
+    pub direction_no_prediction: usize,
     /// Spearman's ρ between the model's effects and the human values, over every stimulus
-    /// of the set.
+    /// of the set (those without a human direction too).
     pub spearman: Option<f64>,
     /// Stimuli in the set.
     pub stimuli: usize,
 }
 
-/// Which target of a stimulus people see as lighter, and how that was established.
+/// Which target of a stimulus people see as lighter, and where that was read.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct BenchmarkConvention {
+pub struct BenchmarkDirection {
     /// The stimulus set.
     pub set: String,
     /// The stimulus.
     pub stimulus: String,
-    /// The label of the target people see as lighter.
-    pub lighter_target: u16,
+    /// The label of the target the source expects to look lighter.
+    pub expected_lighter: u16,
     /// The label of the other target.
-    pub darker_target: u16,
-    /// The published rule applied to the pixels, or a note that it is the set's order.
-    pub convention: String,
-    /// Whether a published rule chose the lighter target.
-    pub checked: bool,
+    pub expected_darker: u16,
+    /// The target people saw as lighter (`None`: no reliable direction).
+    pub human_lighter_target: Option<u16>,
+    /// Why there is no reliable direction, when there is none.
+    pub no_direction: Option<String>,
+    /// Where the expected-lighter target was read.
+    pub direction_source: String,
+    /// Where the source's lighter region lies in the picture (degrees from its centre, x
+    /// right, y up).
+    pub source_position: Option<[f64; 2]>,
 }
 
 /// What the benchmark found; [`BenchmarkReport::write_into`] writes it.
@@ -416,11 +566,8 @@ pub struct BenchmarkReport {
     pub definitions: Vec<String>,
     /// Each model's scores per stimulus set.
     pub scores: Vec<BenchmarkScore>,
-    /// The same scores over only the stimuli whose lighter-looking target a published rule
-    /// chose from the pixels ([`BenchmarkConvention::checked`]).
-    pub checked_scores: Vec<BenchmarkScore>,
-    /// Per stimulus, which target people see as lighter and how that was established.
-    pub conventions: Vec<BenchmarkConvention>,
+    /// Per stimulus, which target people see as lighter and where that was read.
+    pub directions: Vec<BenchmarkDirection>,
     /// Every model on every stimulus.
     pub rows: Vec<BenchmarkRow>,
     /// Seconds taken in all.
@@ -437,12 +584,12 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
     );
     let mut rows = Vec::new();
     for s in &config.stimuli {
+        let direction = s.human_direction();
         for model in &config.models {
             let out = model.predict(&s.image, Some(s.ppd))?;
             let e = effect(&out, &s.targets, s.lighter, s.darker)?.ok_or_else(|| {
                 Error::invalid(format!("stimulus {}/{}: a target is empty", s.set, s.name))
             })?;
-            let direction = s.human.direction();
             rows.push(BenchmarkRow {
                 set: s.set.clone(),
                 stimulus: s.name.clone(),
@@ -453,8 +600,10 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
                     Human::EffectStrength { .. } => None,
                 },
                 human_direction: direction,
+                human_lighter_target: s.human_lighter(),
+                direction_source: s.direction_source.clone(),
                 effect: e,
-                agrees: (direction != 0).then_some(e != 0.0 && e.signum() == f64::from(direction)),
+                verdict: Verdict::of(direction, e, range(&out)),
             });
             progress.advance(1);
         }
@@ -466,28 +615,18 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
         models: config.models.iter().map(|m| m.name().into()).collect(),
         definitions: DEFINITIONS.iter().map(|s| s.to_string()).collect(),
         scores: scores(&rows),
-        checked_scores: scores(
-            &rows
-                .iter()
-                .filter(|r| {
-                    config
-                        .stimuli
-                        .iter()
-                        .any(|s| s.set == r.set && s.name == r.stimulus && s.convention_checked)
-                })
-                .cloned()
-                .collect::<Vec<_>>(),
-        ),
-        conventions: config
+        directions: config
             .stimuli
             .iter()
-            .map(|s| BenchmarkConvention {
+            .map(|s| BenchmarkDirection {
                 set: s.set.clone(),
                 stimulus: s.name.clone(),
-                lighter_target: s.lighter,
-                darker_target: s.darker,
-                convention: s.convention.clone(),
-                checked: s.convention_checked,
+                expected_lighter: s.lighter,
+                expected_darker: s.darker,
+                human_lighter_target: s.human_lighter(),
+                no_direction: s.why_no_direction(),
+                direction_source: s.direction_source.clone(),
+                source_position: s.source_position,
             })
             .collect(),
         rows,
@@ -495,17 +634,37 @@ pub fn run(config: &BenchmarkConfig, progress: &dyn Progress) -> Result<Benchmar
     })
 }
 
-const DEFINITIONS: [&str; 4] = [
-    "effect: mean model output over the target people see as lighter minus the mean over the \
-     other target; which target that is, is stated per stimulus by the exporter (conventions): \
-     a published rule on the illusion's direction applied to stimupy's pixels where one was \
-     verified (checked), else stimupy's order (RHS2007: target 1; murray2020: target 2)",
-    "direction: the model agrees when its effect is positive where people saw the \
-     expected-lighter target lighter (negative where they saw the reverse); stimuli with no \
-     human effect (effect strength 0, or a proportion whose 95 % interval holds 0.5) are not \
-     counted",
+/// The range (largest minus smallest finite value) of a model's output.
+fn range(out: &Image) -> f64 {
+    let (lo, hi) = out
+        .data()
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    if hi >= lo {
+        hi - lo
+    } else {
+        0.0
+    }
+}
+
+const DEFINITIONS: [&str; 5] = [
+    "effect: mean model output over the target the data's source expects people to see as \
+     lighter minus the mean over the other target; the exporter states that target per \
+     stimulus with its source (directions): RHS2007 the authors' MATLAB code (region.hi in \
+     srhande/flodog-models testpatterns/make_*.m), murray2020 Murray (2020) p. 6 and Figure 1",
+    "human_lighter_target: the expected target where the data show the expected effect, the \
+     other where they show the reverse, none where there is no reliable direction (an effect \
+     strength of 0, a proportion whose 95 % interval holds 0.5, or a control figure the paper \
+     calls ineffective)",
+    "direction: the model agrees when its effect has the human sign; stimuli with no human \
+     direction are not counted; an effect within 1e-9 of the range of the model's output is \
+     no prediction, counted neither as agreeing nor as wrong",
     "spearman: rank correlation of the model's effects with RHS2007's effect strengths or \
-     murray2020's proportions expected, over every stimulus of the set",
+     murray2020's proportions expected, over every stimulus of the set (those without a \
+     human direction too)",
     "murray2020 stimuli are stimupy's at 16 pixels per degree (its 2 ppd pixels repeated)",
 ];
 
@@ -524,42 +683,44 @@ pub fn scores(rows: &[BenchmarkRow]) -> Vec<BenchmarkScore> {
                 .iter()
                 .filter(|r| r.set == set && r.model == model)
                 .collect();
-            let pairs: Vec<(f64, f64)> = mine
-                .iter()
-                .map(|r| (f64::from(r.human_direction), r.effect))
-                .collect();
-            let (direction_agrees, direction_counted) = direction_agreement(&pairs);
+            let count = |v: Verdict| mine.iter().filter(|r| r.verdict == v).count();
             let human: Vec<f64> = mine.iter().map(|r| r.human).collect();
             let model_effects: Vec<f64> = mine.iter().map(|r| r.effect).collect();
             BenchmarkScore {
                 spearman: spearman(&human, &model_effects),
                 stimuli: mine.len(),
+                direction_agrees: count(Verdict::Agrees),
+                direction_counted: mine.len() - count(Verdict::NotCounted),
+                direction_no_prediction: count(Verdict::NoPrediction),
                 set,
                 model,
-                direction_agrees,
-                direction_counted,
             }
         })
         .collect()
 }
 
 /// The columns of `benchmark.csv`.
-pub const CSV_HEADER: &str = "set,stimulus,model,human,human_ci95,human_direction,effect,agrees";
+pub const CSV_HEADER: &str = "set,stimulus,model,human,human_ci95,human_direction,\
+                              human_lighter_target,direction_source,effect,verdict";
 
-/// The rows as CSV (numbers written so that they read back exactly).
+/// The rows as CSV (numbers written so that they read back exactly; `none` where people saw
+/// no reliable direction).
 pub fn rows_csv(rows: &[BenchmarkRow]) -> String {
     let mut csv = format!("{CSV_HEADER}\n");
     for r in rows {
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{}\n",
             r.set,
             r.stimulus,
             r.model,
             r.human,
             r.human_ci95.map(|v| v.to_string()).unwrap_or_default(),
             r.human_direction,
+            r.human_lighter_target
+                .map_or_else(|| "none".to_string(), |t| t.to_string()),
+            r.direction_source,
             r.effect,
-            r.agrees.map(|a| a.to_string()).unwrap_or_default()
+            r.verdict.name()
         ));
     }
     csv
@@ -579,7 +740,7 @@ pub fn parse_rows_csv(text: &str, path: &Path) -> Result<Vec<BenchmarkRow>> {
         .map(|(i, line)| {
             let f: Vec<&str> = line.split(',').collect();
             let bad = || Error::format(path, format!("line {}: cannot read {line:?}", i + 2));
-            if f.len() != 8 {
+            if f.len() != 10 {
                 return Err(bad());
             }
             let num = |s: &str| s.parse::<f64>().map_err(|_| bad());
@@ -594,12 +755,14 @@ pub fn parse_rows_csv(text: &str, path: &Path) -> Result<Vec<BenchmarkRow>> {
                     Some(num(f[4])?)
                 },
                 human_direction: f[5].parse().map_err(|_| bad())?,
-                effect: num(f[6])?,
-                agrees: if f[7].is_empty() {
+                human_lighter_target: if f[6] == "none" {
                     None
                 } else {
-                    Some(f[7] == "true")
+                    Some(f[6].parse().map_err(|_| bad())?)
                 },
+                direction_source: f[7].into(),
+                effect: num(f[8])?,
+                verdict: Verdict::from_name(f[9]).ok_or_else(bad)?,
             })
         })
         .collect()
@@ -610,15 +773,30 @@ impl BenchmarkReport {
     pub fn markdown(&self) -> String {
         let mut md = format!(
             "Scores (shadelab {}, stimupy {}): direction = stimuli where the model's effect \
-             has the human sign / stimuli with a human effect; ρ = Spearman rank correlation \
-             with the human values.\n\n| model | RHS2007 direction | RHS2007 ρ | murray2020 \
-             direction | murray2020 ρ |\n|---|---|---|---|---|\n",
+             has the human sign / stimuli with a human direction (in brackets: of those, the \
+             ones where the model predicts no difference, counted neither way); ρ = Spearman \
+             rank correlation with the human values over every stimulus of the set.\n\n\
+             | model | RHS2007 direction | RHS2007 ρ | murray2020 direction | murray2020 ρ |\n\
+             |---|---|---|---|---|\n",
             self.stamp.version, self.stimupy_version
         );
-        let cell = |scores: &[BenchmarkScore], set: &str, model: &str| -> (String, String) {
-            match scores.iter().find(|s| s.set == set && s.model == model) {
+        let cell = |set: &str, model: &str| -> (String, String) {
+            match self
+                .scores
+                .iter()
+                .find(|s| s.set == set && s.model == model)
+            {
                 Some(s) => (
-                    format!("{} / {}", s.direction_agrees, s.direction_counted),
+                    format!(
+                        "{} / {}{}",
+                        s.direction_agrees,
+                        s.direction_counted,
+                        if s.direction_no_prediction > 0 {
+                            format!(" ({} no prediction)", s.direction_no_prediction)
+                        } else {
+                            String::new()
+                        }
+                    ),
                     s.spearman
                         .map(|r| format!("{r:.2}"))
                         .unwrap_or_else(|| "–".into()),
@@ -627,31 +805,25 @@ impl BenchmarkReport {
             }
         };
         for m in &self.models {
-            let (rd, rr) = cell(&self.scores, "RHS2007", m);
-            let (md_, mr) = cell(&self.scores, "murray2020", m);
+            let (rd, rr) = cell("RHS2007", m);
+            let (md_, mr) = cell("murray2020", m);
             md.push_str(&format!("| {m} | {rd} | {rr} | {md_} | {mr} |\n"));
         }
-        let checked = self.conventions.iter().filter(|c| c.checked).count();
-        md.push_str(&format!(
-            "\nThe same scores over only the {checked} of {} stimuli whose lighter-looking target \
-             a published rule chose from the pixels (column *lighter* below):\n\n| model | \
-             RHS2007 direction | RHS2007 ρ | murray2020 direction | murray2020 ρ |\n\
-             |---|---|---|---|---|\n",
-            self.conventions.len()
-        ));
-        for m in &self.models {
-            let (rd, rr) = cell(&self.checked_scores, "RHS2007", m);
-            let (md_, mr) = cell(&self.checked_scores, "murray2020", m);
-            md.push_str(&format!("| {m} | {rd} | {rr} | {md_} | {mr} |\n"));
-        }
-        md.push_str("\nEach model's effect per stimulus (✓ = human direction, ✗ = opposite, · = no human effect; *lighter* = the target people see as lighter, with the published rule that chose it, or *order* where it is the set's order, not checked):\n\n| # | set | stimulus | human | lighter |");
+        md.push_str(
+            "\nEach model's effect per stimulus, measured from the target the source expects to \
+             look lighter (*expected*; ✓ = human direction, ✗ = opposite, 0 = no prediction, · = \
+             no human direction); *seen lighter* = the target people saw as lighter (`none`: no \
+             reliable direction); the sources are listed below the table:\n\n\
+             | # | set | stimulus | human | expected | seen lighter |",
+        );
         for m in &self.models {
             md.push_str(&format!(" {m} |"));
         }
-        md.push_str("\n|---|---|---|---|---|");
+        md.push_str("\n|---|---|---|---|---|---|");
         md.push_str(&"---|".repeat(self.models.len()));
         md.push('\n');
-        for (i, (set, name)) in self.stimulus_order().iter().enumerate() {
+        let order = self.stimulus_order();
+        for (i, (set, name)) in order.iter().enumerate() {
             let Some(first) = self
                 .rows
                 .iter()
@@ -663,20 +835,16 @@ impl BenchmarkReport {
                 Some(ci) => format!("{:.3} ± {:.3}", first.human, ci),
                 None => format!("{}", first.human),
             };
-            let lighter = self
-                .conventions
+            let direction = self
+                .directions
                 .iter()
-                .find(|c| &c.set == set && &c.stimulus == name)
-                .map(|c| {
-                    if c.checked {
-                        format!("{} ({})", c.lighter_target, c.convention)
-                    } else {
-                        format!("{} (order)", c.lighter_target)
-                    }
-                })
-                .unwrap_or_else(|| "–".into());
+                .find(|d| &d.set == set && &d.stimulus == name);
+            let expected = direction.map_or_else(|| "–".into(), |d| d.expected_lighter.to_string());
+            let seen = first
+                .human_lighter_target
+                .map_or_else(|| "none".to_string(), |t| t.to_string());
             md.push_str(&format!(
-                "| {} | {set} | {name} | {human} | {lighter} |",
+                "| {} | {set} | {name} | {human} | {expected} | {seen} |",
                 i + 1
             ));
             for m in &self.models {
@@ -685,10 +853,11 @@ impl BenchmarkReport {
                     .iter()
                     .find(|r| &r.set == set && &r.stimulus == name && &r.model == m)
                     .map(|r| {
-                        let mark = match r.agrees {
-                            Some(true) => "✓",
-                            Some(false) => "✗",
-                            None => "·",
+                        let mark = match r.verdict {
+                            Verdict::Agrees => "✓",
+                            Verdict::Opposite => "✗",
+                            Verdict::NoPrediction => "0",
+                            Verdict::NotCounted => "·",
                         };
                         format!("{:+.3} {mark}", r.effect)
                     })
@@ -696,6 +865,21 @@ impl BenchmarkReport {
                 md.push_str(&format!(" {cell} |"));
             }
             md.push('\n');
+        }
+        md.push_str("\nWhere each expected target was read, and why a stimulus has no human direction:\n\n| # | stimulus | source | no direction because |\n|---|---|---|---|\n");
+        for (i, (set, name)) in order.iter().enumerate() {
+            if let Some(d) = self
+                .directions
+                .iter()
+                .find(|d| &d.set == set && &d.stimulus == name)
+            {
+                md.push_str(&format!(
+                    "| {} | {set}/{name} | {} | {} |\n",
+                    i + 1,
+                    d.direction_source,
+                    d.no_direction.as_deref().unwrap_or("")
+                ));
+            }
         }
         md
     }
@@ -808,14 +992,15 @@ impl CommandReport for BenchmarkReport {
     fn write_into(&self, dir: &Path) -> Result<()> {
         io::write_text(&dir.join("benchmark.csv"), &rows_csv(&self.rows))?;
         let mut scores =
-            String::from("set,model,direction_agrees,direction_counted,spearman,stimuli\n");
+            String::from("set,model,direction_agrees,direction_counted,direction_no_prediction,spearman,stimuli\n");
         for s in &self.scores {
             scores.push_str(&format!(
-                "{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{}\n",
                 s.set,
                 s.model,
                 s.direction_agrees,
                 s.direction_counted,
+                s.direction_no_prediction,
                 s.spearman.map(|r| r.to_string()).unwrap_or_default(),
                 s.stimuli
             ));
@@ -871,8 +1056,9 @@ pub fn contrast_stimulus(name: &str, size: usize, ppd: f64, human: Human) -> Ben
         ppd,
         lighter: 1,
         darker: 2,
-        convention: "contrast".into(),
-        convention_checked: true,
+        direction_source: "simultaneous contrast (synthetic)".into(),
+        source_position: None,
+        no_direction: None,
         human,
     }
 }
@@ -886,6 +1072,7 @@ mod tests {
     fn human_directions_and_bad_configs() {
         assert_eq!(Human::EffectStrength { value: 4.2 }.direction(), 1);
         assert_eq!(Human::EffectStrength { value: 0.0 }.direction(), 0);
+        assert_eq!(Human::EffectStrength { value: 1e-15 }.direction(), 0);
         let p = |value, ci95| Human::ProportionExpected { value, ci95 }.direction();
         assert_eq!(
             (p(0.95, 0.07), p(0.4875, 0.15), p(0.35, 0.1478)),
@@ -898,14 +1085,82 @@ mod tests {
         same.darker = same.lighter;
         let e = BenchmarkConfig::new(vec![same], vec![Model::Retinex], "x".into()).unwrap_err();
         assert!(e.to_string().contains("both label 1"), "{e}");
-        let mut wrong = s;
+        let mut wrong = s.clone();
         wrong.darker = 7;
         let e = BenchmarkConfig::new(vec![wrong], vec![Model::Retinex], "x".into()).unwrap_err();
         assert!(e.to_string().contains("label 7"), "{e}");
+        let mut comma = s;
+        comma.direction_source = "a, b".into();
+        let e = BenchmarkConfig::new(vec![comma], vec![Model::Retinex], "x".into()).unwrap_err();
+        assert!(e.to_string().contains("direction_source"), "{e}");
     }
 
     #[test]
-    fn an_exports_conventions_are_read_and_bad_target_labels_are_one_line_errors() {
+    fn the_seen_lighter_target_follows_the_data_and_the_sources_reason() {
+        let mut s = contrast_stimulus("sbc", 32, 8.0, Human::EffectStrength { value: 1.0 });
+        assert_eq!((s.human_lighter(), s.human_direction()), (Some(1), 1));
+        assert_eq!(s.why_no_direction(), None);
+        s.human = Human::ProportionExpected {
+            value: 0.35,
+            ci95: 0.1,
+        };
+        // Significantly below ½: people chose the other target.
+        assert_eq!((s.human_lighter(), s.human_direction()), (Some(2), -1));
+        s.no_direction = Some("a control the paper calls ineffective".into());
+        assert_eq!((s.human_lighter(), s.human_direction()), (None, 0));
+        assert_eq!(
+            s.why_no_direction().unwrap(),
+            "a control the paper calls ineffective"
+        );
+        s.no_direction = None;
+        s.human = Human::EffectStrength { value: 0.0 };
+        assert_eq!(s.human_lighter(), None);
+        assert!(s.why_no_direction().unwrap().contains("is 0"));
+    }
+
+    #[test]
+    fn a_zero_effect_is_no_prediction_not_a_wrong_one() {
+        assert_eq!(Verdict::of(1, 0.0, 2.0), Verdict::NoPrediction);
+        assert_eq!(Verdict::of(-1, 1e-12, 2.0), Verdict::NoPrediction);
+        assert_eq!(Verdict::of(1, 1e-6, 2.0), Verdict::Agrees);
+        assert_eq!(Verdict::of(-1, 1e-6, 2.0), Verdict::Opposite);
+        assert_eq!(Verdict::of(-1, -0.3, 2.0), Verdict::Agrees);
+        assert_eq!(Verdict::of(0, 0.5, 2.0), Verdict::NotCounted);
+        // A constant output predicts nothing whatever its effect's rounding.
+        assert_eq!(Verdict::of(1, 0.0, 0.0), Verdict::NoPrediction);
+        for v in [
+            Verdict::Agrees,
+            Verdict::Opposite,
+            Verdict::NoPrediction,
+            Verdict::NotCounted,
+        ] {
+            assert_eq!(Verdict::from_name(v.name()), Some(v));
+            assert_eq!(
+                serde_json::to_value(v).unwrap(),
+                serde_json::Value::from(v.name())
+            );
+        }
+        // A flat picture: every model's output is flat, so no model predicts anything.
+        let mut s = contrast_stimulus("flat", 32, 8.0, Human::EffectStrength { value: 1.0 });
+        s.image = s.image.map(|_| 0.5);
+        s.set = "RHS2007".into();
+        let config = BenchmarkConfig::new(vec![s], vec![Model::HighPass], "x".into()).unwrap();
+        let report = run(&config, &NoProgress).unwrap();
+        assert_eq!(report.rows[0].verdict, Verdict::NoPrediction);
+        let score = &report.scores[0];
+        assert_eq!(
+            (
+                score.direction_agrees,
+                score.direction_counted,
+                score.direction_no_prediction
+            ),
+            (0, 1, 1)
+        );
+        assert!(report.markdown().contains("0 / 1 (1 no prediction)"));
+    }
+
+    #[test]
+    fn an_exports_directions_are_read_and_bad_fields_are_one_line_errors() {
         let dir = std::env::temp_dir().join(format!("shadelab-bm-export-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let s = contrast_stimulus("sbc", 32, 8.0, Human::EffectStrength { value: 1.0 });
@@ -920,28 +1175,56 @@ mod tests {
             std::fs::write(dir.join(EXPORT_INDEX), index).unwrap();
             BenchmarkConfig::from_export(&dir, vec![Model::HighPass], &[])
         };
-        let c =
-            write(r#", "lighter_target": 1, "convention": "contrast", "convention_checked": true"#)
-                .unwrap();
+        let source = r#", "direction_source": "make_sbc_small.m region.hi=3""#;
+        let c = write(&format!(
+            r#", "lighter_target": 1{source}, "source_position": [-7.5, 0.0], "no_direction": null"#
+        ))
+        .unwrap();
         let st = &c.stimuli[0];
         assert_eq!((st.lighter, st.darker), (1, 2));
-        assert!(st.convention_checked && st.convention == "contrast");
+        assert_eq!(st.source_position, Some([-7.5, 0.0]));
         let report = run(&c, &NoProgress).unwrap();
-        assert_eq!(report.conventions[0].lighter_target, 1);
-        assert_eq!(report.checked_scores, report.scores);
-        // An export from before the conventions: the set's order, not checked.
-        let c = write(r#", "lighter_target": 1"#).unwrap();
-        assert!(!c.stimuli[0].convention_checked);
+        let d = &report.directions[0];
+        assert_eq!((d.expected_lighter, d.human_lighter_target), (1, Some(1)));
+        assert_eq!(d.direction_source, "make_sbc_small.m region.hi=3");
+        assert!(report.markdown().contains("make_sbc_small.m region.hi=3"));
+        // The source's reason for no direction leaves the stimulus out of the direction score.
+        let c = write(&format!(
+            r#", "lighter_target": 1{source}, "no_direction": "a control""#
+        ))
+        .unwrap();
         let report = run(&c, &NoProgress).unwrap();
-        assert!(report.checked_scores.is_empty());
-        assert!(report.markdown().contains("only the 0 of 1 stimuli"));
+        assert_eq!(report.rows[0].verdict, Verdict::NotCounted);
+        assert_eq!(
+            report.directions[0].no_direction.as_deref(),
+            Some("a control")
+        );
+        assert!(report.markdown().contains("| none |"));
         for (bad, says) in [
-            (r#", "lighter_target": 0"#, "target label from 1"),
-            (r#", "lighter_target": 1.5"#, "target label from 1"),
-            (r#", "lighter_target": 2"#, "both label 2"),
-            ("", "no number lighter_target"),
+            (
+                format!(r#", "lighter_target": 0{source}"#),
+                "target label from 1",
+            ),
+            (
+                format!(r#", "lighter_target": 1.5{source}"#),
+                "target label from 1",
+            ),
+            (format!(r#", "lighter_target": 2{source}"#), "both label 2"),
+            (source.to_string(), "no number lighter_target"),
+            (
+                r#", "lighter_target": 1"#.to_string(),
+                "no direction_source",
+            ),
+            (
+                format!(r#", "lighter_target": 1{source}, "source_position": [1]"#),
+                "source_position",
+            ),
+            (
+                format!(r#", "lighter_target": 1{source}, "no_direction": 3"#),
+                "no_direction",
+            ),
         ] {
-            let e = write(bad).unwrap_err().to_string();
+            let e = write(&bad).unwrap_err().to_string();
             assert!(e.contains(says) && !e.contains('\n'), "{bad}: {e}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
@@ -952,6 +1235,6 @@ mod tests {
         let s = contrast_stimulus("sbc", 64, 8.0, Human::EffectStrength { value: 1.0 });
         let config = BenchmarkConfig::new(vec![s], vec![Model::HighPass], "x".into()).unwrap();
         let report = run(&config, &NoProgress).unwrap();
-        assert!(report.rows[0].effect > 0.0 && report.rows[0].agrees == Some(true));
+        assert!(report.rows[0].effect > 0.0 && report.rows[0].verdict == Verdict::Agrees);
     }
 }
