@@ -101,7 +101,7 @@ def _murray(panel, cell, none=None):
 # for the grating induction, whose details stimupy draws differently (region.hi still falls
 # on one stimupy target); checkerboard_016's small checks are out of phase in either frame
 # (10.7 %, mirrored 8.8 %), and there the surround decides: region.hi lies among white checks,
-# as target 2 does. docs/sources/flodog_regions.py ports the make_*.m files and prints these.
+# as target 2 does.
 SOURCES = {
     "RHS2007": {
         "WE_thick": _rhs("make_bm_whites_thick.m", 2, 1, (-3.00, 0.02)),
