@@ -86,7 +86,11 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
             ));
         }
     }
-    let have = run(Command::new(&py).args(["-c", "import maturin, numpy, pytest"]));
+    // nbclient, nbformat and ipykernel run the tutorial notebook (python/examples/).
+    let have = run(Command::new(&py).args([
+        "-c",
+        "import maturin, numpy, pytest, nbclient, nbformat, ipykernel",
+    ]));
     if !have.is_some_and(|o| o.status.success()) {
         let pip = run(Command::new(&py).args([
             "-m",
@@ -97,11 +101,14 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
             "maturin>=1.5,<2",
             "numpy",
             "pytest",
+            "nbclient",
+            "nbformat",
+            "ipykernel",
         ]));
         if !pip.as_ref().is_some_and(|o| o.status.success()) {
             let why = pip.as_ref().map(text).unwrap_or_default();
             return skip(&format!(
-                "pip could not install maturin, numpy and pytest into {} (no network?): {}",
+                "pip could not install maturin, numpy, pytest, nbclient and ipykernel into {} (no network?): {}",
                 venv.display(),
                 why.trim().lines().last().unwrap_or("")
             ));

@@ -25,6 +25,7 @@ mod output_sets;
 mod perception;
 mod photographs;
 mod python;
+mod release;
 mod robustness;
 mod sidecar_input;
 mod solve;

@@ -61,6 +61,7 @@ from ._results import (
     Outline,
     PriorSweep,
     Result,
+    Stimulus,
     Study,
 )
 
@@ -100,6 +101,7 @@ __all__ = [
     "PriorSweep",
     "Reconstruction",
     "Result",
+    "Stimulus",
     "Study",
     "bench",
     "benchmark",

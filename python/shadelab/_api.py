@@ -12,7 +12,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _shadelab
-from ._results import Lightness, Observer, PriorSweep, Result
+from ._results import Lightness, Observer, PriorSweep, Result, Stimulus
 
 __version__: str = _shadelab.__version__
 
@@ -336,7 +336,7 @@ def render(
         warnings.warn(line, stacklevel=2)
     geometry = report["geometry"]
     height, width, resolution = geometry["height"], geometry["width"], geometry["ppd"]
-    out: Dict[str, Any] = dict(report["parameters"])
+    out: Dict[str, Any] = Stimulus(report["parameters"])
     out.update(
         img=img,
         target_mask=target_mask

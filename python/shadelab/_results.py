@@ -4,15 +4,117 @@ folder, by the same writer) and ``figures()`` (that folder's figures as arrays).
 
 from __future__ import annotations
 
+import base64
 import csv
+import fnmatch
+import html
 import io
 import os
+import tempfile
 from os import fspath as _fspath
-from typing import Any, Dict, Iterator, List, Optional, Union
+from typing import Any, Dict, Iterator, List, Optional, Tuple, Union
 
 import numpy as np
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+#: The most pictures a result shows in a notebook (a gallery or an evaluation writes dozens).
+_MAX_SHOWN = 6
+
+#: Which of the figures ``save`` writes a notebook shows for each command (patterns of their
+#: paths in the folder without ``.png``, in the order shown); a command not named here shows
+#: its first figures. Masks and the stimulus an analysis keeps beside its figures are not
+#: pictures of the result.
+_SHOWN = {
+    "solve": ("depth", "normals", "convergence"),
+    "analyze prior-sweep": ("sweep",),
+    "analyze observer": ("p_convex",),
+    "analyze lightness": ("*_figure",),
+    "analyze fading": ("time_course",),
+    "analyze outline": ("*-shape", "*-shading", "*-paint"),
+    "fit observer": ("fit",),
+}
+
+
+def _figure_pngs(write: Any, command: str) -> List[Tuple[str, bytes]]:
+    """The PNG figures of the folder ``write(folder)`` makes, as ``(name, bytes)`` chosen by
+    :data:`_SHOWN`: the same files ``save`` writes, read back byte for byte."""
+    with tempfile.TemporaryDirectory(prefix="shadelab-repr-") as scratch:
+        folder = os.path.join(scratch, "out")
+        write(folder)
+        found = {}
+        for parent, _, files in os.walk(folder):
+            for f in files:
+                if f.endswith(".png") and not f.endswith("_mask.png"):
+                    path = os.path.join(parent, f)
+                    name = os.path.relpath(path, folder)[: -len(".png")].replace(os.sep, "/")
+                    found[name] = path
+        names = sorted(found)
+        patterns = _SHOWN.get(command, ("*",))
+        chosen: List[str] = []
+        for pattern in patterns:
+            chosen += [n for n in names if fnmatch.fnmatchcase(n, pattern) and n not in chosen]
+        pictures = []
+        for name in chosen[:_MAX_SHOWN]:
+            with open(found[name], "rb") as fh:
+                pictures.append((name, fh.read()))
+        return pictures
+
+
+def _html(title: str, pictures: List[Tuple[str, bytes]]) -> str:
+    """The pictures side by side with their names under them, and a title line above."""
+    cells = "".join(
+        '<figure style="display:inline-block;margin:0 8px 8px 0;vertical-align:top">'
+        f'<img src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}" '
+        f'alt="{html.escape(name)}" style="max-width:360px;image-rendering:pixelated"/>'
+        f'<figcaption style="font-size:smaller">{html.escape(name)}</figcaption></figure>'
+        for name, png in pictures
+    )
+    return f"<div><div>{html.escape(title)}</div>{cells}</div>"
+
+
+class Stimulus(dict):
+    """What :func:`shadelab.render` returns: a plain dict in stimupy's form (``img``,
+    ``target_mask``, ``visual_size``, ``shape`` as (height, width), …) that shows its picture
+    in Jupyter. The picture is the PNG :func:`shadelab.save` writes at 8 bits display-encoded
+    with γ = 2.2 (as the browser experiment's images are; a stimulus rendered for a
+    ``display`` shows that display's codes), so a notebook shows the stimulus as a calibrated
+    screen would, not the too-dark linear codes."""
+
+    __slots__ = ()
+
+    def _png(self) -> Optional[bytes]:
+        from ._api import save
+
+        try:
+            with tempfile.TemporaryDirectory(prefix="shadelab-repr-") as scratch:
+                path = os.path.join(scratch, "stimulus.png")
+                if self.get("display") is not None:
+                    save(self, path, bit_depth=8)
+                else:
+                    save(self, path, bit_depth=8, gamma=2.2)
+                with open(path, "rb") as fh:
+                    return fh.read()
+        except (ValueError, RuntimeError, OSError, KeyError, TypeError):
+            # Not a dict render made (keys removed or changed): the text repr stands.
+            return None
+
+    def _repr_png_(self) -> Optional[bytes]:
+        return self._png()
+
+    def _repr_html_(self) -> Optional[str]:
+        png = self._png()
+        if png is None:
+            return None
+        h, w = self.get("shape", ("?", "?"))
+        vh, vw = self.get("visual_size", ("?", "?"))
+        title = (
+            f"{self.get('stimulus', 'stimulus')}: {h} × {w} px (height × width), "
+            f"{vh:g} × {vw:g} deg, ppd {self.get('ppd', '?'):g}"
+            if isinstance(vh, float) and isinstance(self.get("ppd"), (int, float))
+            else f"{self.get('stimulus', 'stimulus')}: {h} × {w} px (height × width)"
+        )
+        return _html(title, [("img", png)])
 
 
 class Result:
@@ -26,7 +128,7 @@ class Result:
     figures as ``{name: H×W×3 (or ×4) uint8 array}``.
     """
 
-    __slots__ = ("report", "_arrays", "_handle")
+    __slots__ = ("report", "_arrays", "_handle", "_pictures")
 
     #: The command line's command this result is the twin of.
     command: str = ""
@@ -35,6 +137,7 @@ class Result:
         self.report = report
         self._arrays = arrays
         self._handle = handle
+        self._pictures: Optional[List[Tuple[str, bytes]]] = None
 
     def to_dict(self) -> Dict[str, Any]:
         """The report's fields with the arrays added (a new dict; the arrays are shared)."""
@@ -70,6 +173,29 @@ class Result:
         if self._handle is None:
             return {}
         return dict(self._handle.figures())
+
+    def _notebook_pictures(self) -> List[Tuple[str, bytes]]:
+        """The figures a notebook shows for this result, as ``(name, PNG bytes)``: the PNG
+        files :meth:`save` writes (the same writer, read back), the main ones for the command
+        first (the solve's depth and normals, a sweep's curves, a model's output beside the
+        stimulus, …), at most six. Made once per result."""
+        if self._pictures is None:
+            if self._handle is None:
+                self._pictures = []
+            else:
+                handle = self._handle
+                self._pictures = _figure_pngs(lambda out: handle.write(out, True), self.command)
+        return list(self._pictures)
+
+    def _repr_png_(self) -> Optional[bytes]:
+        pictures = self._notebook_pictures()
+        return pictures[0][1] if pictures else None
+
+    def _repr_html_(self) -> Optional[str]:
+        pictures = self._notebook_pictures()
+        if not pictures:
+            return None
+        return _html(repr(self), pictures)
 
     def __repr__(self) -> str:
         arrays = ", ".join(

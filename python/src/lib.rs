@@ -681,7 +681,7 @@ fn lightness<'py>(
 /// The compiled module.
 #[pymodule]
 fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("__version__", shadelab::PROGRAM_VERSION)?;
     m.add_function(wrap_pyfunction!(stimuli, m)?)?;
     m.add_function(wrap_pyfunction!(describe, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
