@@ -26,6 +26,7 @@ mod perception;
 mod photographs;
 mod python;
 mod robustness;
+mod routes;
 mod sidecar_input;
 mod solve;
 mod stimuli;
