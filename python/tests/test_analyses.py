@@ -116,17 +116,3 @@ def test_lightness_rgb_is_read_as_luminance():
 def test_lightness_without_targets_has_none():
     r = shadelab.lightness(np.linspace(0, 1, 256).reshape(16, 16), ppd=8, model="retinex")
     assert r.targets == [] and r.output.shape == (16, 16)
-
-
-def test_a_rendered_dict_gives_the_numbers_of_its_stimulus_by_name():
-    # The dict carries its render's record as a sidecar does: the crater's albedo 0.566 and
-    # ambient 0.1 (not an albedo taken from the background), the hollow mask's face as a
-    # silhouette on a backdrop (solved on its target).
-    for name in ["crater", "hollow-mask"]:
-        s = shadelab.render(name)
-        tilts = [0, 90, 180, 270]
-        by_name = shadelab.prior_sweep(name, tilts=tilts)
-        by_dict = shadelab.prior_sweep(s, tilts=tilts)
-        assert by_dict["parameters"] == by_name["parameters"]
-        np.testing.assert_allclose(by_dict["convexities"], by_name["convexities"], atol=1e-9)
-    assert round(by_dict["parameters"]["albedo"], 3) == 0.7 and by_dict["parameters"]["domain"] == "tokens"
