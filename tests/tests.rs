@@ -27,6 +27,7 @@ mod photographs;
 mod python;
 mod release;
 mod robustness;
+mod routes;
 mod sidecar_input;
 mod solve;
 mod stimuli;

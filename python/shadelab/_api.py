@@ -161,7 +161,10 @@ def _picture_args(
     picture: Any, colour: bool, params: Dict[str, Any], seed: Any, ppd: Any, shape: Any, mask: Any
 ) -> Tuple[Any, ...]:
     """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
-    the stimulus's parameters, seed, ppd, shape (height, width) and target labels."""
+    the stimulus's parameters, seed, ppd, shape (height, width), target labels and, for a dict
+    of :func:`render`, what its render recorded (its ``parameters`` and ``notes``, as a
+    sidecar records them: the albedo, ambient level and light the library takes)."""
+    record = None
     if isinstance(picture, str):
         image, stimulus = None, picture
     else:
@@ -173,6 +176,11 @@ def _picture_args(
             if mask is None and given.get("target_mask") is not None:
                 labels = np.asarray(given["target_mask"])
                 mask = labels if labels.any() else None
+            if isinstance(given.get("parameters"), dict) or isinstance(given.get("notes"), dict):
+                record = json.dumps(
+                    {"parameters": given.get("parameters") or {}, "notes": given.get("notes") or {}},
+                    default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v),
+                )
     return (
         image,
         stimulus,
@@ -181,6 +189,7 @@ def _picture_args(
         _ppd(ppd),
         _pair(shape, "shape", int),
         _labels(mask, "mask"),
+        record,
     )
 
 

@@ -508,8 +508,8 @@ fn solve<'py>(
 }
 
 /// The picture of an analysis, as the Python layer passes it: an array or a stimulus name,
-/// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width) and target
-/// labels.
+/// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width), target
+/// labels and a rendered dict's record (JSON of its `parameters` and `notes`).
 pub(crate) type PictureArgs<'py> = (
     Option<ArrayIn<'py>>,
     Option<String>,
@@ -518,6 +518,7 @@ pub(crate) type PictureArgs<'py> = (
     Option<f64>,
     Option<(usize, usize)>,
     Option<PyReadonlyArray2<'py, u16>>,
+    Option<String>,
 );
 
 /// What the perception analyses assume: domain, boundary, slant, albedo, ambient.
@@ -531,8 +532,28 @@ type SolverArgs = (Option<String>, Option<f64>, Option<f64>, Option<usize>);
 pub(crate) fn picture_source(
     picture: PictureArgs<'_>,
 ) -> PyResult<(shadelab::PictureSource, Option<(usize, usize)>)> {
-    let (image, stimulus, params_json, seed, ppd, shape, labels) = picture;
+    let (image, stimulus, params_json, seed, ppd, shape, labels, record) = picture;
+    // A rendered dict's record (its parameters and notes), read as a sidecar's is.
+    let (declared, silhouette) = match record {
+        None => Default::default(),
+        Some(text) => {
+            let record: Value = serde_json::from_str(&text).map_err(|e| {
+                PyValueError::new_err(format!("image: the dict's record is not JSON: {e}"))
+            })?;
+            let none = Value::Null;
+            let part = |key: &str| record.get(key).unwrap_or(&none).clone();
+            let notes = part("notes");
+            let declared =
+                shadelab::pipeline::source::Declared::from_record(&part("parameters"), &notes)
+                    .map_err(|e| PyValueError::new_err(format!("image: the dict's record: {e}")))?;
+            let silhouette = notes.get(shadelab::pipeline::source::SILHOUETTE_NOTE)
+                == Some(&Value::Bool(true));
+            (declared, silhouette)
+        }
+    };
     let source = shadelab::PictureSource {
+        declared,
+        silhouette,
         pixels: image.as_ref().map(ArrayIn::pixels).transpose()?,
         stimulus,
         params: params_from(&params_json)?,

@@ -11,6 +11,7 @@ mod gif;
 mod keep;
 mod npy;
 mod output_set;
+mod picture;
 mod png;
 pub mod render_sidecar;
 mod sidecar;
@@ -29,6 +30,7 @@ pub use npy::{
     write_f32, write_image, write_normals, IntegerScale, NpyArray,
 };
 pub use output_set::{remove_dead_temporaries, OutputSet};
+pub use picture::{read_picture, PictureFile, Quantum, PICTURE_EXTENSIONS};
 pub use png::{
     assumed_srgb_note, display_rgba8, read_gray, read_gray_as, read_gray_from_bytes, read_labels,
     read_mask, read_mask_from_bytes, read_rgb, read_rgb_as, stimulus_codes, write_display_codes,
@@ -42,99 +44,28 @@ use crate::error::{Error, Result};
 use crate::grid::Image;
 use std::path::Path;
 
-/// The extensions of the pictures [`read_luminance`] reads, as its error lists them.
-pub const PICTURE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "tif", "tiff", "npy"];
-
 /// Reads a picture file as linear luminance by the default rule ([`InputEncoding::Auto`]);
 /// see [`read_luminance_as`].
 pub fn read_luminance(path: &Path, max_pixels: usize) -> Result<(Image, serde_json::Value)> {
     read_luminance_as(path, max_pixels, InputEncoding::Auto)
 }
 
-/// Reads a picture file as linear luminance, its codes decoded as `encoding` says: an 8/16-bit
-/// PNG, a JPEG or a TIFF ([`read_gray_as`]), or an H×W `.npy` ([`read_luminance_npy`]: uint8
-/// and uint16 divided by their largest value and then decoded as `encoding` says, other
-/// integers refused; a float `.npy` is linear already, and an encoding other than auto or
-/// linear is refused for it), with what was read (the picture's [`GrayInfo`], or the `.npy`
-/// format and conversion) for reports. Any other extension is refused, and so is a picture
-/// with values outside 0..1 ([`check_luminance_range`]).
+/// Reads a picture file once ([`read_picture`]) as linear luminance, its codes decoded as
+/// `encoding` says: an 8/16-bit PNG, a JPEG or a TIFF ([`read_gray_as`]), or an H×W `.npy`
+/// ([`read_luminance_npy`]: uint8 and uint16 divided by their largest value and then decoded
+/// as `encoding` says, other integers refused; a float `.npy` is linear already, and an
+/// encoding other than auto or linear is refused for it), told apart by their content, with
+/// what was read (the picture's [`GrayInfo`], or the `.npy` format and conversion) for
+/// reports. A file whose content is none of these is refused, and so is a picture with values
+/// outside 0..1 ([`check_luminance_range`]).
 pub fn read_luminance_as(
     path: &Path,
     max_pixels: usize,
     encoding: InputEncoding,
 ) -> Result<(Image, serde_json::Value)> {
-    encoding.validate()?;
-    let (image, info) = match extension(path).as_str() {
-        "png" | "jpg" | "jpeg" | "tif" | "tiff" => {
-            let (image, info) = read_gray_as(path, max_pixels, encoding)?;
-            (image, serde_json::to_value(info).unwrap_or_default())
-        }
-        "npy" => {
-            let (mut image, scale, rgb) = read_luminance_npy(path, max_pixels)?;
-            let mut notes = Vec::new();
-            let format = match &scale {
-                Some(scale) => {
-                    notes.push(scale.note());
-                    format!("npy {}", scale.dtype)
-                }
-                None => "npy float".to_string(),
-            };
-            match (encoding, &scale) {
-                (InputEncoding::Auto | InputEncoding::Linear, _) => {}
-                (_, None) => {
-                    return Err(Error::format(
-                        path,
-                        format!(
-                            "a float .npy holds linear values already: input gamma                              {encoding} applies only to integer codes (give auto or linear)"
-                        ),
-                    ))
-                }
-                (_, Some(scale)) => {
-                    let decoding = encoding.explicit().unwrap_or(encoding::Decoding::Linear);
-                    image = if rgb {
-                        // Each channel decoded, then the luminance of the linear values (the
-                        // array was checked whole by the first reading).
-                        let array = read_array(path, max_pixels)?;
-                        let linear: Vec<f64> = array
-                            .data
-                            .chunks_exact(3)
-                            .map(|p| {
-                                crate::grid::luminance(
-                                    [p[0], p[1], p[2]].map(|c| decoding.linear(c / scale.max)),
-                                )
-                            })
-                            .collect();
-                        crate::grid::Grid::from_vec(image.width(), image.height(), linear)?
-                    } else {
-                        image.map(|&v| decoding.linear(v))
-                    };
-                    notes.push(match encoding {
-                        InputEncoding::Srgb => "decoded as sRGB (--input-gamma srgb)".to_string(),
-                        _ => format!(
-                            "decoded as luminance = code^{encoding} (--input-gamma {encoding})"
-                        ),
-                    });
-                }
-            }
-            if rgb {
-                notes.push(LUMINANCE_FORMULA.to_string());
-            }
-            let mut info = serde_json::json!({ "format": format });
-            if !notes.is_empty() {
-                info["conversion"] = notes.join("; ").into();
-            }
-            (image, info)
-        }
-        other => {
-            return Err(Error::invalid(format!(
-                "{}: the image must be a .png or .npy file, or a .jpg, .jpeg, .tif or .tiff \
-                 picture (got '.{other}')",
-                path.display()
-            )))
-        }
-    };
-    check_luminance_range(image.data(), path)?;
-    Ok((image, info))
+    let picture = read_picture(path, max_pixels, encoding, false)?;
+    check_luminance_range(picture.gray.data(), path)?;
+    Ok((picture.gray, picture.info))
 }
 
 /// Checks that every value of a picture (gray, or RGB channels in turn) is linear luminance

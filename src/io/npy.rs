@@ -87,27 +87,44 @@ pub fn read_array(path: &Path, max_elements: usize) -> Result<NpyArray> {
 /// The bytes of a `.npy` file that its checked header declares: the preamble and header are
 /// read and checked first, then at most 8 bytes for each value the header declares.
 fn read_npy_file(path: &Path, max_elements: usize) -> Result<Vec<u8>> {
+    read_npy_rest(Vec::new(), super::open_file(path)?, path, max_elements)
+}
+
+/// The bytes of a `.npy` file whose first bytes `head` were already read from `file` (opened
+/// once, so that a pipe works): its header checked first, then at most 8 bytes for each value
+/// it declares.
+pub(crate) fn read_npy_rest(
+    head: Vec<u8>,
+    file: impl std::io::Read,
+    path: &Path,
+    max_elements: usize,
+) -> Result<Vec<u8>> {
     use std::io::Read;
-    let (mut bytes, count, file) = read_npy_header(path, max_elements)?;
+    let (mut bytes, count, file) = read_npy_header(head, file, path, max_elements)?;
     file.take(count.saturating_mul(MAX_ITEM_BYTES as u64))
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
     Ok(bytes)
 }
 
-/// The preamble and header of the `.npy` file at `path`, checked, with the number of values
-/// they declare and the file positioned at the first value.
-fn read_npy_header(path: &Path, max_elements: usize) -> Result<(Vec<u8>, u64, std::fs::File)> {
+/// The preamble and header of a `.npy` file (`head` already read from `file`, which is read
+/// on), checked, with the number of values they declare and the file positioned at the first
+/// value.
+fn read_npy_header<R: std::io::Read>(
+    mut bytes: Vec<u8>,
+    mut file: R,
+    path: &Path,
+    max_elements: usize,
+) -> Result<(Vec<u8>, u64, R)> {
     use std::io::Read;
-    let mut file = super::open_file(path)?;
-    let mut bytes = Vec::new();
     let mut read = |bytes: &mut Vec<u8>, n: u64| {
         (&mut file)
             .take(n)
             .read_to_end(bytes)
             .map_err(|e| Error::io(path, e))
     };
-    read(&mut bytes, 12)?;
+    let have = bytes.len() as u64;
+    read(&mut bytes, 12u64.saturating_sub(have))?;
     let (start, length) = preamble(&bytes).map_err(|m| Error::format(path, m))?;
     // At most one byte past the longest header accepted: enough to tell a file that ends
     // inside its header (truncated) from one whose header is too long.
@@ -128,7 +145,12 @@ fn read_npy_header(path: &Path, max_elements: usize) -> Result<(Vec<u8>, u64, st
 /// `None` for a float or boolean dtype, and for a file whose header cannot be read (reading
 /// the picture says why).
 pub fn npy_file_scale(path: &Path) -> Option<IntegerScale> {
-    let (bytes, _, _) = read_npy_header(path, usize::MAX).ok()?;
+    // Only a file that can be read again: a pipe is read once, by the picture's reader.
+    if !path.is_file() {
+        return None;
+    }
+    let file = super::open_file(path).ok()?;
+    let (bytes, _, _) = read_npy_header(Vec::new(), file, path, usize::MAX).ok()?;
     let file = npyz::NpyFile::new(&bytes[..]).ok()?;
     match file.dtype() {
         npyz::DType::Plain(t) => npy_scale(&t.to_string()).ok().flatten(),
@@ -380,7 +402,15 @@ pub fn read_luminance_npy(
     path: &Path,
     max_pixels: usize,
 ) -> Result<(Image, Option<IntegerScale>, bool)> {
-    let mut array = read_array(path, max_pixels)?;
+    luminance_npy(read_array(path, max_pixels)?, path, max_pixels)
+}
+
+/// [`read_luminance_npy`] of an array already read from `path`.
+pub(crate) fn luminance_npy(
+    mut array: NpyArray,
+    path: &Path,
+    max_pixels: usize,
+) -> Result<(Image, Option<IntegerScale>, bool)> {
     let scale = npy_scale(&array.dtype).map_err(|why| Error::format(path, why))?;
     if let Some(scale) = &scale {
         array.data.iter_mut().for_each(|v| *v /= scale.max);

@@ -179,6 +179,12 @@ impl RenderSidecar {
     /// sidecar with a malformed field, is an error naming the file; a JSON file of another
     /// program is [`Beside::Foreign`].
     pub fn beside(image: &Path) -> Result<Beside> {
+        Self::beside_with(image, || super::png::states_its_encoding(image))
+    }
+
+    /// [`beside`](Self::beside) of a picture already read, which says (when asked) whether
+    /// its own chunk states its encoding: the picture is not opened again.
+    pub fn beside_with(image: &Path, states_its_encoding: impl FnOnce() -> bool) -> Result<Beside> {
         let path = sidecar_path(image);
         if path == image || !path.is_file() {
             return Ok(Beside::Nothing);
@@ -190,7 +196,7 @@ impl RenderSidecar {
         let mut sidecar = Self::from_value(&path, &value)?;
         // A PNG whose own chunk states its encoding (every stimulus PNG since the gAMA chunk)
         // is decoded by the reader: the recorded gamma is not undone a second time.
-        if sidecar.gamma.is_some() && super::png::states_its_encoding(image) {
+        if sidecar.gamma.is_some() && states_its_encoding() {
             sidecar.gamma = None;
             sidecar.gamma_decoded_by_file = true;
         }

@@ -273,6 +273,11 @@ impl Config {
         let (w, h) = (picture.image.width(), picture.image.height());
         let boundary = self.boundary.resolve(w, h, max_pixels)?;
         let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
+        // Attached shadow sits at the ambient level; stored as 8- or 16-bit codes or float32
+        // it is a code's width off it, which would decide the treatment of every shadowed
+        // pixel (in the solver, data or not): what the picture cannot tell from the ambient
+        // level is the ambient level.
+        picture.image = loaded.quantum.settle(&picture.image, lighting.ambient);
         picture.albedo = Some(lighting.albedo);
         picture.ambient = Some(lighting.ambient);
         let parameters = Parameters {

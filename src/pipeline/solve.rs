@@ -400,16 +400,29 @@ struct Solved {
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
-    let (mut image, image_info) =
-        io::read_luminance_as(&config.image, config.max_pixels, config.input_encoding)?;
+    // Read once (a pipe cannot be read again).
+    let file = io::read_picture(
+        &config.image,
+        config.max_pixels,
+        config.input_encoding,
+        false,
+    )?;
+    io::check_luminance_range(file.gray.data(), &config.image)?;
+    let (mut image, image_info) = (file.gray, file.info);
     // A shadelab render's sidecar: its values made linear again and its ambient level taken
     // off (the solve's reflectance has no ambient term), its target mask as the object's.
-    let beside = RenderSidecar::beside(&config.image)?;
+    let states = file.states_its_encoding;
+    let beside = RenderSidecar::beside_with(&config.image, || states)?;
     let sidecar =
         (beside.sidecar().cloned()).map(|s| super::source::without_gamma(s, config.input_encoding));
     if let Some(s) = &sidecar {
         let ambient = s.ambient.unwrap_or(0.0);
-        image = image.map(|&v| (s.linearise(v) - ambient).max(0.0));
+        // What the stored codes cannot tell from the ambient level is attached shadow, at 0
+        // once the ambient is taken off (see perception's load).
+        let quantum = file.quantum.map(|v| s.linearise(v));
+        image = quantum
+            .settle(&image.map(|&v| s.linearise(v)), ambient)
+            .map(|&v| (v - ambient).max(0.0));
     }
     let (w, h) = (image.width(), image.height());
     let mask_file = config

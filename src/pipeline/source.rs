@@ -8,7 +8,9 @@
 //! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
 // What a loaded picture's sidecar says, and the note on an untagged file, defined in io.
-pub use crate::io::{assumed_srgb_note, Beside, Declared, RenderSidecar, TrueLight};
+pub use crate::io::{
+    assumed_srgb_note, Beside, Declared, Quantum, RenderSidecar, TrueLight, SILHOUETTE_NOTE,
+};
 
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels};
@@ -26,7 +28,8 @@ pub const IN_MEMORY: &str = "<array>";
 /// Plain values naming a picture: exactly one of `image`, `stimulus`, `spec` and `pixels`.
 #[derive(Debug, Clone, Default)]
 pub struct PictureSource {
-    /// An 8/16-bit PNG, a JPEG, a TIFF or an H×W `.npy`, decoded as
+    /// An 8/16-bit PNG, a JPEG, a TIFF or an H×W `.npy` (told apart by their content, read
+    /// once: a pipe works), decoded as
     /// [`input_encoding`](Self::input_encoding) says; a shadelab sidecar beside it is read (see
     /// the module's documentation).
     pub image: Option<PathBuf>,
@@ -44,7 +47,8 @@ pub struct PictureSource {
     pub seed: Option<u64>,
     /// Pixels per degree: the image's resolution, or the one to render the stimulus at.
     pub ppd: Option<f64>,
-    /// Target labels: an 8/16-bit grayscale PNG, 0 = background, 1..N = targets.
+    /// Target labels: an 8/16-bit grayscale PNG or an H×W `.npy` of booleans or whole
+    /// numbers, 0 = background, 1..N = targets.
     pub mask: Option<PathBuf>,
     /// The largest picture accepted or made, in pixels.
     pub max_pixels: usize,
@@ -53,6 +57,14 @@ pub struct PictureSource {
     pub pixels: Option<Pixels>,
     /// Target labels in memory (0 = background, 1..N = targets), instead of a `mask` file.
     pub labels: Option<Labels>,
+    /// What the maker of the picture in memory declares (albedo, ambient level, true light),
+    /// as a rendered picture's sidecar would: a stimupy-style dict of `shadelab.render`
+    /// carries them. Only with [`pixels`](Self::pixels).
+    pub declared: Declared,
+    /// Whether the maker of the picture in memory says its targets are objects' silhouettes
+    /// on a backdrop (a rendered dict's `notes.target_is_silhouette`, as a sidecar says it;
+    /// see [`Picture::on_backdrop`]). Only with [`pixels`](Self::pixels).
+    pub silhouette: bool,
 }
 
 /// What a report says of the picture it analysed: the coordinate conventions, where the picture
@@ -100,6 +112,10 @@ pub struct Picture {
     /// is an object's silhouette. The perception analyses then solve on the targets by
     /// default ([`crate::pipeline::perception::DomainSpec::Auto`]).
     pub on_backdrop: bool,
+    /// How finely its values were stored (a file's 8- or 16-bit codes or float32; float64
+    /// for a picture rendered or handed over in memory), so that a level it records (the
+    /// ambient) is found in it to its own precision ([`Quantum::settle`]).
+    pub quantum: Quantum,
 }
 
 impl Picture {
@@ -280,18 +296,17 @@ impl PictureSource {
         let mut picture = match (&self.image, &self.stimulus) {
             (Some(path), _) => {
                 let encoding = self.input_encoding;
-                // Other extensions go to read_luminance, whose error lists those it reads.
-                let ext = io::extension(path);
-                let picture_file = ext != "npy" && io::PICTURE_EXTENSIONS.contains(&ext.as_str());
-                let (mut pixels, info) = if colour && picture_file {
-                    let rgb = io::read_rgb_as(path, max_pixels, encoding)?;
-                    (Pixels::Rgb(rgb), Value::Null)
-                } else {
-                    let (gray, info) = io::read_luminance_as(path, max_pixels, encoding)?;
-                    (Pixels::Gray(gray), info)
+                // Read once (a pipe cannot be read again): the pixels, how finely they were
+                // stored, and whether the file states its own encoding.
+                let file = io::read_picture(path, max_pixels, encoding, colour)?;
+                let (mut pixels, info) = match file.rgb {
+                    Some(rgb) => (Pixels::Rgb(rgb), Value::Null),
+                    None => (Pixels::Gray(file.gray), file.info),
                 };
+                let mut quantum = file.quantum;
                 // The image is read first: a broken image is reported before its sidecar.
-                let beside = RenderSidecar::beside(path)?;
+                let states = file.states_its_encoding;
+                let beside = RenderSidecar::beside_with(path, || states)?;
                 let sidecar = beside
                     .sidecar()
                     .cloned()
@@ -302,12 +317,13 @@ impl PictureSource {
                         Pixels::Gray(i) => Pixels::Gray(i.map(|&v| s.linearise(v))),
                         Pixels::Rgb(i) => Pixels::Rgb(i.map(|p| p.map(|v| s.linearise(v)))),
                     };
+                    quantum = quantum.map(|v| s.linearise(v));
                 }
                 check_pixel_values(&pixels, &path.display().to_string())?;
                 let mut origin = json!({ "image": path.display().to_string() });
                 // How the codes were decoded, where the user said or the default rule assumed
                 // sRGB (a picture that says its own encoding is recorded as before).
-                if encoding.is_explicit() || self.input_note().is_some() {
+                if encoding.is_explicit() || file.assumed_srgb.is_some() {
                     origin["input_encoding"] = encoding.to_string().into();
                     if let Some(conversion) = info.get("conversion") {
                         origin["conversion"] = conversion.clone();
@@ -320,6 +336,7 @@ impl PictureSource {
                     origin: Value::Null,
                     declared: Declared::default(),
                     on_backdrop: false,
+                    quantum,
                 };
                 if let Some(s) = sidecar {
                     origin["sidecar"] = s.to_json();
@@ -345,8 +362,9 @@ impl PictureSource {
                 ppd: self.ppd,
                 labels: None,
                 origin: json!({ "image": IN_MEMORY }),
-                declared: Declared::default(),
-                on_backdrop: false,
+                declared: self.declared,
+                on_backdrop: self.silhouette,
+                quantum: Quantum::default(),
             },
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
@@ -445,12 +463,9 @@ fn rendered(
     let declared = Declared::from_record(&parameters, &notes)
         .map_err(|e| Error::invalid(format!("stimulus {name}: {e}")))?;
     // A rendered surface that leaves part of the frame to the backdrop: its targets are the
-    // objects (a relief on a panel fills the frame).
-    let on_backdrop = output.targets.is_some()
-        && output
-            .surface
-            .as_ref()
-            .is_some_and(|s| s.mask.data().iter().any(|&inside| !inside));
+    // objects (a relief on a panel fills the frame), as its notes say, for a sidecar too.
+    let on_backdrop =
+        output.targets.is_some() && output.notes.get(SILHOUETTE_NOTE) == Some(&Value::Bool(true));
     Ok(Picture {
         pixels: output.pixels,
         ppd: Some(made.geometry.ppd),
@@ -464,6 +479,7 @@ fn rendered(
         }),
         declared,
         on_backdrop,
+        quantum: Quantum::default(),
     })
 }
 

@@ -167,13 +167,19 @@ pub struct Output {
 
 impl Output {
     /// A rendered surface: its image, the surface's layers with the shading before shadows,
-    /// and `targets` and `notes`.
+    /// and `targets` and `notes`. A surface that leaves part of the frame to the backdrop
+    /// makes its targets objects' silhouettes (the note [`crate::io::SILHOUETTE_NOTE`]), so
+    /// that the sidecar says what the picture rendered in memory says (its analyses solve on
+    /// the targets by either route).
     pub(crate) fn rendered(
         surface: crate::surface::Surface,
         rendering: crate::render::Rendering,
         targets: Targets,
-        notes: Map<String, Value>,
+        mut notes: Map<String, Value>,
     ) -> Self {
+        if surface.mask.data().iter().any(|&inside| !inside) {
+            notes.insert(crate::io::SILHOUETTE_NOTE.into(), true.into());
+        }
         Output {
             pixels: Pixels::Gray(rendering.image),
             targets: Some(targets),

@@ -56,13 +56,32 @@ pub struct GrayInfo {
 /// (after its metadata, or at its end): it is read up to the bytes of the largest picture
 /// `max_pixels` allows, and its size is checked before any pixel buffer is allocated.
 fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Facts)> {
-    use std::io::Read;
     let mut file = super::open_file(path)?;
+    let head = read_head(&mut file, path)?;
+    let bytes = read_raster_rest(head, file, path, max_pixels)?;
+    decode_bytes(&bytes, path, max_pixels)
+}
+
+/// The first [`HEAD_BYTES`] bytes of `file` (fewer when it is shorter): enough to tell every
+/// format shadelab reads by its signature.
+pub(crate) fn read_head(file: &mut impl std::io::Read, path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
     let mut bytes = Vec::new();
-    (&mut file)
-        .take(HEAD_BYTES as u64)
+    file.take(HEAD_BYTES as u64)
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
+    Ok(bytes)
+}
+
+/// The whole of a PNG, GIF, JPEG or TIFF file whose first bytes `bytes` were read from `file`
+/// (see [`decode`] for the caps; `file` is read on, never reopened, so that a pipe works).
+pub(crate) fn read_raster_rest(
+    mut bytes: Vec<u8>,
+    file: impl std::io::Read,
+    path: &Path,
+    max_pixels: usize,
+) -> Result<Vec<u8>> {
+    use std::io::Read;
     let cap = match declared_size(&bytes, path).map_err(|m| Error::format(path, m))? {
         Some((w, h)) => {
             check_size(w as usize, h as usize, max_pixels)
@@ -77,7 +96,7 @@ fn decode(path: &Path, max_pixels: usize) -> Result<(DynamicImage, Facts)> {
     if bytes.len() as u64 > cap {
         return Err(super::too_long(path, cap));
     }
-    decode_bytes(&bytes, path, max_pixels)
+    Ok(bytes)
 }
 
 /// The bytes read before anything else: enough for the PNG signature and IHDR chunk's size
@@ -94,6 +113,11 @@ enum Format {
     Gif,
     Jpeg,
     Tiff,
+}
+
+/// Whether `head` starts with the signature of a PNG, GIF, JPEG or TIFF.
+pub(crate) fn is_raster(head: &[u8]) -> bool {
+    format_of(head).is_some()
 }
 
 /// The format whose signature `head` starts with.
@@ -384,7 +408,9 @@ fn resolve(facts: &Facts, encoding: InputEncoding) -> Resolved {
 /// else, and for a file that cannot be read (its reader says why).
 pub fn assumed_srgb_note(path: &Path, encoding: InputEncoding) -> Option<String> {
     use std::io::Read;
-    if encoding.is_explicit() {
+    // Only a file that can be read again: a pipe is read once, by the picture's reader
+    // (whose report records the conversion).
+    if encoding.is_explicit() || !path.is_file() {
         return None;
     }
     let file = std::fs::File::open(path).ok()?;
@@ -428,6 +454,10 @@ fn png_is_whole(bytes: &[u8]) -> bool {
 /// (its reader reports those).
 pub fn states_its_encoding(path: &Path) -> bool {
     use std::io::Read;
+    // Only a file that can be read again: a pipe is read once, by the picture's reader.
+    if !path.is_file() {
+        return false;
+    }
     let Ok(file) = std::fs::File::open(path) else {
         return false;
     };
@@ -557,6 +587,53 @@ pub fn read_gray_as(
     gray_from(image, &resolve(&facts, encoding))
 }
 
+/// A PNG, GIF, JPEG or TIFF decoded from its bytes, with what it says of itself.
+pub(crate) struct Raster {
+    /// Its luminance, linear 0..1.
+    pub gray: Image,
+    /// Its linear RGB, where asked for.
+    pub rgb: Option<RgbImage>,
+    /// What was read and how it was converted.
+    pub info: GrayInfo,
+    /// Whether a chunk (sRGB, gAMA) says how its codes encode luminance.
+    pub states_its_encoding: bool,
+    /// Whether its codes were taken as sRGB by the default rule, with nothing saying so.
+    pub assumed_srgb: bool,
+    /// How its codes (scaled to 0..1) were decoded.
+    pub decoding: Decoding,
+}
+
+/// Decodes the picture `bytes` (read from `path`) under `encoding`: its luminance, and its
+/// linear RGB too with `colour`.
+pub(crate) fn raster_picture(
+    bytes: &[u8],
+    path: &Path,
+    max_pixels: usize,
+    encoding: InputEncoding,
+    colour: bool,
+) -> Result<Raster> {
+    encoding.validate()?;
+    let (image, facts) = decode_bytes(bytes, path, max_pixels)?;
+    let resolved = resolve(&facts, encoding);
+    let rgb = colour
+        .then(|| rgb_from(&image, resolved.decoding))
+        .transpose()?;
+    let (gray, info) = gray_from(image, &resolved)?;
+    Ok(Raster {
+        gray,
+        rgb,
+        info,
+        states_its_encoding: facts.stored != Stored::Unstated,
+        assumed_srgb: resolved.assumed,
+        decoding: resolved.decoding,
+    })
+}
+
+/// The note said once where a picture's codes were taken as sRGB by the default rule.
+pub(crate) fn assumed_srgb_line(path: &Path) -> String {
+    format!("{}: {ASSUMED_SRGB}", path.display())
+}
+
 /// [`read_gray`] of an image held in memory; `source` names it in errors.
 pub fn read_gray_from_bytes(
     bytes: &[u8],
@@ -632,8 +709,12 @@ pub fn read_rgb(path: &Path, max_pixels: usize) -> Result<RgbImage> {
 pub fn read_rgb_as(path: &Path, max_pixels: usize, encoding: InputEncoding) -> Result<RgbImage> {
     encoding.validate()?;
     let (img, facts) = decode(path, max_pixels)?;
-    let decoding = resolve(&facts, encoding).decoding;
-    let img = img.into_rgb32f();
+    rgb_from(&img, resolve(&facts, encoding).decoding)
+}
+
+/// The linear RGB of a decoded picture whose codes (scaled to 0..1) `decoding` decodes.
+fn rgb_from(img: &DynamicImage, decoding: Decoding) -> Result<RgbImage> {
+    let img = img.to_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     Grid::from_vec(
         w,
@@ -644,9 +725,18 @@ pub fn read_rgb_as(path: &Path, max_pixels: usize, encoding: InputEncoding) -> R
     )
 }
 
-/// Reads a mask: any non-zero pixel (in any channel) is inside.
+/// Reads a mask: a PNG (any non-zero pixel, in any channel, is inside) or an H×W `.npy` of
+/// booleans or 0/1 values (1 inside), told apart by their content.
 pub fn read_mask(path: &Path, max_pixels: usize) -> Result<Mask> {
-    mask_from(decode(path, max_pixels)?.0)
+    match super::picture::read_file_bytes(path, max_pixels)? {
+        super::picture::FileBytes::Npy(bytes) => {
+            let (w, h, data) = super::picture::npy_levels(&bytes, path, max_pixels, 1)?;
+            Grid::from_vec(w, h, data.into_iter().map(|v| v == 1).collect())
+        }
+        super::picture::FileBytes::Raster(bytes) => {
+            mask_from(decode_bytes(&bytes, path, max_pixels)?.0)
+        }
+    }
 }
 
 /// [`read_mask`] of an image held in memory; `source` names it in errors.
@@ -666,9 +756,17 @@ fn mask_from(img: DynamicImage) -> Result<Mask> {
     )
 }
 
-/// Reads a label map (8- or 16-bit grayscale codes 0..N).
+/// Reads a label map: an 8- or 16-bit grayscale PNG of codes 0..N, or an H×W `.npy` of
+/// booleans or whole numbers 0..65535, told apart by their content.
 pub fn read_labels(path: &Path, max_pixels: usize) -> Result<Labels> {
-    let img = decode(path, max_pixels)?.0;
+    let bytes = match super::picture::read_file_bytes(path, max_pixels)? {
+        super::picture::FileBytes::Npy(bytes) => {
+            let (w, h, data) = super::picture::npy_levels(&bytes, path, max_pixels, 65535)?;
+            return Grid::from_vec(w, h, data);
+        }
+        super::picture::FileBytes::Raster(bytes) => bytes,
+    };
+    let img = decode_bytes(&bytes, path, max_pixels)?.0;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let data = match img {
         DynamicImage::ImageLuma8(b) => b.into_raw().into_iter().map(u16::from).collect(),

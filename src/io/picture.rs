@@ -1,0 +1,358 @@
+//! A picture file read once: its format told by its content (the PNG, GIF, JPEG, TIFF or
+//! `.npy` signature), not its name, and its bytes read through one open file, so that a pipe,
+//! a FIFO or bash's `<(…)` works; then decoded into one value ([`PictureFile`]: the pixels,
+//! how they were encoded and how finely) that the readers of its sidecar and its analyses are
+//! handed, never opening the file again.
+
+use super::encoding::{Decoding, InputEncoding};
+use super::npy::{self, IntegerScale};
+use super::png;
+use crate::error::{Error, Result};
+use crate::grid::{Image, RgbImage};
+use serde_json::{json, Value};
+use std::path::Path;
+use std::sync::Arc;
+
+/// The extensions of the pictures [`read_picture`] reads, as its error lists them.
+pub const PICTURE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "tif", "tiff", "npy"];
+
+/// A picture file's bytes, by the format its content says.
+pub(crate) enum FileBytes {
+    /// A NumPy `.npy` array.
+    Npy(Vec<u8>),
+    /// A PNG, GIF, JPEG or TIFF.
+    Raster(Vec<u8>),
+}
+
+/// The bytes of the picture at `path`, read through one open file: its first bytes say its
+/// format (a file whose content says none is taken by its extension, whose reader then says
+/// what is wrong), and no more is read than a picture of `max_pixels` can need.
+pub(crate) fn read_file_bytes(path: &Path, max_pixels: usize) -> Result<FileBytes> {
+    let mut file = super::open_file(path)?;
+    let head = png::read_head(&mut file, path)?;
+    let ext = super::extension(path);
+    if head.starts_with(b"\x93NUMPY") || (!png::is_raster(&head) && ext == "npy") {
+        return Ok(FileBytes::Npy(npy::read_npy_rest(
+            head, file, path, max_pixels,
+        )?));
+    }
+    if png::is_raster(&head) || PICTURE_EXTENSIONS.contains(&ext.as_str()) {
+        return Ok(FileBytes::Raster(png::read_raster_rest(
+            head, file, path, max_pixels,
+        )?));
+    }
+    Err(Error::invalid(format!(
+        "{}: the image must be a .png or .npy file, or a .jpg, .jpeg, .tif or .tiff picture \
+         (its content begins with none of their signatures{})",
+        path.display(),
+        if ext.is_empty() {
+            String::new()
+        } else {
+            format!(", and its name ends in '.{ext}'")
+        }
+    )))
+}
+
+/// The values of an H×W (or H×W×1) `.npy` label map or mask: booleans, or whole numbers
+/// 0..=`top`, with its width and height; anything else is refused naming the first value
+/// that is not one.
+pub(crate) fn npy_levels(
+    bytes: &[u8],
+    path: &Path,
+    max_pixels: usize,
+    top: u16,
+) -> Result<(usize, usize, Vec<u16>)> {
+    let array = npy::read_array_from_bytes(bytes, path, max_pixels)?;
+    let (h, w) = match array.shape[..] {
+        [h, w] | [h, w, 1] => (h, w),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "a mask must be a 2-D H×W array, found shape {:?}",
+                    array.shape
+                ),
+            ))
+        }
+    };
+    crate::grid::check_size(w, h, max_pixels).map_err(|e| Error::format(path, e.to_string()))?;
+    let kind = if top == 1 {
+        "booleans or 0/1 values"
+    } else {
+        "booleans or whole numbers 0..65535 (0 = background, 1..N = targets)"
+    };
+    let mut levels = Vec::with_capacity(array.data.len());
+    for (i, &v) in array.data.iter().enumerate() {
+        if !(v >= 0.0 && v <= f64::from(top) && v.fract() == 0.0) {
+            return Err(Error::format(
+                path,
+                format!(
+                    "a mask .npy must hold {kind}; found {v} at column {}, row {} (dtype {})",
+                    i % w.max(1),
+                    i / w.max(1),
+                    array.dtype
+                ),
+            ));
+        }
+        levels.push(v as u16);
+    }
+    Ok((w, h, levels))
+}
+
+/// How finely a picture's values were stored: the values it can hold near any level, so that
+/// a decision about a level (is this pixel at the ambient level, in attached shadow?) is made
+/// to the picture's own precision and not to the last bit of a float.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Quantum {
+    /// Floating-point values with this relative precision (2⁻⁵³ for float64, 2⁻²⁴ for
+    /// float32).
+    Float(f64),
+    /// Integer codes: the linear value of each code, in increasing order.
+    Codes(Arc<Vec<f64>>),
+}
+
+impl Default for Quantum {
+    /// Float64 values, as rendered in memory.
+    fn default() -> Self {
+        Quantum::Float(f64::EPSILON / 2.0)
+    }
+}
+
+impl Quantum {
+    /// The codes 0..=`top` decoded to linear values by `linear` (of the code scaled to 0..1).
+    fn codes(top: f64, linear: impl Fn(f64) -> f64) -> Quantum {
+        // Beyond 16 bits a code is as fine as a float32.
+        if top > 65535.0 {
+            return Quantum::Float(f64::from(f32::EPSILON) / 2.0);
+        }
+        let n = top as usize;
+        Quantum::Codes(Arc::new((0..=n).map(|c| linear(c as f64 / top)).collect()))
+    }
+
+    /// This quantum after every value went through `f` (increasing): a sidecar's display gamma
+    /// or range undone.
+    pub fn map(&self, f: impl Fn(f64) -> f64) -> Quantum {
+        match self {
+            Quantum::Float(r) => Quantum::Float(*r),
+            Quantum::Codes(table) => {
+                Quantum::Codes(Arc::new(table.iter().map(|&v| f(v)).collect()))
+            }
+        }
+    }
+
+    /// The values that the picture cannot tell from `level`: the interval (low, high] of the
+    /// code nearest `level` (the values that code stands for), or `level` within two units of
+    /// the float's last place on the scale of 0..1.
+    pub fn bin(&self, level: f64) -> (f64, f64) {
+        match self {
+            Quantum::Float(r) => {
+                let tol = 2.0 * r * level.abs().max(1.0);
+                (level - tol, level + tol)
+            }
+            Quantum::Codes(table) => {
+                // The edges of a code's interval: halfway to its neighbours.
+                let low = |c: usize| {
+                    c.checked_sub(1)
+                        .map_or(f64::NEG_INFINITY, |b| (table[b] + table[c]) / 2.0)
+                };
+                let high = |c: usize| {
+                    table
+                        .get(c + 1)
+                        .map_or(f64::INFINITY, |&a| (table[c] + a) / 2.0)
+                };
+                // The codes on either side of the level; each that could have stored it (the
+                // level within its interval, to a millionth of a step: a level halfway between
+                // two codes, as 0.1 is at 8 and 16 bits, is either's).
+                let i = table.partition_point(|&v| v < level);
+                let could = |c: usize| {
+                    let slack = 1e-6 * (high(c) - low(c)).min(1.0);
+                    level > low(c) - slack && level <= high(c) + slack
+                };
+                let below = i.checked_sub(1).filter(|&c| could(c));
+                let above = Some(i).filter(|&c| c < table.len() && could(c));
+                match (below, above) {
+                    (Some(b), Some(a)) => (low(b), high(a)),
+                    (Some(c), None) | (None, Some(c)) => (low(c), high(c)),
+                    // Beyond every code (a level the picture cannot hold): itself alone.
+                    (None, None) => (level, level),
+                }
+            }
+        }
+    }
+
+    /// `image` with every value the picture cannot tell from `level` ([`bin`](Self::bin))
+    /// set to `level` exactly: a rendered picture's attached shadow, stored as 8- or 16-bit
+    /// codes or float32, is at its ambient level again, as when it was rendered.
+    pub fn settle(&self, image: &Image, level: f64) -> Image {
+        let (low, high) = self.bin(level);
+        image.map(|&v| if v > low && v <= high { level } else { v })
+    }
+}
+
+/// A picture file read once and decoded.
+#[derive(Debug, Clone)]
+pub struct PictureFile {
+    /// Its luminance, linear 0..1 (not yet checked to lie in 0..1).
+    pub gray: Image,
+    /// Its linear RGB, where asked for and the file is a PNG, GIF, JPEG or TIFF.
+    pub rgb: Option<RgbImage>,
+    /// What was read and how it was converted, for reports.
+    pub info: Value,
+    /// Whether the file's own chunk (sRGB, gAMA) says how its codes encode luminance.
+    pub states_its_encoding: bool,
+    /// The note to say once where the codes were taken as sRGB by the default rule.
+    pub assumed_srgb: Option<String>,
+    /// How a `.npy` picture's integers were scaled to 0..1.
+    pub npy_scale: Option<IntegerScale>,
+    /// How finely its values were stored.
+    pub quantum: Quantum,
+}
+
+/// Reads the picture at `path` once: a PNG, GIF, JPEG or TIFF (8 or 16 bits) or an H×W (or
+/// H×W×3) `.npy`, told apart by its content, decoded as `encoding` says (see
+/// [`super::read_luminance_as`]); with `colour`, a PNG, GIF, JPEG or TIFF's linear RGB too.
+pub fn read_picture(
+    path: &Path,
+    max_pixels: usize,
+    encoding: InputEncoding,
+    colour: bool,
+) -> Result<PictureFile> {
+    encoding.validate()?;
+    match read_file_bytes(path, max_pixels)? {
+        FileBytes::Raster(bytes) => {
+            let r = png::raster_picture(&bytes, path, max_pixels, encoding, colour)?;
+            let decoding = r.decoding;
+            let top = 2f64.powi(i32::from(r.info.bit_depth)) - 1.0;
+            Ok(PictureFile {
+                quantum: Quantum::codes(top, |v| decoding.linear(v)),
+                info: serde_json::to_value(&r.info).unwrap_or_default(),
+                gray: r.gray,
+                rgb: r.rgb,
+                states_its_encoding: r.states_its_encoding,
+                assumed_srgb: r.assumed_srgb.then(|| png::assumed_srgb_line(path)),
+                npy_scale: None,
+            })
+        }
+        FileBytes::Npy(bytes) => npy_picture(&bytes, path, max_pixels, encoding),
+    }
+}
+
+/// A `.npy` picture: floats and booleans as they are, uint8 and uint16 codes divided by their
+/// largest value and then decoded as `encoding` says (an encoding other than auto or linear is
+/// refused for floats), H×W×3 linear RGB made luminance.
+fn npy_picture(
+    bytes: &[u8],
+    path: &Path,
+    max_pixels: usize,
+    encoding: InputEncoding,
+) -> Result<PictureFile> {
+    let array = npy::read_array_from_bytes(bytes, path, max_pixels)?;
+    let dtype = array.dtype.clone();
+    let raw = encoding.is_explicit().then(|| array.clone());
+    let (mut image, scale, rgb) = npy::luminance_npy(array, path, max_pixels)?;
+    let mut notes = Vec::new();
+    let format = match &scale {
+        Some(scale) => {
+            notes.push(scale.note());
+            format!("npy {}", scale.dtype)
+        }
+        None => "npy float".to_string(),
+    };
+    let mut decoding = Decoding::Linear;
+    match (encoding, &scale, raw) {
+        (InputEncoding::Auto | InputEncoding::Linear, _, _) => {}
+        (_, None, _) => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "a float .npy holds linear values already: input gamma {encoding} applies \
+                     only to integer codes (give auto or linear)"
+                ),
+            ))
+        }
+        (_, Some(scale), raw) => {
+            decoding = encoding.explicit().unwrap_or(Decoding::Linear);
+            image = match raw {
+                // Each channel decoded, then the luminance of the linear values.
+                Some(array) if rgb => {
+                    let linear: Vec<f64> = array
+                        .data
+                        .chunks_exact(3)
+                        .map(|p| {
+                            crate::grid::luminance(
+                                [p[0], p[1], p[2]].map(|c| decoding.linear(c / scale.max)),
+                            )
+                        })
+                        .collect();
+                    crate::grid::Grid::from_vec(image.width(), image.height(), linear)?
+                }
+                _ => image.map(|&v| decoding.linear(v)),
+            };
+            notes.push(match encoding {
+                InputEncoding::Srgb => "decoded as sRGB (--input-gamma srgb)".to_string(),
+                _ => format!("decoded as luminance = code^{encoding} (--input-gamma {encoding})"),
+            });
+        }
+    }
+    if rgb {
+        notes.push(png::LUMINANCE_FORMULA.to_string());
+    }
+    let mut info = json!({ "format": format });
+    if !notes.is_empty() {
+        info["conversion"] = notes.join("; ").into();
+    }
+    let quantum = match &scale {
+        Some(scale) => Quantum::codes(scale.max, |v| decoding.linear(v)),
+        None if dtype.ends_with("f4") => Quantum::Float(f64::from(f32::EPSILON) / 2.0),
+        // float16: 11 bits of precision.
+        None if dtype.ends_with("f2") => Quantum::Float(2f64.powi(-11)),
+        None => Quantum::default(),
+    };
+    Ok(PictureFile {
+        gray: image,
+        rgb: None,
+        info,
+        states_its_encoding: false,
+        assumed_srgb: None,
+        npy_scale: scale,
+        quantum,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Grid;
+
+    #[test]
+    fn a_level_stored_as_8_or_16_bit_codes_or_float32_is_found_again() {
+        // 0.1 lies halfway between two codes at 8 bits (25.5) and at 16 bits (6553.5): the
+        // render's rounding picks the upper one, and either could have stored it.
+        for bits in [8, 16] {
+            let top = 2f64.powi(bits) - 1.0;
+            let q = Quantum::codes(top, |v| v);
+            let stored = (0.1 * top).round() / top;
+            let lit = stored + 1.0 / top;
+            let image = Grid::from_vec(3, 1, vec![stored, lit, 0.5]).unwrap();
+            assert_eq!(
+                q.settle(&image, 0.1).data(),
+                &[0.1, lit, 0.5],
+                "{bits} bits"
+            );
+        }
+        let float32 = Quantum::Float(f64::from(f32::EPSILON) / 2.0);
+        let stored = f64::from(0.1f32);
+        assert_ne!(stored, 0.1);
+        let image = Grid::from_vec(2, 1, vec![stored, 0.1 + 1e-6]).unwrap();
+        assert_eq!(float32.settle(&image, 0.1).data(), &[0.1, 0.1 + 1e-6]);
+        // Float64: only the level itself, to its last bits.
+        let image = Grid::from_vec(2, 1, vec![0.1, 0.1 + 1e-12]).unwrap();
+        assert_eq!(Quantum::default().settle(&image, 0.1).data(), image.data());
+        // Codes through a display gamma: the level's code found through the decoding.
+        let q = Quantum::codes(255.0, |v| v.powf(2.2));
+        let code = (0.1f64.powf(1.0 / 2.2) * 255.0).round();
+        let stored = (code / 255.0).powf(2.2);
+        let image = Grid::from_vec(1, 1, vec![stored]).unwrap();
+        assert_eq!(q.settle(&image, 0.1).data(), &[0.1]);
+    }
+}
