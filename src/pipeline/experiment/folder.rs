@@ -45,6 +45,7 @@ impl Report {
                     &options,
                     // Into the run's own fresh folder.
                     true,
+                    None,
                 )
                 .map(|_| ())
             })
