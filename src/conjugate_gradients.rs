@@ -47,7 +47,7 @@ pub(crate) struct Outcome {
 ///   preconditioned residual).
 ///
 /// Stops early, not converged, where A's curvature along a direction is not positive (or not
-/// a number).
+/// a number), or where a stop was requested ([`crate::cancel`]).
 pub(crate) fn solve(
     mut apply: impl FnMut(&[f64], &mut [f64]),
     mut precondition: impl FnMut(&[f64], &mut [f64]),
@@ -78,6 +78,11 @@ pub(crate) fn solve(
     p.copy_from_slice(q);
     let mut rz = dot(r, q);
     for iteration in 1..=stop.max_iter {
+        // A requested stop ends the solve here, not converged: one iteration of a large
+        // system is a fraction of a second, the whole solve can be seconds.
+        if crate::cancel::requested() {
+            return ended(iteration - 1, norm);
+        }
         apply(p, q);
         let curvature = dot(p, q);
         if curvature.is_nan() || curvature <= 0.0 {

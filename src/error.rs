@@ -10,12 +10,14 @@ pub enum Error {
     #[error("{0}")]
     Invalid(String),
     /// A name (shape, stimulus, parameter, model, …) that shadelab does not know.
-    #[error("unknown {kind} '{name}' (valid: {valid})")]
+    #[error("unknown {kind} '{name}'{hint} (valid: {valid})")]
     Unknown {
         /// What kind of thing was named ("stimulus", "parameter", …).
         kind: &'static str,
         /// The name given.
         name: String,
+        /// The nearest valid name as words (`; did you mean 'kappas'?`), or empty.
+        hint: String,
         /// The valid names, comma separated.
         valid: String,
     },
@@ -91,11 +93,23 @@ impl Error {
         }
     }
 
-    /// An [`Error::Unknown`] listing the valid names.
+    /// An [`Error::Unknown`] listing the valid names and naming the nearest ([`nearest_name`]).
+    ///
+    /// ```
+    /// let e = shadelab::Error::unknown("parameter", "prior_kappa", &["prior_tilt", "kappas", "noise"]);
+    /// assert_eq!(
+    ///     e.to_string(),
+    ///     "unknown parameter 'prior_kappa'; did you mean 'kappas'? (valid: prior_tilt, kappas, noise)"
+    /// );
+    /// ```
     pub fn unknown<S: AsRef<str>>(kind: &'static str, name: &str, valid: &[S]) -> Self {
+        let hint = nearest_name(name, valid)
+            .map(|n| format!("; did you mean '{n}'?"))
+            .unwrap_or_default();
         Error::Unknown {
             kind,
             name: name.to_string(),
+            hint,
             valid: valid
                 .iter()
                 .map(|s| s.as_ref())
@@ -112,6 +126,52 @@ impl Error {
             Error::Invalid(_) | Error::Unknown { .. } | Error::TooLarge(_)
         )
     }
+}
+
+/// The valid name nearest `name`, if one is near enough to be a slip: the fewest edits
+/// (insert, delete or change a letter, ignoring case and `-` against `_`) from `name`, or
+/// from one of its `_`/`-`-separated words of three letters or more (`prior_kappa` →
+/// `kappas`: a word of it is one letter short), at most a third of the valid name's length
+/// (and at least one). Ties go to the first in `valid`.
+///
+/// ```
+/// use shadelab::nearest_name;
+/// assert_eq!(nearest_name("prior_kappa", &["prior_tilt", "kappas"]), Some("kappas"));
+/// assert_eq!(nearest_name("rotaton", &["rotation", "size"]), Some("rotation"));
+/// assert_eq!(nearest_name("teapot", &["sphere", "crater"]), None);
+/// ```
+pub fn nearest_name<'a, S: AsRef<str>>(name: &str, valid: &'a [S]) -> Option<&'a str> {
+    let plain = |s: &str| s.to_lowercase().replace('-', "_");
+    let name = plain(name);
+    let words: Vec<&str> = std::iter::once(name.as_str())
+        .chain(name.split('_').filter(|w| w.len() >= 3))
+        .collect();
+    valid
+        .iter()
+        .map(AsRef::as_ref)
+        .filter_map(|v| {
+            let candidate = plain(v);
+            let d = words.iter().map(|w| edit_distance(w, &candidate)).min()?;
+            (d <= (candidate.chars().count() / 3).max(1)).then_some((d, v))
+        })
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, v)| v)
+}
+
+/// Levenshtein distance between `a` and `b`, in characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let substitute = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitute.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
 }
 
 /// The library's result type.

@@ -409,6 +409,7 @@ fn write_one(r: &Rendered, dir: &Path) -> Result<()> {
         // 16-bit linear PNG with its sidecar and mask, into the gallery's own fresh folder.
         &ExportOptions::default(),
         true,
+        None,
     )?;
     io::write_rgb(
         &dir.join("thumbs").join(format!("{name}.png")),

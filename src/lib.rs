@@ -78,9 +78,9 @@ mod surface;
 mod visual_size;
 
 // The core: images, lights, sizes, errors, progress.
-pub use error::{Error, Result};
+pub use error::{nearest_name, Error, Result};
 pub use gradient_space::Normal;
-pub use grid::{Grid, Image, Labels, Mask, RgbImage, DEFAULT_MAX_PIXELS};
+pub use grid::{check_size, Grid, Image, Labels, Mask, RgbImage, DEFAULT_MAX_PIXELS};
 pub use light::{FrontLight, Light};
 pub use message::{Message, Setting};
 pub use params::{ParamKind, ParamSet, ParamSpec, Params};

@@ -139,7 +139,14 @@ impl ParamSpec {
     /// canonical JSON form.
     pub fn check(&self, value: &Value) -> Result<Value> {
         let bad = |why: String| Error::invalid(format!("parameter {}: {why}", self.name));
-        let as_text = value.as_str();
+        // A number where text is meant (Python's `rotation=180`) is its text: whole numbers
+        // without a decimal point, as they are written on the command line.
+        let number_text = value.as_f64().map(|v| match value.as_i64() {
+            Some(i) => i.to_string(),
+            None if v.fract() == 0.0 && v.abs() < 1e15 => format!("{v:.0}"),
+            None => v.to_string(),
+        });
+        let as_text = value.as_str().or(number_text.as_deref());
         match &self.kind {
             ParamKind::Number { min, max } => {
                 let v = match (value.as_f64(), as_text) {
@@ -206,12 +213,7 @@ impl Params {
     /// Checks `given` against `specs`: unknown keys are errors that list the valid ones,
     /// values are range-checked, and missing ones take their defaults.
     pub fn resolve(specs: &[ParamSpec], given: &Map<String, Value>) -> Result<Params> {
-        for key in given.keys() {
-            if !specs.iter().any(|s| s.name == key) {
-                let names: Vec<&str> = specs.iter().map(|s| s.name).collect();
-                return Err(Error::unknown("parameter", key, &names));
-            }
-        }
+        Params::check_names(specs, given.keys(), &[])?;
         let mut values = BTreeMap::new();
         for spec in specs {
             let v = match given.get(spec.name) {
@@ -221,6 +223,37 @@ impl Params {
             values.insert(spec.name.to_string(), v);
         }
         Ok(Params { values })
+    }
+
+    /// Checks that every name in `given` is a parameter of `specs`; an unknown one is an
+    /// error listing the valid names and naming the nearest among them and `also`, the other
+    /// names the caller accepts beside the parameters (a Python function's own keywords:
+    /// `observer("bumps", prior_kappa=2)` suggests the observer's `kappas`).
+    pub fn check_names<'a>(
+        specs: &[ParamSpec],
+        given: impl IntoIterator<Item = &'a String>,
+        also: &[&str],
+    ) -> Result<()> {
+        for key in given {
+            if !specs.iter().any(|s| s.name == key) {
+                let names: Vec<&str> = specs.iter().map(|s| s.name).collect();
+                let nearby: Vec<&str> = names.iter().chain(also).copied().collect();
+                let hint = match crate::error::nearest_name(key, &nearby) {
+                    Some(n) if also.contains(&n) && !names.contains(&n) => {
+                        format!("; did you mean the keyword '{n}'?")
+                    }
+                    Some(n) => format!("; did you mean '{n}'?"),
+                    None => String::new(),
+                };
+                return Err(Error::Unknown {
+                    kind: "parameter",
+                    name: key.clone(),
+                    hint,
+                    valid: names.join(", "),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Parses `key=value` pairs from the command line into a map for [`Params::resolve`];

@@ -428,3 +428,90 @@ fn a_set_replaced_by_a_smaller_one_takes_its_extra_files_with_it() {
     let _ = std::fs::remove_file(d.join("../outside.txt"));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn two_pictures_of_one_name_never_share_a_sidecar_or_mask() {
+    // `a.npy` and then `a.png`: both would be recorded in a.json with a_mask.png beside them,
+    // and `a.png → a.json` is how every analysis finds a picture's record. The second is
+    // refused, naming the first; the first set stays as it was.
+    let d = scratch("sets-one-name");
+    let render = |stimulus: &str, out: &str| {
+        shadelab(
+            &d,
+            &["--quiet", "render", stimulus, "--size", "24", "--out", out],
+        )
+    };
+    assert!(render("bumps", "a.npy").status.success());
+    let before = tree(&d);
+    for forced in [false, true] {
+        let mut args = vec![
+            "--quiet", "render", "crater", "--size", "24", "--out", "a.png",
+        ];
+        if forced {
+            args.push("--force");
+        }
+        let out = shadelab(&d, &args);
+        assert_error(
+            &out,
+            1,
+            "a.json beside it is the record of a.npy, another picture",
+        );
+        assert_eq!(tree(&d), before, "forced: {forced}");
+    }
+    // The same picture again replaces its own set, and once a.npy is gone its record is a
+    // stale one that a new picture may take.
+    assert!(render("bumps", "a.npy").status.success());
+    std::fs::remove_file(d.join("a.npy")).unwrap();
+    assert!(render("crater", "a.png").status.success());
+    assert_eq!(files_in(&d), ["a.json", "a.png", "a_mask.png"]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("a.json")).unwrap()).unwrap();
+    assert_eq!(json["stimulus"], "crater");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn an_edited_picture_says_so_and_its_sidecar_is_not_rendered_again() {
+    use shadelab::pipeline::render::{run, RenderConfig};
+    use shadelab::stimulus::{Pixels, Range};
+    let d = scratch("sets-edited");
+    let mut config = RenderConfig::new("bumps");
+    config.size.set_shape((24, 32));
+    let report = run(&config, &shadelab::NoProgress).unwrap();
+    let Pixels::Gray(img) = &report.output.pixels else {
+        panic!("bumps is gray")
+    };
+    let rendered_md5 = shadelab::stimulus::pixels_md5(&report.output.pixels);
+    let edited = Pixels::Gray(img.map(|v| v * 0.5 + 0.25));
+    let edited_md5 = shadelab::stimulus::pixels_md5(&edited);
+    let edited = report
+        .clone()
+        .with_picture(edited, Range::Unit, "img")
+        .unwrap();
+    edited
+        .write(&shadelab::Output::new(d.join("e.npy")))
+        .unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("e.json")).unwrap()).unwrap();
+    assert_eq!(json["md5_float64_rounded8"], edited_md5.as_str());
+    assert_eq!(
+        json["edited"]["rendered_md5_float64_rounded8"],
+        rendered_md5.as_str()
+    );
+    assert_ne!(edited_md5, rendered_md5);
+    // The .npy holds the edited values exactly (float32 of them).
+    let written = shadelab::internal::io::read_array(&d.join("e.npy"), 1 << 20).unwrap();
+    let Pixels::Gray(want) = &edited.output.pixels else {
+        unreachable!()
+    };
+    assert_eq!(written.shape, [24, 32]);
+    for (a, b) in written.data.iter().zip(want.data()) {
+        assert_eq!(*a, f64::from(*b as f32));
+    }
+    // render --spec of its sidecar refuses to claim it reproduces the picture, in one line.
+    std::fs::create_dir(d.join("again")).unwrap();
+    let out = shadelab(&d, &["render", "--spec", "e.json", "--out", "again/e.npy"]);
+    assert_error(&out, 1, "e.json: records a picture edited after rendering");
+    assert!(files_in(&d.join("again")).is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}

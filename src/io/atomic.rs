@@ -166,7 +166,8 @@ fn written_by_shadelab(marker: &Path) -> bool {
     }
 }
 
-fn file_name_of(path: &Path) -> String {
+/// The last part of `path`, lossily as text (for messages).
+pub(crate) fn file_name_of(path: &Path) -> String {
     path.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default()

@@ -17,6 +17,7 @@ pub mod render_sidecar;
 mod sidecar;
 mod temp;
 
+pub(crate) use atomic::file_name_of;
 pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
 pub(crate) use csv::check_csv_finite;
 pub use csv::{csv_field, csv_record, parse_csv};

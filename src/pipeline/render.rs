@@ -19,7 +19,7 @@
 
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::stimulus::{self, ExportOptions, Output, Request, Spec};
+use crate::stimulus::{self, Edited, ExportOptions, Output, Pixels, Range, Request, Spec};
 use crate::visual_size::{Geometry, SizeRequest};
 use serde::Serialize;
 use serde_json::{Map, Value};
@@ -174,6 +174,9 @@ pub struct RenderReport {
     /// How the files are encoded ([`RenderConfig::export`]).
     #[serde(skip)]
     pub export: ExportOptions,
+    /// Set when the picture is no longer the render ([`RenderReport::with_picture`]).
+    #[serde(skip)]
+    pub edited: Option<Edited>,
 }
 
 /// Renders the config's stimulus (nothing is written; see [`RenderReport::write`]).
@@ -204,10 +207,87 @@ pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderRepor
         request,
         output,
         export: config.export.clone(),
+        edited: None,
     })
 }
 
+/// How far a value handed back may lie from the render's and still be the render: far below
+/// every format's step (float32 at 1 is 6e-8 apart, 16-bit codes 1.5e-5), so that an array
+/// that went through float64 arithmetic unchanged is not called edited.
+const SAME_VALUE: f64 = 1e-9;
+
 impl RenderReport {
+    /// The render with the caller's picture in place of its own: `pixels` (in `range`, as
+    /// the render was handed over) are what [`RenderReport::write`] writes. Where they are the
+    /// render's (every value within 1e-9) nothing changes and the files are the render's,
+    /// byte for byte; otherwise the report is marked [`Edited`] and its sidecar says so. The
+    /// picture must have the render's size and channels and be linear luminance 0..1 without
+    /// NaN, as every picture shadelab reads; `what` names it in errors.
+    ///
+    /// ```
+    /// use shadelab::pipeline::render::{run, RenderConfig};
+    /// use shadelab::stimulus::{Pixels, Range};
+    /// let mut config = RenderConfig::new("bumps");
+    /// config.size.set_shape((16, 24));
+    /// let report = run(&config, &shadelab::NoProgress).unwrap();
+    /// let Pixels::Gray(img) = &report.output.pixels else { unreachable!() };
+    /// let same = report.clone().with_picture(Pixels::Gray(img.clone()), Range::Unit, "img").unwrap();
+    /// assert!(same.edited.is_none());
+    /// let halved = Pixels::Gray(img.map(|v| v * 0.5));
+    /// let edited = report.with_picture(halved, Range::Unit, "img").unwrap();
+    /// assert!(edited.edited.is_some());
+    /// ```
+    pub fn with_picture(
+        mut self,
+        pixels: Pixels,
+        range: Range,
+        what: &str,
+    ) -> Result<RenderReport> {
+        let ((w, h), (rw, rh)) = (pixels.size(), self.output.pixels.size());
+        let pixels = match (pixels, &self.output.pixels) {
+            (Pixels::Gray(i), Pixels::Gray(_)) => Pixels::Gray(i.map(|&v| range.to_unit(v))),
+            (Pixels::Rgb(i), Pixels::Rgb(_)) => Pixels::Rgb(i.map(|p| p.map(|v| range.to_unit(v)))),
+            (given, _) => {
+                let channels = |p: &Pixels| match p {
+                    Pixels::Gray(_) => "gray (height × width)",
+                    Pixels::Rgb(_) => "RGB (height × width × 3)",
+                };
+                return Err(Error::invalid(format!(
+                    "{what}: the picture is {} but {} renders {}",
+                    channels(&given),
+                    self.stimulus,
+                    channels(&self.output.pixels)
+                )));
+            }
+        };
+        if (w, h) != (rw, rh) {
+            return Err(Error::invalid(format!(
+                "{what}: the picture is {h} high × {w} wide but the render it records is {rh} \
+                 high × {rw} wide"
+            )));
+        }
+        let (values, channels): (&[f64], usize) = match &pixels {
+            Pixels::Gray(i) => (i.data(), 1),
+            Pixels::Rgb(i) => (i.data().as_flattened(), 3),
+        };
+        super::source::check_values(values, channels, w, what)?;
+        let rendered: &[f64] = match &self.output.pixels {
+            Pixels::Gray(i) => i.data(),
+            Pixels::Rgb(i) => i.data().as_flattened(),
+        };
+        let same = values
+            .iter()
+            .zip(rendered)
+            .all(|(a, b)| (a - b).abs() <= SAME_VALUE);
+        if !same {
+            self.edited = Some(Edited {
+                rendered_md5: stimulus::pixels_md5(&self.output.pixels),
+            });
+            self.output.pixels = pixels;
+        }
+        Ok(self)
+    }
+
     /// Writes the render to the file `out` (`.png`, `.npy`, `.mat` or `.svg`) with its sidecar,
     /// mask and (if asked) layers, whole or not at all (see [`stimulus::write_output`]); a file
     /// shadelab did not write is replaced only with [`Output::force`](super::Output::force), and
@@ -236,6 +316,7 @@ impl RenderReport {
             out.path(),
             &self.export,
             out.forced(),
+            self.edited.as_ref(),
         )
     }
 }
@@ -334,6 +415,12 @@ pub fn describe(name: &str) -> Result<Description> {
 
 /// The render a sidecar records.
 fn from_sidecar(v: &Value) -> Result<RenderConfig> {
+    if v.get(stimulus::EDITED_KEY).is_some_and(|e| !e.is_null()) {
+        return Err(Error::invalid(
+            "records a picture edited after rendering: rendering it again gives the render, \
+             not that picture (render the stimulus from its parameters under another name)",
+        ));
+    }
     let field = |key: &str| {
         v.get(key)
             .ok_or_else(|| Error::invalid(format!("the sidecar has no '{key}'")))

@@ -341,6 +341,8 @@ impl Solver {
                 &computed
             }
         };
+        // The depth's Poisson solve above stops early on a requested stop: no step then.
+        crate::cancel::check()?;
         let mut x = vec![0.0; 3 * n];
         x[..n].copy_from_slice(&self.cur_f[..n]);
         x[n..2 * n].copy_from_slice(&self.cur_g[..n]);

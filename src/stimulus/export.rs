@@ -27,6 +27,14 @@ impl Range {
             Range::Psychopy => v * 2.0 - 1.0,
         }
     }
+
+    /// A value in this range as linear 0..1 (the inverse of [`Range::apply`]).
+    pub fn to_unit(self, v: f64) -> f64 {
+        match self {
+            Range::Unit => v,
+            Range::Psychopy => (v + 1.0) / 2.0,
+        }
+    }
 }
 
 /// How to write a stimulus.
@@ -168,6 +176,32 @@ impl ExportOptions {
 /// The output formats, by extension.
 pub const FORMATS: &[&str] = &["png", "npy", "mat", "npz", "svg"];
 
+/// A picture that is no longer the render its sidecar records: the caller changed it after
+/// rendering (Python's `save` of an edited `img`). Its sidecar says so (`edited`), with the
+/// digest of the render it came from beside the picture's own, and `render --spec` of that
+/// sidecar refuses to claim it reproduces the picture.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Edited {
+    /// The render's own digest (`md5_float64_rounded8` of the picture as rendered).
+    pub rendered_md5: String,
+}
+
+/// The sidecar key that marks an edited picture ([`Edited`]).
+pub const EDITED_KEY: &str = "edited";
+
+/// The digest the sidecar records of a picture (`md5_float64_rounded8`, stimupy's: float64
+/// values rounded to 8 decimals; an RGB picture's channels in turn, pixel by pixel).
+pub fn pixels_md5(pixels: &Pixels) -> String {
+    match pixels {
+        Pixels::Gray(img) => io::image_md5(img),
+        Pixels::Rgb(img) => io::image_md5(&crate::grid::Grid::from_fn(
+            img.width() * 3,
+            img.height(),
+            |c, r| img.get(c / 3, r)[c % 3],
+        )),
+    }
+}
+
 /// The name of the picture in a `.mat` or `.npz` bundle (stimupy's).
 pub const MAT_VARIABLE: &str = "img";
 
@@ -177,7 +211,10 @@ pub const MAT_VARIABLE: &str = "img";
 /// policy, as [`crate::pipeline::Output`] holds it). Returns every file written. The files are
 /// committed as a set ([`io::OutputSet`]): whatever stops the write, the old set or the new set
 /// is there whole, never a mix; a second run writing the same output meanwhile fails with
-/// [`Error::Locked`].
+/// [`Error::Locked`]. `edited` says the picture is not the render `request` describes (its
+/// sidecar says so). The sidecar and mask beside `path` are one picture's: when they are the
+/// record of another picture of the same name (`a.npy` beside `a.png`) that is still there,
+/// the write is refused, naming it, even when forced.
 pub fn write_output(
     name: &str,
     request: &Request,
@@ -185,8 +222,15 @@ pub fn write_output(
     path: &Path,
     options: &ExportOptions,
     force: bool,
+    edited: Option<&Edited>,
 ) -> Result<Vec<PathBuf>> {
     let ext = options.check(path)?;
+    if ext == "svg" && edited.is_some() {
+        return Err(Error::format(
+            path,
+            "an edited picture has no vector form (the SVG draws the render); write it as .png, .npy or .mat",
+        ));
+    }
     if ext == "svg" && output.svg.is_none() {
         let why = match output.notes.get("svg_omitted").and_then(|v| v.as_str()) {
             Some(reason) => format!(" here ({reason})"),
@@ -197,6 +241,7 @@ pub fn write_output(
         )));
     }
     let sidecar = io::sibling(path, "", "json");
+    check_not_another_pictures(path, &sidecar)?;
     // The set, the sidecar last: it is the commit record (see `io::OutputSet`).
     // In the order they were always listed (companions, image, sidecar).
     let mut files = planned_files(path, output, options);
@@ -212,14 +257,62 @@ pub fn write_output(
     // Under the lock: the companions of the old set that the new one lacks (a render with
     // `layers` replaced by one without), as the old sidecar lists them.
     let stale = stale_companions(path, &sidecar, &files);
-    write_all(name, request, output, path, &ext, &sidecar, options, &set)
-        .map_err(|e| set.final_names(e))?;
+    let picture = Picture {
+        name,
+        request,
+        output,
+        edited,
+    };
+    write_all(&picture, path, &ext, &sidecar, options, &set).map_err(|e| set.final_names(e))?;
     set.commit()?;
     // The new sidecar no longer lists them: they go with the set they belonged to.
     for file in stale {
         fs::remove_file(&file).map_err(|e| Error::io(&file, e))?;
     }
     Ok(files)
+}
+
+/// What [`write_all`] writes: the stimulus, its request and output, and whether the picture
+/// was edited.
+struct Picture<'a> {
+    name: &'a str,
+    request: &'a Request,
+    output: &'a Output,
+    edited: Option<&'a Edited>,
+}
+
+/// Refuses to write `path` when the shadelab sidecar beside it is the record of another
+/// picture of the same name that is still there (`a.json` of `a.npy` when writing `a.png`):
+/// replacing it would leave that picture with this one's record and mask. A sidecar whose
+/// picture is gone, or a sidecar that is not shadelab's, is left to the overwrite rule.
+fn check_not_another_pictures(path: &Path, sidecar: &Path) -> Result<()> {
+    let Ok(bytes) = io::read_capped(sidecar, io::MAX_TEXT_BYTES) else {
+        return Ok(());
+    };
+    let Ok(old) = serde_json::from_slice::<Value>(&bytes) else {
+        return Ok(());
+    };
+    if old.get("program").and_then(Value::as_str) != Some("shadelab") {
+        return Ok(());
+    }
+    let Some(image) = old.pointer("/files/image").and_then(Value::as_str) else {
+        return Ok(());
+    };
+    let ours = path.file_name().and_then(|n| n.to_str());
+    // Only a plain file name beside it counts: a hand-edited record cannot point elsewhere.
+    let other = sidecar.with_file_name(image);
+    let plain = Path::new(image).file_name().and_then(|n| n.to_str()) == Some(image);
+    if ours == Some(image) || !plain || !other.is_file() {
+        return Ok(());
+    }
+    Err(Error::format(
+        path,
+        format!(
+            "{} beside it is the record of {image}, another picture (its sidecar and mask would \
+             be replaced); give this one another name, or remove {image} first",
+            io::file_name_of(sidecar)
+        ),
+    ))
 }
 
 /// The companion files (mask, layers) beside `path` that the shadelab sidecar there lists and
@@ -277,17 +370,20 @@ pub(crate) fn planned_files(path: &Path, output: &Output, options: &ExportOption
     files
 }
 
-#[allow(clippy::too_many_arguments)]
 fn write_all(
-    name: &str,
-    request: &Request,
-    output: &Output,
+    picture: &Picture<'_>,
     path: &Path,
     ext: &str,
     sidecar: &Path,
     options: &ExportOptions,
     set: &io::OutputSet,
 ) -> Result<()> {
+    let Picture {
+        name,
+        request,
+        output,
+        edited,
+    } = *picture;
     let mut files = Map::new();
     let mut record = |key: &str, p: &Path| {
         files.insert(
@@ -335,7 +431,7 @@ fn write_all(
                 unreachable!("a display's codes are shown on a display")
             };
             let size = output.pixels.size();
-            let text = png_text(name, request, options);
+            let text = png_text(name, request, options, edited);
             let codes = io::DisplayCodes {
                 codes: &shown.codes,
                 channels: shown.channels,
@@ -348,7 +444,7 @@ fn write_all(
                 Pixels::Gray(img) => io::PngPicture::Gray(img),
                 Pixels::Rgb(img) => io::PngPicture::Rgb(img),
             };
-            let text = png_text(name, request, options);
+            let text = png_text(name, request, options, edited);
             io::write_stimulus(image, picture, depth, gamma, &text)?
         }
         ("npy", Pixels::Gray(img)) => io::write_image(image, &img.map(|&v| to_range(v)))?,
@@ -379,7 +475,17 @@ fn write_all(
         _ => return Err(Error::invalid(format!("unknown output format '.{ext}'"))),
     }
     record("image", path);
-    let value = sidecar_json(name, request, output, ext, options, files, shown.as_ref());
+    let mut value = sidecar_json(name, request, output, ext, options, files, shown.as_ref());
+    if let (Some(edited), Value::Object(fields)) = (edited, &mut value) {
+        fields.insert(
+            EDITED_KEY.into(),
+            json!({
+                "rendered_md5_float64_rounded8": edited.rendered_md5,
+                "note": "the picture was changed after rendering: its values are not the render \
+                         the parameters describe (md5_float64_rounded8 is the picture's own)",
+            }),
+        );
+    }
     io::write_json(set.staged(sidecar)?, &value)
 }
 
@@ -437,8 +543,14 @@ fn encoding(format: &str, options: &ExportOptions) -> String {
 /// The text a stimulus PNG carries (iTXt chunks), so that the file alone says what it is:
 /// `Software`, a one-line `Description`, and `shadelab`, the sidecar's record of the stimulus
 /// (name, parameters, seed, size triple, encoding) as JSON. Its gAMA chunk says the same
-/// encoding to viewers (1.0 for linear codes, 1/gamma for display-encoded ones).
-pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(String, String)> {
+/// encoding to viewers (1.0 for linear codes, 1/gamma for display-encoded ones). An edited
+/// picture ([`Edited`]) says so in both.
+pub fn png_text(
+    name: &str,
+    request: &Request,
+    options: &ExportOptions,
+    edited: Option<&Edited>,
+) -> Vec<(String, String)> {
     let g = &request.geometry;
     let version = io::PROGRAM_VERSION;
     let bits = options.png_bits();
@@ -455,8 +567,13 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
         }
         _ => "linear luminance 0..1, code = round(v * max)".to_string(),
     };
+    let edit = if edited.is_some() {
+        " (edited after rendering)"
+    } else {
+        ""
+    };
     let description = format!(
-        "{name}: {light}, {bits}-bit; {} x {} px (height x width), {:.4} x {:.4} deg at {} ppd",
+        "{name}{edit}: {light}, {bits}-bit; {} x {} px (height x width), {:.4} x {:.4} deg at {} ppd",
         g.height,
         g.width,
         g.height_deg(),
@@ -476,6 +593,12 @@ pub fn png_text(name: &str, request: &Request, options: &ExportOptions) -> Vec<(
     if let (Some(d), Some(mapping)) = (&options.display, options.mapping()) {
         record.insert("display".to_string(), d.to_json());
         record.insert("luminance".to_string(), mapping.to_json());
+    }
+    if let Some(edited) = edited {
+        record.insert(
+            EDITED_KEY.to_string(),
+            json!({"rendered_md5_float64_rounded8": edited.rendered_md5}),
+        );
     }
     vec![
         ("Software".to_string(), format!("shadelab {version}")),
@@ -497,17 +620,11 @@ pub fn sidecar_json(
     files: Map<String, Value>,
     shown: Option<&Shown>,
 ) -> Value {
-    let (channels, md5) = match &output.pixels {
-        Pixels::Gray(img) => (1, io::image_md5(img)),
-        Pixels::Rgb(img) => (
-            3,
-            io::image_md5(&crate::grid::Grid::from_fn(
-                img.width() * 3,
-                img.height(),
-                |c, r| img.get(c / 3, r)[c % 3],
-            )),
-        ),
+    let channels = match &output.pixels {
+        Pixels::Gray(_) => 1,
+        Pixels::Rgb(_) => 3,
     };
+    let md5 = pixels_md5(&output.pixels);
     let mut sidecar = stimulus_record(name, request);
     let Value::Object(rest) = json!({
         "channels": channels,

@@ -30,7 +30,9 @@ mod svg;
 
 pub use crate::surface::{Mesh, MeshShading, Projection, Surface};
 pub(crate) use export::planned_files;
-pub use export::{shown_on_display, write_output, ExportOptions, Range};
+pub use export::{
+    pixels_md5, shown_on_display, write_output, Edited, ExportOptions, Range, EDITED_KEY,
+};
 
 // The typed interface: one parameter struct and one function per stimulus.
 pub use boundary_strips::{boundary_strips, BoundaryStripsParams, StripShading};
@@ -348,6 +350,17 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 /// The names of every stimulus.
 pub fn names() -> Vec<&'static str> {
     all().iter().map(|s| s.info().name).collect()
+}
+
+/// Checks that every name in `given` is a parameter of the stimulus `name`, naming the
+/// nearest among its parameters and `also` (the caller's other names, such as a Python
+/// function's keywords) when one is not ([`Params::check_names`]).
+pub fn check_param_names<'a>(
+    name: &str,
+    given: impl IntoIterator<Item = &'a String>,
+    also: &[&str],
+) -> Result<()> {
+    Params::check_names(&find(name)?.info().params, given, also)
 }
 
 /// The stimulus called `name`; the error lists the valid names.

@@ -258,6 +258,7 @@ fn the_sidecar_holds_every_parameter_of_every_stimulus() {
             &path,
             &ExportOptions::default(),
             false,
+            None,
         )
         .unwrap();
         let meta = sidecar(&d.join(format!("{name}.json")));

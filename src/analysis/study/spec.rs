@@ -150,9 +150,7 @@ impl Study {
         Study::new_with_max_pixels(spec, max_pixels).map_err(|e| match e {
             Error::Invalid(m) => Error::format(path, m),
             Error::TooLarge(m) => Error::TooLarge(format!("{}: {m}", path.display())),
-            Error::Unknown { kind, name, valid } => {
-                Error::format(path, format!("unknown {kind} '{name}' (valid: {valid})"))
-            }
+            unknown @ Error::Unknown { .. } => Error::format(path, unknown.to_string()),
             other => other,
         })
     }

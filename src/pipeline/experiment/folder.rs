@@ -51,6 +51,7 @@ impl Report {
                     &options,
                     // Into the run's own fresh folder.
                     true,
+                    None,
                 )
                 .map(|_| ())
             })

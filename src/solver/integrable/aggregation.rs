@@ -49,15 +49,22 @@ impl Csr {
     /// (row, column), added in the triplets' order.
     #[cfg(test)]
     pub(super) fn from_triplets(rows: usize, triplets: &[(u32, u32, f64)]) -> Csr {
-        let (mut a, entry) = Csr::pattern(rows, triplets.iter().map(|&(r, c, _)| (r, c)));
+        let (mut a, entry) = Csr::pattern(rows, triplets.iter().map(|&(r, c, _)| (r, c)))
+            .expect("no stop is requested in tests");
         a.fill(&entry, triplets.iter().map(|t| t.2));
         a
     }
 
     /// The matrix of `rows` rows with an entry, 0, at each of the (row, column) `positions`
     /// (repeats stored once), and the index of each position's entry in the values.
-    fn pattern(rows: usize, positions: impl Iterator<Item = (u32, u32)>) -> (Csr, Vec<u32>) {
+    fn pattern(
+        rows: usize,
+        positions: impl Iterator<Item = (u32, u32)>,
+    ) -> Option<(Csr, Vec<u32>)> {
         let positions: Vec<(u32, u32)> = positions.collect();
+        if crate::cancel::requested() {
+            return None;
+        }
         // Bucket by row (stable), then sort each row's few entries by column (stable too).
         let mut count = vec![0usize; rows + 1];
         for &(r, _) in &positions {
@@ -76,6 +83,9 @@ impl Csr {
         let mut col: Vec<u32> = Vec::with_capacity(positions.len() / 2);
         let mut entry = vec![0u32; positions.len()];
         for i in 0..rows {
+            if i % CANCEL_ROWS == 0 && crate::cancel::requested() {
+                return None;
+            }
             let row = &mut bucket[count[i]..count[i + 1]];
             row.sort_by_key(|&(c, _)| c);
             for &(c, k) in row.iter() {
@@ -87,7 +97,7 @@ impl Csr {
             start[i + 1] = col.len();
         }
         let val = vec![0.0; col.len()];
-        (Csr { start, col, val }, entry)
+        Some((Csr { start, col, val }, entry))
     }
 
     /// Sets every entry to the sum of the `values` whose index in `entry` points at it, added
@@ -133,6 +143,10 @@ pub(super) type Place = (u8, u32, u32);
 /// Rows at or below which a level is solved directly.
 const COARSEST: usize = 500;
 
+/// Rows sorted between two looks for a requested stop ([`crate::cancel`]) while a pattern is
+/// planned: the finest pattern of a 1024² picture takes seconds in all.
+const CANCEL_ROWS: usize = 1 << 16;
+
 /// The most levels.
 const MAX_LEVELS: usize = 12;
 
@@ -169,13 +183,13 @@ pub(super) struct Multigrid {
 impl Multigrid {
     /// The hierarchy for matrices of `rows` rows with entries at the (row, column) `positions`
     /// (symmetric, the diagonal among them), whose unknowns sit at `places`; its values are 0
-    /// until [`Multigrid::fill`].
+    /// until [`Multigrid::fill`]. `None` when a stop was requested meanwhile ([`crate::cancel`]).
     pub(super) fn plan(
         rows: usize,
         positions: impl Iterator<Item = (u32, u32)>,
         places: Vec<Place>,
-    ) -> Multigrid {
-        let (mut a, entry) = Csr::pattern(rows, positions);
+    ) -> Option<Multigrid> {
+        let (mut a, entry) = Csr::pattern(rows, positions)?;
         let mut places = places;
         let mut levels = Vec::new();
         loop {
@@ -191,11 +205,11 @@ impl Multigrid {
                     blocks: Vec::new(),
                     coarse: None,
                 });
-                return Multigrid {
+                return Some(Multigrid {
                     levels,
                     entry,
                     factor: Vec::new(),
-                };
+                });
             }
             // PᵀAP for P the aggregates' indicators: the entries summed by aggregate.
             let positions = (0..a.rows()).flat_map(|i| {
@@ -203,7 +217,7 @@ impl Multigrid {
                 let aggregate = &aggregate;
                 a.row(i).0.iter().map(move |&c| (ai, aggregate[c as usize]))
             });
-            let (coarse, scatter) = Csr::pattern(coarse_places.len(), positions);
+            let (coarse, scatter) = Csr::pattern(coarse_places.len(), positions)?;
             levels.push(Level {
                 blocks: blocks(&places),
                 a,
@@ -471,7 +485,8 @@ mod tests {
     /// The hierarchy of `a`: planned for its pattern and filled with its values.
     fn hierarchy(a: &Csr, places: Vec<Place>) -> Multigrid {
         let positions = (0..a.rows()).flat_map(|i| a.row(i).0.iter().map(move |&c| (i as u32, c)));
-        let mut mg = Multigrid::plan(a.rows(), positions, places);
+        let mut mg =
+            Multigrid::plan(a.rows(), positions, places).expect("no stop is requested in tests");
         mg.fill(a.val.iter().copied());
         mg
     }

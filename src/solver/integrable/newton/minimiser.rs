@@ -195,26 +195,49 @@ impl Minimiser {
     pub(super) fn descend(&mut self, energy: &Energy) -> f64 {
         let n = energy.len();
         let model = energy.linearise(&self.x, self.soft);
+        if crate::cancel::requested() {
+            return 0.0;
+        }
         // Planned at the first step for the model's pattern and refilled at each; filled for
         // this step's first damping, it serves the raised ones too: a larger ν only makes the
         // matrix more diagonal.
-        let (mg, cycle) = self.multigrid.get_or_insert_with(|| {
+        // A requested stop ends the step where it is, lowering nothing: every phase of a
+        // step at 1024² (planning, filling, each damping's solve) is up to seconds, and the
+        // caller's loop stops on the same flag.
+        if self.multigrid.is_none() {
             let mut positions = Vec::with_capacity(48 * n);
             model.entries(self.nu, |r, c, _| positions.push((r, c)));
-            let mg = Multigrid::plan(3 * n, positions.into_iter(), energy.places());
+            let Some(mg) = Multigrid::plan(3 * n, positions.into_iter(), energy.places()) else {
+                return 0.0;
+            };
             let cycle = mg.scratch();
-            (mg, cycle)
-        });
+            self.multigrid = Some((mg, cycle));
+        }
+        let Some((mg, cycle)) = self.multigrid.as_mut() else {
+            unreachable!("planned above")
+        };
+        if crate::cancel::requested() {
+            return 0.0;
+        }
         let values = &mut self.values;
         values.clear();
         model.entries(self.nu, |_, _, v| values.push(v));
+        if crate::cancel::requested() {
+            return 0.0;
+        }
         mg.fill(values.iter().copied());
         let b: Vec<f64> = self.grad.iter().map(|g| -g).collect();
         let mut delta = vec![0.0; b.len()];
         let (trial, trial_grad, scratch) =
             (&mut self.trial, &mut self.trial_grad, &mut self.scratch);
         for _ in 0..MAX_RETRIES {
+            if crate::cancel::requested() {
+                return 0.0;
+            }
             self.cg_iterations += model.solve(self.nu, (mg, cycle), &b, &mut delta, CG_STOP);
+            if crate::cancel::requested() {
+                return 0.0;
+            }
             let largest = delta[..2 * n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
             if largest > MAX_STEP {
                 // Farther than the model can be trusted: more damping.
