@@ -818,7 +818,8 @@ fn a_labs_folder_is_read_as_it_arrives() {
     assert_eq!(fit["design"]["simulated_trials"], 96);
     let methods = std::fs::read_to_string(dir.join("g/methods.md")).unwrap();
     assert!(
-        methods.contains("96 of these trials were simulated (a pilot's rows, answered by the observer model), not judged by people."),
+        methods.contains("**Design.** 3 participants and 1 simulated observer (4 fitted individually) answered whether")
+            && methods.contains("96 of these trials were simulated (a pilot's rows, answered by the observer model), not judged by people."),
         "{methods}"
     );
     // The pilot alone: no participant, no person.

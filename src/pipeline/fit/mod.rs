@@ -100,6 +100,8 @@ pub struct Design {
     pub simulated_rows_left_out: usize,
     /// Simulated test trials fitted (with [`Reading::include_simulated`]), among `trials`.
     pub simulated_trials: usize,
+    /// Participants with simulated trials fitted, among `participants`.
+    pub simulated_participants: usize,
     /// Rows read twice (the same rows in two files) and counted once.
     pub duplicates: Vec<Duplicate>,
     /// The designs of the trials (their `design_hash`), each with its files: one, or several
@@ -379,6 +381,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             no_response_rows: responses.no_response,
             simulated_rows_left_out: responses.simulated_left_out,
             simulated_trials: responses.simulated_fitted,
+            simulated_participants: responses.simulated_participants,
             duplicates: responses.duplicates.clone(),
             designs: responses.designs.clone(),
             files: responses
@@ -714,12 +717,24 @@ impl Report {
         } else {
             ("One participant", "participants")
         };
-        let who = if d.participants > 1 {
+        let some_simulated = d.simulated_participants > 0 && !all_simulated;
+        let people = if some_simulated {
+            let k = d.simulated_participants;
             format!(
-                "{} {many} ({} fitted individually)",
-                d.participants,
-                self.participants.len()
+                "{} {} and {k} simulated observer{}",
+                d.participants - k,
+                if d.participants - k == 1 {
+                    "participant"
+                } else {
+                    "participants"
+                },
+                if k == 1 { "" } else { "s" }
             )
+        } else {
+            format!("{} {many}", d.participants)
+        };
+        let who = if d.participants > 1 {
+            format!("{people} ({} fitted individually)", self.participants.len())
         } else {
             one.into()
         };
@@ -728,6 +743,8 @@ impl Report {
                 "These responses were simulated, not given by people: ",
                 " (the observer model of shadelab's pilot mode) answered",
             )
+        } else if some_simulated {
+            ("", " answered")
         } else {
             ("", " judged")
         };

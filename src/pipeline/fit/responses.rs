@@ -118,6 +118,8 @@ pub struct Responses {
     pub simulated_left_out: usize,
     /// Simulated test trials fitted ([`Reading::include_simulated`]).
     pub simulated_fitted: usize,
+    /// Participants with simulated trials fitted.
+    pub simulated_participants: usize,
     /// Rows read twice and counted once.
     pub duplicates: Vec<Duplicate>,
     /// The designs the trials carry (their `design_hash`; none where the data have no such
@@ -682,6 +684,13 @@ fn gather(
     }
     let (simulated_left_out, no_response) =
         (count(|c| c.simulated_left_out), count(|c| c.no_response));
+    let simulated_participants = participants
+        .iter()
+        .filter(|(p, _)| {
+            kept.iter()
+                .any(|c| c.participant == *p && c.simulated_fitted > 0)
+        })
+        .count();
     if participants.is_empty() {
         if simulated_left_out > 0 {
             return Err(Error::Setting(
@@ -707,6 +716,7 @@ fn gather(
         no_response,
         simulated_left_out,
         simulated_fitted: count(|c| c.simulated_fitted),
+        simulated_participants,
         duplicates,
         designs,
         files,
