@@ -148,7 +148,7 @@ else
   echo "chromium or jsPsych (npm) not found: the worked example's responses come from the library instead" >&2
   (cd "$root" && cargo run --quiet --release --example fit_recovery -- worked "$work/responses.csv")
 fi
-shadelab fit observer responses.csv --out mg-fit --design mg/design.json
+shadelab fit observer responses.csv --include-simulated --out mg-fit --design mg/design.json
 keep mg-fit/fit.png experiments-fit.png
 
 echo "== the tutorial (docs/tutorial.md): its own sh blocks, run as written"

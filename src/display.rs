@@ -311,6 +311,20 @@ pub struct Display {
     weights: [f64; 3],
     /// cd/m² of every code, rising.
     lut: Vec<f64>,
+    calibration: Option<Calibration>,
+}
+
+/// Which calibration of a PsychoPy monitor file a display was read from, and why that one
+/// (a sidecar records it).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Calibration {
+    /// Its name in the monitor file.
+    pub name: String,
+    /// Named by the display's `calibration`; else PsychoPy's own choice, the one
+    /// `psychopy.monitors.Monitor(name)` loads: the last by name.
+    pub named: bool,
+    /// Every calibration in the file, in PsychoPy's order (by name).
+    pub all: Vec<String>,
 }
 
 /// What a display shows of a stimulus: its codes and their luminance.
@@ -441,7 +455,19 @@ impl Display {
             quantise,
             weights: REC709_WEIGHTS,
             lut,
+            calibration: None,
         })
+    }
+
+    /// Records which calibration of a PsychoPy monitor file the display is.
+    pub fn with_calibration(mut self, calibration: Calibration) -> Display {
+        self.calibration = Some(calibration);
+        self
+    }
+
+    /// The PsychoPy calibration the display was read from, if any.
+    pub fn calibration(&self) -> Option<&Calibration> {
+        self.calibration.as_ref()
     }
 
     /// Sets the luminance weights of R, G and B that bit-stealing adds (default
@@ -621,7 +647,7 @@ impl Display {
             }),
         };
         let (black, white) = self.black_white();
-        json!({
+        let mut record = json!({
             "name": self.name,
             "bit_depth": self.bits,
             "response": response,
@@ -629,7 +655,19 @@ impl Display {
             "channel_weights": self.weights,
             "black_cd_m2": black,
             "white_cd_m2": white,
-        })
+        });
+        if let Some(c) = &self.calibration {
+            record["psychopy_calibration"] = json!({
+                "name": c.name,
+                "taken": if c.named {
+                    "named"
+                } else {
+                    "PsychoPy's: the last by name, as Monitor(name) loads it"
+                },
+                "calibrations": c.all,
+            });
+        }
+        record
     }
 
     /// The display a sidecar recorded ([`to_json`](Self::to_json)'s object).
@@ -678,7 +716,19 @@ impl Display {
             ),
             _ => return Err(bad()),
         };
-        let display = Display::new(name, bits, response, quantise)?;
+        let mut display = Display::new(name, bits, response, quantise)?;
+        if let Some(c) = value.get("psychopy_calibration") {
+            display = display.with_calibration(Calibration {
+                name: c["name"].as_str().ok_or_else(bad)?.to_string(),
+                named: c["taken"] == "named",
+                all: c["calibrations"]
+                    .as_array()
+                    .ok_or_else(bad)?
+                    .iter()
+                    .map(|n| n.as_str().map(str::to_string).ok_or_else(bad))
+                    .collect::<Result<_>>()?,
+            });
+        }
         match value
             .get("channel_weights")
             .and_then(Value::as_array)

@@ -33,6 +33,10 @@ pub enum Setting {
     Lambda,
     /// The solver method (here: the Jacobi sweeps).
     JacobiMethod,
+    /// Whether a fit takes simulated rows (a pilot's) too.
+    IncludeSimulated,
+    /// Whether a fit pools data of different designs (`design_hash`).
+    MixedDesigns,
 }
 
 /// One piece of a [`Message`].

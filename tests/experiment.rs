@@ -20,6 +20,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
+/// How the fit reads a pilot's rows (the page's simulated participant): taken, not left out.
+fn pilot() -> shadelab::pipeline::fit::Reading {
+    shadelab::pipeline::fit::Reading {
+        include_simulated: true,
+        ..Default::default()
+    }
+}
+
 /// The design's test trials per rotation.
 fn counts(report: &experiment::Report) -> BTreeMap<String, usize> {
     let mut n = BTreeMap::new();
@@ -744,6 +752,15 @@ fn the_pilot_is_fitted_back_and_each_participant_gets_their_own_order() {
     // The loop closed: the page's data, fitted back by `shadelab fit observer`, recover the
     // simulated observer (384 test trials, the default design).
     std::fs::write(d.join("pilot.csv"), &csv).unwrap();
+    // A pilot's rows never pass for people's: refused unless asked for, then said.
+    let refused = shadelab(&d, &["fit", "observer", "pilot.csv", "--out", "fit"]);
+    assert!(!refused.status.success());
+    let why = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        why.contains("384 trials whose 'simulated' column is set")
+            && why.contains("--include-simulated"),
+        "{why}"
+    );
     let fitted = shadelab(
         &d,
         &[
@@ -751,6 +768,7 @@ fn the_pilot_is_fitted_back_and_each_participant_gets_their_own_order() {
             "fit",
             "observer",
             "pilot.csv",
+            "--include-simulated",
             "--out",
             "fit",
             "--bootstrap",
@@ -1074,6 +1092,7 @@ fn the_data_reach_a_real_server_by_post_and_a_refused_one_falls_back_to_the_down
     std::fs::write(d.join("data/5f1a.json"), &body).unwrap();
     let mut fit = shadelab::pipeline::fit::Config::new(&d.join("data/5f1a.json"));
     fit.options.bootstrap = 0;
+    fit.reading.include_simulated = true;
     let fitted = shadelab::pipeline::fit::run(&fit, &NoProgress).unwrap();
     let ci = fitted.pooled.prior_tilt_deg.ci95.unwrap();
     eprintln!(
@@ -1102,6 +1121,7 @@ fn the_data_reach_a_real_server_by_post_and_a_refused_one_falls_back_to_the_down
     // The folder of both: one fit each, and the group.
     let mut fit = shadelab::pipeline::fit::Config::new(&d.join("data"));
     fit.options.bootstrap = 0;
+    fit.reading.include_simulated = true;
     let both = shadelab::pipeline::fit::run(&fit, &NoProgress).unwrap();
     let ids: Vec<&str> = both
         .participants
@@ -1324,7 +1344,7 @@ fn a_labs_own_jspsych_page_embeds_the_timeline_between_its_trials() {
     assert_eq!(preload["success"], true, "{preload}");
     // And the lab's file fits as it is.
     std::fs::write(d.join("lab.json"), &json).unwrap();
-    let r = shadelab::pipeline::fit::read_responses(&d.join("lab.json")).unwrap();
+    let r = shadelab::pipeline::fit::read_responses_with(&d.join("lab.json"), &pilot()).unwrap();
     assert_eq!(r.participants[0].0, "lab-007");
     assert_eq!(r.participants[0].1.len(), 12);
     drop(server);
@@ -1369,7 +1389,9 @@ fn counterbalanced_keys_are_swapped_for_half_of_the_participants_and_read_back()
         assert_eq!(keys.0 == "j", odd, "{id}: {keys:?}");
         // The fit reads the judgements through each row's own keys.
         std::fs::write(d.join(format!("{id}.csv")), &csv).unwrap();
-        let r = shadelab::pipeline::fit::read_responses(&d.join(format!("{id}.csv"))).unwrap();
+        let r =
+            shadelab::pipeline::fit::read_responses_with(&d.join(format!("{id}.csv")), &pilot())
+                .unwrap();
         let from_rows: Vec<bool> = shown
             .iter()
             .filter(|r| r["block"] == "test")

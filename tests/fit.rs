@@ -41,6 +41,7 @@ fn simulated_responses_are_fitted_back() {
                 "fit",
                 "observer",
                 "r.csv",
+                "--include-simulated",
                 "--out",
                 out,
                 "--bootstrap",
@@ -117,7 +118,7 @@ fn participants_are_fitted_one_by_one() {
         let text = simulated_responses(&m, &design(), 15, seed, who);
         csv.push_str(text.strip_prefix(RESPONSES_HEADER).unwrap().trim_end());
     }
-    csv.push_str("\ncat,1,test,disc,0,convex,400,f,,\ncat,2,test,disc,180,concave,400,j,,\n");
+    csv.push_str("\ncat,1,test,disc,0,convex,400,f,,,\ncat,2,test,disc,180,concave,400,j,,,\n");
     std::fs::write(dir.join("r.csv"), csv).unwrap();
     let run = shadelab(
         &dir,
@@ -125,6 +126,7 @@ fn participants_are_fitted_one_by_one() {
             "fit",
             "observer",
             "r.csv",
+            "--include-simulated",
             "--out",
             "f",
             "--bootstrap",
@@ -600,6 +602,7 @@ fn the_fit_is_the_same_for_any_thread_count() {
                 "fit",
                 "observer",
                 "r.csv",
+                "--include-simulated",
                 "--out",
                 &out,
                 "--bootstrap",
@@ -617,4 +620,264 @@ fn the_fit_is_the_same_for_any_thread_count() {
         fits.push(v);
     }
     assert_eq!(fits[0], fits[1]);
+}
+
+/// jsPsych's rows of one participant as a study saves them: a consent screen, then each
+/// trial's row (its key, its rt, the design's hash), from a simulated observer's answers.
+fn study_rows(model: &ModelParams, seed: u64, who: &str, design_hash: &str) -> Vec<Value> {
+    let mut rows = vec![serde_json::json!({
+        "trial_type": "html-button-response", "participant": who, "response": 0,
+        "rt": 1500, "design_hash": design_hash,
+    })];
+    for (i, line) in simulated_responses(model, &design(), 4, seed, who)
+        .lines()
+        .skip(1)
+        .enumerate()
+    {
+        let f: Vec<&str> = line.split(',').collect();
+        rows.push(serde_json::json!({
+            "trial_type": "image-keyboard-response", "participant": who, "block": "test",
+            "rotation_deg": f[4].parse::<f64>().unwrap(),
+            "response": if f[5] == "convex" { "f" } else { "j" },
+            "rt": 350.5 + ((i * 37) % 500) as f64,
+            "key_convex": "f", "key_concave": "j", "design_hash": design_hash,
+        }));
+    }
+    rows
+}
+
+/// jsPsych rows as a CSV with `delimiter`; with `;` (a European Excel's), decimal commas.
+fn rows_csv(rows: &[Value], delimiter: &str) -> String {
+    let columns = [
+        "trial_type",
+        "participant",
+        "block",
+        "rotation_deg",
+        "response",
+        "rt",
+        "key_convex",
+        "key_concave",
+        "design_hash",
+    ];
+    let mut csv = columns.join(delimiter) + "\r\n";
+    for r in rows {
+        let cells: Vec<String> = columns
+            .iter()
+            .map(|c| match &r[c] {
+                Value::Null => String::new(),
+                Value::String(s) => s.clone(),
+                v if delimiter == ";" => v.to_string().replace('.', ","),
+                v => v.to_string(),
+            })
+            .collect();
+        csv += &(cells.join(delimiter) + "\r\n");
+    }
+    csv
+}
+
+/// A lab's folder as it arrives: a JATOS results export (one result per line: two
+/// participants and a questionnaire) beside the server's copy of one of them, a participant's
+/// file from a European Excel (semicolons, decimal commas), a timed-out trial and a pilot's
+/// simulated file. The copy is counted once with a warning naming both files, the timed-out
+/// trial and the pilot left out and counted, and all of it in fit.json and methods.md; a file
+/// of another design is refused naming the files until --mixed-designs; --include-simulated
+/// takes the pilot, and the Methods paragraph says it was simulated.
+#[test]
+fn a_labs_folder_is_read_as_it_arrives() {
+    let dir = scratch("fit-lab-folder");
+    let data = dir.join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    let model = |tilt: f64| ModelParams {
+        tilt_deg: tilt,
+        kappa: 2.5,
+        convexity_prior: 0.6,
+        lapse: 0.02,
+    };
+    let p1 = study_rows(&model(20.0), 1, "p1", "d1");
+    let mut p2 = study_rows(&model(30.0), 2, "p2", "d1");
+    // p2's 10th trial timed out: jsPsych writes no key and no rt.
+    p2[10]["response"] = Value::Null;
+    p2[10]["rt"] = Value::Null;
+    let questionnaire = serde_json::json!([{"trial_type": "survey-likert", "participant": "p2",
+        "response": {"Q0": 3}}]);
+    let jatos = format!(
+        "{}\n{}\n{}\n",
+        Value::from(p1.clone()),
+        Value::from(p2),
+        questionnaire
+    );
+    std::fs::write(data.join("jatos_results_20261201.txt"), jatos).unwrap();
+    std::fs::write(data.join("p1.csv"), rows_csv(&p1, ",")).unwrap();
+    let p3 = study_rows(&model(10.0), 3, "p3", "d1");
+    let excel = rows_csv(&p3, ";");
+    assert!(excel.contains(";350,5;"), "{excel}");
+    std::fs::write(data.join("p3.csv"), excel).unwrap();
+    std::fs::write(
+        data.join("pilot.csv"),
+        simulated_responses(&model(26.0), &design(), 4, 9, "pilot"),
+    )
+    .unwrap();
+    let fit_args = |out: &'static str, more: &[&'static str]| {
+        let mut a = vec![
+            "fit",
+            "observer",
+            "data",
+            "--out",
+            out,
+            "--bootstrap",
+            "0",
+            "--lapse",
+            "0.02",
+        ];
+        a.extend_from_slice(more);
+        a
+    };
+    let run = shadelab(&dir, &fit_args("f", &[]));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains(
+            "warning: participant 'p1': the same 96 rows are in \
+             data/jatos_results_20261201.txt (result 1) and in data/p1.csv; counted once"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains(
+            "warning: 96 simulated trials (a pilot's: their 'simulated' column is set) left out"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: 1 trials without a response (timed out) left out"),
+        "{err}"
+    );
+    let fit = read_json(&dir.join("f/fit.json"));
+    let d = &fit["design"];
+    assert_eq!(fit["n_trials"], 3 * 96 - 1, "{d}");
+    let people: Vec<&str> = fit["participants"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["participant"].as_str().unwrap())
+        .collect();
+    assert_eq!(people, ["p1", "p2", "p3"]);
+    let trials = |i: usize| fit["participants"][i]["n_trials"].as_u64().unwrap();
+    assert_eq!((trials(0), trials(1), trials(2)), (96, 95, 96));
+    assert_eq!(d["no_response_rows"], 1);
+    assert_eq!(d["simulated_rows_left_out"], 96);
+    assert_eq!(d["simulated_trials"], 0);
+    assert_eq!(
+        d["other_rows"], 4,
+        "three consent screens and the questionnaire"
+    );
+    assert_eq!(d["duplicates"][0]["left_out"], "data/p1.csv");
+    assert_eq!(d["duplicates"][0]["rows"], 96);
+    assert_eq!(d["designs"].as_array().unwrap().len(), 1);
+    assert_eq!(fit["reading"]["include_simulated"], false);
+    let methods = std::fs::read_to_string(dir.join("f/methods.md")).unwrap();
+    assert!(
+        methods.contains("3 participants (3 fitted individually) judged")
+            && methods.contains(
+                "(1 trials without a response (timed out), 96 simulated trials (a pilot's) and \
+                 96 rows that a second copy of the same data repeated were not analysed)"
+            )
+            && !methods.contains("were simulated"),
+        "{methods}"
+    );
+    // The semicolon file alone, as it is: its decimal commas read.
+    let alone = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "fit",
+            "observer",
+            "data/p3.csv",
+            "--out",
+            "p3",
+            "--bootstrap",
+            "0",
+        ],
+    );
+    assert!(
+        alone.status.success(),
+        "{}",
+        String::from_utf8_lossy(&alone.stderr)
+    );
+    assert_eq!(read_json(&dir.join("p3/fit.json"))["n_trials"], 96);
+
+    // The pilot taken when asked for: said in the report and in the Methods paragraph.
+    let run = shadelab(&dir, &fit_args("g", &["--include-simulated"]));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let fit = read_json(&dir.join("g/fit.json"));
+    assert_eq!(fit["n_trials"], 4 * 96 - 1);
+    assert_eq!(fit["design"]["simulated_trials"], 96);
+    let methods = std::fs::read_to_string(dir.join("g/methods.md")).unwrap();
+    assert!(
+        methods.contains("**Design.** 3 participants and 1 simulated observer (4 fitted individually) answered whether")
+            && methods.contains("96 of these trials were simulated (a pilot's rows, answered by the observer model), not judged by people."),
+        "{methods}"
+    );
+    // The pilot alone: no participant, no person.
+    let run = shadelab(
+        &dir,
+        &[
+            "--quiet",
+            "fit",
+            "observer",
+            "data/pilot.csv",
+            "--out",
+            "pilot",
+            "--bootstrap",
+            "0",
+            "--include-simulated",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let methods = std::fs::read_to_string(dir.join("pilot/methods.md")).unwrap();
+    assert!(
+        methods.contains(
+            "**Design.** These responses were simulated, not given by people: a simulated \
+             observer (the observer model of shadelab's pilot mode) answered whether"
+        ) && !methods.contains("participants judged")
+            && !methods.contains("One participant"),
+        "{methods}"
+    );
+    assert_error(
+        &shadelab(
+            &dir,
+            &["fit", "observer", "data/pilot.csv", "--out", "pilot2"],
+        ),
+        1,
+        "every trial with a response is simulated (96 trials whose 'simulated' column is set: \
+         a pilot's, not people's); to fit them anyway give --include-simulated",
+    );
+
+    // Another design's file: refused naming the files, then pooled when asked for.
+    std::fs::write(
+        data.join("q.json"),
+        Value::from(study_rows(&model(20.0), 4, "q", "d2")).to_string(),
+    )
+    .unwrap();
+    assert_error(
+        &shadelab(&dir, &fit_args("h", &[])),
+        1,
+        "data: trials of 2 designs (another design_hash): d1 in data/jatos_results_20261201.txt \
+         (result 1), data/jatos_results_20261201.txt (result 2), data/p3.csv; d2 in data/q.json; \
+         fit each design alone, or pool them with --mixed-designs",
+    );
+    assert!(!dir.join("h").exists());
+    let run = shadelab(&dir, &fit_args("h", &["--mixed-designs"]));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(err.contains("warning: 2 designs pooled"), "{err}");
+    assert_eq!(read_json(&dir.join("h/fit.json"))["n_trials"], 4 * 96 - 1);
 }

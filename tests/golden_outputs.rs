@@ -154,6 +154,7 @@ const RUNS: &[&[&str]] = &[
         "fit",
         "observer",
         "responses.csv",
+        "--include-simulated",
         "--bootstrap",
         "50",
         "--nonparametric",

@@ -264,11 +264,26 @@ fn fit_study_gallery_and_eval_keep_the_users_files() {
     keeps_user_files(
         &d,
         "fit2",
-        &["--quiet", "fit", "observer", "r.csv", "--out", "fit2"],
+        &[
+            "--quiet",
+            "fit",
+            "observer",
+            "r.csv",
+            "--include-simulated",
+            "--out",
+            "fit2",
+        ],
     );
     std::fs::write(d.join("fit2/p01.csv"), &csv).unwrap();
     for force in [false, true] {
-        let args = ["fit", "observer", "fit2/p01.csv", "--out", "fit2"];
+        let args = [
+            "fit",
+            "observer",
+            "fit2/p01.csv",
+            "--include-simulated",
+            "--out",
+            "fit2",
+        ];
         ok(&quiet(&d, force, &args), "fit from inside");
         assert_eq!(
             std::fs::read_to_string(d.join("fit2/p01.csv")).unwrap(),

@@ -351,6 +351,8 @@ def fit_observer(
     responses: Union[PathLike, Dict[str, Any], Any],
     *,
     keys: Optional[str] = ...,
+    include_simulated: bool = ...,
+    mixed_designs: bool = ...,
     design: Optional[PathLike] = ...,
     lapse: Optional[float] = ...,
     nonparametric: bool = ...,

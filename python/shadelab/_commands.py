@@ -368,6 +368,8 @@ def fit_observer(
     responses: Any,
     *,
     keys: Optional[str] = None,
+    include_simulated: bool = False,
+    mixed_designs: bool = False,
     design: Optional[PathLike] = None,
     lapse: Optional[float] = None,
     nonparametric: bool = False,
@@ -382,6 +384,9 @@ def fit_observer(
     of them, a DataFrame (anything with ``to_csv``), or a dict of columns (``rotation_deg``,
     ``response`` as convex/concave/1/0 or booleans, optionally ``participant``). ``keys`` maps
     key presses to judgements (``"fj"`` or ``"arrowleft,arrowright"``, bump then dimple);
+    ``include_simulated`` fits rows whose ``simulated`` column is set (a pilot's) too, which
+    are otherwise counted and left out (the Methods paragraph then says they were simulated);
+    ``mixed_designs`` pools files of different designs (``design_hash``), otherwise refused;
     ``design`` the experiment's design.json for the Methods paragraph; ``lapse`` fixes the
     lapse rate; ``bootstrap`` replicates (with ``seed``) give intervals beside the
     profile-likelihood ones. Returns a :class:`Fit` (``pooled``, ``participants``, ``group``,
@@ -393,6 +398,8 @@ def fit_observer(
         name,
         text,
         _opt(str, keys),
+        bool(include_simulated),
+        bool(mixed_designs),
         None if design is None else _fspath(design),
         _opt(float, lapse),
         bool(nonparametric),

@@ -155,6 +155,8 @@ def fit_observer(
     responses: str,
     text: Optional[str],
     keys: Optional[str],
+    include_simulated: bool,
+    mixed_designs: bool,
     design: Optional[str],
     lapse: Optional[float],
     nonparametric: bool,

@@ -495,13 +495,15 @@ pub fn experiment(
 /// responses are the file or folder `responses`, or with `text` that text (CSV or jsPsych
 /// JSON) named `responses`.
 #[pyfunction]
-#[pyo3(signature = (responses, text, keys, design, lapse, nonparametric, bootstrap, seed))]
+#[pyo3(signature = (responses, text, keys, include_simulated, mixed_designs, design, lapse, nonparametric, bootstrap, seed))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit_observer(
     py: Python<'_>,
     responses: PathBuf,
     text: Option<String>,
     keys: Option<String>,
+    include_simulated: bool,
+    mixed_designs: bool,
     design: Option<PathBuf>,
     lapse: Option<f64>,
     nonparametric: bool,
@@ -516,10 +518,12 @@ pub fn fit_observer(
         vec![responses.clone()]
     };
     config.text = text;
-    config.keys = keys
+    config.reading.keys = keys
         .map(|k| KeyMap::parse(&k))
         .transpose()
         .map_err(|e| PyValueError::new_err(format!("keys: {e}")))?;
+    config.reading.include_simulated = include_simulated;
+    config.reading.mixed_designs = mixed_designs;
     config.design = design;
     let d = config.options;
     config.options.lapse = lapse;

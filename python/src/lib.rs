@@ -47,6 +47,8 @@ pub(crate) fn to_py(e: Error) -> PyErr {
                 Setting::Keys => "keys='fj' (bump, dimple)".into(),
                 Setting::Lambda => format!("{words} (lam=)"),
                 Setting::JacobiMethod => format!("{words} (method='jacobi')"),
+                Setting::IncludeSimulated => "include_simulated=True".into(),
+                Setting::MixedDesigns => "mixed_designs=True".into(),
                 _ => words.into(),
             });
             if message.settings().any(|s| s == Setting::Lambda) {

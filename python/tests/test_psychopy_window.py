@@ -181,8 +181,11 @@ def test_psychopys_own_inverse_gamma_agrees_with_the_display_codes():
         _unavailable(f"PsychoPy is not installed ({e})")
     here = os.path.dirname(os.path.abspath(__file__))
     path = os.path.join(here, "..", "..", "tests", "data", "psychopy-monitor-labcrt.json")
-    stim = shadelab.render("sphere", shape=(64, 64), light="above", display=path, luminance=(2, 100))
-    lo, hi = 0.4, 118.0  # the monitor file's newest calibration: [0.4, 118, 2.2, 0, 0.1, 0]
+    # The monitor file's method-4 calibration, named: [0.4, 118, 2.2, 0, 0.1, 0].
+    lab = {"psychopy_monitor": os.path.abspath(path), "calibration": "2026_11_20 lab"}
+    stim = shadelab.render("sphere", shape=(64, 64), light="above", display=lab, luminance=(2, 100))
+    assert stim["display"]["psychopy_calibration"]["taken"] == "named"
+    lo, hi = 0.4, 118.0
     wanted = (2 + stim["img"] * 98).ravel()
     theirs = calibTools.gammaInvFun((wanted - lo) / (hi - lo), lo, hi, 2.2, b=0.1, eq=4) * 255
     ours = stim["codes"].ravel().astype(float)
@@ -190,6 +193,41 @@ def test_psychopys_own_inverse_gamma_agrees_with_the_display_codes():
     # the curvature of the response over one code (below 0.01 code here).
     assert np.abs(ours - theirs).max() <= 0.51, np.abs(ours - theirs).max()
     assert len(np.unique(stim["codes"])) > 100
+
+
+def test_the_calibration_taken_is_the_one_psychopys_monitor_loads(tmp_path, monkeypatch):
+    # PsychoPy writes a monitor file with two calibrations (Monitor.newCalib, setGammaGrid,
+    # save), the newer by calibDate first by name; Monitor(name) loads one, and shadelab takes
+    # the same from the file (white 150, not the newer calibration's 100 cd/m²).
+    try:
+        from psychopy import monitors
+        from psychopy.monitors import calibTools
+    except ImportError as e:
+        _unavailable(f"PsychoPy is not installed ({e})")
+    monkeypatch.setattr(calibTools, "monitorFolder", str(tmp_path))
+    mon = monitors.Monitor("twocal", autoLog=False)
+    temporary = mon.currentCalibName
+    for name, date, white in [
+        ("2026_11_28 09:03", 1767607200.0, 150.0),
+        ("2026_11_20 lab", 1795600000.0, 100.0),
+    ]:
+        mon.newCalib(name)
+        mon.setGammaGrid([[0.5, white, 2.2, 0, 0, 0], [0.5, white * 0.2, 2.1, 0, 0, 0],
+                          [0.5, white * 0.7, 2.2, 0, 0, 0], [0.5, white * 0.1, 2.3, 0, 0, 0]])
+        mon.setLineariseMethod(1)
+        mon.setCalibDate(date)
+    mon.delCalib(temporary)
+    mon.save()
+    loaded = monitors.Monitor("twocal", autoLog=False)
+    theirs = loaded.currentCalibName, float(loaded.getGammaGrid()[0][1])
+    assert theirs == ("2026_11_28 09:03", 150.0), theirs
+    stim = shadelab.render("sphere", shape=(16, 16), display=str(tmp_path / "twocal.json"))
+    record = stim["display"]
+    assert (record["psychopy_calibration"]["name"], record["white_cd_m2"]) == theirs
+    assert record["psychopy_calibration"]["calibrations"] == sorted(loaded.calibNames)
+    # Named, the other one.
+    named = {"psychopy_monitor": str(tmp_path / "twocal.json"), "calibration": "2026_11_20 lab"}
+    assert shadelab.render("sphere", shape=(16, 16), display=named)["display"]["white_cd_m2"] == 100.0
 
 
 @pytest.mark.parametrize(

@@ -25,13 +25,26 @@ pub struct ObserverArgs {
     /// The data: jsPsych's CSV or JSON as the `shadelab experiment` study saves it, a plain
     /// responses CSV (columns rotation_deg and response: convex/concave or 1/0), or a folder of
     /// such files (one or more participants each; a design.json in it is read as --design).
-    /// Rows without a rotation are skipped in jsPsych data, practice rows always; each
-    /// participant (the participant column, else the file's name) is fitted beside the pooled fit.
+    /// Rows without a rotation are skipped in jsPsych data, practice rows always, trials without
+    /// a response (timed out) and simulated rows are counted and left out; each participant
+    /// (the participant column, else the file's name) is fitted beside the pooled fit. A folder
+    /// is read as a lab's data arrive: JATOS's results export (a result per line), semicolon-
+    /// separated CSV, the same rows in two files counted once (with a warning), files of two
+    /// designs refused.
     responses: PathBuf,
     /// The keys for bump and dimple, when `response` holds the key pressed and the rows do not
     /// say (e.g. fj, or arrowleft,arrowright).
     #[arg(long, value_name = "BUMP,DIMPLE")]
     keys: Option<String>,
+    /// Fit the rows whose `simulated` column is set too (a pilot's, answered by the observer
+    /// model; without it they are counted and left out). The Methods paragraph says they were
+    /// simulated.
+    #[arg(long)]
+    include_simulated: bool,
+    /// Pool data files of different designs (another `design_hash`), which are refused
+    /// otherwise.
+    #[arg(long)]
+    mixed_designs: bool,
     /// The experiment's design.json, for the Methods paragraph's stimulus and apparatus.
     #[arg(long, value_name = "FILE")]
     design: Option<PathBuf>,
@@ -63,8 +76,10 @@ fn observer(args: ObserverArgs, global: &Global) -> CliResult {
     let started = Instant::now();
     let mut config = Config::new(&args.responses);
     if let Some(k) = &args.keys {
-        config.keys = Some(KeyMap::parse(k).map_err(|e| super::flags::usage("--keys", e))?);
+        config.reading.keys = Some(KeyMap::parse(k).map_err(|e| super::flags::usage("--keys", e))?);
     }
+    config.reading.include_simulated = args.include_simulated;
+    config.reading.mixed_designs = args.mixed_designs;
     config.design = args.design.clone();
     config.options = FitOptions {
         lapse: args.lapse,

@@ -153,6 +153,8 @@ pub fn worded(message: &shadelab::Message) -> String {
         Setting::Keys => "--keys BUMP,DIMPLE".into(),
         Setting::Lambda => format!("{words} (--lambda)"),
         Setting::JacobiMethod => format!("{words} (--method jacobi)"),
+        Setting::IncludeSimulated => "--include-simulated".into(),
+        Setting::MixedDesigns => "--mixed-designs".into(),
         _ => words.into(),
     })
 }

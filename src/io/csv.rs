@@ -26,6 +26,7 @@ pub fn csv_field(text: &str) -> String {
 fn next_record(
     chars: &mut std::iter::Peekable<std::str::Chars<'_>>,
     line: &mut usize,
+    delimiter: char,
 ) -> std::result::Result<Option<(Vec<String>, bool)>, String> {
     if chars.peek().is_none() {
         return Ok(None);
@@ -60,12 +61,13 @@ fn next_record(
                     }
                 }
                 match chars.peek() {
-                    None | Some(',') | Some('\n') | Some('\r') => {}
+                    None | Some('\n') | Some('\r') => {}
+                    Some(&c) if c == delimiter => {}
                     Some(c) => return Err(format!("'{c}' follows a closing quote")),
                 }
             }
             Some('"') => return Err("a quote inside an unquoted field".into()),
-            Some(',') => {
+            Some(c) if c == delimiter => {
                 fields.push(std::mem::take(&mut field));
                 quoted = false;
             }
@@ -94,12 +96,22 @@ fn next_record(
 /// assert!(parse_csv("a\n\"open").unwrap_err().contains("line 2"));
 /// ```
 pub fn parse_csv(text: &str) -> std::result::Result<Vec<(usize, Vec<String>)>, String> {
+    parse_csv_with(text, ',')
+}
+
+/// [`parse_csv`] with fields separated by `delimiter` (`;` in the CSV a European Excel saves).
+pub fn parse_csv_with(
+    text: &str,
+    delimiter: char,
+) -> std::result::Result<Vec<(usize, Vec<String>)>, String> {
     let mut rows = Vec::new();
     let mut chars = text.chars().peekable();
     let mut line = 1;
     loop {
         let start = line;
-        match next_record(&mut chars, &mut line).map_err(|why| format!("line {start}: {why}"))? {
+        match next_record(&mut chars, &mut line, delimiter)
+            .map_err(|why| format!("line {start}: {why}"))?
+        {
             None => return Ok(rows),
             Some((fields, quoted)) => {
                 if !(fields.len() == 1 && fields[0].is_empty() && !quoted) {
@@ -123,10 +135,36 @@ pub fn parse_csv(text: &str) -> std::result::Result<Vec<(usize, Vec<String>)>, S
 pub fn csv_record(line: &str) -> std::result::Result<Vec<String>, String> {
     let mut chars = line.chars().peekable();
     let mut lines = 1;
-    match next_record(&mut chars, &mut lines)? {
+    match next_record(&mut chars, &mut lines, ',')? {
         None => Ok(vec![String::new()]),
         Some(_) if chars.peek().is_some() => Err("a line break inside the record".into()),
         Some((fields, _)) => Ok(fields),
+    }
+}
+
+/// The field separator of a table's header line: `;` when the line has a semicolon and no
+/// comma outside quotes (the CSV a European Excel saves, whose decimal separator is the
+/// comma), else `,`.
+///
+/// ```
+/// use shadelab::internal::io::csv_delimiter;
+/// assert_eq!(csv_delimiter("\"a;b\",c"), ',');
+/// assert_eq!(csv_delimiter("rotation_deg;response;\"a,b\""), ';');
+/// ```
+pub fn csv_delimiter(header: &str) -> char {
+    let (mut commas, mut semicolons, mut quoted) = (0, 0, false);
+    for c in header.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => commas += 1,
+            ';' if !quoted => semicolons += 1,
+            _ => {}
+        }
+    }
+    if semicolons > 0 && commas == 0 {
+        ';'
+    } else {
+        ','
     }
 }
 

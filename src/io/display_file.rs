@@ -1,13 +1,14 @@
 //! Display files: shadelab's display JSON, a PsychoPy monitor file or a photometer's CSV, read
 //! into a [`Display`] (see docs/display.md).
 
-use crate::display::{Display, GammaModel, Quantise, Response};
+use crate::display::{Calibration, Display, GammaModel, Quantise, Response};
 use crate::error::{Error, Result};
 use serde_json::Value;
 use std::path::Path;
 
 /// Reads a display file: shadelab's display JSON (see docs/display.md), a PsychoPy
-/// monitor file (`~/.psychopy3/monitors/NAME.json`: its latest calibration's gamma grid)
+/// monitor file (`~/.psychopy3/monitors/NAME.json`: the gamma grid of the calibration
+/// PsychoPy's `Monitor(NAME)` loads, the last by name)
 /// or a photometer's CSV (`code,luminance`, 8, 10 or 16 bits by its top code).
 pub fn read_display(path: &Path) -> Result<Display> {
     let bytes = super::read_capped(path, super::MAX_TEXT_BYTES)?;
@@ -218,9 +219,11 @@ fn from_json(path: &Path, stem: &str, value: &Value) -> Result<Display> {
     }
 }
 
-/// The display a PsychoPy monitor file describes: the calibration named (else the latest by
-/// `calibDate`), its `gammaGrid` row 0 (luminance: minLum, maxLum, gamma, a, b, k) and its
-/// `linearizeMethod`; the guns' maxLum (rows 1–3) give bit-stealing its channel weights.
+/// The display a PsychoPy monitor file describes: the calibration named, else the one
+/// PsychoPy's `Monitor(name)` loads (`Monitor.__init__` calls `setCurrent(-1)`: the last of
+/// `sorted(calibs)`, by name, whatever its `calibDate`); its `gammaGrid` row 0 (luminance:
+/// minLum, maxLum, gamma, a, b, k) and its `linearizeMethod`; the guns' maxLum (rows 1–3)
+/// give bit-stealing its channel weights. The display records which calibration it is.
 fn psychopy_monitor(
     name: &str,
     calibs: &serde_json::Map<String, Value>,
@@ -229,19 +232,39 @@ fn psychopy_monitor(
     quantise: Quantise,
 ) -> Result<Display> {
     let bad = |m: String| Error::invalid(m);
-    let (label, calib) = match wanted {
-        Some(w) => calibs
-            .get_key_value(w)
-            .ok_or_else(|| bad(format!("no calibration '{w}' in the monitor file")))?,
-        None => calibs
-            .iter()
-            .filter(|(_, c)| c.get("gammaGrid").is_some())
-            .max_by(|a, b| {
-                let date = |c: &Value| c.get("calibDate").and_then(Value::as_f64).unwrap_or(0.0);
-                date(a.1).total_cmp(&date(b.1))
-            })
-            .ok_or_else(|| bad("the monitor file holds no calibration with a gammaGrid".into()))?,
+    // Python sorts str by code point, as Rust orders UTF-8 by bytes.
+    let mut all: Vec<String> = calibs.keys().cloned().collect();
+    all.sort();
+    let listed = || {
+        all.iter()
+            .map(|n| format!("'{n}'"))
+            .collect::<Vec<_>>()
+            .join(", ")
     };
+    let (label, calib) = match wanted {
+        Some(w) => calibs.get_key_value(w).ok_or_else(|| {
+            bad(format!(
+                "no calibration '{w}' in the monitor file (it holds {})",
+                listed()
+            ))
+        })?,
+        None => all
+            .last()
+            .and_then(|n| calibs.get_key_value(n))
+            .ok_or_else(|| bad("the monitor file holds no calibration".into()))?,
+    };
+    if calib.get("gammaGrid").is_none() {
+        return Err(bad(if wanted.is_none() && all.len() > 1 {
+            format!(
+                "calibration '{label}', the one PsychoPy's Monitor loads (the last by name), has \
+                 no gammaGrid; name one that has as the display's calibration \
+                 ({{\"psychopy_monitor\": FILE, \"calibration\": NAME}}; the file holds {})",
+                listed()
+            )
+        } else {
+            format!("calibration '{label}' has no gammaGrid")
+        }));
+    }
     let grid = calib.get("gammaGrid").cloned().unwrap_or(Value::Null);
     // json_tricks writes arrays as {"__ndarray__": [...], "dtype": ..., "shape": ...}.
     let grid = grid.get("__ndarray__").cloned().unwrap_or(grid);
@@ -287,6 +310,11 @@ fn psychopy_monitor(
         quantise,
     )
     .map_err(|e| bad(format!("calibration '{label}': {e}")))?;
+    let display = display.with_calibration(Calibration {
+        name: label.clone(),
+        named: wanted.is_some(),
+        all: all.clone(),
+    });
     let guns = [rows[1][1], rows[2][1], rows[3][1]];
     let total: f64 = guns.iter().sum();
     if guns.iter().all(|g| g.is_finite() && *g > 0.0) {

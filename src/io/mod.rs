@@ -20,7 +20,7 @@ mod temp;
 pub(crate) use atomic::file_name_of;
 pub use atomic::{check_overwrite, write_atomic, write_text, AtomicDir};
 pub(crate) use csv::check_csv_finite;
-pub use csv::{csv_field, csv_record, parse_csv};
+pub use csv::{csv_delimiter, csv_field, csv_record, parse_csv, parse_csv_with};
 pub use display_file::{display_from_value, read_display};
 pub use encoding::{InputEncoding, INPUT_GAMMA_RANGE};
 pub use gif::write_gif;

@@ -221,12 +221,45 @@ fn the_sidecar_records_each_targets_luminance_and_the_file_reads_back_as_the_sti
 #[test]
 fn a_psychopy_monitor_file_gives_psychopys_own_luminances() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
-    let display = shadelab::read_display(&data.join("psychopy-monitor-labcrt.json")).unwrap();
-    // The latest calibration (method 4, Pelli & Zhang) against PsychoPy's gammaFun.
+    let d = scratch("display-psychopy");
+    std::fs::copy(
+        data.join("psychopy-monitor-labcrt.json"),
+        d.join("labcrt.json"),
+    )
+    .unwrap();
+    // Of its two calibrations, the one PsychoPy's Monitor('labcrt') loads: the last by name
+    // ('2026_11_28 09:03', method 1, white 110 cd/m²), not the newer by calibDate
+    // ('2026_11_20 lab', 118 cd/m²); python/tests/test_psychopy_window.py asks PsychoPy itself.
+    let display = shadelab::read_display(&d.join("labcrt.json")).unwrap();
+    let c = display.calibration().unwrap();
+    assert_eq!(
+        (c.name.as_str(), c.named, c.all.len()),
+        ("2026_11_28 09:03", false, 2)
+    );
+    assert_eq!(display.black_white(), (0.5, 110.0));
+    // Named, the other calibration (method 4, Pelli & Zhang) against PsychoPy's gammaFun.
+    std::fs::write(
+        d.join("lab.json"),
+        r#"{"psychopy_monitor": "labcrt.json", "calibration": "2026_11_20 lab"}"#,
+    )
+    .unwrap();
+    let display = shadelab::read_display(&d.join("lab.json")).unwrap();
     assert!(
-        display.name().contains("2026_11_20 lab"),
+        display.name().contains("2026_11_20 lab") && display.calibration().unwrap().named,
         "{}",
         display.name()
+    );
+    std::fs::write(
+        d.join("nope.json"),
+        r#"{"psychopy_monitor": "labcrt.json", "calibration": "2026"}"#,
+    )
+    .unwrap();
+    let e = shadelab::read_display(&d.join("nope.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no calibration '2026' in the monitor file (it holds '2026_11_20 lab', '2026_11_28 09:03')"),
+        "{e}"
     );
     let table = std::fs::read_to_string(data.join("psychopy-gammafun-eq4.csv")).unwrap();
     let mut n = 0;
@@ -241,13 +274,7 @@ fn a_psychopy_monitor_file_gives_psychopys_own_luminances() {
         n += 1;
     }
     assert_eq!(n, 256);
-    // Named, the older calibration (method 1) is taken instead.
-    let d = scratch("display-psychopy");
-    std::fs::copy(
-        data.join("psychopy-monitor-labcrt.json"),
-        d.join("labcrt.json"),
-    )
-    .unwrap();
+    // Named, the older calibration (method 1).
     std::fs::write(
         d.join("old.json"),
         r#"{"psychopy_monitor": "labcrt.json", "calibration": "2026_11_28 09:03", "bit_depth": 8}"#,
@@ -275,10 +302,23 @@ fn a_psychopy_monitor_file_gives_psychopys_own_luminances() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The sidecar records which calibration, and why that one.
+    let record = &sidecar(&d.join("s.json"))["display"];
+    assert_eq!(record["response"]["equation"], 1);
+    assert_eq!(record["white_cd_m2"], 110.0);
+    assert_eq!(record["psychopy_calibration"]["name"], "2026_11_28 09:03");
     assert_eq!(
-        sidecar(&d.join("s.json"))["display"]["response"]["equation"],
-        4
+        record["psychopy_calibration"]["taken"],
+        "PsychoPy's: the last by name, as Monitor(name) loads it"
     );
+    // --spec of that sidecar takes the same display, its record included.
+    let out = shadelab(&d, &["render", "--spec", "s.json", "--out", "again.png"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(sidecar(&d.join("again.json"))["display"], *record);
 }
 
 #[test]

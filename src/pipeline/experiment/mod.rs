@@ -65,7 +65,7 @@ pub const MARKER: &str = "design.json";
 
 /// The header of the responses CSV the page writes (and `fit observer` reads).
 pub const CSV_HEADER: &str =
-    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image,design_hash";
+    "participant,trial,block,stimulus,rotation_deg,response,rt_ms,key,image,design_hash,simulated";
 
 /// The observer model the pilot mode simulates and `fit observer` estimates.
 pub const MODEL: &str =

@@ -6,7 +6,10 @@
 //! Only `rotation_deg` (θ, the direction of the stimulus's bright side, degrees; 0 = up,
 //! +90 = left) and `response` (`convex` | `concave`, or 1 | 0) are needed; a `block` column
 //! keeps the `test` rows (and drops `practice`); a `participant` column gives one fit per
-//! participant beside the pooled fit; other columns are ignored.
+//! participant beside the pooled fit; a `simulated` column marks a pilot's rows, which are
+//! left out unless [`Reading::include_simulated`]; a `design_hash` column tells designs
+//! apart; other columns are ignored. What the reader left out, and why, is in the report's
+//! [`Design`].
 //!
 //! ```
 //! use shadelab::pipeline::fit::parse_responses;
@@ -28,8 +31,8 @@ mod responses;
 use responses::is_design;
 
 pub use responses::{
-    parse_data, parse_responses, read_responses, read_responses_with, KeyMap, Responses,
-    DATA_EXTENSIONS,
+    parse_data, parse_responses, read_responses, read_responses_with, DesignFiles, Duplicate,
+    KeyMap, Reading, Responses, DATA_EXTENSIONS,
 };
 
 use super::CommandReport;
@@ -51,10 +54,9 @@ pub struct Config {
     pub responses: PathBuf,
     /// How to fit.
     pub options: FitOptions,
-    /// How key presses map to judgements, for data whose `response` column holds the key
-    /// pressed; `None`: the rows' own `judgement`, else their `key_convex`/`key_concave`, else
-    /// `response` as convex/concave/1/0.
-    pub keys: Option<KeyMap>,
+    /// How to read the data: the key mapping, and whether simulated rows and several designs
+    /// are taken.
+    pub reading: Reading,
     /// The experiment's `design.json`, which the Methods paragraph describes (stimulus,
     /// apparatus, order); `None`: a `design.json` in the responses folder, if any.
     pub design: Option<PathBuf>,
@@ -70,7 +72,7 @@ impl Config {
         Config {
             responses: responses.to_path_buf(),
             options: FitOptions::default(),
-            keys: None,
+            reading: Reading::default(),
             design: None,
             text: None,
         }
@@ -92,6 +94,19 @@ pub struct Design {
     pub practice_rows: usize,
     /// jsPsych rows that are not trials (instructions, fixation, breaks, a lab's own), left out.
     pub other_rows: usize,
+    /// Test trials without a response (timed out: `response` null or empty), left out.
+    pub no_response_rows: usize,
+    /// Simulated test trials (a pilot's: their `simulated` column set) left out.
+    pub simulated_rows_left_out: usize,
+    /// Simulated test trials fitted (with [`Reading::include_simulated`]), among `trials`.
+    pub simulated_trials: usize,
+    /// Participants with simulated trials fitted, among `participants`.
+    pub simulated_participants: usize,
+    /// Rows read twice (the same rows in two files) and counted once.
+    pub duplicates: Vec<Duplicate>,
+    /// The designs of the trials (their `design_hash`), each with its files: one, or several
+    /// pooled with [`Reading::mixed_designs`]; none where the data carry no hash.
+    pub designs: Vec<DesignFiles>,
     /// The data files read.
     pub files: Vec<String>,
 }
@@ -202,6 +217,8 @@ pub struct Report {
     pub model: &'static str,
     /// The design read from the data.
     pub design: Design,
+    /// How the data were read.
+    pub reading: Reading,
     /// How it was fitted.
     pub settings: FitOptions,
     /// The pooled fit.
@@ -235,8 +252,8 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let started = Instant::now();
     config.options.validate()?;
     let responses = match &config.text {
-        Some(text) => parse_data(text, &config.responses, config.keys.as_ref(), "")?,
-        None => read_responses_with(&config.responses, config.keys.as_ref())?,
+        Some(text) => parse_data(text, &config.responses, &config.reading, "")?,
+        None => read_responses_with(&config.responses, &config.reading)?,
     };
     let design_file = config.design.clone().or_else(|| {
         let beside = config.responses.join(super::experiment::MARKER);
@@ -298,6 +315,43 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         }
     }
     progress.finish();
+    for d in &responses.duplicates {
+        warnings.push(format!(
+            "participant '{}': the same {} rows are in {} and in {}; counted once (from {})",
+            d.participant, d.rows, d.kept, d.left_out, d.kept
+        ));
+    }
+    if responses.designs.len() > 1 {
+        warnings.push(format!(
+            "{} designs pooled (another design_hash): {}",
+            responses.designs.len(),
+            responses
+                .designs
+                .iter()
+                .map(DesignFiles::to_string)
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
+    if responses.simulated_left_out > 0 {
+        warnings.push(format!(
+            "{} simulated trials (a pilot's: their 'simulated' column is set) left out",
+            responses.simulated_left_out
+        ));
+    }
+    if responses.simulated_fitted > 0 {
+        warnings.push(format!(
+            "{} of the {} trials fitted are simulated (a pilot's), not people's",
+            responses.simulated_fitted,
+            all.len()
+        ));
+    }
+    if responses.no_response > 0 {
+        warnings.push(format!(
+            "{} trials without a response (timed out) left out",
+            responses.no_response
+        ));
+    }
     for b in &pooled.at_bounds {
         warnings.push(format!(
             "the pooled estimate of {b} lies at the bound of the search"
@@ -324,12 +378,19 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             trials_per_rotation: [per.clone().min().unwrap_or(0), per.max().unwrap_or(0)],
             practice_rows: responses.practice_rows,
             other_rows: responses.other_rows,
+            no_response_rows: responses.no_response,
+            simulated_rows_left_out: responses.simulated_left_out,
+            simulated_trials: responses.simulated_fitted,
+            simulated_participants: responses.simulated_participants,
+            duplicates: responses.duplicates.clone(),
+            designs: responses.designs.clone(),
             files: responses
                 .files
                 .iter()
                 .map(|f| f.display().to_string())
                 .collect(),
         },
+        reading: config.reading.clone(),
         settings: config.options,
         pooled,
         group: if several {
@@ -356,16 +417,21 @@ pub const RESPONSES_HEADER: &str = super::experiment::CSV_HEADER;
 
 /// A simulated responses CSV (the format [`parse_responses`] reads): `repeats` test trials at
 /// each of `rotations` answered by the observer model `model` with draws from a generator
-/// seeded with `seed`, in a seeded random order; `rt_ms` is 0 and `key`, `image` and `design_hash` are empty
-/// (nothing was shown).
+/// seeded with `seed`, in a seeded random order; `rt_ms` is 0 and `key`, `image` and
+/// `design_hash` are empty (nothing was shown), and every row's `simulated` says so, as the
+/// study's pilot mode does (`tilt:26,kappa:2,convex:0.5,lapse:0.02,seed:1`): the fit leaves
+/// the rows out unless [`Reading::include_simulated`].
 ///
 /// ```
 /// use shadelab::internal::analysis::observer_model::ModelParams;
-/// use shadelab::pipeline::fit::{parse_responses, simulated_responses};
+/// use shadelab::pipeline::fit::{parse_data, parse_responses, simulated_responses, Reading};
 /// let m = ModelParams { tilt_deg: 26.0, kappa: 2.0, convexity_prior: 0.5, lapse: 0.02 };
 /// let csv = simulated_responses(&m, &[0.0, 90.0, 180.0, 270.0], 5, 1, "sim");
-/// let r = parse_responses(&csv, std::path::Path::new("sim.csv")).unwrap();
-/// assert_eq!(r.participants[0].1.len(), 20);
+/// let path = std::path::Path::new("sim.csv");
+/// assert!(parse_responses(&csv, path).is_err(), "a pilot's rows only");
+/// let pilot = Reading { include_simulated: true, ..Reading::default() };
+/// let r = parse_data(&csv, path, &pilot, "").unwrap();
+/// assert_eq!((r.participants[0].1.len(), r.simulated_fitted), (20, 20));
 /// ```
 pub fn simulated_responses(
     model: &ModelParams,
@@ -385,10 +451,15 @@ pub fn simulated_responses(
         order.swap(i, j);
     }
     let mut csv = format!("{RESPONSES_HEADER}\n");
+    // Said as the study page's pilot mode says it (its `simulate` URL parameter).
+    let simulated = io::csv_field(&format!(
+        "tilt:{},kappa:{},convex:{},lapse:{},seed:{seed}",
+        model.tilt_deg, model.kappa, model.convexity_prior, model.lapse
+    ));
     for (i, &r) in order.iter().enumerate() {
         let convex = rng.next_f64() < model.p_convex(r);
         csv.push_str(&format!(
-            "{},{},test,simulated,{r},{},0,,,\n",
+            "{},{},test,simulated,{r},{},0,,,,{simulated}\n",
             io::csv_field(participant),
             i + 1,
             if convex { "convex" } else { "concave" }
@@ -639,14 +710,82 @@ impl Report {
                 d.trials_per_rotation[0], d.trials_per_rotation[1]
             )
         };
-        let who = if d.participants > 1 {
+        // Simulated responses are never described as people's judgements.
+        let all_simulated = d.simulated_trials == d.trials;
+        let (one, many) = if all_simulated {
+            ("a simulated observer", "simulated observers")
+        } else {
+            ("One participant", "participants")
+        };
+        let some_simulated = d.simulated_participants > 0 && !all_simulated;
+        let people = if some_simulated {
+            let k = d.simulated_participants;
             format!(
-                "{} participants ({} fitted individually)",
-                d.participants,
-                self.participants.len()
+                "{} {} and {k} simulated observer{}",
+                d.participants - k,
+                if d.participants - k == 1 {
+                    "participant"
+                } else {
+                    "participants"
+                },
+                if k == 1 { "" } else { "s" }
             )
         } else {
-            "One participant".into()
+            format!("{} {many}", d.participants)
+        };
+        let who = if d.participants > 1 {
+            format!("{people} ({} fitted individually)", self.participants.len())
+        } else {
+            one.into()
+        };
+        let (opening, judged) = if all_simulated {
+            (
+                "These responses were simulated, not given by people: ",
+                " (the observer model of shadelab's pilot mode) answered",
+            )
+        } else if some_simulated {
+            ("", " answered")
+        } else {
+            ("", " judged")
+        };
+        let simulated = if d.simulated_trials > 0 && !all_simulated {
+            format!(
+                " {} of these trials were simulated (a pilot's rows, answered by the observer \
+                 model), not judged by people.",
+                d.simulated_trials
+            )
+        } else {
+            String::new()
+        };
+        let mut left_out = Vec::new();
+        if d.practice_rows > 0 {
+            left_out.push(format!("{} practice trials", d.practice_rows));
+        }
+        if d.no_response_rows > 0 {
+            left_out.push(format!(
+                "{} trials without a response (timed out)",
+                d.no_response_rows
+            ));
+        }
+        if d.simulated_rows_left_out > 0 {
+            left_out.push(format!(
+                "{} simulated trials (a pilot's)",
+                d.simulated_rows_left_out
+            ));
+        }
+        let repeated: usize = d.duplicates.iter().map(|r| r.rows).sum();
+        if repeated > 0 {
+            left_out.push(format!(
+                "{repeated} rows that a second copy of the same data repeated"
+            ));
+        }
+        let left_out = match left_out.len() {
+            0 => String::new(),
+            1 => format!(" ({} were not analysed)", left_out[0]),
+            _ => {
+                let last = left_out.pop().unwrap_or_default();
+                format!(" ({} and {last} were not analysed)", left_out.join(", "))
+            }
         };
         let lapse = match self.settings.lapse {
             Some(l) => format!("a lapse rate fixed at λ = {l}"),
@@ -657,9 +796,10 @@ impl Report {
         };
         let mut text = format!(
             "## Methods\n\n\
-            **Design.** {who} judged whether a shaded disc was a bump (convex) or a dimple \
-            (concave) in {} test trials{}: {rotations}, {repeats}{}. The direction θ of the bright \
-            side is given in the tilt convention (0° = up, +90° = left).\n\n\
+            **Design.** {opening}{who}{judged} whether a shaded disc was a bump (convex) or a \
+            dimple (concave) in {} test trials{}: {rotations}, {repeats}{left_out}.{simulated} The \
+            direction θ of the bright side is given in the tilt convention (0° = up, +90° = \
+            left).\n\n\
             **Model.** Responses were fitted with an ideal-observer model in which the disc is \
             either a bump lit from θ or a dimple lit from θ + 180°, a von Mises prior over the \
             light's tilt (mean μ, concentration κ) weighs the two lights, a convexity prior π \
@@ -678,11 +818,6 @@ impl Report {
             favour a convexity prior).\n",
             d.trials,
             if d.participants > 1 { " in all" } else { "" },
-            if d.practice_rows > 0 {
-                format!(" ({} practice trials were not analysed)", d.practice_rows)
-            } else {
-                String::new()
-            },
             io::PROGRAM_VERSION,
             if f.bootstrap > 0 {
                 format!(
@@ -826,7 +961,7 @@ mod tests {
                    \"image-keyboard-response\",\"trial\",\"test\",\"0\",\"f\",\"f\",\"j\",\"A\"\r\n\
                    \"image-keyboard-response\",\"trial\",\"test\",\"180\",\"j\",\"f\",\"j\",\"A\"\r\n\
                    \"image-keyboard-response\",\"trial\",\"test\",\"90\",\"j\",\"j\",\"f\",\"A\"\r\n";
-        let r = parse_data(csv, p, None, "").unwrap();
+        let r = parse_data(csv, p, &Reading::default(), "").unwrap();
         assert_eq!(
             r.participants,
             vec![("A".into(), vec![(0.0, true), (180.0, false), (90.0, true)])]
@@ -836,28 +971,35 @@ mod tests {
         let json = r#"[{"trial_type":"html-button-response","response":0},
             {"trial_type":"image-keyboard-response","block":"test","rotation_deg":0,"response":"a"},
             {"trial_type":"image-keyboard-response","block":"test","rotation_deg":180,"response":"L"}]"#;
-        let e = parse_data(json, p, None, "p7").unwrap_err().to_string();
+        let e = parse_data(json, p, &Reading::default(), "p7")
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("row 2: unknown response 'a'") && e.contains("give the keys"),
             "{e}"
         );
-        let keys = KeyMap::parse("a,l").unwrap();
-        let r = parse_data(json, p, Some(&keys), "p7").unwrap();
+        let keys = Reading {
+            keys: Some(KeyMap::parse("a,l").unwrap()),
+            ..Reading::default()
+        };
+        let r = parse_data(json, p, &keys, "p7").unwrap();
         assert_eq!(
             r.participants,
             vec![("p7".into(), vec![(0.0, true), (180.0, false)])]
         );
         // A press that is neither key is named.
-        let e = parse_data(json, p, Some(&KeyMap::parse("fj").unwrap()), "")
-            .unwrap_err()
-            .to_string();
+        let fj = Reading {
+            keys: Some(KeyMap::parse("fj").unwrap()),
+            ..Reading::default()
+        };
+        let e = parse_data(json, p, &fj, "").unwrap_err().to_string();
         assert!(e.contains("row 2: response 'a' is neither"), "{e}");
         assert!(KeyMap::parse("ff").is_err() && KeyMap::parse("fjk").is_err());
-        assert!(parse_data("[1]", p, None, "")
+        assert!(parse_data("[1]", p, &Reading::default(), "")
             .unwrap_err()
             .to_string()
             .contains("row 1"));
-        assert!(parse_data("{\"x\": 1}", p, None, "").is_err());
+        assert!(parse_data("{\"x\": 1}", p, &Reading::default(), "").is_err());
     }
 
     #[test]
