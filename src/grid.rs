@@ -4,6 +4,7 @@
 //! `docs/conventions.md`). Data are stored row-major.
 
 use crate::error::{Error, Result};
+use crate::visual_size::SizeText;
 
 /// A width × height grid of `T`, stored row-major from the top-left pixel.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,7 +33,8 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
     r * rgb[0] + g * rgb[1] + b * rgb[2]
 }
 
-/// The words of every size-mismatch error, `"{what} WxH but {other_what} WxH"`: what
+/// The words of every size-mismatch error, `"{what} H px high × W px wide but {other_what} …"`
+/// (the axes in words, [`crate::SizeText`]): what
 /// [`Grid::check_same_size`] says, and the base of messages about a size that is not a grid's.
 pub(crate) fn size_mismatch(
     what: &str,
@@ -40,7 +42,11 @@ pub(crate) fn size_mismatch(
     other_what: &str,
     (other_width, other_height): (usize, usize),
 ) -> String {
-    format!("{what} {width}x{height} but {other_what} {other_width}x{other_height}")
+    format!(
+        "{what} {} but {other_what} {}",
+        SizeText::Pixels(height, width),
+        SizeText::Pixels(other_height, other_width)
+    )
 }
 
 /// The largest grid shadelab makes unless told otherwise (about 64 megapixels).
@@ -52,13 +58,15 @@ pub const DEFAULT_MAX_PIXELS: usize = 64 * 1024 * 1024;
 pub fn check_size(width: usize, height: usize, max_pixels: usize) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(Error::invalid(format!(
-            "image size {width}x{height} is empty (both sides must be at least 1 pixel)"
+            "image size {} is empty (both sides must be at least 1 pixel)",
+            SizeText::Pixels(height, width)
         )));
     }
     match width.checked_mul(height) {
         Some(n) if n <= max_pixels => check_memory(width, height),
         _ => Err(Error::TooLarge(format!(
-            "image size {width}x{height} exceeds the limit of {max_pixels} pixels"
+            "image size {} exceeds the limit of {max_pixels} pixels",
+            SizeText::Pixels(height, width)
         ))),
     }
 }
@@ -87,8 +95,8 @@ pub fn check_memory(width: usize, height: usize) -> Result<()> {
     let mut probe: Vec<u8> = Vec::new();
     probe.try_reserve_exact(bytes).map_err(|_| {
         Error::Compute(format!(
-            "image size {width}x{height} needs buffers of {} each, more memory than this \
-             machine can give",
+            "image size {} needs buffers of {} each, more memory than this machine can give",
+            SizeText::Pixels(height, width),
             crate::error::byte_size(bytes as u64)
         ))
     })
@@ -123,8 +131,9 @@ impl<T> Grid<T> {
     pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Result<Self> {
         if width.checked_mul(height) != Some(data.len()) {
             return Err(Error::invalid(format!(
-                "{} values do not fill a {width}x{height} grid",
-                data.len()
+                "{} values do not fill a grid {}",
+                data.len(),
+                SizeText::Pixels(height, width)
             )));
         }
         Ok(Grid {
@@ -188,7 +197,7 @@ impl<T> Grid<T> {
     ///     .check_same_size("image is", &Grid::new(2, 3, true), "the mask is")
     ///     .unwrap_err();
     /// assert!(matches!(e, shadelab::Error::Invalid(_)));
-    /// assert_eq!(e.to_string(), "image is 3x2 but the mask is 2x3");
+    /// assert_eq!(e.to_string(), "image is 2 px high × 3 px wide but the mask is 3 px high × 2 px wide");
     /// ```
     pub fn check_same_size<U>(&self, what: &str, other: &Grid<U>, other_what: &str) -> Result<()> {
         if self.same_size(other) {

@@ -85,7 +85,7 @@ pub use light::{FrontLight, Light};
 pub use message::{Message, Setting};
 pub use params::{ParamKind, ParamSet, ParamSpec, Params};
 pub use progress::{NoProgress, Progress};
-pub use visual_size::{parse_size, Geometry, SizeRequest};
+pub use visual_size::{parse_size, Geometry, SizeRequest, SizeText, MAX_VISUAL_DEGREES};
 
 // Files: what a picture's pixels mean when read, and how they are written.
 pub use colormap::Colormap;

@@ -22,7 +22,7 @@
 //! the albedo (an object whose cross-sections at the limb are a few pixels in radius or whose
 //! normals also turn along the contour inward, as the Stanford bunny's at 128²; an outline that
 //! is mostly cuts), the rim fit runs instead. The albedo is the brightest pixel;
-//! the standard errors are the fit's.
+//! the standard errors are the fit's, widened as below.
 //!
 //! **At the limb** ([`EstimateMethod::Limb`], the rim fit, where the band's model fails). On
 //! the limb the surface turns away from
@@ -50,11 +50,15 @@
 //! The standard errors are the fit's: the tilt's from the covariance of (a, b) across the light's
 //! direction, the slant's from its variance along it.
 //!
-//! The limb fits' standard errors are sampling errors: they do not cover their models' bias.
-//! Where the outline's shading normals are far from edge-on (the Stanford bunny at 128²: n_z 0.24
-//! on average, changing around the outline; its shape sampled half a pixel inside the limb, not
-//! its coarse mesh, since the mean halves at 512²), the rim fit's slant is off by up to
-//! 13 of its standard errors (7.4° against 0.4–1.9°): see docs/perception.md.
+//! The limb fits' standard errors cover their models' misfit, not only the pixels' noise: a
+//! model that does not fit the object (a cross-section that is no circle, an outline partly a
+//! cut) leaves residuals that run along the outline, so the fit's least-squares errors are
+//! widened by √(residuals / 8) (the residuals taken as 8 independent blocks of the outline,
+//! [`outline_blocks`]) and combined with a delete-one-eighth jackknife over the outline's
+//! directions ([`jackknife`]). Measured on spheres, ellipsoids and vases at 64², 128² and 256²
+//! under 32 lights each, the true tilt lies within ±2σ in 92 % of the estimates and the slant in
+//! 96 % (docs/perception.md). The moments' tilt error is the mean gradient's sampling error
+//! only, and they give no slant error.
 //!
 //! **From the interior statistics** ([`EstimateMethod::Moments`], for pictures without an
 //! occluding outline: a relief on a plane, a region cut out of a surface):
@@ -153,7 +157,17 @@ pub struct LightEstimate {
     pub slant_se_deg: Option<f64>,
     /// Limb pixels the fit kept (0 for the moments).
     pub limb_pixels: usize,
+    /// What the user should know of the estimate: [`WHOLE_FRAME_WARNING`] where the mask is
+    /// the whole frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<&'static str>,
 }
+
+/// The warning of an estimate whose mask is the whole frame (no mask given, no sidecar's):
+/// the estimators take every pixel as the surface's, a background included.
+pub const WHOLE_FRAME_WARNING: &str = "the light was estimated over the whole frame (no mask): \
+     a background, if the picture has one, was taken as surface and biases the estimate; give \
+     the object's mask";
 
 /// The largest slant the estimate returns, so that the light stays strictly in front of the
 /// surface (shape from shading needs s_z > 0).
@@ -246,13 +260,22 @@ pub fn estimate_light(image: &Image, mask: &Mask) -> Result<LightEstimate> {
 /// ```
 pub fn estimate_light_with(image: &Image, mask: &Mask, outline: Outline) -> Result<LightEstimate> {
     check_inputs(image, mask)?;
+    let mut estimate = estimate_on_mask(image, mask, outline)?;
+    if mask.data().iter().all(|&m| m) {
+        estimate.warning = Some(WHOLE_FRAME_WARNING);
+    }
+    Ok(estimate)
+}
+
+/// [`estimate_light_with`] without the whole-frame warning.
+fn estimate_on_mask(image: &Image, mask: &Mask, outline: Outline) -> Result<LightEstimate> {
     let moments = moments_estimate(image, mask)?;
     if outline == Outline::Occluding {
         if let Some(e) = band_estimate(image, mask)? {
             return Ok(e);
         }
-        if let Some(e) = limb_estimate(image, mask)? {
-            if e.slant_se_deg.is_some_and(|se| se > MAX_LIMB_SLANT_SE_DEG) {
+        if let Some((e, fit_slant_se)) = limb_estimate(image, mask)? {
+            if fit_slant_se > MAX_LIMB_SLANT_SE_DEG {
                 // The limb's tilt, the interior's slant and albedo.
                 return Ok(LightEstimate {
                     light: FrontLight::new(Light::from_tilt_slant(e.tilt_deg, moments.slant_deg)?)?,
@@ -298,8 +321,10 @@ fn brightest(image: &Image, mask: &Mask) -> Result<f64> {
     Ok(max)
 }
 
-/// The limb fit, or `None` where the limb is too short or too straight for it.
-fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
+/// The limb fit and its slant's sampling standard error (degrees; what decides
+/// [`EstimateMethod::LimbAndMoments`]), or `None` where the limb is too short or too straight
+/// for it.
+fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<(LightEstimate, f64)>> {
     let rho = brightest(image, mask)?;
     let normals = occluding_normals(mask);
     // (n_x, n_y, I) of the lit limb pixels.
@@ -371,8 +396,38 @@ fn limb_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
         90.0
     };
     let pixels = keep.iter().filter(|&&k| k).count();
+    // The model's own error: how far the answer moves with each eighth of the outline's
+    // directions left out.
+    let left_out: Vec<(f64, f64)> = (0..JACKKNIFE_SECTORS)
+        .filter_map(|k| {
+            let without: Vec<bool> = samples
+                .iter()
+                .zip(&keep)
+                .map(|(s, &kept)| kept && sector(s[0], s[1]) != k)
+                .collect();
+            if without == keep || without.iter().filter(|&&k| k).count() < MIN_LIMB_PIXELS {
+                return None;
+            }
+            let f = fit_limb(&samples, &without)?;
+            let (a, b) = (f.coef[0], f.coef[1]);
+            let amplitude = a.hypot(b);
+            (amplitude > 0.0).then(|| {
+                let slant = limb_slant(amplitude / rho, f.coef[2] / rho).to_degrees();
+                (
+                    (-a).atan2(b).to_degrees(),
+                    slant.min(MAX_ESTIMATED_SLANT_DEG),
+                )
+            })
+        })
+        .collect();
+    let (tilt_jk, slant_jk) = jackknife(&left_out, (tilt_deg, slant_deg));
+    let block = outline_blocks(f.count);
+    let fit_slant_se = slant_se_deg;
+    let tilt_se_deg = (block * tilt_se_deg).hypot(tilt_jk).min(180.0);
+    let slant_se_deg = (block * slant_se_deg).hypot(slant_jk).min(90.0);
     let (tilt, slant) = ((tilt_deg, tilt_se_deg), (slant_deg, slant_se_deg));
-    limb_light(image, mask, EstimateMethod::Limb, tilt, slant, rho, pixels).map(Some)
+    let e = limb_light(image, mask, EstimateMethod::Limb, tilt, slant, rho, pixels)?;
+    Ok(Some((e, fit_slant_se)))
 }
 
 /// A limb fit's estimate from its tilt and slant (each in degrees with its standard error), its
@@ -397,6 +452,7 @@ fn limb_light(
         tilt_se_deg,
         slant_se_deg: Some(slant_se_deg),
         limb_pixels,
+        warning: None,
     })
 }
 
@@ -613,9 +669,79 @@ fn band_estimate(image: &Image, mask: &Mask) -> Result<Option<LightEstimate>> {
     let cov_hz = ua * cov[(0, 2)] + ub * cov[(1, 2)];
     let slant_var = jh * jh * var_h + 2.0 * jh * jz * cov_hz + jz * jz * cov[(2, 2)];
     let slant_se_deg = slant_var.max(0.0).sqrt().to_degrees().min(90.0);
+    // The model's own error: how far the answer moves with each eighth of the outline's
+    // directions left out (the radii as fitted).
+    let left_out: Vec<(f64, f64)> = (0..JACKKNIFE_SECTORS)
+        .filter_map(|k| {
+            let without: Vec<bool> = rays
+                .iter()
+                .zip(&keep)
+                .map(|(r, &kept)| kept && sector(r.normal[0], r.normal[1]) != k)
+                .collect();
+            if without == keep {
+                return None;
+            }
+            let g = fit_band(&rays, &without)?.coef;
+            let across = g[0].hypot(g[1]);
+            (across > 0.0).then(|| {
+                let slant = across.atan2(g[2]).to_degrees();
+                (
+                    (-g[0]).atan2(g[1]).to_degrees(),
+                    slant.min(MAX_ESTIMATED_SLANT_DEG),
+                )
+            })
+        })
+        .collect();
+    let (tilt_jk, slant_jk) = jackknife(&left_out, (tilt_deg, slant_deg));
+    let block = outline_blocks(count);
+    let tilt_se_deg = (block * tilt_se_deg).hypot(tilt_jk).min(180.0);
+    let slant_se_deg = (block * slant_se_deg).hypot(slant_jk).min(90.0);
     let (tilt, slant) = ((tilt_deg, tilt_se_deg), (slant_deg, slant_se_deg));
     let method = EstimateMethod::LimbBand;
     limb_light(image, mask, method, tilt, slant, rho, kept).map(Some)
+}
+
+/// The outline is cut into this many sectors of its normals' directions for the jackknife.
+const JACKKNIFE_SECTORS: usize = 8;
+
+/// How much wider a fit's standard errors are when its `count` residuals are taken as
+/// [`JACKKNIFE_SECTORS`] independent blocks along the outline rather than independent pixels:
+/// √(count / sectors) (at least 1). A model's misfit runs along the outline (a cross-section
+/// that is no circle, a stretch of cut), so neighbouring pixels' residuals agree, and the
+/// pixel count overstates what they tell.
+fn outline_blocks(count: usize) -> f64 {
+    (count as f64 / JACKKNIFE_SECTORS as f64).max(1.0).sqrt()
+}
+
+/// The sector (0..[`JACKKNIFE_SECTORS`]) of the image-plane direction (`x`, `y`).
+fn sector(x: f64, y: f64) -> usize {
+    let turn = (y.atan2(x) + std::f64::consts::PI) / std::f64::consts::TAU;
+    ((turn * JACKKNIFE_SECTORS as f64) as usize).min(JACKKNIFE_SECTORS - 1)
+}
+
+/// The delete-a-group jackknife's standard errors (degrees) of the tilt and slant, from the
+/// estimates with each sector of the outline left out in turn (`left_out`, (tilt, slant)) and
+/// the estimate from all of it: √((k − 1)/k · Σ(θᵢ − θ̄)²) over the k sectors, the tilts
+/// unwrapped around the full estimate's. This is what the fits' own standard errors miss: they
+/// assume residuals independent from pixel to pixel, while a model that does not fit the
+/// object (a cross-section that is no circle, an outline that is partly a cut) leaves
+/// residuals that run along the outline, and moves the answer as parts of the outline come and
+/// go. Fewer than three sectors give 0 (the fit's errors alone).
+fn jackknife(left_out: &[(f64, f64)], (tilt, slant): (f64, f64)) -> (f64, f64) {
+    let k = left_out.len();
+    if k < 3 {
+        return (0.0, 0.0);
+    }
+    let spread = |d: Vec<f64>| {
+        let mean = d.iter().sum::<f64>() / k as f64;
+        let sum: f64 = d.iter().map(|v| (v - mean).powi(2)).sum();
+        ((k - 1) as f64 / k as f64 * sum).sqrt()
+    };
+    let wrap = |d: f64| (d + 180.0).rem_euclid(360.0) - 180.0;
+    (
+        spread(left_out.iter().map(|e| wrap(e.0 - tilt)).collect()),
+        spread(left_out.iter().map(|e| e.1 - slant).collect()),
+    )
 }
 
 /// The slant σ (radians) from the limb fit's amplitude u = |(a, b)|/ρ and constant v = c/ρ.
@@ -827,6 +953,7 @@ fn moments_estimate(image: &Image, mask: &Mask) -> Result<LightEstimate> {
         tilt_se_deg: g.direction_se.to_degrees().min(180.0),
         slant_se_deg: None,
         limb_pixels: 0,
+        warning: None,
     })
 }
 
@@ -851,6 +978,86 @@ mod tests {
     fn tilt_difference(a: f64, b: f64) -> f64 {
         let d = (a - b).rem_euclid(360.0);
         d.min(360.0 - d)
+    }
+
+    /// The share of estimates whose ±2σ holds the true tilt (lights of slant 20° or more) and
+    /// slant, over spheres, ellipsoids and vases at `sizes`, 4 slants × 8 tilts, albedo 0.8;
+    /// prints each object's figures.
+    fn coverage(sizes: &[usize]) -> (f64, f64) {
+        type Shape = fn(usize) -> crate::surface::Surface;
+        let shapes: [(&str, Shape); 3] = [
+            ("sphere", |n| sphere(n, n, 0.45 * n as f64).unwrap()),
+            ("ellipsoid", |n| {
+                let n_f = n as f64;
+                crate::surface::ellipsoid(n, n, 0.45 * n_f, 0.3 * n_f, 0.35 * n_f).unwrap()
+            }),
+            ("vase", |n| crate::surface::vase(n, n).unwrap()),
+        ];
+        let (mut tilt_in, mut slant_in, mut total) = (0usize, 0usize, 0usize);
+        for (name, make) in shapes {
+            for &n in sizes {
+                let s = make(n);
+                let (mut t_in, mut s_in, mut count) = (0, 0, 0);
+                let (mut worst_t, mut worst_s) = (0.0f64, 0.0f64);
+                for slant in [20.0, 35.0, 50.0, 65.0] {
+                    for tilt in [0.0, 30.0, 75.0, 120.0, 165.0, 210.0, 255.0, 300.0] {
+                        let light = Light::from_tilt_slant(tilt, slant).unwrap();
+                        let map = Lambertian {
+                            light,
+                            albedo: 0.8,
+                            ambient: 0.0,
+                        };
+                        let image = render(&s, &map, &RenderOptions::default()).image;
+                        let e = estimate_light_with(&image, &s.mask, Outline::Occluding).unwrap();
+                        let se = e.slant_se_deg.unwrap_or(0.0);
+                        let dt = tilt_difference(e.tilt_deg, tilt) / e.tilt_se_deg.max(1e-9);
+                        let ds = (e.slant_deg - slant).abs() / se.max(1e-9);
+                        worst_t = worst_t.max(dt);
+                        worst_s = worst_s.max(ds);
+                        t_in += usize::from(dt <= 2.0);
+                        s_in += usize::from(ds <= 2.0);
+                        count += 1;
+                    }
+                }
+                eprintln!(
+                    "{name} {n}²: tilt within ±2σ {t_in}/{count}, slant {s_in}/{count}; \
+                     worst |error|/σ tilt {worst_t:.1}, slant {worst_s:.1}"
+                );
+                tilt_in += t_in;
+                slant_in += s_in;
+                total += count;
+            }
+        }
+        let share = |k: usize| k as f64 / total as f64;
+        eprintln!(
+            "all: tilt {:.3}, slant {:.3} of {total}",
+            share(tilt_in),
+            share(slant_in)
+        );
+        (share(tilt_in), share(slant_in))
+    }
+
+    #[test]
+    fn the_true_light_lies_within_two_standard_errors_in_nine_cases_of_ten() {
+        let (tilt, slant) = coverage(&[64, 96]);
+        assert!(tilt >= 0.9 && slant >= 0.9, "tilt {tilt}, slant {slant}");
+    }
+
+    #[test]
+    #[ignore = "the measurement of docs/perception.md; run with --ignored --nocapture"]
+    fn coverage_of_two_standard_errors_at_three_sizes() {
+        coverage(&[64, 128, 256]);
+    }
+
+    #[test]
+    fn a_whole_frame_mask_warns() {
+        let light = Light::from_tilt_slant(45.0, 40.0).unwrap();
+        let (image, mask) = sphere_image(light, 0.8);
+        let e = estimate_light_with(&image, &mask, Outline::Occluding).unwrap();
+        assert_eq!(e.warning, None);
+        let whole = Grid::new(image.width(), image.height(), true);
+        let e = estimate_light_with(&image, &whole, Outline::Occluding).unwrap();
+        assert_eq!(e.warning, Some(WHOLE_FRAME_WARNING));
     }
 
     #[test]

@@ -37,9 +37,57 @@ impl Geometry {
         self.height as f64 / self.ppd
     }
 
+    /// Its visual size, for a message ("10.0° high × 14.0° wide").
+    pub fn size_text(&self) -> SizeText {
+        SizeText::Degrees(self.height_deg(), self.width_deg())
+    }
+
     /// Converts a length in degrees to pixels.
     pub fn px(&self, degrees: f64) -> f64 {
         degrees * self.ppd
+    }
+}
+
+/// The largest visual size, in degrees, either side of a stimulus may have: half the visual
+/// field, what a flat screen can span at most (a ppd below one pixel per 8° on a shape of
+/// 100000 × 1 pixels would otherwise record 800,000°).
+pub const MAX_VISUAL_DEGREES: f64 = 180.0;
+
+/// A size written for a message with its axes named in words, height first, so that it reads
+/// right whatever order the reader writes sizes in (Python and JSON (height, width), the
+/// command line's `--size WxH` width first).
+///
+/// ```
+/// use shadelab::SizeText;
+/// assert_eq!(SizeText::Degrees(10.0, 14.0).to_string(), "10.0° high × 14.0° wide");
+/// assert_eq!(SizeText::Degrees(3.97476, 0.25).to_string(), "3.975° high × 0.25° wide");
+/// assert_eq!(SizeText::Pixels(40, 60).to_string(), "40 px high × 60 px wide");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SizeText {
+    /// (height, width) in degrees of visual angle, written to three decimals at most.
+    Degrees(f64, f64),
+    /// (height, width) in pixels.
+    Pixels(usize, usize),
+}
+
+impl std::fmt::Display for SizeText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            SizeText::Degrees(h, w) => write!(f, "{}° high × {}° wide", degrees(h), degrees(w)),
+            SizeText::Pixels(h, w) => write!(f, "{h} px high × {w} px wide"),
+        }
+    }
+}
+
+/// `v` to three decimals at most and one at least (10.0, 3.975, 0.25).
+fn degrees(v: f64) -> String {
+    let text = format!("{v:.3}");
+    let trimmed = text.trim_end_matches('0');
+    if trimmed.ends_with('.') {
+        format!("{trimmed}0")
+    } else {
+        trimmed.to_string()
     }
 }
 
@@ -123,7 +171,8 @@ impl SizeRequest {
     /// ([`whole_pixels`]: rounded down, as stimupy); ppd and shape give the visual size; a shape without a ppd
     /// takes the largest ppd at which the visual size (`default_visual_size` when none is
     /// given) fits it, the rest of the shape being field; all three must agree to within half
-    /// a pixel. Without a shape, `default_ppd` and then `default_visual_size` fill in.
+    /// a pixel. Without a shape, `default_ppd` and then `default_visual_size` fill in. A
+    /// visual size over [`MAX_VISUAL_DEGREES`] either way, given or resolved, is refused.
     pub fn resolve(
         &self,
         default_visual_size: (f64, f64),
@@ -133,7 +182,8 @@ impl SizeRequest {
         if let Some((h, w)) = self.visual_size {
             if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0) {
                 return Err(Error::invalid(format!(
-                    "visual size {h}x{w} degrees (height x width) must be positive"
+                    "visual size {} must be positive",
+                    SizeText::Degrees(h, w)
                 )));
             }
         }
@@ -166,11 +216,28 @@ impl SizeRequest {
             (_, None, None) => (default_ppd, round_shape(visual_or_default, default_ppd)?),
         };
         crate::grid::check_size(shape.1, shape.0, max_pixels)?;
-        Ok(Geometry {
+        let geometry = Geometry {
             width: shape.1,
             height: shape.0,
             ppd,
-        })
+        };
+        let (h, w) = (geometry.height_deg(), geometry.width_deg());
+        if h > MAX_VISUAL_DEGREES || w > MAX_VISUAL_DEGREES {
+            let how = match (self.visual_size, self.ppd) {
+                (_, Some(_)) => "",
+                (Some(_), None) => " (the ppd that fits the visual size given to the shape)",
+                (None, None) => {
+                    " (the ppd that fits the stimulus's default visual size to the shape)"
+                }
+            };
+            return Err(Error::invalid(format!(
+                "{} at {ppd} ppd{how} is {}: over {MAX_VISUAL_DEGREES}° either way; give a \
+                 ppd or a visual size that fits",
+                SizeText::Pixels(shape.0, shape.1),
+                SizeText::Degrees(h, w)
+            )));
+        }
+        Ok(geometry)
     }
 }
 
@@ -197,8 +264,8 @@ fn round_shape(visual: (f64, f64), ppd: f64) -> Result<(usize, usize)> {
     let w = whole_pixels(visual.1, ppd);
     if !(w >= 1.0 && h >= 1.0 && w < 1e9 && h < 1e9) {
         return Err(Error::invalid(format!(
-            "visual size {}x{}° (height x width) at {ppd} ppd gives {h}x{w} pixels",
-            visual.0, visual.1
+            "visual size {} at {ppd} ppd gives {h} pixels high × {w} wide",
+            SizeText::Degrees(visual.0, visual.1)
         )));
     }
     Ok((h as usize, w as usize))
@@ -344,6 +411,30 @@ mod tests {
             ..Default::default()
         };
         assert!(r.resolve((1.0, 1.0), 1.0, MAX).is_err());
+        // A shape of 100000 × 1 pixels fitted to 8° × 8° would be 800,000° wide.
+        let wide = SizeRequest {
+            shape: Some((1, 100_000)),
+            ..Default::default()
+        };
+        let e = wide.resolve((8.0, 8.0), 16.0, MAX).unwrap_err().to_string();
+        assert!(
+            e.contains("1 px high × 100000 px wide at 0.125 ppd")
+                && e.contains("8.0° high × 800000.0° wide")
+                && e.contains("over 180°"),
+            "{e}"
+        );
+        let at_limit = SizeRequest {
+            visual_size: Some((180.0, 10.0)),
+            ppd: Some(1.0),
+            shape: None,
+        };
+        assert!(at_limit.resolve((1.0, 1.0), 1.0, MAX).is_ok());
+        let over = SizeRequest {
+            visual_size: Some((180.5, 10.0)),
+            ppd: Some(2.0),
+            shape: None,
+        };
+        assert!(over.resolve((1.0, 1.0), 1.0, MAX).is_err());
         assert!(parse_pair::<usize>("12x", "size").is_err());
         assert_eq!(parse_pair::<usize>("12x7", "size").unwrap(), (12, 7));
         assert_eq!(parse_size::<usize>("12x7", "size").unwrap(), (7, 12));

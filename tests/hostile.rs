@@ -468,8 +468,11 @@ const BAD_IMAGES: &[(&str, &str)] = &[
     ),
     ("in/empty.png", "not a PNG image"),
     ("in/dir.png", "is a directory"),
-    ("in/zero.png", "image size 0x0 is empty"),
-    ("in/bomb.png", "100000x100000 exceeds the limit"),
+    ("in/zero.png", "image size 0 px high × 0 px wide is empty"),
+    (
+        "in/bomb.png",
+        "100000 px high × 100000 px wide exceeds the limit",
+    ),
     ("in/missing.png", "No such file"),
     ("in/complex.npy", "unsupported dtype"),
     ("in/text.npy", "unsupported dtype"),
@@ -504,7 +507,7 @@ fn broken_images_are_refused_by_every_command_that_reads_one() {
                 "{} --max-pixels 100000000000",
                 command.replace("{}", "in/bomb.png")
             ),
-            vec!["in/bomb.png", "100000x100000"],
+            vec!["in/bomb.png", "100000 px high × 100000 px wide"],
         ));
     }
     refused_all(&d, &table);
@@ -648,7 +651,11 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         // solve --mask
         (
             "solve in/ok.png --light above --mask in/mask8.png --out o",
-            &["in/mask8.png", "8x8", "16x16"],
+            &[
+                "in/mask8.png",
+                "8 px high × 8 px wide",
+                "16 px high × 16 px wide",
+            ],
         ),
         (
             "solve in/ok.png --light above --mask in/mask_empty.png --out o",
@@ -673,7 +680,7 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         // solve --boundary FILE.npy
         (
             "solve in/ok.png --light above --boundary in/normals8.npy --out o",
-            &["in/normals8.npy", "8x8"],
+            &["in/normals8.npy", "8 px high × 8 px wide"],
         ),
         (
             "solve in/ok.png --light above --boundary in/normals_nan.npy --out o",
@@ -706,7 +713,7 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         // analyze: target labels
         (
             "analyze lightness in/ok.png --model retinex --mask in/mask8.png --out o",
-            &["in/mask8.png", "8x8"],
+            &["in/mask8.png", "8 px high × 8 px wide"],
         ),
         (
             "analyze lightness in/ok.png --model retinex --mask in/rgba.png --out o",
@@ -718,7 +725,7 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         ),
         (
             "analyze fading in/ok.png --ppd 8 --mask in/mask8.png --out o",
-            &["in/mask8.png", "8x8"],
+            &["in/mask8.png", "8 px high × 8 px wide"],
         ),
         (
             "analyze fading in/ok.png --ppd 8 --mask in/mask_empty.png --out o",
@@ -726,7 +733,7 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         ),
         (
             "analyze prior-sweep in/ok.png --mask in/mask8.png --out o",
-            &["in/mask8.png", "8x8"],
+            &["in/mask8.png", "8 px high × 8 px wide"],
         ),
         (
             "analyze observer in/ok.png --mask in/bomb.png --out o",
@@ -734,12 +741,12 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         ),
         (
             "analyze prior-sweep --stimulus bumps --mask in/mask8.png --out o",
-            &["in/mask8.png", "8x8"],
+            &["in/mask8.png", "8 px high × 8 px wide"],
         ),
         // analyze prior-sweep / observer: domain and boundary
         (
             "analyze prior-sweep in/ok.png --domain in/mask8.png --out o",
-            &["domain mask in/mask8.png", "8x8"],
+            &["domain mask in/mask8.png", "8 px high × 8 px wide"],
         ),
         (
             "analyze prior-sweep in/ok.png --domain in/mask_empty.png --out o",
@@ -755,7 +762,7 @@ fn broken_masks_boundaries_and_domains_are_refused() {
         ),
         (
             "analyze prior-sweep in/ok.png --boundary in/normals8.npy --out o",
-            &["in/normals8.npy", "8x8"],
+            &["in/normals8.npy", "8 px high × 8 px wide"],
         ),
         (
             "analyze observer in/ok.png --boundary in/normals_nan.npy --out o",
@@ -839,7 +846,7 @@ fn render_refuses_broken_depth_maps_meshes_and_specs() {
         ),
         (
             "render --spec in/huge_spec.json --out o.png",
-            &["100000x100000", "--max-pixels"],
+            &["100000 px high × 100000 px wide", "--max-pixels"],
         ),
         (
             "render --spec in/bad_param.json --out o.png",
@@ -890,7 +897,7 @@ fn render_refuses_bad_numbers_names_and_sizes() {
         ("render sphere --size nan --out o.png", &["--size", "nan"]),
         (
             "render sphere --size 100000 --out o.png",
-            &["100000x100000", "--max-pixels"],
+            &["100000 px high × 100000 px wide", "--max-pixels"],
         ),
         (
             "render sphere --size 18446744073709551615 --out o.png",
@@ -902,7 +909,7 @@ fn render_refuses_bad_numbers_names_and_sizes() {
         ),
         (
             "render sphere --size 16 --max-pixels 255 --out o.png",
-            &["16x16", "255"],
+            &["16 px high × 16 px wide", "255"],
         ),
         (
             "render sphere --set radius=-1 --out o.png",
@@ -1174,7 +1181,7 @@ fn analyze_refuses_bad_numbers_and_names() {
         ),
         (
             "analyze lightness in/one.png --model all --ppd 8 --out o",
-            &["1x1", "smaller"],
+            &["1 px high × 1 px wide", "smaller"],
         ),
         (
             "analyze lightness --model retinex --out o",
@@ -1194,7 +1201,7 @@ fn analyze_refuses_bad_numbers_and_names() {
         ),
         (
             "analyze lightness --stimulus disc --ppd 0.01 --model retinex --out o",
-            &["0x0"],
+            &["0 pixels high × 0 wide"],
         ),
         (
             "analyze lightness in/ok.png --stimulus disc --model retinex --out o",
@@ -1454,7 +1461,7 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         ),
         (
             "study run in/study.json --max-pixels 100 --out o",
-            &["in/study.json", "24x24", "100"],
+            &["in/study.json", "24 px high × 24 px wide", "100"],
         ),
         (
             "study run in/study_noise.json --out o",
@@ -1594,7 +1601,7 @@ fn study_gallery_and_bench_refuse_bad_specs_and_arguments() {
         ),
         (
             "gallery --presets in/presets_ok --max-pixels 10 --out o",
-            &["8x8", "10"],
+            &["8 px high × 8 px wide", "10"],
         ),
         ("bench --sizes 4", &["--sizes", "8"]),
         ("bench --sizes 16 --repeat 0", &["--repeat"]),
@@ -1777,7 +1784,10 @@ fn inputs_are_read_only_as_far_as_needed() {
             "--out",
             "huge.png",
         ],
-        &["100000x100000", "more memory than this machine can give"],
+        &[
+            "100000 px high × 100000 px wide",
+            "more memory than this machine can give",
+        ],
     );
     assert!(!d.join("huge.png").exists());
     // Absurd thread counts are capped at once, not spent starting threads.

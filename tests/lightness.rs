@@ -286,7 +286,7 @@ mod cli {
                 "c",
             ],
         );
-        assert_error(&out, 2, "60x64");
+        assert_error(&out, 2, "64 px high × 60 px wide");
         // NaN in the input.
         let mut nan = image.clone();
         *nan.get_mut(5, 7) = f64::NAN;

@@ -282,7 +282,10 @@ fn the_limb_boundary_is_named_and_needs_the_image() {
     let message = limb_count(&mask, &small, &map, None)
         .unwrap_err()
         .to_string();
-    assert_eq!(message, "image is 95x96 but the mask is 96x96");
+    assert_eq!(
+        message,
+        "image is 96 px high × 95 px wide but the mask is 96 px high × 96 px wide"
+    );
 }
 
 /// `shadelab solve image.npy --mask mask.png` in `dir` under `light` with `boundary`, into the

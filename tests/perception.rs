@@ -120,9 +120,15 @@ fn the_limb_estimate_is_unbiased_on_the_sphere() {
     assert!(moments.1 > 15.0, "{moments:?}");
     for &(tilt, slant, e, _) in &estimates {
         assert_eq!(e.method, EstimateMethod::LimbBand, "{tilt} {slant}");
-        assert!(e.slant_se_deg.unwrap() < 1.0, "{e:?}");
+        // The ± covers the model's misfit too (widest at slant 15°, 2.1°), and the truth.
+        assert!(e.slant_se_deg.unwrap() < 3.0, "{e:?}");
         if slant >= 15.0 {
-            assert!(e.tilt_se_deg < 1.0, "{e:?}");
+            assert!(
+                (e.slant_deg - slant).abs() <= 2.0 * e.slant_se_deg.unwrap(),
+                "{e:?}"
+            );
+            assert!(e.tilt_se_deg < 2.5, "{e:?}");
+            assert!(tilt_error(e.tilt_deg, tilt) <= 2.0 * e.tilt_se_deg, "{e:?}");
         }
     }
 }

@@ -563,7 +563,11 @@ def solve(
         None if max_iter is None else int(max_iter),
         "none" if saturation is None else str(saturation),
     )
-    return Reconstruction(normals, depth, f, g, json.loads(report_json), handle)
+    report = json.loads(report_json)
+    warning = ((report.get("light") or {}).get("estimate") or {}).get("warning")
+    if warning:
+        warnings.warn(warning, stacklevel=2)
+    return Reconstruction(normals, depth, f, g, report, handle)
 
 
 def prior_sweep(

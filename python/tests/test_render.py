@@ -174,7 +174,7 @@ def test_shape_from_visual_size_is_stimupys(visual_size, ppd):
 
 
 def test_3_3_by_5_1_degrees_at_31_7_ppd_warns_as_stimupy():
-    with pytest.warns(UserWarning, match=r"3.3x5.1 deg .* at 31.7 ppd is 104x161 px"):
+    with pytest.warns(UserWarning, match=r"3.3° high × 5.1° wide at 31.7 ppd is 104 px high × 161 px wide"):
         s = shadelab.render("checkerboard", visual_size=(3.3, 5.1), ppd=31.7)
     assert s["shape"] == (104, 161)
     assert s["notes"]["visual_size_rounded"]["asked_visual_size"] == [3.3, 5.1]
@@ -414,3 +414,40 @@ def test_save_refuses_bad_options_and_keeps_a_foreign_file(tmp_path):
         shadelab.save(s, mine)
     assert mine.read_bytes() == b"the user's own file"
     assert sorted(os.listdir(tmp_path)) == ["c.png"]
+
+
+def test_sizes_in_messages_name_their_axes():
+    # (height, width) = (14, 10): 10° wide, too narrow for the 11° the 3 × 4 discs need.
+    with pytest.raises(ValueError, match=r"bumps: 3 rows × 4 columns of discs need 8\.0° high × "
+                                         r"11\.0° wide but the frame is 14\.0° high × 10\.0° wide"):
+        shadelab.render("bumps", visual_size=(14, 10))
+    with pytest.raises(ValueError, match=r"1 px high × 100000 px wide .* 800000\.0° wide: over 180°"):
+        shadelab.render("checkerboard", shape=(1, 100000))
+
+
+@pytest.mark.parametrize("visual_size,ppd,check", [
+    ((4, 6), 10, 0.75), ((4, 6), 31.7, 0.8), ((3.3, 5.1), 10, 1.0), ((7, 13), 23, 0.33),
+    ((4, 6), 10, 1.0), ((2.5, 9), 37.3, 1.3),
+])
+def test_checkerboard_rounds_its_check_as_stimupy_does(visual_size, ppd, check):
+    # stimupy 1.2 rounds the check to whole pixels (0.75° at 10 ppd: 8 px, 0.8°) and warns;
+    # its square waves move an edge by a pixel on some frames (33 rows at 10 ppd, 1° checks).
+    import warnings
+
+    kw = dict(visual_size=visual_size, ppd=ppd, check_visual_size=check,
+              intensity_checks=(0.2, 0.9), target_indices=((1, 2), (0, 0)), intensity_target=0.5)
+    with warnings.catch_warnings(record=True) as ours_said:
+        warnings.simplefilter("always")
+        ours = shadelab.render("checkerboard", **kw)
+    rounded = [str(w.message) for w in ours_said if "rounded to whole pixels as stimupy" in str(w.message)]
+    px = int(np.round(check * ppd))
+    assert len(rounded) == (0 if abs(px / ppd - check) < 1e-9 else 1), rounded
+    _stimupy()
+    from stimupy.stimuli.checkerboards import checkerboard
+
+    with warnings.catch_warnings(record=True) as theirs_said:
+        warnings.simplefilter("always")
+        theirs = checkerboard(**kw)
+    assert bool(rounded) == any("phase_width" in str(w.message) for w in theirs_said)
+    np.testing.assert_array_equal(ours["img"], theirs["img"])
+    np.testing.assert_array_equal(ours["target_mask"], theirs["target_mask"])

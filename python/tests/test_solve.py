@@ -134,7 +134,7 @@ def test_bad_arrays_are_value_errors():
         shadelab.solve(np.zeros((8, 8), dtype=complex), light=(0, 0, 1))
     with pytest.raises(ValueError, match="empty"):
         shadelab.solve(np.zeros((8, 8)), light=(0, 0, 1), mask=np.zeros((8, 8), bool))
-    with pytest.raises(ValueError, match="8x4"):
+    with pytest.raises(ValueError, match="4 px high × 8 px wide"):
         shadelab.solve(np.zeros((8, 8)), light=(0, 0, 1), mask=np.ones((4, 8), bool))
 
 

@@ -420,8 +420,9 @@ pub fn check_scene(scene: &Scene) -> Result<()> {
     for t in scene.tokens {
         if t.pixels().iter().any(|&p| p >= w * h) {
             return Err(Error::invalid(format!(
-                "token '{}' does not fit a {w}x{h} image",
-                t.name
+                "token '{}' does not fit an image {}",
+                t.name,
+                crate::SizeText::Pixels(h, w)
             )));
         }
         if !t.inside(scene.domain) {

@@ -29,8 +29,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     let _ = writeln!(text, "{} — {}", d.name, d.summary);
     let _ = writeln!(
         text,
-        "default size: {}x{} deg (width x height) at {} ppd",
-        d.default_visual_size.1, d.default_visual_size.0, d.default_ppd
+        "default size: {} at {} ppd",
+        shadelab::SizeText::Degrees(d.default_visual_size.0, d.default_visual_size.1),
+        d.default_ppd
     );
     let _ = writeln!(text, "parameters (--set key=value):");
     for p in &d.params {

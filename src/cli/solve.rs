@@ -114,6 +114,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         light.slant_deg,
         if light.estimated { " (estimated)" } else { "" },
     );
+    if let Some(warning) = light.estimate.and_then(|e| e.warning) {
+        out.warn(warning);
+    }
     if let Some(e) = &light.estimate {
         text += &format!(
             "estimated by {}: tilt ± {:.1}°, slant {}\n",

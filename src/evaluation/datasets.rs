@@ -380,12 +380,10 @@ fn same_size<A, B>(a: &Grid<A>, b: &Grid<B>, a_path: &Path, b_path: &Path) -> Re
         Err(Error::format(
             a_path,
             format!(
-                "is {}x{} but {} is {}x{}",
-                a.width(),
-                a.height(),
+                "is {} but {} is {}",
+                crate::SizeText::Pixels(a.height(), a.width()),
                 b_path.display(),
-                b.width(),
-                b.height()
+                crate::SizeText::Pixels(b.height(), b.width())
             ),
         ))
     }

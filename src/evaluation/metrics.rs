@@ -132,13 +132,10 @@ fn check_sizes<A, B>(a: &Grid<A>, b: &Grid<B>, mask: &Mask) -> Result<()> {
         Ok(())
     } else {
         Err(Error::invalid(format!(
-            "sizes differ: {}x{}, {}x{} and a mask of {}x{}",
-            a.width(),
-            a.height(),
-            b.width(),
-            b.height(),
-            mask.width(),
-            mask.height()
+            "sizes differ: {}, {} and a mask of {}",
+            crate::SizeText::Pixels(a.height(), a.width()),
+            crate::SizeText::Pixels(b.height(), b.width()),
+            crate::SizeText::Pixels(mask.height(), mask.width())
         )))
     }
 }

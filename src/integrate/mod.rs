@@ -114,13 +114,10 @@ pub fn gradients_from_fg(
 ) -> Result<(Image, Image)> {
     if !f.same_size(&g) || !f.same_size(mask) {
         return Err(Error::invalid(format!(
-            "f is {}x{}, g {}x{} and the mask {}x{}: they must have one size",
-            f.width(),
-            f.height(),
-            g.width(),
-            g.height(),
-            mask.width(),
-            mask.height()
+            "f is {}, g {} and the mask {}: they must have one size",
+            crate::SizeText::Pixels(f.height(), f.width()),
+            crate::SizeText::Pixels(g.height(), g.width()),
+            crate::SizeText::Pixels(mask.height(), mask.width())
         )));
     }
     check_min_nz(min_nz)?;
@@ -208,11 +205,9 @@ pub fn fit_scale_offset(estimate: &Image, truth: &Image, mask: &Mask) -> Result<
 fn check_gradients(dz_dx: &Image, dz_dy: &Image) -> Result<()> {
     if !dz_dx.same_size(dz_dy) {
         return Err(Error::invalid(format!(
-            "gradient fields differ in size: {}x{} and {}x{}",
-            dz_dx.width(),
-            dz_dx.height(),
-            dz_dy.width(),
-            dz_dy.height()
+            "gradient fields differ in size: {} and {}",
+            crate::SizeText::Pixels(dz_dx.height(), dz_dx.width()),
+            crate::SizeText::Pixels(dz_dy.height(), dz_dy.width())
         )));
     }
     for (name, grid) in [("x", dz_dx), ("y", dz_dy)] {

@@ -201,7 +201,10 @@ fn rest_on_zero_lifts_the_masked_minimum_to_zero_and_clears_the_outside() {
     );
     assert_eq!(flat.data(), &[0.0; 4]);
     let e = rest_on_zero(&mut flat, &Grid::new(3, 2, true)).unwrap_err();
-    assert!(e.to_string().contains("depth is 2x2"), "{e}");
+    assert!(
+        e.to_string().contains("depth is 2 px high × 2 px wide"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -217,12 +217,12 @@ mod tests {
         let err = target_means(&out, &image, &Grid::new(3, 2, 1u16), &[]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "the target mask is 3x2 but the image is 4x2"
+            "the target mask is 2 px high × 3 px wide but the image is 2 px high × 4 px wide"
         );
         let err = target_means(&out, &Grid::new(4, 3, 0.25), &labels, &[]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "the model output is 4x2 but the image is 4x3"
+            "the model output is 2 px high × 4 px wide but the image is 3 px high × 4 px wide"
         );
     }
 }

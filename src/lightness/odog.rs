@@ -681,9 +681,10 @@ fn check_geometry(width: usize, height: usize, ppd: f64) -> Result<()> {
     let (wd, hd) = (width as f64 / ppd, height as f64 / ppd);
     if wd < MIN_SIDE_DEG || hd < MIN_SIDE_DEG {
         return Err(Error::invalid(format!(
-            "image {width}x{height} px at {ppd} ppd is {wd:.2}x{hd:.2}°, smaller than the \
-             largest filter ({MIN_SIDE_DEG}°, twice its 3° space constant): use a larger image \
-             or a smaller ppd"
+            "image {} at {ppd} ppd is {}, smaller than the largest filter ({MIN_SIDE_DEG}°, \
+             twice its 3° space constant) either way: use a larger image or a smaller ppd",
+            crate::SizeText::Pixels(height, width),
+            crate::SizeText::Degrees(hd, wd)
         )));
     }
     Ok(())

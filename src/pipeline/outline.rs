@@ -96,7 +96,8 @@ impl OutlineConfig {
             }
             if w == 0 || h == 0 {
                 return Err(Error::invalid(format!(
-                    "size {w}x{h} must be at least 1 pixel each way"
+                    "size {} must be at least 1 pixel each way",
+                    crate::SizeText::Pixels(h, w)
                 )));
             }
         }

@@ -206,7 +206,8 @@ impl Config {
                 Err(Error::invalid("a size applies to a rendered stimulus only"))
             } else if w == 0 || h == 0 {
                 Err(Error::invalid(format!(
-                    "size {w}x{h} must be at least 1 pixel each way"
+                    "size {} must be at least 1 pixel each way",
+                    crate::SizeText::Pixels(h, w)
                 )))
             } else {
                 Ok(())

@@ -162,7 +162,8 @@ pub struct RenderReport {
     /// Facts the stimulus recorded (e.g. the shared value of the checker squares).
     pub notes: Map<String, Value>,
     /// What the user should know though nothing failed, one line each: a visual size that
-    /// whole pixels made smaller (stimupy's rounding down).
+    /// whole pixels made smaller (stimupy's rounding down), a checkerboard's check that whole
+    /// pixels changed (stimupy's rounding).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     /// The resolved request.
@@ -196,6 +197,12 @@ pub fn run(config: &RenderConfig, progress: &dyn Progress) -> Result<RenderRepor
         .rounded_visual_size(&request.geometry)
         .map(|asked| stimulus::rounded_warning(&config.stimulus, &request.geometry, asked))
         .into_iter()
+        .chain(
+            output
+                .notes
+                .get(stimulus::CHECK_ROUNDED_NOTE)
+                .and_then(|note| stimulus::rounded_check_warning(note, request.geometry.ppd)),
+        )
         .collect();
     Ok(RenderReport {
         stimulus: config.stimulus.clone(),

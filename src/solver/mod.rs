@@ -445,7 +445,8 @@ impl Solver {
         let n = width * height;
         if n >= NO_SLOT as usize {
             return Err(Error::invalid(format!(
-                "image size {width}x{height} is too large for the solver"
+                "image size {} is too large for the solver",
+                crate::SizeText::Pixels(height, width)
             )));
         }
         Ok(Solver {
@@ -514,7 +515,9 @@ impl Solver {
         ] {
             if (gw, gh) != (w, h) {
                 return Err(Error::invalid(format!(
-                    "{what} is {gw}x{gh} but the solver was made for {w}x{h}"
+                    "{what} is {} but the solver was made for {}",
+                    crate::SizeText::Pixels(gh, gw),
+                    crate::SizeText::Pixels(h, w)
                 )));
             }
         }

@@ -321,7 +321,7 @@ fn bad_input_is_an_error_not_a_panic() {
     let e = solver
         .solve(&Grid::new(16, 15, 0.5), &s.mask, &occ, &map, &ok)
         .unwrap_err();
-    assert!(e.to_string().contains("16x15"), "{e}");
+    assert!(e.to_string().contains("15 px high × 16 px wide"), "{e}");
     assert!(solver
         .solve(&image, &Grid::new(15, 16, true), &occ, &map, &ok)
         .is_err());

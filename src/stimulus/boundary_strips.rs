@@ -121,11 +121,10 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     let stack = n as f64 * band + (n as f64 - 1.0) * gap;
     let (fw, fh) = (g.width as f64, g.height as f64);
     if width > fw || stack > fh {
-        let (dw, dh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
-            "boundary-strips: {n} strips need {:.2}x{:.2} degrees but the frame is {dw:.2}x{dh:.2}: enlarge the visual size or shorten them",
-            width / g.ppd,
-            stack / g.ppd
+            "boundary-strips: {n} strips need {} but the frame is {}: enlarge the visual size or shorten them",
+            crate::SizeText::Degrees(stack / g.ppd, width / g.ppd),
+            g.size_text()
         )));
     }
     let x0 = g.snap(-width / 2.0, 0.0).0;

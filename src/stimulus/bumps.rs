@@ -200,7 +200,11 @@ fn discs(name: &str, p: &DiscArrayParams, g: &Geometry, seed: u64, light: Light)
         )));
     }
     let centres = grid_centres(g, rows, cols, spacing);
-    g.check_inside(&format!("{name}: {rows}x{cols} discs"), &centres, radius)?;
+    g.check_inside(
+        &format!("{name}: {rows} rows × {cols} columns of discs"),
+        &centres,
+        radius,
+    )?;
     let sign = polarities(p.pattern, rows, cols, seed);
     let s = light.direction();
     let tilt_len = s.x.hypot(s.y);

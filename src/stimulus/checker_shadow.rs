@@ -247,11 +247,10 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     let content_w = 2.0 * extent.0 * side;
     let content_h = (top - bottom) * side;
     if content_w > g.width as f64 + 0.5 || content_h > g.height as f64 + 0.5 {
-        let (fw, fh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
-            "checker-shadow: the scene needs {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or shrink `square`",
-            content_w / g.ppd,
-            content_h / g.ppd
+            "checker-shadow: the scene needs {} but the frame is {}: enlarge the visual size or shrink `square`",
+            crate::SizeText::Degrees(content_h / g.ppd, content_w / g.ppd),
+            g.size_text()
         )));
     }
     let (lu, lw, lz) = (cl / SQRT_2, cl / SQRT_2, sl);

@@ -3,9 +3,10 @@
 //! disc and background intensities), so that shadelab can stand in for it and be compared with
 //! it.
 //!
-//! No anti-aliasing: a pixel of the checkerboard belongs to the check that contains its centre,
-//! and a pixel of the disc follows stimupy's rule (see [`disc`]); the SVG versions have their
-//! edges at the same places.
+//! No anti-aliasing: the checkerboard's pixels and checks are stimupy 1.2's, computed as it
+//! computes them, a check side being rounded to whole pixels as stimupy rounds it (0.75° at
+//! 10 ppd is 8 pixels, 0.8°, with a warning; see [`checkerboard`]), and a pixel of the disc
+//! follows stimupy's rule (see [`disc`]); the SVG versions have their edges at the same places.
 //!
 //! Targets are stimupy's: a checkerboard has none (no target mask, as stimupy's all-zero
 //! `target_mask`) unless `targets` names checks as stimupy's `target_indices` do, and then its
@@ -114,6 +115,12 @@ fn check_name(r: usize, c: usize) -> String {
 
 /// A plain checkerboard (as stimupy's), starting with the first intensity at the top left.
 ///
+/// The check side is whole pixels as stimupy 1.2 makes it: `round(check·ppd)` pixels (half to
+/// even), recorded in the notes as [`CHECK_ROUNDED_NOTE`] (with a warning) where that changes
+/// it; the checks run from the top-left corner. The picture and its target mask are stimupy's
+/// pixel for pixel, including where stimupy's square waves put an edge a pixel off a whole
+/// number of checks (see `StimupyGrating`).
+///
 /// Its targets are stimupy's: with no `targets` there are none (no target mask); with
 /// `targets` (stimupy's `target_indices`), the named checks in the order given, named `r0c1`
 /// (row 0, column 1, from the top left), drawn with `intensity_target` (as stimupy's
@@ -123,9 +130,10 @@ fn check_name(r: usize, c: usize) -> String {
 /// use shadelab::stimulus::{checkerboard, CheckerboardParams, Pixels};
 /// use shadelab::Geometry;
 ///
-/// // 0.5° checks at 4 ppd are 2 pixels wide: columns 0-1 dark, 2-3 light.
+/// // 0.5° checks at 4 ppd are 2 pixels wide: columns 0-1 dark, 2-3 light. (On a frame of a
+/// // few checks stimupy's square waves move edges: 6 × 4 pixels start 1, 0, 1, 1, 0, 1.)
 /// let p = CheckerboardParams { check: 0.5, ..Default::default() };
-/// let g = Geometry { width: 6, height: 4, ppd: 4.0 };
+/// let g = Geometry { width: 12, height: 8, ppd: 4.0 };
 /// let out = checkerboard(&p, &g).unwrap();
 /// let Pixels::Gray(image) = &out.pixels else { panic!() };
 /// let top: Vec<f64> = (0..6).map(|c| *image.get(c, 0)).collect();
@@ -141,19 +149,17 @@ fn check_name(r: usize, c: usize) -> String {
 /// ```
 pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     p.validate()?;
-    let check = g.px(p.check);
-    if check < 1.0 {
+    let check = rounded_check(p.check, g.ppd);
+    if check.pixels < 1.0 {
         return Err(Error::invalid(format!(
-            "checkerboard: check {}° is under one pixel at {} ppd",
-            p.check, g.ppd
+            "checkerboard: check {}° is under one pixel at {} ppd (stimupy rounds it to {} pixels)",
+            p.check, g.ppd, check.pixels
         )));
     }
     let (first, second) = (p.intensity_first, p.intensity_second);
-    let index = |i: usize| ((i as f64 + 0.5) / check).floor() as usize;
-    let (nx, ny) = (
-        (g.width as f64 / check).ceil() as usize,
-        (g.height as f64 / check).ceil() as usize,
-    );
+    let columns = StimupyGrating::new(g.width, g.ppd, check.pixels, (first, second));
+    let rows = StimupyGrating::new(g.height, g.ppd, check.pixels, (first, second));
+    let (nx, ny) = (columns.checks, rows.checks);
     let chosen = parse_targets(&p.targets, ny, nx)?;
     if chosen.len() > usize::from(u16::MAX) {
         return Err(Error::invalid(format!(
@@ -175,23 +181,34 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     let names: Vec<String> = chosen.iter().map(|&(r, c)| check_name(r, c)).collect();
     let targets_drawn = !chosen.is_empty();
     let target_value = p.intensity_target;
-    let cols: Vec<usize> = (0..g.width).map(index).collect();
+    let pixel = |y: usize, x: usize| {
+        let label = check_labels[rows.check[y] * nx + columns.check[x]];
+        let value = if targets_drawn && label != 0 {
+            target_value
+        } else {
+            stimupy_plaid(columns.value[x], rows.value[y], (first, second))
+        };
+        (value, label)
+    };
     let (image, labels) = paint_rows(g, 0.0, |y, row, lrow| {
-        let r = index(y);
-        for ((v, l), &c) in row.iter_mut().zip(lrow.iter_mut()).zip(&cols) {
-            *l = check_labels[r * nx + c];
-            *v = if targets_drawn && *l != 0 {
-                target_value
-            } else if (r + c) % 2 == 0 {
-                first
-            } else {
-                second
-            };
+        for (x, (v, l)) in row.iter_mut().zip(lrow.iter_mut()).enumerate() {
+            (*v, *l) = pixel(y, x);
         }
     })?;
     let mut notes = Map::new();
     notes.insert("checks".into(), json!([nx, ny]));
-    let svg = if nx * ny > MAX_SVG_CHECKS {
+    if (check.degrees - p.check).abs() > 1e-9 * p.check {
+        notes.insert(
+            CHECK_ROUNDED_NOTE.into(),
+            json!({
+                "asked_check": p.check,
+                "check": check.degrees,
+                "check_px": check.pixels,
+            }),
+        );
+    }
+    let (column_runs, row_runs) = (columns.runs(), rows.runs());
+    let svg = if column_runs.len() * row_runs.len() > MAX_SVG_CHECKS {
         notes.insert(
             "svg_omitted".into(),
             json!(format!(
@@ -201,15 +218,23 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
         );
         None
     } else {
-        let drawn: &[(usize, usize)] = if targets_drawn { &chosen } else { &[] };
-        Some(checks_svg(
-            g,
-            check,
-            (nx, ny),
-            (first, second),
-            drawn,
-            target_value,
-        ))
+        let mut doc = document(g, "checkerboard", first);
+        for &(y0, y1) in &row_runs {
+            for &(x0, x1) in &column_runs {
+                let (value, _) = pixel(y0, x0);
+                if value != first {
+                    doc = doc.add(
+                        Rectangle::new()
+                            .set("x", x0)
+                            .set("y", y0)
+                            .set("width", x1 - x0)
+                            .set("height", y1 - y0)
+                            .set("fill", gray(value)),
+                    );
+                }
+            }
+        }
+        Some(doc.to_string())
     };
     Ok(Output {
         pixels: Pixels::Gray(image),
@@ -220,49 +245,181 @@ pub fn checkerboard(p: &CheckerboardParams, g: &Geometry) -> Result<Output> {
     })
 }
 
-/// The most checks an SVG document is made for (half of them become rectangles).
-const MAX_SVG_CHECKS: usize = 500_000;
+/// The note of a checkerboard whose check whole pixels changed (stimupy's rounding), recorded
+/// in the sidecar's notes: `{"asked_check", "check", "check_px"}` in degrees and pixels; the
+/// command line and Python say it as a warning ([`rounded_check_warning`]).
+pub const CHECK_ROUNDED_NOTE: &str = "check_rounded";
 
-fn checks_svg(
-    frame: &Geometry,
-    check: f64,
-    (nx, ny): (usize, usize),
-    (first, second): (f64, f64),
-    targets: &[(usize, usize)],
-    target_value: f64,
-) -> String {
-    let mut doc = document(frame, "checkerboard", first);
-    for j in 0..ny {
-        for i in 0..nx {
-            let is_target = targets.contains(&(j, i));
-            if (i + j) % 2 == 1 || is_target {
-                let (x0, y0) = (i as f64 * check, j as f64 * check);
-                let (x1, y1) = (
-                    ((i + 1) as f64 * check).min(frame.width as f64),
-                    ((j + 1) as f64 * check).min(frame.height as f64),
-                );
-                let fill = if is_target { target_value } else { second };
-                doc = doc.add(
-                    Rectangle::new()
-                        .set("x", num(x0))
-                        .set("y", num(y0))
-                        .set("width", num(x1 - x0))
-                        .set("height", num(y1 - y0))
-                        .set("fill", gray(fill)),
-                );
-            }
-        }
-    }
-    doc.to_string()
+/// The warning a render with [`CHECK_ROUNDED_NOTE`] gives, in one line (stimupy says
+/// "Adjusted phase_width=0.75 -> 0.8 because of poor resolution").
+pub fn rounded_check_warning(note: &serde_json::Value, ppd: f64) -> Option<String> {
+    let (asked, check, pixels) = (
+        note["asked_check"].as_f64()?,
+        note["check"].as_f64()?,
+        note["check_px"].as_f64()?,
+    );
+    Some(format!(
+        "checkerboard: check {asked}° at {ppd} ppd is {pixels} px, rounded to whole pixels as \
+         stimupy does: {check:.4}°"
+    ))
 }
 
-/// The x (or y) coordinates in degrees that stimupy gives the `n` pixels of an axis `n / ppd`
-/// degrees long with its default origin ("mean"): `numpy.linspace(−L/2, L/2, n)`, computed as
-/// NumPy does (start + i·step, the last one exactly L/2). The ends lie on the frame's edges, so
-/// the spacing is L/(n − 1), a little more than a pixel's 1/ppd.
-fn stimupy_axis(n: usize, ppd: f64) -> Vec<f64> {
-    let length = n as f64 / ppd;
-    let (start, stop) = (-length / 2.0, length / 2.0);
+/// A check side as stimupy 1.2 draws it (`stimupy.components.waves.resolve_grating_params`
+/// with `round_phase_width`): its pixels, NumPy's `round(check·ppd)` (half to even), and the
+/// degrees they are. stimupy first turns the check into checks per degree and back, as here.
+struct RoundedCheck {
+    pixels: f64,
+    degrees: f64,
+}
+
+fn rounded_check(check: f64, ppd: f64) -> RoundedCheck {
+    let per_degree = 1.0 / check;
+    let pixels = (1.0 / per_degree * ppd).round_ties_even();
+    RoundedCheck {
+        pixels,
+        degrees: pixels / ppd,
+    }
+}
+
+/// One axis of stimupy 1.2's checkerboard, which is the plaid of two square-wave gratings
+/// (`stimupy.components.waves.square`, origin "corner", distance "oblique"), computed as
+/// stimupy computes it so that the pixels and the mask are its own whole or not:
+///
+/// - the distance of pixel i from the corner is `linspace(0, n/ppd, n)[i]` degrees (the ends on
+///   the frame's edges), rounded to 6 decimals and stretched to run from 0.001 to its largest
+///   value less 0.001;
+/// - its value is `sin(π·distance/check)` scaled from its own range (min..max over the axis) to
+///   the two intensities and rounded to the nearer one, so a grating that does not reach a
+///   trough moves its first edge (33 rows at 10 ppd with 1° checks: row 0 a check of its own);
+/// - its check (the mask's) is the nearest of the phase centres
+///   `arange(0.001 + check/2, …, check)`, a tie to the later one, numbered as they occur.
+///
+/// (The vertical grating's distance also holds 6·10⁻¹⁷·x from stimupy's rotation by −90°,
+/// below the rounding to 10⁻⁶ degrees.)
+struct StimupyGrating {
+    /// Each pixel's value, one of the two intensities.
+    value: Vec<f64>,
+    /// Each pixel's check, 0-based from the top left.
+    check: Vec<usize>,
+    /// The checks along the axis.
+    checks: usize,
+}
+
+impl StimupyGrating {
+    fn new(n: usize, ppd: f64, check_px: f64, (first, second): (f64, f64)) -> StimupyGrating {
+        if n < 2 {
+            // stimupy divides by the zero range of a one-pixel axis; its corner is lit.
+            return StimupyGrating {
+                value: vec![second; n],
+                check: vec![0; n],
+                checks: 1,
+            };
+        }
+        let width = check_px / ppd;
+        let round6 = |v: f64| (v * 1e6).round_ties_even() / 1e6;
+        let raw: Vec<f64> = numpy_linspace(0.0, n as f64 / ppd, n)
+            .into_iter()
+            .map(round6)
+            .collect();
+        let (low, high) = min_max(&raw);
+        let (start, stop) = (1e-3, high - 1e-3);
+        let distance: Vec<f64> = raw
+            .iter()
+            .map(|&d| (d - low) / (high - low) * (stop - start) + start)
+            .collect();
+        let frequency = 1.0 / (2.0 * width);
+        let sine: Vec<f64> = distance
+            .iter()
+            .map(|&d| (frequency * 2.0 * std::f64::consts::PI * d + 0.0).sin())
+            .collect();
+        let (s_low, s_high) = min_max(&sine);
+        let (lo, hi) = (first.min(second), first.max(second));
+        let value = sine
+            .iter()
+            .map(|&s| {
+                let v = (s - s_low) / (s_high - s_low) * (second - first) + first;
+                // stimupy.utils.round_to_vals: the lower one only when strictly nearer.
+                if v <= lo || (v - lo).abs() < (v - hi).abs() {
+                    lo
+                } else {
+                    hi
+                }
+            })
+            .collect();
+        // The phase centres, as NumPy's arange fills them: start + i·((start + step) − start).
+        let (d_low, d_high) = min_max(&distance);
+        let centre0 = d_low + width / 2.0;
+        let end = d_high.max(-d_low) + width;
+        let count = ((end - centre0) / width).ceil().max(1.0) as usize;
+        let delta = (centre0 + width) - centre0;
+        let centres: Vec<f64> = (0..count).map(|i| centre0 + i as f64 * delta).collect();
+        let nearest: Vec<usize> = distance
+            .iter()
+            .map(|&d| {
+                let i = centres.partition_point(|&c| c < d);
+                let previous = i.max(1) - 1;
+                if i == centres.len()
+                    || (d - centres[previous]).abs() < (d - centres[i.min(centres.len() - 1)]).abs()
+                {
+                    previous
+                } else {
+                    i
+                }
+            })
+            .collect();
+        // Numbered in the order they occur (np.unique of the regions present).
+        let mut present: Vec<usize> = nearest.clone();
+        present.sort_unstable();
+        present.dedup();
+        let check = nearest
+            .iter()
+            .map(|k| present.partition_point(|p| p < k))
+            .collect();
+        StimupyGrating {
+            value,
+            check,
+            checks: present.len(),
+        }
+    }
+
+    /// The runs of pixels [start, end) with one value and one check.
+    fn runs(&self) -> Vec<(usize, usize)> {
+        let mut runs = Vec::new();
+        let mut start = 0;
+        for i in 1..=self.value.len() {
+            if i == self.value.len()
+                || self.value[i] != self.value[start]
+                || self.check[i] != self.check[start]
+            {
+                runs.push((start, i));
+                start = i;
+            }
+        }
+        runs
+    }
+}
+
+/// stimupy's plaid of two gratings' values: the second intensity where they sum to both
+/// intensities (one grating at each), the first elsewhere.
+fn stimupy_plaid(a: f64, b: f64, (first, second): (f64, f64)) -> f64 {
+    if a + b == first + second {
+        second
+    } else {
+        first
+    }
+}
+
+/// The smallest and largest of `values`.
+fn min_max(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
+/// NumPy's `linspace(start, stop, n)`: start + i·step, the last one exactly `stop`.
+fn numpy_linspace(start: f64, stop: f64, n: usize) -> Vec<f64> {
     let step = if n > 1 {
         (stop - start) / (n - 1) as f64
     } else {
@@ -273,6 +430,18 @@ fn stimupy_axis(n: usize, ppd: f64) -> Vec<f64> {
         *last = stop;
     }
     axis
+}
+
+/// The most checks an SVG document is made for (half of them become rectangles).
+const MAX_SVG_CHECKS: usize = 500_000;
+
+/// The x (or y) coordinates in degrees that stimupy gives the `n` pixels of an axis `n / ppd`
+/// degrees long with its default origin ("mean"): `numpy.linspace(−L/2, L/2, n)`, computed as
+/// NumPy does (start + i·step, the last one exactly L/2). The ends lie on the frame's edges, so
+/// the spacing is L/(n − 1), a little more than a pixel's 1/ppd.
+fn stimupy_axis(n: usize, ppd: f64) -> Vec<f64> {
+    let length = n as f64 / ppd;
+    numpy_linspace(-length / 2.0, length / 2.0, n)
 }
 
 /// NumPy's `round(v, 8)`: scaled by 10⁸, rounded half to even, scaled back.

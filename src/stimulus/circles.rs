@@ -142,7 +142,11 @@ impl Circles {
             random_centres(name, g, count, radius, spacing, seed)?
         } else {
             let c = grid_centres(g, rows, cols, spacing);
-            g.check_inside(&format!("{name}: {rows}x{cols} circles"), &c, radius)?;
+            g.check_inside(
+                &format!("{name}: {rows} rows × {cols} columns of circles"),
+                &c,
+                radius,
+            )?;
             c
         };
         let mut rng = SplitMix64::new(seed ^ 0x0005_EED0_FC1B_C1E5);

@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 use crate::random::SplitMix64;
-use crate::visual_size::Geometry;
+use crate::visual_size::{Geometry, SizeText};
 use std::ops::Range;
 
 /// A stimulus's picture as the drawing code sees it: the [`Geometry`] (size in pixels, pixels
@@ -72,9 +72,10 @@ impl Geometry {
         );
         let need_w = (max_x - min_x + 2.0 * radius) / self.ppd;
         let need_h = (max_y - min_y + 2.0 * radius) / self.ppd;
-        let (fw, fh) = (self.width_deg(), self.height_deg());
         Err(Error::invalid(format!(
-            "{what} need {need_w:.2}x{need_h:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer"
+            "{what} need {} but the frame is {}: enlarge the visual size or make them smaller or fewer",
+            SizeText::Degrees(need_h, need_w),
+            self.size_text()
         )))
     }
 }
@@ -140,11 +141,11 @@ pub(crate) fn random_centres(
         }
     }
     if placed.len() < count {
-        let (fw, fh) = (frame.width_deg(), frame.height_deg());
         return Err(Error::invalid(format!(
-            "{what}: cannot place {count} discs of radius {:.2}° at least {:.2}° apart in {fw:.2}x{fh:.2} degrees (placed {}): enlarge the frame or lower the count",
+            "{what}: cannot place {count} discs of radius {:.2}° at least {:.2}° apart in {} (placed {}): enlarge the frame or lower the count",
             radius / frame.ppd,
             min_distance / frame.ppd,
+            frame.size_text(),
             placed.len()
         )));
     }

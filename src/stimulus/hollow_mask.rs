@@ -145,7 +145,8 @@ fn pair(w: usize, h: usize, relief: f64) -> Result<(Surface, Named, Option<Overl
     let (cw, ch) = (w / 2, h / 2);
     if cw < 8 || ch < 8 {
         return Err(Error::invalid(format!(
-            "hollow-mask: layout=pair needs at least 16x16 pixels, not {w}x{h}"
+            "hollow-mask: layout=pair needs at least 16 px high × 16 px wide, not {}",
+            crate::SizeText::Pixels(h, w)
         )));
     }
     // The face fills 90 % of its quarter along the tighter axis.

@@ -41,7 +41,9 @@ pub use bumps::{
     SidewaysParams,
 };
 pub use checker_shadow::{checker_shadow, CheckerShadowParams, CylinderColour};
-pub use checkerboard::{checkerboard, disc, CheckerboardParams, DiscParams};
+pub use checkerboard::{
+    checkerboard, disc, rounded_check_warning, CheckerboardParams, DiscParams, CHECK_ROUNDED_NOTE,
+};
 pub use circles::{
     circles, CircleLayout, CirclePolarity, CircleShading, CirclesParams, ShadingAxis,
 };
@@ -60,7 +62,7 @@ use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
 use crate::params::{ParamSet, ParamSpec, Params};
-use crate::visual_size::{Geometry, SizeRequest};
+use crate::visual_size::{Geometry, SizeRequest, SizeText};
 use serde::Deserialize;
 use serde_json::{Map, Value};
 
@@ -569,15 +571,12 @@ pub const ROUNDED_NOTE: &str = "visual_size_rounded";
 /// The warning a render with [`ROUNDED_NOTE`] gives, in one line.
 pub fn rounded_warning(name: &str, g: &Geometry, asked: (f64, f64)) -> String {
     format!(
-        "{name}: visual size {}x{} deg (height x width) at {} ppd is {}x{} px, rounded down to \
-         whole pixels as stimupy does: {:.4}x{:.4} deg",
-        asked.0,
-        asked.1,
+        "{name}: visual size {} at {} ppd is {}, rounded down to whole pixels as stimupy does: \
+         {}",
+        SizeText::Degrees(asked.0, asked.1),
         g.ppd,
-        g.height,
-        g.width,
-        g.height_deg(),
-        g.width_deg()
+        SizeText::Pixels(g.height, g.width),
+        g.size_text()
     )
 }
 

@@ -109,11 +109,13 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     };
     let total = n * width + n.saturating_sub(1) * gap;
     if total > across_px || length > along_px {
-        let (fw, fh) = (g.width_deg(), g.height_deg());
         return Err(Error::invalid(format!(
-            "strips: {n} strips need {:.2}x{:.2} degrees but the frame is {fw:.2}x{fh:.2}: enlarge the visual size or make them smaller or fewer",
-            if horizontal { length } else { total } as f64 / g.ppd,
-            if horizontal { total } else { length } as f64 / g.ppd,
+            "strips: {n} strips need {} but the frame is {}: enlarge the visual size or make them smaller or fewer",
+            crate::SizeText::Degrees(
+                if horizontal { total } else { length } as f64 / g.ppd,
+                if horizontal { length } else { total } as f64 / g.ppd,
+            ),
+            g.size_text()
         )));
     }
     let start = (across_px - total) / 2;

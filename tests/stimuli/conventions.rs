@@ -288,7 +288,7 @@ fn a_visual_size_is_rounded_down_to_whole_pixels_as_stimupy_and_said() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("warning: checkerboard: visual size 3.3x5.1 deg (height x width) at 31.7 ppd is 104x161 px, rounded down"),
+        err.contains("warning: checkerboard: visual size 3.3° high × 5.1° wide at 31.7 ppd is 104 px high × 161 px wide, rounded down"),
         "{err}"
     );
     let side: Value = serde_json::from_slice(&std::fs::read(d.join("c.json")).unwrap()).unwrap();
@@ -323,4 +323,99 @@ fn a_visual_size_is_rounded_down_to_whole_pixels_as_stimupy_and_said() {
         shadelab::internal::visual_size::whole_pixels(3.3, 31.7),
         104.0
     );
+}
+
+#[test]
+fn sizes_in_messages_name_their_axes_and_a_visual_size_stays_under_180_degrees() {
+    let d = scratch("conv-size-words");
+    // --visual-size is width first: 10° wide, 14° high; the 3 × 4 discs need 11° across.
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "bumps",
+            "--visual-size",
+            "10x14",
+            "--out",
+            "b.png",
+        ],
+    );
+    crate::cli::assert_error(
+        &out,
+        2,
+        "bumps: 3 rows × 4 columns of discs need 8.0° high × 11.0° wide but the frame is 14.0° high × 10.0° wide",
+    );
+    // 100000 × 1 pixels fitted to the default 8° × 8° would be 800,000° wide.
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "checkerboard",
+            "--size",
+            "100000x1",
+            "--out",
+            "c.png",
+        ],
+    );
+    crate::cli::assert_error(
+        &out,
+        2,
+        "1 px high × 100000 px wide at 0.125 ppd (the ppd that fits the stimulus's default visual size to the shape) is 8.0° high × 800000.0° wide: over 180°",
+    );
+    assert!(crate::cli::files_in(&d).is_empty());
+}
+
+#[test]
+fn a_check_that_is_no_whole_number_of_pixels_is_rounded_as_stimupy_rounds_it() {
+    // stimupy 1.2: 0.75° at 10 ppd is round(7.5) = 8 px (half to even), 0.8°, with a warning.
+    let d = scratch("conv-check-rounding");
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "checkerboard",
+            "--visual-size",
+            "6x4",
+            "--ppd",
+            "10",
+            "--set",
+            "check=0.75",
+            "--out",
+            "c.png",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: checkerboard: check 0.75° at 10 ppd is 8 px, rounded to whole pixels as stimupy does: 0.8000°"),
+        "{err}"
+    );
+    let side: Value = serde_json::from_slice(&std::fs::read(d.join("c.json")).unwrap()).unwrap();
+    assert_eq!(side["notes"]["check_rounded"]["check_px"], 8.0);
+    let (img, _) = shadelab::internal::io::read_gray(&d.join("c.png"), 1 << 20).unwrap();
+    // Row 0: 8 dark columns, 8 light, 8 dark … (not 7.5).
+    let top: Vec<f64> = (0..60).map(|c| *img.get(c, 0)).collect();
+    for (c, v) in top.iter().enumerate() {
+        let expect = if (c / 8) % 2 == 0 { 0.0 } else { 1.0 };
+        assert_eq!(*v, expect, "column {c}");
+    }
+    // A whole number of pixels: no warning, no note.
+    let out = shadelab(
+        &d,
+        &[
+            "render",
+            "checkerboard",
+            "--visual-size",
+            "6x4",
+            "--ppd",
+            "10",
+            "--set",
+            "check=0.8",
+            "--out",
+            "w.png",
+        ],
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let side: Value = serde_json::from_slice(&std::fs::read(d.join("w.json")).unwrap()).unwrap();
+    assert!(side["notes"].get("check_rounded").is_none());
 }

@@ -408,10 +408,15 @@ impl Config {
             });
         }
         let (h, w) = self.visual_size;
-        if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0 && h <= 180.0 && w <= 180.0) {
-            return Err(BadSetting { field: "visual_size", error: Error::invalid(format!(
-                "the visual size {h} x {w} degrees (height x width) must be above 0 and at most 180 each"
-            )) });
+        let most = crate::MAX_VISUAL_DEGREES;
+        if !(h.is_finite() && w.is_finite() && h > 0.0 && w > 0.0 && h <= most && w <= most) {
+            return Err(BadSetting {
+                field: "visual_size",
+                error: Error::invalid(format!(
+                    "the visual size {} must be above 0 and at most {most}° each way",
+                    crate::SizeText::Degrees(h, w)
+                )),
+            });
         }
         let key_ok = |k: char| k.is_ascii_lowercase() || k.is_ascii_digit();
         if !key_ok(self.keys.convex) || !key_ok(self.keys.concave) {

@@ -85,7 +85,8 @@ impl Mesh {
         }
         if owner.iter().all(|&t| t == NONE) {
             return Err(Error::Compute(format!(
-                "the mesh covers no pixel centre of the {width}x{height} frame at fill {fill}"
+                "the mesh covers no pixel centre of the frame {} at fill {fill}",
+                crate::SizeText::Pixels(height, width)
             )));
         }
 
