@@ -40,6 +40,7 @@ from ._commands import (
     benchmark,
     evaluate,
     experiment,
+    experiment_pilot,
     fading,
     fit_observer,
     gallery,
@@ -83,6 +84,7 @@ COMMANDS = {
     "study merge": study_merge,
     "eval": evaluate,
     "experiment": experiment,
+    "experiment pilot": experiment_pilot,
     "fit observer": fit_observer,
 }
 
@@ -108,6 +110,7 @@ __all__ = [
     "describe",
     "evaluate",
     "experiment",
+    "experiment_pilot",
     "fading",
     "fit_observer",
     "gallery",

@@ -347,6 +347,14 @@ def experiment(
     force: bool = ...,
     **params: Any,
 ) -> Experiment: ...
+def experiment_pilot(
+    study: PathLike,
+    simulate: str,
+    *,
+    participant: Optional[str] = ...,
+    out: Optional[PathLike] = ...,
+    force: bool = ...,
+) -> str: ...
 def fit_observer(
     responses: Union[PathLike, Dict[str, Any], Any],
     *,

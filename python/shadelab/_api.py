@@ -3,6 +3,7 @@ module's arguments and its results into dicts and arrays (see ``shadelab``'s doc
 
 from __future__ import annotations
 
+import inspect
 import json
 import os as _os
 import warnings
@@ -60,8 +61,15 @@ def _light_text(light: Any) -> str:
     return ",".join(repr(float(v)) for v in values)
 
 
-def _params_json(params: Dict[str, Any]) -> str:
-    """Parameter values as JSON (NumPy scalars and arrays become plain numbers and lists)."""
+def _params_json(params: Dict[str, Any], stimulus: Optional[str] = None, function: Any = None) -> str:
+    """Parameter values as JSON (NumPy scalars and arrays become plain numbers and lists).
+
+    Where the keywords enter: with the ``stimulus`` they are for, each name is checked against
+    its parameters, and an unknown one is a ValueError naming the nearest among them and the
+    keywords of the public ``function`` they were given to (``prior_kappa`` → ``kappas``)."""
+    if stimulus is not None and params:
+        keywords = [] if function is None else list(inspect.signature(function).parameters)
+        _shadelab.check_params(str(stimulus), list(params), keywords)
 
     def plain(v: Any) -> Any:
         if isinstance(v, np.generic):
@@ -116,6 +124,7 @@ def _float_image(image: Any, what: str, colour: bool) -> np.ndarray:
     if given is not None:
         image = given["img"]
     a = np.asarray(image)
+    _shadelab.check_shape(list(a.shape), what)
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{what}: unsupported dtype {a.dtype} (need a real number type)")
     if a.dtype.kind in "iu":
@@ -143,6 +152,7 @@ def _labels(mask: Any, what: str) -> Optional[np.ndarray]:
     a = np.asarray(mask)
     if a.ndim != 2:
         raise ValueError(f"{what}: expected a 2-D H×W array, found shape {a.shape}")
+    _shadelab.check_shape(list(a.shape), what)
     if a.dtype.kind == "b":
         return a.astype(np.uint16)
     if a.dtype.kind not in "iuf" or (a.size and (a.min() < 0 or a.max() > 65535)):
@@ -158,7 +168,14 @@ def _opt(kind: type, value: Any) -> Any:
 
 
 def _picture_args(
-    picture: Any, colour: bool, params: Dict[str, Any], seed: Any, ppd: Any, shape: Any, mask: Any
+    picture: Any,
+    colour: bool,
+    params: Dict[str, Any],
+    seed: Any,
+    ppd: Any,
+    shape: Any,
+    mask: Any,
+    function: Any = None,
 ) -> Tuple[Any, ...]:
     """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
     the stimulus's parameters, seed, ppd, shape (height, width), target labels and, for a dict
@@ -184,7 +201,7 @@ def _picture_args(
     return (
         image,
         stimulus,
-        _params_json(params),
+        _params_json(params, stimulus, function),
         _opt(int, seed),
         _ppd(ppd),
         _pair(shape, "shape", int),
@@ -324,7 +341,7 @@ def render(
     display_path, display_json = _display_arg(display)
     report_json, img, target_mask, names, extra = _shadelab.render(
         name,
-        _params_json(params),
+        _params_json(params, name, render),
         _pair(visual_size, "visual_size", float),
         _ppd(ppd),
         _pair(shape, "shape", int),
@@ -444,7 +461,7 @@ def save(
     layers: bool = False,
     force: bool = False,
 ) -> List[str]:
-    """Writes a :func:`render` dict as ``shadelab render`` writes it, byte for byte.
+    """Writes a :func:`render` dict's picture as ``shadelab render`` writes a render.
 
     The format follows ``path``'s extension (``.png`` 8- or 16-bit, ``.npy`` float32, ``.mat``
     or ``.npz`` bundles, ``.svg`` for vector stimuli); the target mask (``NAME_mask.png``) and
@@ -453,11 +470,17 @@ def save(
     is ``"unit"`` (0..1) or ``"psychopy"`` (−1..1, float formats), ``display`` and
     ``luminance`` write a display's codes (PNG; see :func:`render`); each not given is taken
     from the dict's ``export`` (what :func:`render` was asked for), else 16 bits, linear,
-    0..1, no display. The stimulus is rendered
-    again from its recorded name, parameters, seed, shape and ppd by the command line's own
-    pipeline and writer, so the files are those ``shadelab render`` writes. As there, a file
-    shadelab did not write is not replaced unless ``force=True``, and the set of files is
-    written whole or not at all. Returns the paths written.
+    0..1, no display. The picture written is the dict's ``img`` as it is now (in the range
+    :func:`render` gave it: a ``.npy`` holds its values as float32, a PNG their codes); the
+    mask, layers and sidecar are those of the render the dict records (its name, parameters,
+    seed, shape and ppd), written by the command line's own writer, so an unchanged dict
+    gives the files ``shadelab render`` writes, byte for byte. An ``img`` changed since
+    :func:`render` (any value by more than 1e-9) is written as it is, and its sidecar says it
+    was edited (``edited``, with the render's digest beside the picture's own); ``shadelab
+    render --spec`` of that sidecar refuses to claim it reproduces it. As with the command
+    line, a file shadelab did not write is not replaced unless ``force=True``, another
+    picture's sidecar and mask never are (``a.png`` beside ``a.npy``: give another name), and
+    the set of files is written whole or not at all. Returns the paths written.
 
     >>> import tempfile, pathlib
     >>> s = render("checkerboard", shape=(16, 24), ppd=8, targets="0,0")
@@ -468,12 +491,14 @@ def save(
     try:
         name, params = stim["stimulus"], stim["parameters"]
         shape, ppd, seed = stim["shape"], stim["ppd"], stim["seed"]
+        img = stim["img"]
     except (KeyError, TypeError):
         raise ValueError(
-            "save: stim must be a dict that shadelab.render returned (stimulus, parameters, "
-            "shape, ppd, seed)"
+            "save: stim must be a dict that shadelab.render returned (img, stimulus, "
+            "parameters, shape, ppd, seed)"
         ) from None
     asked = stim.get("export") or {}
+    image_range = asked.get("range") or "unit"
     if bit_depth is None:
         bit_depth = asked.get("bit_depth") or 16
     if gamma is None:
@@ -487,6 +512,8 @@ def save(
     display_path, display_json = _display_arg(display)
     return list(
         _shadelab.save(
+            _float_image(img, "img", colour=True),
+            str(image_range),
             str(name),
             _params_json(dict(params)),
             float(ppd),
@@ -546,6 +573,7 @@ def solve(
         m = np.asarray(mask)
         if m.ndim != 2:
             raise ValueError(f"mask: expected a 2-D H×W array, found shape {m.shape}")
+        _shadelab.check_shape(list(m.shape), "mask")
         inside = m != 0
     estimate = isinstance(albedo, str)
     if estimate and albedo != "estimate":
@@ -610,7 +638,7 @@ def prior_sweep(
     True
     """
     report_json, tilt_array, convexity, handle = _shadelab.prior_sweep(
-        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _picture_args(picture, False, params, seed, ppd, shape, mask, prior_sweep),
         _assumptions(domain, boundary, slant, albedo, ambient),
         _solver(method, lam, tol, max_iter),
         _floats(tilts),
@@ -657,7 +685,7 @@ def observer(
     judge and the sweep's ``tilts`` (covering the circle in equal steps), in degrees.
     """
     report_json, handle = _shadelab.observer(
-        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _picture_args(picture, False, params, seed, ppd, shape, mask, observer),
         _assumptions(domain, boundary, slant, albedo, ambient),
         _solver(method, lam, tol, max_iter),
         (
@@ -698,6 +726,6 @@ def lightness(
     (2, ['A', 'B'])
     """
     out, report_json, handle = _shadelab.lightness(
-        _picture_args(picture, True, params, seed, ppd, None, mask), str(model)
+        _picture_args(picture, True, params, seed, ppd, None, mask, lightness), str(model)
     )
     return Lightness(json.loads(report_json), {"output": out}, handle)

@@ -62,7 +62,7 @@ def fading(
     True
     """
     report, arrays, handle = _shadelab.fading(
-        _picture_args(picture, True, params, seed, ppd, None, mask),
+        _picture_args(picture, True, params, seed, ppd, None, mask, fading),
         (
             _opt(float, tau),
             _opt(float, duration),
@@ -103,7 +103,7 @@ def outline(
     True
     """
     report, layers, handle = _shadelab.outline(
-        _picture_args(picture, False, params, seed, ppd, shape, mask),
+        _picture_args(picture, False, params, seed, ppd, shape, mask, outline),
         None if light is None else _light_text(light),
         float(depth_scale),
         float(lam),
@@ -322,7 +322,7 @@ def experiment(
         if v is not None
     }
     report, folder, kept, install_error = _shadelab.experiment(
-        _fspath(out), _opt(str, stimulus), _params_json(params), json.dumps(settings), bool(force)
+        _fspath(out), _opt(str, stimulus), _params_json(params, stimulus, experiment), json.dumps(settings), bool(force)
     )
     return Experiment(json.loads(report), folder, list(kept), install_error)
 
@@ -362,6 +362,32 @@ def _cell(v: Any) -> str:
     if isinstance(v, np.generic):
         return str(v.item())
     return str(v)
+
+
+
+def experiment_pilot(
+    study: PathLike,
+    simulate: str,
+    *,
+    participant: Optional[str] = None,
+    out: Optional[PathLike] = None,
+    force: bool = False,
+) -> str:
+    """The study's simulated participant without a browser (``shadelab experiment pilot``):
+    the trial rows the page in ``study`` (its folder or ``design.json``) writes in pilot mode
+    for the observer ``simulate`` (the page's ``simulate`` text,
+    ``"tilt:T,kappa:K[,convex:C][,lapse:L][,seed:S]"``) and ``participant`` (default
+    ``simulated-seedS``), as CSV text; written to ``out`` too when given (a file is replaced
+    only with ``force=True``). Its ``simulated`` column says whose rows they are: give
+    ``include_simulated=True`` to :func:`fit_observer` to fit them."""
+    csv_text, _participant, _seed = _shadelab.experiment_pilot(
+        _fspath(study),
+        str(simulate),
+        None if participant is None else str(participant),
+        None if out is None else _fspath(out),
+        bool(force),
+    )
+    return csv_text
 
 
 def fit_observer(

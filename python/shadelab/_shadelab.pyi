@@ -10,6 +10,8 @@ __version__: str
 
 def stimuli() -> List[Tuple[str, str]]: ...
 def describe(name: str) -> str: ...
+def check_params(stimulus: str, given: List[str], keywords: List[str]) -> None: ...
+def check_shape(shape: List[int], what: str) -> None: ...
 def render(
     name: str,
     params_json: str,
@@ -95,6 +97,8 @@ def lightness(
     picture: PictureArgs, model: str
 ) -> Tuple[npt.NDArray[np.float64], str, ReportHandle]: ...
 def save(
+    image: np.ndarray,
+    image_range: str,
     name: str,
     params_json: str,
     ppd: float,
@@ -151,6 +155,9 @@ def bench(
 def experiment(
     out: str, stimulus: Optional[str], params_json: str, settings_json: str, force: bool
 ) -> Tuple[str, str, List[str], Optional[str]]: ...
+def experiment_pilot(
+    study: str, simulate: str, participant: Optional[str], out: Optional[str], force: bool
+) -> Tuple[str, str, int]: ...
 def fit_observer(
     responses: str,
     text: Optional[str],

@@ -536,3 +536,34 @@ pub fn fit_observer(
         ReportHandle::new(Kind::Fit(Box::new(report)), inputs),
     ))
 }
+
+/// `shadelab experiment pilot`: the trial rows the study `study` (its folder or design.json)
+/// writes in pilot mode for the observer `simulate` (the page's `simulate` text) and
+/// `participant`, through the library's pilot; written to `out` when given (replacing a file
+/// only with `force`). Returns (the rows as CSV, the participant, the order seed).
+#[pyfunction]
+#[pyo3(signature = (study, simulate, participant, out, force))]
+pub fn experiment_pilot(
+    py: Python<'_>,
+    study: PathBuf,
+    simulate: &str,
+    participant: Option<String>,
+    out: Option<PathBuf>,
+    force: bool,
+) -> PyResult<(String, String, u32)> {
+    let config = pl::experiment::PilotConfig {
+        study,
+        simulate: simulate
+            .parse()
+            .map_err(|e| PyValueError::new_err(format!("simulate {e}")))?,
+        participant,
+    };
+    let report = run_released(py, || {
+        let report = pl::experiment::run_pilot(&config)?;
+        if let Some(out) = &out {
+            report.write(out, &config.design_path(), force)?;
+        }
+        Ok(report)
+    })?;
+    Ok((report.csv(), report.participant.clone(), report.order_seed))
+}

@@ -237,6 +237,33 @@ fn describe(name: &str) -> PyResult<String> {
     json_text(&description)
 }
 
+/// Checks the keyword names `given` to a Python function against the stimulus's parameters:
+/// an unknown one is a ValueError naming the nearest among them and the function's own
+/// `keywords`, where keywords enter, before anything is rendered.
+#[pyfunction]
+fn check_params(stimulus: &str, given: Vec<String>, keywords: Vec<String>) -> PyResult<()> {
+    let keywords: Vec<&str> = keywords.iter().map(String::as_str).collect();
+    shadelab::stimulus::check_param_names(stimulus, &given, &keywords).map_err(to_py)
+}
+
+/// The size of an array handed over as a picture, mask or labels, checked against the pixel
+/// limit before anything is allocated for it (`what` names it in the error): `shape` is
+/// NumPy's, height first.
+#[pyfunction]
+fn check_shape(shape: Vec<usize>, what: &str) -> PyResult<()> {
+    let (h, w) = match shape.as_slice() {
+        [h, w] | [h, w, _] => (*h, *w),
+        _ => return Ok(()),
+    };
+    let limit = shadelab::DEFAULT_MAX_PIXELS;
+    shadelab::check_size(w, h, limit).map_err(|e| match e {
+        Error::TooLarge(_) => PyValueError::new_err(format!(
+            "{what}: {h} high × {w} wide is over the limit of {limit} pixels"
+        )),
+        other => PyValueError::new_err(format!("{what}: {other}")),
+    })
+}
+
 /// Renders a stimulus: (report JSON, img, target_mask or None, target names one a line, layers dict).
 #[pyfunction]
 #[pyo3(signature = (name, params_json, visual_size, ppd, shape, seed, layers, bit_depth, gamma, range, display, display_json, luminance))]
@@ -341,6 +368,17 @@ fn render<'py>(
     Ok((text, img, mask, names, extra))
 }
 
+/// The value range of Python's `range` keyword: `unit` (0..1) or `psychopy` (-1..1).
+fn value_range(range: &str) -> PyResult<shadelab::stimulus::Range> {
+    match range {
+        "unit" => Ok(shadelab::stimulus::Range::Unit),
+        "psychopy" => Ok(shadelab::stimulus::Range::Psychopy),
+        other => Err(PyValueError::new_err(format!(
+            "range '{other}': unit (0..1) or psychopy (-1..1)"
+        ))),
+    }
+}
+
 /// The export options of Python's `render`/`save` keywords, checked as the command line's
 /// flags are: a bit depth of 8 or 16, a range `unit` or `psychopy`, a display from a file or
 /// a dict's JSON (relative names resolve against the working folder), a luminance `LO,HI` or
@@ -365,15 +403,7 @@ fn export_options(
             )))
         }
     };
-    export.range = match range {
-        "unit" => shadelab::stimulus::Range::Unit,
-        "psychopy" => shadelab::stimulus::Range::Psychopy,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "range '{other}': unit (0..1) or psychopy (-1..1)"
-            )))
-        }
-    };
+    export.range = value_range(range)?;
     export.display = match (display, display_json) {
         (Some(path), _) => Some(shadelab::read_display(&path).map_err(to_py)?),
         (None, Some(text)) => {
@@ -402,14 +432,19 @@ fn export_options(
     Ok(export)
 }
 
-/// Renders a stimulus and writes it as `shadelab render` does (the picture in the format its
-/// extension names, its mask, its sidecar, with `layers` the surface layers): the same
-/// pipeline and writer, so the same bytes. Returns the paths written.
+/// Writes the picture `image` of a render as `shadelab render` writes that render (the
+/// picture in the format its extension names, its mask, its sidecar, with `layers` the
+/// surface layers): the render is made again from its record for its mask, layers and
+/// sidecar, and the picture written is `image` (in `image_range`, as `render` handed it
+/// over), through the same writer; an `image` that is not the render is recorded as edited
+/// ([`pl::render::RenderReport::with_picture`]). Returns the paths written.
 #[pyfunction]
-#[pyo3(signature = (name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, display, display_json, luminance, layers, force))]
+#[pyo3(signature = (image, image_range, name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, display, display_json, luminance, layers, force))]
 #[allow(clippy::too_many_arguments)]
 fn save(
     py: Python<'_>,
+    image: ArrayIn<'_>,
+    image_range: &str,
     name: &str,
     params_json: &str,
     ppd: f64,
@@ -432,10 +467,13 @@ fn save(
     config.export = export_options(bit_depth, gamma, range, (display, display_json), luminance)?;
     let export = &mut config.export;
     export.layers = layers;
+    let pixels = image.pixels()?;
+    let image_range = value_range(image_range)?;
     let written = run_released(py, || {
         config.validate()?;
         config.check_output(&out)?;
-        let report = pl::render::run(&config, &NoProgress)?;
+        let report =
+            pl::render::run(&config, &NoProgress)?.with_picture(pixels, image_range, "img")?;
         report.write(&shadelab::Output::new(&out).force(force))
     })?;
     Ok(written
@@ -707,6 +745,8 @@ fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", shadelab::PROGRAM_VERSION)?;
     m.add_function(wrap_pyfunction!(stimuli, m)?)?;
     m.add_function(wrap_pyfunction!(describe, m)?)?;
+    m.add_function(wrap_pyfunction!(check_params, m)?)?;
+    m.add_function(wrap_pyfunction!(check_shape, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
@@ -722,6 +762,7 @@ fn _shadelab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::bench, m)?)?;
     m.add_function(wrap_pyfunction!(commands::benchmark, m)?)?;
     m.add_function(wrap_pyfunction!(commands::experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::experiment_pilot, m)?)?;
     m.add_function(wrap_pyfunction!(commands::fit_observer, m)?)?;
     m.add_class::<ReportHandle>()?;
     Ok(())

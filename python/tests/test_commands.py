@@ -1,6 +1,8 @@
 """Every command of the command line has its Python twin, and the two give the same numbers
 and write the same files (the command line's binary is SHADELAB_BIN, set by tests/python.rs)."""
 
+import csv
+import io
 import json
 import os
 import pathlib
@@ -63,7 +65,10 @@ def test_every_command_has_its_python_twin():
         text = subprocess.run([cli, command, "--help"], capture_output=True, text=True).stdout
         if "Commands:" in text:
             found += [f"{command} {sub}" for sub in commands_of(cli, command)]
-        else:
+        # A command that runs by itself as well (`experiment --out DIR` beside `experiment
+        # pilot`) has a usage line of its own without a subcommand.
+        usages = [l for l in text.split("Commands:")[0].splitlines() if f"shadelab {command}" in l]
+        if "Commands:" not in text or any("<COMMAND>" not in l for l in usages):
             found.append(command)
     assert sorted(found) == sorted(shadelab.COMMANDS), sorted(set(found) ^ set(shadelab.COMMANDS))
     for command, function in shadelab.COMMANDS.items():
@@ -316,6 +321,25 @@ def test_experiment_matches_the_command_line(tmp_path):
         shadelab.experiment(tmp_path / "bad", keys="f")
     with pytest.raises(ValueError, match="save_format"):
         shadelab.experiment(tmp_path / "bad", save_format="xml")
+
+
+def test_experiment_pilot_gives_the_command_lines_rows(tmp_path):
+    # The simulated participant's rows without a browser: the CSV the command line writes,
+    # byte for byte, with the simulated column set, and fit_observer leaves them out unless
+    # asked.
+    shadelab.experiment(tmp_path / "study", rotations=[0, 90, 180, 270], repeats=2, practice=2, seed=3)
+    model = "tilt:20,kappa:2,convex:0.6,lapse:0.02,seed:5"
+    text = shadelab.experiment_pilot(tmp_path / "study", model, participant="P1", out=tmp_path / "py.csv")
+    run_cli("experiment", "pilot", tmp_path / "study", "--simulate", model, "--participant", "P1",
+            "--out", tmp_path / "cli.csv")
+    assert (tmp_path / "py.csv").read_text() == text == (tmp_path / "cli.csv").read_text()
+    rows = list(csv.DictReader(io.StringIO(text)))
+    assert len(rows) == 4 * 2 + 2  # the test trials and the practice
+    assert {r["simulated"] for r in rows} == {model}
+    with pytest.raises(ValueError, match="include_simulated"):
+        shadelab.fit_observer(tmp_path / "py.csv")
+    with pytest.raises(ValueError, match="simulate"):
+        shadelab.experiment_pilot(tmp_path / "study", "tilt:20")
 
 
 def simulated_judgements(seed=7, mu=26.0, trials=24):

@@ -59,3 +59,67 @@ def test_sigint_stops_a_1024_solve_within_half_a_second():
     assert 0.0 <= latency <= 0.5, f"KeyboardInterrupt {latency:.3f} s after SIGINT"
     assert "after True" in lines, f"the next call did not run normally: {out!r} {err!r}"
     assert child.returncode == 0, err
+
+
+# The child for the Levenberg–Marquardt methods: on each "go" line it starts one 1024² solve
+# (saying so) and reports how it ended; a SIGINT that arrives between solves is ignored.
+PHASES_CHILD = textwrap.dedent(
+    """
+    import sys, time
+    import shadelab
+    method = sys.argv[1]
+    s = shadelab.render("sphere", shape=1024, light="tilt=30,slant=40")
+    print("ready", flush=True)
+    while True:
+        try:
+            line = sys.stdin.readline()
+        except KeyboardInterrupt:
+            continue
+        if line.strip() != "go":
+            break
+        try:
+            print("started", time.monotonic(), flush=True)
+            shadelab.solve(s["img"], light="tilt=30,slant=40", mask=s["target_mask"],
+                           method=method, tol=1e-12, max_iter=1000000)
+            print("finished", time.monotonic(), flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.monotonic(), flush=True)
+    """
+)
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGINT") or os.name != "posix", reason="POSIX signals")
+@pytest.mark.parametrize("method", ["integrable-lm", "nested-lm"])
+def test_sigint_stops_every_phase_of_a_1024_lm_solve_within_half_a_second(method):
+    # Signalled 0.5, 1, 2 and 3 s into the solve: the warm start, the depth's Poisson solve,
+    # the first step's planning of the aggregation multigrid, its conjugate gradients and
+    # the later steps all look for the stop.
+    child = subprocess.Popen(
+        [sys.executable, "-c", PHASES_CHILD, method],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    latencies = []
+    try:
+        assert child.stdout.readline().strip() == "ready"
+        for delay in (0.5, 1.0, 2.0, 3.0):
+            child.stdin.write("go\n")
+            child.stdin.flush()
+            kind, started = child.stdout.readline().split()
+            assert kind == "started"
+            time.sleep(max(0.0, float(started) + delay - time.monotonic()))
+            sent = time.monotonic()
+            child.send_signal(signal.SIGINT)
+            kind, at = child.stdout.readline().split()
+            assert kind == "interrupted", f"{method} ended by itself {delay} s in ({float(at) - float(started):.2f} s)"
+            latencies.append((delay, float(at) - sent))
+        out, err = child.communicate("end\n", timeout=60)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    print(method, ", ".join(f"{d} s in: {l:.3f} s" for d, l in latencies))
+    for delay, latency in latencies:
+        assert 0.0 <= latency <= 0.5, f"{method}: KeyboardInterrupt {latency:.3f} s after a SIGINT {delay} s in"
+    assert child.returncode == 0, err

@@ -3,7 +3,9 @@
 import json
 import os
 import pathlib
+import struct
 import subprocess
+import zlib
 
 import numpy as np
 import pytest
@@ -451,3 +453,131 @@ def test_checkerboard_rounds_its_check_as_stimupy_does(visual_size, ppd, check):
     assert bool(rounded) == any("phase_width" in str(w.message) for w in theirs_said)
     np.testing.assert_array_equal(ours["img"], theirs["img"])
     np.testing.assert_array_equal(ours["target_mask"], theirs["target_mask"])
+
+def read_gray_png(path):
+    """The codes of a gray, non-interlaced 8- or 16-bit PNG (shadelab's stimulus PNGs) and the
+    largest code, decoded here (no imaging library needed)."""
+    data = pathlib.Path(path).read_bytes()
+    pos, idat, head = 8, b"", None
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + length]
+        if kind == b"IHDR":
+            head = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + length
+    width, height, depth, colour, _, _, interlace = head
+    assert colour == 0 and interlace == 0 and depth in (8, 16)
+    bpp = depth // 8
+    raw, stride = zlib.decompress(idat), width * bpp
+    rows, prev = [], bytearray(stride)
+    for r in range(height):
+        kind, line = raw[r * (stride + 1)], bytearray(raw[r * (stride + 1) + 1 : (r + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b, c = prev[i], prev[i - bpp] if i >= bpp else 0
+            if kind == 1:
+                line[i] = (line[i] + a) & 255
+            elif kind == 2:
+                line[i] = (line[i] + b) & 255
+            elif kind == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif kind == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(bytes(line))
+        prev = line
+    codes = np.frombuffer(b"".join(rows), dtype=">u2" if depth == 16 else np.uint8)
+    return codes.reshape(height, width).astype(np.float64), float(2**depth - 1)
+
+
+def test_save_writes_the_array_it_is_given(tmp_path):
+    # An edited img is what is written: .npy exactly (float32 of it), a PNG within half its
+    # quantisation step; the sidecar carries the picture's own digest and says it was edited.
+    s = shadelab.render("bumps", ppd=8)
+    shadelab.save(s, tmp_path / "unedited.npy")
+    unedited = json.loads((tmp_path / "unedited.json").read_text())
+    assert "edited" not in unedited
+    s["img"] = s["img"] * 0.5 + 0.25
+    shadelab.save(s, tmp_path / "edited.npy")
+    assert np.array_equal(np.load(tmp_path / "edited.npy"), s["img"].astype(np.float32))
+    shadelab.save(s, tmp_path / "e16.png")
+    shadelab.save(s, tmp_path / "e8.png", bit_depth=8)
+    for name in ("e16.png", "e8.png"):
+        codes, top = read_gray_png(tmp_path / name)
+        assert np.abs(codes / top - s["img"]).max() <= 0.5 / top + 1e-12, name
+    for name in ("edited", "e16", "e8"):
+        record = json.loads((tmp_path / f"{name}.json").read_text())
+        assert record["md5_float64_rounded8"] != unedited["md5_float64_rounded8"]
+        assert record["edited"]["rendered_md5_float64_rounded8"] == unedited["md5_float64_rounded8"]
+    # In the range render handed it over: PsychoPy's -1..1 is read back as such.
+    p = shadelab.render("bumps", ppd=8, range="psychopy")
+    p["img"] = p["img"] * 0.5
+    shadelab.save(p, tmp_path / "p.npy")
+    assert np.abs(np.load(tmp_path / "p.npy") - p["img"]).max() <= 6e-8
+    # What no picture can be is refused, naming img, and nothing is written.
+    for bad, match in [
+        (s["img"] * 4, "img: .*outside 0..1"),
+        (s["img"][:20], r"img: the picture is 20 high × (\d+) wide but the render it records is \d+ high × \1 wide"),
+        (np.full(s["img"].shape, np.nan), "img: .*non-finite"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            shadelab.save(dict(s, img=bad), tmp_path / "bad.npy")
+    assert not (tmp_path / "bad.npy").exists()
+    # render --spec of the edited sidecar refuses to claim it reproduces the picture.
+    cli = os.environ.get("SHADELAB_BIN")
+    if cli:
+        out = subprocess.run(
+            [cli, "render", "--spec", str(tmp_path / "edited.json"), "--out", str(tmp_path / "again.npy")],
+            capture_output=True, text=True,
+        )
+        assert out.returncode == 1 and "edited after rendering" in out.stderr
+        assert len(out.stderr.strip().splitlines()) == 1
+        assert not (tmp_path / "again.npy").exists()
+
+
+def test_two_saves_of_one_name_never_share_a_sidecar_or_mask(tmp_path):
+    # exp1.npy then exp1.png would both be recorded in exp1.json: the second is refused,
+    # naming the first, whose set stays as it was (and so with the command line's --out).
+    bumps = shadelab.render("bumps", shape=(40, 60))
+    crater = shadelab.render("crater", shape=(40, 60))
+    shadelab.save(bumps, tmp_path / "exp1.npy")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    for force in (False, True):
+        with pytest.raises(ValueError, match="exp1.json beside it is the record of exp1.npy, another picture"):
+            shadelab.save(crater, tmp_path / "exp1.png", force=force)
+        assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    # Another name is its own set; the lookup X.png -> X.json finds each picture's record.
+    shadelab.save(crater, tmp_path / "exp1-crater.png")
+    assert json.loads((tmp_path / "exp1.json").read_text())["stimulus"] == "bumps"
+    assert json.loads((tmp_path / "exp1-crater.json").read_text())["stimulus"] == "crater"
+
+
+def test_numbers_are_accepted_where_a_number_is_meant():
+    # crater's rotation is a choice of "0" and "180": a number names it as well as its text.
+    by_text = shadelab.render("crater", shape=(32, 32), rotation="180")
+    for given in (180, 180.0, np.int64(180)):
+        s = shadelab.render("crater", shape=(32, 32), rotation=given)
+        assert s["rotation"] == "180"
+        assert np.array_equal(s["img"], by_text["img"])
+    assert not np.array_equal(shadelab.render("crater", shape=(32, 32), rotation=0)["img"], by_text["img"])
+    with pytest.raises(ValueError, match="parameter rotation: '90' is not one of 0, 180"):
+        shadelab.render("crater", shape=(32, 32), rotation=90)
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: shadelab.render("crater", rotaton=180), "unknown parameter 'rotaton'; did you mean 'rotation'\\?"),
+        (lambda: shadelab.render("bumps", visual_sise=4), "did you mean the keyword 'visual_size'\\?"),
+        (lambda: shadelab.observer("bumps", shape=(32, 48), prior_kappa=2), "unknown parameter 'prior_kappa'; did you mean the keyword 'kappas'\\?"),
+        (lambda: shadelab.prior_sweep("bumps", tilt=[0]), "did you mean the keyword 'tilts'\\?"),
+        (lambda: shadelab.lightness("checker-shadow", modl="odog"), "did you mean the keyword 'model'\\?"),
+        (lambda: shadelab.render("bumps", teapot=1), "unknown parameter 'teapot' \\(valid: "),
+    ],
+)
+def test_an_unknown_keyword_names_the_nearest_valid_one(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()

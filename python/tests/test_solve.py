@@ -238,3 +238,22 @@ def test_integrable_lm_minimises_the_same_energy(sphere):
     e_alt = angular_error_deg(alt.normals, sphere["normals"], inside)
     e_lm = angular_error_deg(r.normals, sphere["normals"], inside)
     assert e_lm < e_alt - 1.0, (e_lm, e_alt)
+
+
+def test_an_array_over_the_pixel_limit_is_refused_before_anything_is_allocated():
+    # 200000² float64 would be 320 GB: a broadcast view holds one value, and the limit is
+    # applied to its shape before any copy (the interpreter used to abort).
+    huge = np.broadcast_to(np.float64(0.5), (200000, 200000))
+    with pytest.raises(ValueError, match="image: 200000 high × 200000 wide is over the limit of 67108864 pixels"):
+        shadelab.solve(huge, light=(0, 0, 1))
+    with pytest.raises(ValueError, match="image: 200000 high × 200000 wide"):
+        shadelab.prior_sweep(np.broadcast_to(np.uint8(3), (200000, 200000)))
+    with pytest.raises(ValueError, match="image: 200000 high × 200000 wide"):
+        shadelab.lightness(np.broadcast_to(np.float64(0.5), (200000, 200000, 3)), ppd=10)
+    with pytest.raises(ValueError, match="mask: 200000 high × 200000 wide"):
+        shadelab.solve(np.full((8, 8), 0.5), light=(0, 0, 1), mask=np.broadcast_to(True, (200000, 200000)))
+    with pytest.raises(ValueError, match="mask: 200000 high × 200000 wide"):
+        shadelab.lightness(np.full((8, 8), 0.5), ppd=10, mask=np.broadcast_to(np.uint16(1), (200000, 200000)))
+    s = shadelab.render("bumps", shape=(16, 16))
+    with pytest.raises(ValueError, match="img: 200000 high × 200000 wide"):
+        shadelab.save(dict(s, img=np.broadcast_to(np.float64(0.5), (200000, 200000))), "never-written.npy")

@@ -354,15 +354,24 @@ pub fn names() -> Vec<&'static str> {
     all().iter().map(|s| s.info().name).collect()
 }
 
-/// Checks that every name in `given` is a parameter of the stimulus `name`, naming the
-/// nearest among its parameters and `also` (the caller's other names, such as a Python
-/// function's keywords) when one is not ([`Params::check_names`]).
+/// Checks that every name in `given` is a parameter of the stimulus `name` or one of its
+/// stimupy names (`check_visual_size` for `checkerboard`'s `check`), naming the nearest among
+/// those and `also` (the caller's other names, such as a Python function's keywords) when one
+/// is not ([`Params::check_names`]).
 pub fn check_param_names<'a>(
     name: &str,
     given: impl IntoIterator<Item = &'a String>,
     also: &[&str],
 ) -> Result<()> {
-    Params::check_names(&find(name)?.info().params, given, also)
+    let stimupy: Vec<&str> = stimupy_names::ALIASES
+        .iter()
+        .filter(|a| a.stimulus == name)
+        .map(|a| a.stimupy)
+        .collect();
+    let own = given
+        .into_iter()
+        .filter(|key| !stimupy.contains(&key.as_str()));
+    Params::check_names(&find(name)?.info().params, own, also)
 }
 
 /// The stimulus called `name`; the error lists the valid names.
