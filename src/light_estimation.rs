@@ -1044,12 +1044,6 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "the measurement of docs/perception.md; run with --ignored --nocapture"]
-    fn coverage_of_two_standard_errors_at_three_sizes() {
-        coverage(&[64, 128, 256]);
-    }
-
-    #[test]
     fn a_whole_frame_mask_warns() {
         let light = Light::from_tilt_slant(45.0, 40.0).unwrap();
         let (image, mask) = sphere_image(light, 0.8);

@@ -1649,7 +1649,8 @@ fn the_pilot_without_a_browser_writes_the_rows_the_page_writes() {
     );
     assert!(!d.join("x.csv").exists());
     // fit observer reads the pilot's file as it reads the page's.
-    let read = shadelab::pipeline::fit::read_responses(&d.join("p1.csv")).unwrap();
+    let read =
+        shadelab::pipeline::fit::read_responses_with(&d.join("p1.csv"), &self::pilot()).unwrap();
     assert_eq!(read.participants[0].0, "P-odd");
     assert_eq!(read.participants[0].1.len(), 36);
     // The page, in pilot mode for the same participant and observer, writes the same rows:

@@ -235,7 +235,7 @@ fn bad_input_gives_one_line_and_no_output_folder() {
         "solve-size",
         &base(&["--light", "front", "--mask", "small.png"]),
         2,
-        "32x64",
+        "64 px high × 32 px wide",
     );
     fails(
         "solve-empty",
@@ -361,7 +361,7 @@ fn boundary_normals_can_come_from_a_file() {
             "x",
         ],
     );
-    assert_error(&bad, 2, "8x8");
+    assert_error(&bad, 2, "8 px high × 8 px wide");
     assert!(!d.join("x").exists());
 }
 

@@ -433,7 +433,7 @@ fn an_experiment_with_collected_responses_is_refused_unless_forced_and_they_stay
     assert!(design["model"]["responses_csv"]
         .as_str()
         .unwrap()
-        .ends_with(",design_hash"));
+        .ends_with(",design_hash,simulated"));
     // The runner writes each row's design hash from the design (the header and the field).
     let js = std::fs::read_to_string(d.join("exp/shadelab-timeline.js")).unwrap();
     assert!(js.contains("design_hash: design.design_hash"), "{js}");

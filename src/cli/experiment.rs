@@ -120,7 +120,7 @@ fn pilot(args: PilotArgs, global: &Global) -> CliResult {
     out.wrote(&args.out, started.elapsed().as_secs_f64());
     out.results(
         &format!(
-            "{} trials of participant {} (order seed {}) answered by {}; fit them with `shadelab fit observer {}`",
+            "{} trials of participant {} (order seed {}) answered by {}; fit them with `shadelab fit observer {} --include-simulated`",
             report.rows.len(),
             report.participant,
             report.order_seed,

@@ -241,7 +241,7 @@ pub fn write_output(
         )));
     }
     let sidecar = io::sibling(path, "", "json");
-    check_not_another_pictures(path, &sidecar)?;
+    check_not_another_pictures(path, &sidecar, &pixels_md5(&output.pixels), options)?;
     // The set, the sidecar last: it is the commit record (see `io::OutputSet`).
     // In the order they were always listed (companions, image, sidecar).
     let mut files = planned_files(path, output, options);
@@ -283,9 +283,16 @@ struct Picture<'a> {
 
 /// Refuses to write `path` when the shadelab sidecar beside it is the record of another
 /// picture of the same name that is still there (`a.json` of `a.npy` when writing `a.png`):
-/// replacing it would leave that picture with this one's record and mask. A sidecar whose
-/// picture is gone, or a sidecar that is not shadelab's, is left to the overwrite rule.
-fn check_not_another_pictures(path: &Path, sidecar: &Path) -> Result<()> {
+/// replacing it would leave that picture with this one's record and mask. The same picture in
+/// another file (the same digest `md5`, and the same gamma and range, no display: what a
+/// reader of either file takes from the record) shares it. A sidecar whose picture is gone,
+/// or a sidecar that is not shadelab's, is left to the overwrite rule.
+fn check_not_another_pictures(
+    path: &Path,
+    sidecar: &Path,
+    md5: &str,
+    options: &ExportOptions,
+) -> Result<()> {
     let Ok(bytes) = io::read_capped(sidecar, io::MAX_TEXT_BYTES) else {
         return Ok(());
     };
@@ -303,6 +310,19 @@ fn check_not_another_pictures(path: &Path, sidecar: &Path) -> Result<()> {
     let other = sidecar.with_file_name(image);
     let plain = Path::new(image).file_name().and_then(|n| n.to_str()) == Some(image);
     if ours == Some(image) || !plain || !other.is_file() {
+        return Ok(());
+    }
+    let range = match options.range {
+        Range::Unit => "0..1",
+        Range::Psychopy => "-1..1",
+    };
+    let same_picture = old.get("md5_float64_rounded8").and_then(Value::as_str) == Some(md5)
+        && old.get(EDITED_KEY).is_none()
+        && old.get("gamma").and_then(Value::as_f64) == options.gamma
+        && old.get("range").and_then(Value::as_str) == Some(range)
+        && old.get("display").map_or(true, Value::is_null)
+        && options.display.is_none();
+    if same_picture {
         return Ok(());
     }
     Err(Error::format(
