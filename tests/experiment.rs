@@ -1599,54 +1599,28 @@ fn the_pilot_without_a_browser_writes_the_rows_the_page_writes() {
     assert_eq!(pilot("P-odd", "p2.csv"), csv);
     assert_ne!(pilot("P-even", "p3.csv"), csv);
     // Refusals: one line each, nothing written.
-    assert_error(
-        &shadelab(
-            &d,
-            &[
-                "experiment",
-                "pilot",
-                "study",
-                "--simulate",
-                "tilt:26",
-                "--out",
-                "x.csv",
-            ],
-        ),
+    let refused = |study: &str, extra: &[&str], out: &str, code: i32, needle: &str| {
+        let mut args = vec!["experiment", "pilot", study];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out]);
+        assert_error(&shadelab(&d, &args), code, needle);
+    };
+    refused(
+        "study",
+        &["--simulate", "tilt:26"],
+        "x.csv",
         2,
         "--simulate give kappa",
     );
-    assert_error(
-        &shadelab(
-            &d,
-            &[
-                "experiment",
-                "pilot",
-                "study",
-                "--simulate",
-                model,
-                "--out",
-                "p1.csv",
-            ],
-        ),
-        1,
-        "p1.csv",
+    refused(
+        "study",
+        &["--simulate", model, "--participant", "P odd"],
+        "x.csv",
+        2,
+        "--participant 'P odd': use letters, digits",
     );
-    assert_error(
-        &shadelab(
-            &d,
-            &[
-                "experiment",
-                "pilot",
-                "nowhere",
-                "--simulate",
-                model,
-                "--out",
-                "x.csv",
-            ],
-        ),
-        1,
-        "nowhere",
-    );
+    refused("study", &["--simulate", model], "p1.csv", 1, "p1.csv");
+    refused("nowhere", &["--simulate", model], "x.csv", 1, "nowhere");
     assert!(!d.join("x.csv").exists());
     // fit observer reads the pilot's file as it reads the page's.
     let read =

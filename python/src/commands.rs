@@ -556,7 +556,10 @@ pub fn experiment_pilot(
         simulate: simulate
             .parse()
             .map_err(|e| PyValueError::new_err(format!("simulate {e}")))?,
-        participant,
+        participant: participant
+            .map(|p| p.parse())
+            .transpose()
+            .map_err(|e| PyValueError::new_err(format!("participant {e}")))?,
     };
     let report = run_released(py, || {
         let report = pl::experiment::run_pilot(&config)?;

@@ -340,6 +340,8 @@ def test_experiment_pilot_gives_the_command_lines_rows(tmp_path):
         shadelab.fit_observer(tmp_path / "py.csv")
     with pytest.raises(ValueError, match="simulate"):
         shadelab.experiment_pilot(tmp_path / "study", "tilt:20")
+    with pytest.raises(ValueError, match="participant 'P 1': use letters"):
+        shadelab.experiment_pilot(tmp_path / "study", model, participant="P 1")
 
 
 def simulated_judgements(seed=7, mu=26.0, trials=24):

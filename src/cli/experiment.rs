@@ -109,11 +109,12 @@ fn pilot(args: PilotArgs, global: &Global) -> CliResult {
             .simulate
             .parse()
             .map_err(|e| CliError::usage(format!("--simulate {e}")))?,
-        participant: args.participant,
+        participant: args
+            .participant
+            .map(|p| p.parse())
+            .transpose()
+            .map_err(|e| CliError::usage(format!("--participant {e}")))?,
     };
-    config
-        .validate()
-        .map_err(|e| CliError::usage(format!("--participant {e}")))?;
     let report = run_pilot(&config)?;
     report.write(&args.out, &config.design_path(), global.force)?;
     let out = super::output::Output::new(global);

@@ -241,22 +241,30 @@ pub fn write_output(
         )));
     }
     let sidecar = io::sibling(path, "", "json");
-    check_not_another_pictures(path, &sidecar, &pixels_md5(&output.pixels), options)?;
     // The set, the sidecar last: it is the commit record (see `io::OutputSet`).
     // In the order they were always listed (companions, image, sidecar).
     let mut files = planned_files(path, output, options);
     files.rotate_left(1);
     files.push(sidecar.clone());
     let set = io::OutputSet::begin(&files)?;
+    // Under the lock, the record already there, read once for both decisions below.
+    let old = old_record(&sidecar);
+    check_not_another_pictures(
+        path,
+        &sidecar,
+        old.as_ref(),
+        &pixels_md5(&output.pixels),
+        options,
+    )?;
     // Every file this call will write is checked before the first is written: the image and
     // its companions are replaced only when the sidecar beside them is shadelab's, and the
     // sidecar only when it is one.
     for target in &files {
         io::check_overwrite(target, &sidecar, force)?;
     }
-    // Under the lock: the companions of the old set that the new one lacks (a render with
-    // `layers` replaced by one without), as the old sidecar lists them.
-    let stale = stale_companions(path, &sidecar, &files);
+    // The companions of the old set that the new one lacks (a render with `layers` replaced
+    // by one without), as the old sidecar lists them.
+    let stale = stale_companions(path, old.as_ref(), &files);
     let picture = Picture {
         name,
         request,
@@ -290,18 +298,13 @@ struct Picture<'a> {
 fn check_not_another_pictures(
     path: &Path,
     sidecar: &Path,
+    old: Option<&Value>,
     md5: &str,
     options: &ExportOptions,
 ) -> Result<()> {
-    let Ok(bytes) = io::read_capped(sidecar, io::MAX_TEXT_BYTES) else {
+    let Some(old) = old else {
         return Ok(());
     };
-    let Ok(old) = serde_json::from_slice::<Value>(&bytes) else {
-        return Ok(());
-    };
-    if old.get("program").and_then(Value::as_str) != Some("shadelab") {
-        return Ok(());
-    }
     let Some(image) = old.pointer("/files/image").and_then(Value::as_str) else {
         return Ok(());
     };
@@ -335,19 +338,21 @@ fn check_not_another_pictures(
     ))
 }
 
-/// The companion files (mask, layers) beside `path` that the shadelab sidecar there lists and
+/// The shadelab sidecar already beside the picture (`None` when there is none, or it is not
+/// JSON or not shadelab's), read once per write.
+fn old_record(sidecar: &Path) -> Option<Value> {
+    let bytes = io::read_capped(sidecar, io::MAX_TEXT_BYTES).ok()?;
+    let old: Value = serde_json::from_slice(&bytes).ok()?;
+    (old.get("program").and_then(Value::as_str) == Some("shadelab")).then_some(old)
+}
+
+/// The companion files (mask, layers) beside `path` that the shadelab sidecar `old` lists and
 /// the new set (`files`) does not write. Only names a render can write are considered, so a
 /// sidecar edited by hand cannot make shadelab delete anything else.
-fn stale_companions(path: &Path, sidecar: &Path, files: &[PathBuf]) -> Vec<PathBuf> {
-    let Ok(bytes) = io::read_capped(sidecar, io::MAX_TEXT_BYTES) else {
+fn stale_companions(path: &Path, old: Option<&Value>, files: &[PathBuf]) -> Vec<PathBuf> {
+    let Some(old) = old else {
         return Vec::new();
     };
-    let Ok(old) = serde_json::from_slice::<Value>(&bytes) else {
-        return Vec::new();
-    };
-    if old.get("program").and_then(Value::as_str) != Some("shadelab") {
-        return Vec::new();
-    }
     let listed: Vec<&str> = old
         .get("files")
         .and_then(Value::as_object)

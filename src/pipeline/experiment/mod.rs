@@ -42,8 +42,8 @@ mod pilot_mode;
 
 pub use folder::{Install, Written};
 pub use pilot_mode::{
-    csv_cell, order_seed, pilot, run_pilot, PilotConfig, PilotReport, Simulate, PILOT_COLUMNS,
-    PILOT_PPD_METHOD,
+    csv_cell, order_seed, pilot, run_pilot, Participant, PilotConfig, PilotReport, Simulate,
+    PILOT_COLUMNS, PILOT_PPD_METHOD,
 };
 
 use super::perception::{field, BadSetting};

@@ -30,7 +30,9 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-/// A pilot to run: the study, the observer, the participant.
+/// A pilot to run: the study, the observer, the participant. Its parts are each valid by
+/// their type ([`Simulate`] and [`Participant`] are made by parsing the page's text), so there
+/// is nothing left to check.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PilotConfig {
     /// The study folder `shadelab experiment` wrote (or its `design.json`).
@@ -38,27 +40,47 @@ pub struct PilotConfig {
     /// The simulated observer.
     pub simulate: Simulate,
     /// The participant id (the page's `participant` parameter); `None`: `simulated-seedS`.
-    pub participant: Option<String>,
+    pub participant: Option<Participant>,
+}
+
+/// A participant id as the page takes it: letters, digits, `-`, `_`, `.` or `@`, at most 128.
+///
+/// ```
+/// use shadelab::pipeline::experiment::Participant;
+/// let p: Participant = "p-01@lab".parse()?;
+/// assert_eq!(p.as_str(), "p-01@lab");
+/// assert!("p 01".parse::<Participant>().is_err());
+/// # Ok::<(), shadelab::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Participant(String);
+
+impl Participant {
+    /// The id.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+}
+
+impl FromStr for Participant {
+    type Err = Error;
+
+    /// The message names the id, for the caller to prefix with its flag or keyword.
+    fn from_str(p: &str) -> Result<Self> {
+        let ok = (1..=128).contains(&p.len())
+            && p.chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '@' | '-'));
+        if ok {
+            Ok(Participant(p.to_string()))
+        } else {
+            Err(Error::invalid(format!(
+                "'{p}': use letters, digits, '-', '_', '.' or '@' (at most 128)"
+            )))
+        }
+    }
 }
 
 impl PilotConfig {
-    /// Checks the observer and the participant id (as the page does: letters, digits, `-`,
-    /// `_`, `.` or `@`, at most 128).
-    pub fn validate(&self) -> Result<()> {
-        self.simulate.model.validate()?;
-        if let Some(p) = &self.participant {
-            let ok = (1..=128).contains(&p.len())
-                && p.chars()
-                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '@' | '-'));
-            if !ok {
-                return Err(Error::invalid(format!(
-                    "participant '{p}': use letters, digits, '-', '_', '.' or '@' (at most 128)"
-                )));
-            }
-        }
-        Ok(())
-    }
-
     /// The design file: `study/design.json`, or `study` itself when it is a file.
     pub fn design_path(&self) -> PathBuf {
         if self.study.is_dir() {
@@ -71,26 +93,34 @@ impl PilotConfig {
 
 /// Reads the study's design and runs [`pilot`] on it.
 pub fn run_pilot(config: &PilotConfig) -> Result<PilotReport> {
-    config.validate()?;
     let path = config.design_path();
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
     let design: Value = serde_json::from_str(&text)
         .map_err(|e| Error::format(&path, format!("is not JSON ({e})")))?;
-    pilot(&design, &config.simulate, config.participant.as_deref())
+    pilot(&design, &config.simulate, config.participant.as_ref())
         .map_err(|e| Error::format(&path, e.to_string()))
 }
 
 /// The pilot's observer: the model and the seed of its answers, as the page's `simulate`
-/// parameter gives them (`tilt:T,kappa:K,convex:C,lapse:L,seed:S`).
+/// parameter gives them (`tilt:T,kappa:K,convex:C,lapse:L,seed:S`). Made only by parsing that
+/// text, with the page's ranges, so a `Simulate` is always a valid observer.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Simulate {
-    /// The observer model (π defaults to 0.5, λ to 0).
-    pub model: ModelParams,
-    /// The seed of the answers' generator (default 1).
-    pub seed: u32,
+    model: ModelParams,
+    seed: u32,
 }
 
 impl Simulate {
+    /// The observer model (π defaults to 0.5, λ to 0).
+    pub fn model(&self) -> &ModelParams {
+        &self.model
+    }
+
+    /// The seed of the answers' generator (default 1).
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+
     /// The model as the rows' `simulated` column writes it:
     /// `tilt:T,kappa:K,convex:C,lapse:L,seed:S`.
     pub fn text(&self) -> String {
@@ -309,9 +339,8 @@ fn js_number(v: &Value) -> String {
 pub fn pilot(
     design: &Value,
     simulate: &Simulate,
-    participant: Option<&str>,
+    participant: Option<&Participant>,
 ) -> Result<PilotReport> {
-    simulate.model.validate()?;
     let bad = |what: &str| {
         Error::invalid(format!(
             "the design has no {what}: is it a shadelab experiment's design.json?"
@@ -326,7 +355,7 @@ pub fn pilot(
         v.as_str().map(str::to_string).ok_or_else(|| bad(what))
     };
     let participant = participant
-        .map(str::to_string)
+        .map(|p| p.as_str().to_string())
         .unwrap_or_else(|| format!("simulated-seed{}", simulate.seed));
     let order_seed = order_seed(&format!("{seed}:{participant}"));
     let mut random = Mulberry32(order_seed);

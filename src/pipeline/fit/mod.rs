@@ -111,6 +111,65 @@ pub struct Design {
     pub files: Vec<String>,
 }
 
+impl Design {
+    /// What was read but not analysed, in the order the Methods name it: the one wording of
+    /// the fit's warnings and of its Methods paragraph.
+    fn left_out(&self) -> Vec<LeftOut> {
+        [
+            LeftOut::Practice(self.practice_rows),
+            LeftOut::NoResponse(self.no_response_rows),
+            LeftOut::Simulated(self.simulated_rows_left_out),
+            LeftOut::Repeated(self.duplicates.iter().map(|r| r.rows).sum()),
+        ]
+        .into_iter()
+        .filter(|l| l.count() > 0)
+        .collect()
+    }
+}
+
+/// Rows of the data that the fit read and left out, with their count.
+#[derive(Debug, Clone, Copy)]
+enum LeftOut {
+    /// Practice trials (never analysed).
+    Practice(usize),
+    /// Test trials without a response.
+    NoResponse(usize),
+    /// Simulated test trials (without [`Reading::include_simulated`]).
+    Simulated(usize),
+    /// Rows a second copy of the same data repeated (each duplicate also has its own warning).
+    Repeated(usize),
+}
+
+impl LeftOut {
+    fn count(&self) -> usize {
+        match *self {
+            LeftOut::Practice(n)
+            | LeftOut::NoResponse(n)
+            | LeftOut::Simulated(n)
+            | LeftOut::Repeated(n) => n,
+        }
+    }
+
+    /// Whether leaving these out is worth a warning: practice rows are meant to be left out,
+    /// and each repeated file has a warning of its own.
+    fn warned(&self) -> bool {
+        matches!(self, LeftOut::NoResponse(_) | LeftOut::Simulated(_))
+    }
+}
+
+impl std::fmt::Display for LeftOut {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            LeftOut::Practice(n) => write!(f, "{n} practice trials"),
+            LeftOut::NoResponse(n) => write!(f, "{n} trials without a response (timed out)"),
+            LeftOut::Simulated(n) => write!(f, "{n} simulated trials (a pilot's)"),
+            LeftOut::Repeated(n) => {
+                write!(f, "{n} rows that a second copy of the same data repeated")
+            }
+        }
+    }
+}
+
 /// The spread of the per-participant fits: a two-stage (summary-statistics) random-effects
 /// description of the group, beside the pooled fit (which treats every trial as one observer's).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -333,12 +392,6 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
                 .join("; ")
         ));
     }
-    if responses.simulated_left_out > 0 {
-        warnings.push(format!(
-            "{} simulated trials (a pilot's: their 'simulated' column is set) left out",
-            responses.simulated_left_out
-        ));
-    }
     if responses.simulated_fitted > 0 {
         warnings.push(format!(
             "{} of the {} trials fitted are simulated (a pilot's), not people's",
@@ -346,18 +399,38 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             all.len()
         ));
     }
-    if responses.no_response > 0 {
-        warnings.push(format!(
-            "{} trials without a response (timed out) left out",
-            responses.no_response
-        ));
-    }
+    let per = pooled_bins.iter().map(|b| b.trials);
+    let design = Design {
+        trials: all.len(),
+        participants: responses.participants.len(),
+        rotations_deg: pooled_bins.iter().map(|b| b.rotation_deg).collect(),
+        trials_per_rotation: [per.clone().min().unwrap_or(0), per.max().unwrap_or(0)],
+        practice_rows: responses.practice_rows,
+        other_rows: responses.other_rows,
+        no_response_rows: responses.no_response,
+        simulated_rows_left_out: responses.simulated_left_out,
+        simulated_trials: responses.simulated_fitted,
+        simulated_participants: responses.simulated_participants,
+        duplicates: responses.duplicates.clone(),
+        designs: responses.designs.clone(),
+        files: responses
+            .files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect(),
+    };
+    warnings.extend(
+        design
+            .left_out()
+            .into_iter()
+            .filter(LeftOut::warned)
+            .map(|l| format!("{l} left out")),
+    );
     for b in &pooled.at_bounds {
         warnings.push(format!(
             "the pooled estimate of {b} lies at the bound of the search"
         ));
     }
-    let per = pooled_bins.iter().map(|b| b.trials);
     let m = pooled.params();
     let study = serde_json::json!({
         "priors": {
@@ -371,25 +444,7 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
         stamp: Stamp::of("fit observer"),
         responses: name,
         model: MODEL,
-        design: Design {
-            trials: all.len(),
-            participants: responses.participants.len(),
-            rotations_deg: pooled_bins.iter().map(|b| b.rotation_deg).collect(),
-            trials_per_rotation: [per.clone().min().unwrap_or(0), per.max().unwrap_or(0)],
-            practice_rows: responses.practice_rows,
-            other_rows: responses.other_rows,
-            no_response_rows: responses.no_response,
-            simulated_rows_left_out: responses.simulated_left_out,
-            simulated_trials: responses.simulated_fitted,
-            simulated_participants: responses.simulated_participants,
-            duplicates: responses.duplicates.clone(),
-            designs: responses.designs.clone(),
-            files: responses
-                .files
-                .iter()
-                .map(|f| f.display().to_string())
-                .collect(),
-        },
+        design,
         reading: config.reading.clone(),
         settings: config.options,
         pooled,
@@ -757,28 +812,7 @@ impl Report {
         } else {
             String::new()
         };
-        let mut left_out = Vec::new();
-        if d.practice_rows > 0 {
-            left_out.push(format!("{} practice trials", d.practice_rows));
-        }
-        if d.no_response_rows > 0 {
-            left_out.push(format!(
-                "{} trials without a response (timed out)",
-                d.no_response_rows
-            ));
-        }
-        if d.simulated_rows_left_out > 0 {
-            left_out.push(format!(
-                "{} simulated trials (a pilot's)",
-                d.simulated_rows_left_out
-            ));
-        }
-        let repeated: usize = d.duplicates.iter().map(|r| r.rows).sum();
-        if repeated > 0 {
-            left_out.push(format!(
-                "{repeated} rows that a second copy of the same data repeated"
-            ));
-        }
+        let mut left_out: Vec<String> = d.left_out().iter().map(LeftOut::to_string).collect();
         let left_out = match left_out.len() {
             0 => String::new(),
             1 => format!(" ({} were not analysed)", left_out[0]),
