@@ -144,6 +144,7 @@ fn bad_configs_are_refused_with_one_line() {
         (|c| c.rotations = vec![f64::INFINITY], "not a number"),
         (|c| c.repeats = 0, "repeats"),
         (|c| c.practice = 1000, "practice"),
+        (|c| c.seed = 1 << 53, "2^53 − 1: the page's JavaScript"),
         (|c| c.ppd = 0.0, "pixels per degree"),
         (|c| c.viewing_distance_cm = 1.0, "viewing distance"),
         (|c| c.visual_size = (0.0, 4.0), "visual size"),
@@ -337,6 +338,10 @@ fn the_command_line_writes_the_folder_and_refuses_bad_flags() {
     assert!(!d.join("e/node_modules").exists());
     for (flags, needle) in [
         (&["--save-format", "xml"][..], "--save-format 'xml'"),
+        (
+            &["--seed", "9007199254740992"][..],
+            "--seed: seed 9007199254740992 must be at most 9007199254740991",
+        ),
         (&["--prolific-code", "no spaces"][..], "--prolific-code"),
         (&["--save-url", "lab.example/save"][..], "--save-url"),
         (

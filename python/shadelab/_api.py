@@ -476,8 +476,10 @@ def save(
     seed, shape and ppd), written by the command line's own writer, so an unchanged dict
     gives the files ``shadelab render`` writes, byte for byte. An ``img`` changed since
     :func:`render` (any value by more than 1e-9) is written as it is, and its sidecar says it
-    was edited (``edited``, with the render's digest beside the picture's own); ``shadelab
-    render --spec`` of that sidecar refuses to claim it reproduces it. As with the command
+    was edited (``edited``, with the render's digest beside the picture's own); so are a
+    ``target_mask`` or ``target_names`` changed since :func:`render`: the mask file and the
+    sidecar's targets are the dict's, and ``edited`` says ``target_mask``. ``shadelab
+    render --spec`` of such a sidecar refuses to claim it reproduces it. As with the command
     line, a file shadelab did not write is not replaced unless ``force=True``, another
     picture's sidecar and mask never are (``a.png`` beside ``a.npy``: give another name), and
     the set of files is written whole or not at all. Returns the paths written.
@@ -510,10 +512,17 @@ def save(
         if luminance is None:
             luminance = asked.get("luminance")
     display_path, display_json = _display_arg(display)
+    targets = None
+    if stim.get("target_mask") is not None:
+        names = stim.get("target_names") or []
+        if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+            raise ValueError("save: target_names must be a list of names (text), one per label")
+        targets = (_labels(stim["target_mask"], "target_mask"), list(names))
     return list(
         _shadelab.save(
             _float_image(img, "img", colour=True),
             str(image_range),
+            targets,
             str(name),
             _params_json(dict(params)),
             float(ppd),

@@ -437,14 +437,17 @@ fn export_options(
 /// surface layers): the render is made again from its record for its mask, layers and
 /// sidecar, and the picture written is `image` (in `image_range`, as `render` handed it
 /// over), through the same writer; an `image` that is not the render is recorded as edited
-/// ([`pl::render::RenderReport::with_picture`]). Returns the paths written.
+/// ([`pl::render::RenderReport::with_picture`]), and so are `targets` (the dict's
+/// `target_mask` and `target_names`) that are not its targets
+/// ([`pl::render::RenderReport::with_targets`]). Returns the paths written.
 #[pyfunction]
-#[pyo3(signature = (image, image_range, name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, display, display_json, luminance, layers, force))]
+#[pyo3(signature = (image, image_range, targets, name, params_json, ppd, shape, seed, out, bit_depth, gamma, range, display, display_json, luminance, layers, force))]
 #[allow(clippy::too_many_arguments)]
 fn save(
     py: Python<'_>,
     image: ArrayIn<'_>,
     image_range: &str,
+    targets: Option<(PyReadonlyArray2<'_, u16>, Vec<String>)>,
     name: &str,
     params_json: &str,
     ppd: f64,
@@ -469,11 +472,16 @@ fn save(
     export.layers = layers;
     let pixels = image.pixels()?;
     let image_range = value_range(image_range)?;
+    let targets =
+        targets.map(|(labels, names)| -> (Labels, _) { (grid_from(labels.as_array()), names) });
     let written = run_released(py, || {
         config.validate()?;
         config.check_output(&out)?;
-        let report =
+        let mut report =
             pl::render::run(&config, &NoProgress)?.with_picture(pixels, image_range, "img")?;
+        if let Some((labels, names)) = targets {
+            report = report.with_targets(labels, names, "target_mask")?;
+        }
         report.write(&shadelab::Output::new(&out).force(force))
     })?;
     Ok(written
@@ -586,8 +594,8 @@ pub(crate) fn picture_source(
             let declared =
                 shadelab::pipeline::source::Declared::from_record(&part("parameters"), &notes)
                     .map_err(|e| PyValueError::new_err(format!("image: the dict's record: {e}")))?;
-            let silhouette = notes.get(shadelab::pipeline::source::SILHOUETTE_NOTE)
-                == Some(&Value::Bool(true));
+            let silhouette =
+                notes.get(shadelab::pipeline::source::SILHOUETTE_NOTE) == Some(&Value::Bool(true));
             (declared, silhouette)
         }
     };

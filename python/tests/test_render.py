@@ -538,6 +538,32 @@ def test_save_writes_the_array_it_is_given(tmp_path):
         assert not (tmp_path / "again.npy").exists()
 
 
+def test_save_writes_the_target_mask_it_is_given(tmp_path):
+    # An edited target_mask is the mask written (its labels read back from the mask PNG) and
+    # the targets its sidecar lists; `edited` says so. The render's own mask changes nothing.
+    s = shadelab.render("bumps", ppd=8)
+    shadelab.save(s, tmp_path / "same.npy")
+    same = json.loads((tmp_path / "same.json").read_text())
+    assert "edited" not in same
+    mask = s["target_mask"].copy()
+    mask[mask == 2] = 0
+    mask[:2, :2] = 2
+    shadelab.save(dict(s, target_mask=mask), tmp_path / "m.npy")
+    codes, _ = read_gray_png(tmp_path / "m_mask.png")
+    assert np.array_equal(codes, mask)
+    record = json.loads((tmp_path / "m.json").read_text())
+    assert "target_mask" in record["edited"] and "rendered_md5_float64_rounded8" not in record["edited"]
+    assert record["md5_float64_rounded8"] == same["md5_float64_rounded8"]
+    assert [t["name"] for t in record["targets"]] == s["target_names"]
+    # Renamed targets are an edit too; a label without a name is refused, naming the mask.
+    names = ["t%d" % (i + 1) for i in range(len(s["target_names"]))]
+    shadelab.save(dict(s, target_names=names), tmp_path / "n.npy")
+    assert [t["name"] for t in json.loads((tmp_path / "n.json").read_text())["targets"]] == names
+    with pytest.raises(ValueError, match=r"target_mask: label \d+ has no name \(2 target names given\)"):
+        shadelab.save(dict(s, target_names=names[:2]), tmp_path / "bad.npy")
+    assert not (tmp_path / "bad.npy").exists()
+
+
 def test_two_saves_of_one_name_never_share_a_sidecar_or_mask(tmp_path):
     # exp1.npy then exp1.png would both be recorded in exp1.json: the second is refused,
     # naming the first, whose set stays as it was (and so with the command line's --out).

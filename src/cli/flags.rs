@@ -178,6 +178,7 @@ const FIELD_FLAGS: &[(&str, &str)] = &[
     ("lapse", "--lapse"),
     ("repeats", "--repeats"),
     ("practice", "--practice"),
+    ("seed", "--seed"),
     ("ppd", "--ppd"),
     ("viewing_distance_cm", "--viewing-distance"),
     ("visual_size", "--visual-size"),

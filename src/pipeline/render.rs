@@ -18,6 +18,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::grid::Labels;
 use crate::progress::Progress;
 use crate::stimulus::{self, Edited, ExportOptions, Output, Pixels, Range, Request, Spec};
 use crate::visual_size::{Geometry, SizeRequest};
@@ -287,10 +288,58 @@ impl RenderReport {
             .zip(rendered)
             .all(|(a, b)| (a - b).abs() <= SAME_VALUE);
         if !same {
-            self.edited = Some(Edited {
-                rendered_md5: stimulus::pixels_md5(&self.output.pixels),
-            });
+            self.edited.get_or_insert_with(Edited::default).rendered_md5 =
+                Some(stimulus::pixels_md5(&self.output.pixels));
             self.output.pixels = pixels;
+        }
+        Ok(self)
+    }
+
+    /// The render with the caller's target mask in place of its own: `labels` (0 the
+    /// background, `k` the target `names[k - 1]`) are the mask [`RenderReport::write`] writes,
+    /// and the targets the sidecar describes. Where they are the render's (the same labels and
+    /// names, or no targets and an all-zero mask, stimupy's habit) nothing changes; otherwise
+    /// the report is marked [`Edited`] (`target_mask`). `what` names the mask in errors.
+    ///
+    /// ```
+    /// use shadelab::pipeline::render::{run, RenderConfig};
+    /// let mut config = RenderConfig::new("bumps");
+    /// config.size.set_shape((16, 24));
+    /// let report = run(&config, &shadelab::NoProgress).unwrap();
+    /// let targets = report.output.targets.clone().unwrap();
+    /// let same = report.clone().with_targets(targets.labels.clone(), targets.names.clone(), "target_mask").unwrap();
+    /// assert!(same.edited.is_none());
+    /// let cleared = targets.labels.map(|_| 0);
+    /// let edited = report.with_targets(cleared, targets.names, "target_mask").unwrap();
+    /// assert!(edited.edited.unwrap().target_mask);
+    /// ```
+    pub fn with_targets(
+        mut self,
+        labels: Labels,
+        names: Vec<String>,
+        what: &str,
+    ) -> Result<RenderReport> {
+        let ((w, h), (rw, rh)) = ((labels.width(), labels.height()), self.output.pixels.size());
+        if (w, h) != (rw, rh) {
+            return Err(Error::invalid(format!(
+                "{what}: the mask is {h} high × {w} wide but the render it records is {rh} \
+                 high × {rw} wide"
+            )));
+        }
+        let top = labels.data().iter().copied().max().unwrap_or(0);
+        if usize::from(top) > names.len() {
+            return Err(Error::invalid(format!(
+                "{what}: label {top} has no name ({} target names given)",
+                names.len()
+            )));
+        }
+        let same = match &self.output.targets {
+            Some(t) => t.labels == labels && t.names == names,
+            None => top == 0,
+        };
+        if !same {
+            self.edited.get_or_insert_with(Edited::default).target_mask = true;
+            self.output.targets = Some(stimulus::Targets { labels, names });
         }
         Ok(self)
     }

@@ -180,10 +180,37 @@ pub const FORMATS: &[&str] = &["png", "npy", "mat", "npz", "svg"];
 /// rendering (Python's `save` of an edited `img`). Its sidecar says so (`edited`), with the
 /// digest of the render it came from beside the picture's own, and `render --spec` of that
 /// sidecar refuses to claim it reproduces the picture.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Edited {
-    /// The render's own digest (`md5_float64_rounded8` of the picture as rendered).
-    pub rendered_md5: String,
+    /// The render's own digest (`md5_float64_rounded8` of the picture as rendered), when the
+    /// picture's values were changed (`None`: the picture is the render's).
+    pub rendered_md5: Option<String>,
+    /// The target mask (or its names) was changed: the mask written, and the target facts of
+    /// the sidecar, are the caller's, not the render's.
+    pub target_mask: bool,
+}
+
+impl Edited {
+    /// What the sidecar and the PNG's own record say of the edit (under [`EDITED_KEY`]).
+    pub fn to_json(&self) -> Value {
+        let mut record = serde_json::Map::new();
+        if let Some(md5) = &self.rendered_md5 {
+            record.insert("rendered_md5_float64_rounded8".into(), md5.as_str().into());
+        }
+        if self.target_mask {
+            record.insert(
+                "target_mask".into(),
+                "edited: the mask and the target facts are the caller's, not the render's".into(),
+            );
+        }
+        record.insert(
+            "note".into(),
+            "changed after rendering: this is not the render the parameters describe \
+             (md5_float64_rounded8 is the picture's own)"
+                .into(),
+        );
+        Value::Object(record)
+    }
 }
 
 /// The sidecar key that marks an edited picture ([`Edited`]).
@@ -225,7 +252,7 @@ pub fn write_output(
     edited: Option<&Edited>,
 ) -> Result<Vec<PathBuf>> {
     let ext = options.check(path)?;
-    if ext == "svg" && edited.is_some() {
+    if ext == "svg" && edited.is_some_and(|e| e.rendered_md5.is_some()) {
         return Err(Error::format(
             path,
             "an edited picture has no vector form (the SVG draws the render); write it as .png, .npy or .mat",
@@ -502,14 +529,7 @@ fn write_all(
     record("image", path);
     let mut value = sidecar_json(name, request, output, ext, options, files, shown.as_ref());
     if let (Some(edited), Value::Object(fields)) = (edited, &mut value) {
-        fields.insert(
-            EDITED_KEY.into(),
-            json!({
-                "rendered_md5_float64_rounded8": edited.rendered_md5,
-                "note": "the picture was changed after rendering: its values are not the render \
-                         the parameters describe (md5_float64_rounded8 is the picture's own)",
-            }),
-        );
+        fields.insert(EDITED_KEY.into(), edited.to_json());
     }
     io::write_json(set.staged(sidecar)?, &value)
 }
@@ -620,10 +640,7 @@ pub fn png_text(
         record.insert("luminance".to_string(), mapping.to_json());
     }
     if let Some(edited) = edited {
-        record.insert(
-            EDITED_KEY.to_string(),
-            json!({"rendered_md5_float64_rounded8": edited.rendered_md5}),
-        );
+        record.insert(EDITED_KEY.to_string(), edited.to_json());
     }
     vec![
         ("Software".to_string(), format!("shadelab {version}")),

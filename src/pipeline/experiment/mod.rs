@@ -85,6 +85,10 @@ pub const MAX_REPEATS: usize = 1000;
 /// Most practice trials accepted.
 pub const MAX_PRACTICE: usize = 100;
 
+/// The largest design seed: 2⁵³ − 1, JavaScript's largest exact whole number (the page reads
+/// the seed from `design.json` as a number and makes each participant's order seed of it).
+pub const MAX_PAGE_SEED: u64 = (1 << 53) - 1;
+
 /// The runner and its style sheet, copied into every experiment folder.
 const RUNNER_JS: &str = include_str!("../../../assets/experiment/experiment.js");
 const TIMELINE_JS: &str = include_str!("../../../assets/experiment/shadelab-timeline.js");
@@ -369,6 +373,17 @@ impl Config {
             });
         }
         field("rotations", rotations(&self.rotations).map(|_| ()))?;
+        if self.seed > MAX_PAGE_SEED {
+            return Err(BadSetting {
+                field: "seed",
+                error: Error::invalid(format!(
+                    "seed {} must be at most {MAX_PAGE_SEED} (2^53 − 1: the page's JavaScript \
+                     holds it as a number, and a larger one would give the participants other \
+                     orders than design.json and `experiment pilot` say)",
+                    self.seed
+                )),
+            });
+        }
         if self.repeats == 0 || self.repeats > MAX_REPEATS {
             return Err(BadSetting {
                 field: "repeats",
