@@ -74,8 +74,10 @@ pub struct RenderSidecar {
     /// regions of a picture whose surface goes on outside them (bumps, discs, a crater).
     pub silhouette: bool,
     /// The picture file it records (`files.image`), when it says.
+    #[serde(skip)]
     pub image: Option<String>,
     /// The recorded picture's size (height, width), when it says.
+    #[serde(skip)]
     pub shape: Option<(usize, usize)>,
 }
 
@@ -200,9 +202,13 @@ impl RenderSidecar {
         encoding: super::InputEncoding,
         max_pixels: usize,
     ) -> Result<Beside> {
-        let beside = Self::beside_unchecked(image, || file.states_its_encoding)?;
-        if let Beside::Ours(sidecar) = &beside {
+        // Checked with its gamma as recorded: each file is compared as its reader takes it.
+        let mut beside = Self::beside_unchecked(image, || false)?;
+        if let Beside::Ours(sidecar) = &mut beside {
             sidecar.check_records(image, file, encoding, max_pixels)?;
+            if file.states_its_encoding {
+                sidecar.decoded_by_file();
+            }
         }
         Ok(beside)
     }
@@ -251,7 +257,26 @@ impl RenderSidecar {
         }
         let theirs = super::read_picture(&other, max_pixels, encoding, false)
             .map_err(|e| Error::format(image, format!("{}: {e}", self.path.display())))?;
+        // Each file's values made linear as its reader takes them: the recorded gamma undone
+        // for a file that does not state its own encoding (and for neither under an explicit
+        // encoding).
+        let reader = |states: bool| {
+            let mut s = self.clone();
+            if states || encoding.is_explicit() {
+                s.gamma = None;
+            }
+            s
+        };
+        let (mine, other_reader) = (
+            reader(file.states_its_encoding),
+            reader(theirs.states_its_encoding),
+        );
+        let (my_quantum, their_quantum) = (
+            file.quantum.map(|v| mine.linearise(v)),
+            theirs.quantum.map(|v| other_reader.linearise(v)),
+        );
         let within = |a: f64, b: f64| {
+            let (a, b) = (mine.linearise(a), other_reader.linearise(b));
             let half = |q: &super::Quantum, v: f64| {
                 let (low, high) = q.bin(v);
                 let width = high - low;
@@ -261,7 +286,7 @@ impl RenderSidecar {
                     0.0
                 }
             };
-            (a - b).abs() <= half(&file.quantum, a) + half(&theirs.quantum, b) + 1e-12
+            (a - b).abs() <= half(&my_quantum, a) + half(&their_quantum, b) + 1e-12
         };
         let same = theirs.gray.width() == size.0
             && theirs.gray.height() == size.1
@@ -296,10 +321,18 @@ impl RenderSidecar {
         // A PNG whose own chunk states its encoding (every stimulus PNG since the gAMA chunk)
         // is decoded by the reader: the recorded gamma is not undone a second time.
         if sidecar.gamma.is_some() && states_its_encoding() {
-            sidecar.gamma = None;
-            sidecar.gamma_decoded_by_file = true;
+            sidecar.decoded_by_file();
         }
         Ok(Beside::Ours(Box::new(sidecar)))
+    }
+
+    /// This record of a picture whose own chunk states its encoding: the reader decodes it,
+    /// so the recorded gamma is not undone a second time.
+    fn decoded_by_file(&mut self) {
+        if self.gamma.is_some() {
+            self.gamma = None;
+            self.gamma_decoded_by_file = true;
+        }
     }
 
     /// Reads a sidecar file; an error unless it is a well-formed shadelab sidecar.
