@@ -180,7 +180,8 @@ def _picture_args(
     """An analysis's picture as the compiled module takes it: an array or a stimulus name, and
     the stimulus's parameters, seed, ppd, shape (height, width), target labels and, for a dict
     of :func:`render`, what its render recorded (its ``parameters`` and ``notes``, as a
-    sidecar records them: the albedo, ambient level and light the library takes)."""
+    sidecar records them: the albedo, ambient level and light the library takes, and whether
+    the labels passed are the dict's own target mask, which its notes may call silhouettes)."""
     record = None
     if isinstance(picture, str):
         image, stimulus = None, picture
@@ -190,12 +191,20 @@ def _picture_args(
         given = _stimupy_dict(picture)
         if given is not None:
             ppd = given.get("ppd") if ppd is None else ppd
+            own_targets = False
             if mask is None and given.get("target_mask") is not None:
                 labels = np.asarray(given["target_mask"])
                 mask = labels if labels.any() else None
+                own_targets = mask is not None
             if isinstance(given.get("parameters"), dict) or isinstance(given.get("notes"), dict):
                 record = json.dumps(
-                    {"parameters": given.get("parameters") or {}, "notes": given.get("notes") or {}},
+                    {
+                        "parameters": given.get("parameters") or {},
+                        "notes": given.get("notes") or {},
+                        # Whether the labels passed are the dict's own (what its notes describe).
+                        "own_targets": own_targets,
+                        "target_names": list(given.get("target_names") or []) if own_targets else [],
+                    },
                     default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v),
                 )
     return (

@@ -557,7 +557,8 @@ fn solve<'py>(
 
 /// The picture of an analysis, as the Python layer passes it: an array or a stimulus name,
 /// the stimulus's parameters (JSON), seed, ppd, rendered shape (height, width), target
-/// labels and a rendered dict's record (JSON of its `parameters` and `notes`).
+/// labels and a rendered dict's record (JSON of its `parameters` and `notes`, and
+/// `own_targets`: whether the labels are the dict's own target mask, named `target_names`).
 pub(crate) type PictureArgs<'py> = (
     Option<ArrayIn<'py>>,
     Option<String>,
@@ -582,7 +583,7 @@ pub(crate) fn picture_source(
 ) -> PyResult<(shadelab::PictureSource, Option<(usize, usize)>)> {
     let (image, stimulus, params_json, seed, ppd, shape, labels, record) = picture;
     // A rendered dict's record (its parameters and notes), read as a sidecar's is.
-    let (declared, silhouette) = match record {
+    let (declared, silhouette, label_names) = match record {
         None => Default::default(),
         Some(text) => {
             let record: Value = serde_json::from_str(&text).map_err(|e| {
@@ -594,9 +595,24 @@ pub(crate) fn picture_source(
             let declared =
                 shadelab::pipeline::source::Declared::from_record(&part("parameters"), &notes)
                     .map_err(|e| PyValueError::new_err(format!("image: the dict's record: {e}")))?;
-            let silhouette =
-                notes.get(shadelab::pipeline::source::SILHOUETTE_NOTE) == Some(&Value::Bool(true));
-            (declared, silhouette)
+            // The notes speak of the dict's own targets, not of a mask given beside it.
+            let silhouette = notes.get(shadelab::pipeline::source::SILHOUETTE_NOTE)
+                == Some(&Value::Bool(true))
+                && record.get("own_targets") == Some(&Value::Bool(true));
+            // The names of the dict's own targets, as a sidecar names them.
+            let names: Vec<String> = match record.get("target_names") {
+                Some(Value::Array(items))
+                    if record.get("own_targets") == Some(&Value::Bool(true)) =>
+                {
+                    items
+                        .iter()
+                        .filter_map(Value::as_str)
+                        .map(String::from)
+                        .collect()
+                }
+                _ => Vec::new(),
+            };
+            (declared, silhouette, names)
         }
     };
     let source = shadelab::PictureSource {
@@ -608,6 +624,7 @@ pub(crate) fn picture_source(
         seed,
         ppd,
         labels: labels.map(|l| -> Labels { grid_from(l.as_array()) }),
+        label_names,
         max_pixels: shadelab::DEFAULT_MAX_PIXELS,
         ..Default::default()
     };

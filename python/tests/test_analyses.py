@@ -116,3 +116,75 @@ def test_lightness_rgb_is_read_as_luminance():
 def test_lightness_without_targets_has_none():
     r = shadelab.lightness(np.linspace(0, 1, 256).reshape(16, 16), ppd=8, model="retinex")
     assert r.targets == [] and r.output.shape == (16, 16)
+
+
+ROUTE_STIMULI = [
+    "crater",
+    "bumps",
+    "sideways",
+    "strips",
+    "hollow-mask",
+    "circles-binary",
+    "boundary-strips",
+    "sphere",
+    "checker-shadow",
+]
+
+
+def _numbers(value, path=""):
+    """Every number in a report by its path, without timings and the input's description."""
+    if isinstance(value, dict):
+        out = {}
+        for key, item in value.items():
+            if key not in ("seconds", "input"):
+                out.update(_numbers(item, f"{path}/{key}"))
+        return out
+    if isinstance(value, (list, tuple)):
+        out = {}
+        for i, item in enumerate(value):
+            out.update(_numbers(item, f"{path}[{i}]"))
+        return out
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return {path: float(value)}
+    if isinstance(value, str):
+        return {path: value}
+    return {}
+
+
+@pytest.mark.parametrize("name", ROUTE_STIMULI)
+def test_every_analysis_of_a_rendered_dict_gives_the_stimulus_numbers(name):
+    # The dict carries what a sidecar carries (albedo, ambient level, light, targets and
+    # whether they are silhouettes): every analysis of it gives the numbers of the stimulus
+    # by name, to rounding (the CLI's routes: tests/routes.rs).
+    ppd = 12
+    stim = shadelab.render(name, ppd=ppd)
+    analyses = {
+        "outline": lambda p, **k: shadelab.outline(p, **k),
+        "lightness": lambda p, **k: shadelab.lightness(p, model="flodog", **k),
+    }
+    if name != "checker-shadow":
+        analyses["prior_sweep"] = lambda p, **k: shadelab.prior_sweep(p, tilts=[0, 90, 180, 270], **k)
+        analyses["observer"] = lambda p, **k: shadelab.observer(
+            p, tilts=list(range(0, 360, 45)), rotations=[0, 90, 180, 270], **k
+        )
+    for analysis, run in analyses.items():
+        by_name = _numbers(run(name, ppd=ppd).report)
+        by_dict = _numbers(run(stim).report)
+        assert by_name.keys() == by_dict.keys(), analysis
+        assert len(by_name) > 3, analysis
+        for key, expected in by_name.items():
+            got = by_dict[key]
+            if isinstance(expected, str):
+                assert got == expected, f"{name} {analysis} {key}"
+            else:
+                assert got == pytest.approx(expected, rel=1e-9, abs=1e-9), f"{name} {analysis} {key}"
+
+
+def test_a_mask_given_with_a_dict_is_not_its_silhouettes():
+    # The hollow mask's face is a silhouette on a backdrop (solved on its target); a mask
+    # given beside the dict says nothing of a backdrop, as --mask beside a sidecar does not.
+    stim = shadelab.render("hollow-mask", ppd=8)
+    own = shadelab.prior_sweep(stim, tilts=[0, 180])
+    given = shadelab.prior_sweep(stim, tilts=[0, 180], mask=stim["target_mask"])
+    assert own["parameters"]["domain"] == "tokens"
+    assert given["parameters"]["domain"] == "image"

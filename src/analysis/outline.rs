@@ -395,7 +395,8 @@ pub struct ShadingFit {
     /// The fitted offset a (ambient level).
     pub offset: f64,
     /// The share of the luminance variance the shape explains, 1 − Σ(I − Î)²/Σ(I − Ī)²
-    /// (1 for a uniform picture that the shape reproduces, 0 when it does not vary).
+    /// (1 for a target that does not vary, which the flat fit reproduces; 0 when the shape's
+    /// shading does not vary or varies against the picture).
     pub explained: f64,
 }
 
@@ -465,6 +466,10 @@ pub fn fit_shading(
 /// in a flat profile is not a shape.
 const FLAT_SHADING: f64 = 1e-18;
 
+/// A target whose values' variance (per pixel) is below this, a spread of 10⁻⁶ (a 16-bit
+/// code is 1.5 × 10⁻⁵), does not vary.
+const FLAT_VALUES: f64 = 1e-12;
+
 /// A column-mean f whose total change is below this per column is taken as unchanging.
 const FLAT_F: f64 = 1e-9;
 
@@ -495,12 +500,13 @@ fn fit_under(values: &[f64], normals: &[Normal], light: Light, fitted: bool) -> 
             e * e
         })
         .sum();
-    let explained = if svv > 0.0 {
+    // A target that does not vary (to far below any stored code) is what the flat fit
+    // reproduces: the rounding of its values in a float32 file or of their mean is no
+    // variance to explain, and must not decide between 0 and 1.
+    let explained = if svv > FLAT_VALUES * n {
         (1.0 - residual / svv).max(0.0)
-    } else if residual <= 0.0 {
-        1.0
     } else {
-        0.0
+        1.0
     };
     ShadingFit {
         light,

@@ -408,11 +408,15 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         false,
     )?;
     io::check_luminance_range(file.gray.data(), &config.image)?;
+    let beside = RenderSidecar::of_picture(
+        &config.image,
+        &file,
+        config.input_encoding,
+        config.max_pixels,
+    )?;
     let (mut image, image_info) = (file.gray, file.info);
     // A shadelab render's sidecar: its values made linear again and its ambient level taken
     // off (the solve's reflectance has no ambient term), its target mask as the object's.
-    let states = file.states_its_encoding;
-    let beside = RenderSidecar::beside_with(&config.image, || states)?;
     let sidecar =
         (beside.sidecar().cloned()).map(|s| super::source::without_gamma(s, config.input_encoding));
     if let Some(s) = &sidecar {

@@ -57,13 +57,17 @@ pub struct PictureSource {
     pub pixels: Option<Pixels>,
     /// Target labels in memory (0 = background, 1..N = targets), instead of a `mask` file.
     pub labels: Option<Labels>,
+    /// The names of the [`labels`](Self::labels) (`names[l - 1]` names label `l`), as their
+    /// maker gives them (a rendered dict's `target_names`); empty when unnamed.
+    pub label_names: Vec<String>,
     /// What the maker of the picture in memory declares (albedo, ambient level, true light),
     /// as a rendered picture's sidecar would: a stimupy-style dict of `shadelab.render`
     /// carries them. Only with [`pixels`](Self::pixels).
     pub declared: Declared,
-    /// Whether the maker of the picture in memory says its targets are objects' silhouettes
-    /// on a backdrop (a rendered dict's `notes.target_is_silhouette`, as a sidecar says it;
-    /// see [`Picture::on_backdrop`]). Only with [`pixels`](Self::pixels).
+    /// Whether the maker of the picture in memory says its targets, the [`labels`](Self::labels)
+    /// given with it, are objects' silhouettes on a backdrop (a rendered dict's
+    /// `notes.target_is_silhouette` with its own `target_mask`, as a sidecar says it; see
+    /// [`Picture::on_backdrop`]). Only with [`pixels`](Self::pixels).
     pub silhouette: bool,
 }
 
@@ -299,14 +303,13 @@ impl PictureSource {
                 // Read once (a pipe cannot be read again): the pixels, how finely they were
                 // stored, and whether the file states its own encoding.
                 let file = io::read_picture(path, max_pixels, encoding, colour)?;
+                // The image is read first: a broken image is reported before its sidecar.
+                let beside = RenderSidecar::of_picture(path, &file, encoding, max_pixels)?;
                 let (mut pixels, info) = match file.rgb {
                     Some(rgb) => (Pixels::Rgb(rgb), Value::Null),
                     None => (Pixels::Gray(file.gray), file.info),
                 };
                 let mut quantum = file.quantum;
-                // The image is read first: a broken image is reported before its sidecar.
-                let states = file.states_its_encoding;
-                let beside = RenderSidecar::beside_with(path, || states)?;
                 let sidecar = beside
                     .sidecar()
                     .cloned()
@@ -402,8 +405,9 @@ impl PictureSource {
                 ))
             }
         };
-        if self.mask.is_some() || self.labels.is_some() {
-            // Targets given here say nothing of a backdrop.
+        if self.mask.is_some() || (self.labels.is_some() && !self.silhouette) {
+            // Targets given here say nothing of a backdrop, unless the maker of the picture in
+            // memory says that they, its own targets, are silhouettes.
             picture.on_backdrop = false;
         }
         if let Some(path) = &self.mask {
@@ -421,7 +425,7 @@ impl PictureSource {
                     picture.pixels.size(),
                 )));
             }
-            picture.labels = Some((labels.clone(), Vec::new()));
+            picture.labels = Some((labels.clone(), self.label_names.clone()));
         }
         Ok((picture, request))
     }
