@@ -233,22 +233,24 @@ pub fn read_picture(
                 npy_scale: None,
             })
         }
-        FileBytes::Npy(bytes) => npy_picture(&bytes, path, max_pixels, encoding),
+        FileBytes::Npy(bytes) => npy_picture(&bytes, path, max_pixels, encoding, colour),
     }
 }
 
 /// A `.npy` picture: floats and booleans as they are, uint8 and uint16 codes divided by their
 /// largest value and then decoded as `encoding` says (an encoding other than auto or linear is
-/// refused for floats), H×W×3 linear RGB made luminance.
+/// refused for floats), H×W×3 linear RGB made luminance and, with `colour`, kept as RGB too
+/// (each channel scaled and decoded as the luminance's are).
 fn npy_picture(
     bytes: &[u8],
     path: &Path,
     max_pixels: usize,
     encoding: InputEncoding,
+    colour: bool,
 ) -> Result<PictureFile> {
     let array = npy::read_array_from_bytes(bytes, path, max_pixels)?;
     let dtype = array.dtype.clone();
-    let raw = encoding.is_explicit().then(|| array.clone());
+    let raw = (encoding.is_explicit() || colour).then(|| array.clone());
     let (mut image, scale, rgb) = npy::luminance_npy(array, path, max_pixels)?;
     let mut notes = Vec::new();
     let format = match &scale {
@@ -259,7 +261,7 @@ fn npy_picture(
         None => "npy float".to_string(),
     };
     let mut decoding = Decoding::Linear;
-    match (encoding, &scale, raw) {
+    match (encoding, &scale, &raw) {
         (InputEncoding::Auto | InputEncoding::Linear, _, _) => {}
         (_, None, _) => {
             return Err(Error::format(
@@ -308,9 +310,24 @@ fn npy_picture(
         None if dtype.ends_with("f2") => Quantum::Float(2f64.powi(-11)),
         None => Quantum::default(),
     };
+    // Each channel as the luminance was made of it: its integer codes scaled to 0..1, then
+    // decoded.
+    let top = scale.as_ref().map_or(1.0, |s| s.max);
+    let rgb = match raw {
+        Some(array) if rgb && colour => Some(crate::grid::Grid::from_vec(
+            image.width(),
+            image.height(),
+            array
+                .data
+                .chunks_exact(3)
+                .map(|p| [p[0], p[1], p[2]].map(|c| decoding.linear(c / top)))
+                .collect(),
+        )?),
+        _ => None,
+    };
     Ok(PictureFile {
         gray: image,
-        rgb: None,
+        rgb,
         info,
         states_its_encoding: false,
         assumed_srgb: None,

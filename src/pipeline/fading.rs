@@ -330,6 +330,26 @@ impl FadingReport {
 
 /// The blurred and the sharp disk, the resolution, and where they came from.
 fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
+    // A fading disk rendered to a file (its sidecar records it) and no labels given: the file
+    // holds the blurred disk, and its sharp twin is the render the sidecar records with
+    // blur = 0, as for the stimulus by name, so that both routes give the same numbers.
+    let given_labels = source.mask.is_some() || source.labels.is_some();
+    let beside = source.beside()?;
+    let render = beside
+        .sidecar()
+        .filter(|s| !given_labels && s.stimulus.as_deref() == Some(FADING_DISK));
+    if let Some(sidecar) = render {
+        let blurred = source.load(true)?;
+        let sharp = PictureSource {
+            spec: Some(sidecar.path.clone()),
+            params: Map::from_iter([("blur".to_string(), Value::from("0"))]),
+            ppd: source.ppd,
+            max_pixels: source.max_pixels,
+            ..Default::default()
+        }
+        .load(true)?;
+        return twin(blurred, sharp);
+    }
     if source.image.is_some() {
         let input = source.load(true)?;
         let ppd = input.ppd.unwrap_or_default();
@@ -376,7 +396,15 @@ fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
     let blurred_input = source.load(true)?;
     let mut sharp_source = source.clone();
     sharp_source.params.insert("blur".into(), Value::from("0"));
-    let sharp_input = sharp_source.load(true)?;
+    twin(blurred_input, sharp_source.load(true)?)
+}
+
+/// The fading disk's stimulus name.
+const FADING_DISK: &str = "fading-disk";
+
+/// The blurred and the sharp disk of two renders (or a file and a render), each found by its
+/// `disk` target.
+fn twin(blurred_input: Picture, sharp_input: Picture) -> Result<(Scene, Scene, f64, Value)> {
     let ppd = blurred_input.ppd.unwrap_or_default();
     let disk = |input: &Picture, what: &str| -> Result<Scene> {
         let (labels, names) = input.labels.as_ref().ok_or_else(|| {
