@@ -41,9 +41,8 @@ step "cffconvert --validate CITATION.cff"
 "$work/tools/bin/cffconvert" --validate -i CITATION.cff
 
 step "cargo publish --dry-run (the shadelab crate; python/ and web/engine/ are publish = false)"
+# It says what it packaged ("Packaged N files, … compressed") and keeps no .crate file.
 cargo publish --dry-run
-crate=target/package/shadelab-$version.crate
-echo "$crate: $(du -k "$crate" | cut -f1) KiB, $(tar tzf "$crate" | wc -l) files"
 
 step "maturin sdist and wheel of the Python package"
 "$work/tools/bin/maturin" sdist -m python/Cargo.toml --out "$work/dist"
@@ -80,8 +79,10 @@ PY
 step "the sdist's own test suite against the installed package"
 tar xzf "$sdist" -C "$work/sdist"
 tests=$work/sdist/shadelab-$version/python/tests
-# The command line the suite compares with (SHADELAB_BIN), built from this commit.
-cargo build --release --quiet --bin shadelab
+# The command line the suite compares with (SHADELAB_BIN): the program the first step's
+# `cargo test` built from this commit (a `cargo build` would compile it again, without the
+# tests' features of the shared dependencies).
+test -x target/release/shadelab
 # From a folder of its own, so that `import shadelab` is the installed package (the unpacked
 # sdist's shadelab/ has no compiled module); a home of its own, as tests/python.rs runs the
 # suite. PsychoPy is not installed here and ../shared's data is not beside the sdist, so the
