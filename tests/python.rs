@@ -3,10 +3,15 @@
 //! command covers it.
 //!
 //! A virtual environment (`target/python/venv/`, with maturin, NumPy and pytest installed by
-//! pip) and the wheel (`target/python/wheels/`). The wheel is compiled in the root's own target
-//! directory: its dependencies are the root crate's, at the versions of the root's lock file
-//! (python/Cargo.lock keeps them equal), so they are compiled once for both; `cargo test`
-//! releases the directory's lock before it runs the tests. Where Python ≥ 3.9, its `venv` module or pip's packages
+//! pip) and the wheel (`target/python/wheels/`), built from the sdist as pip builds it: `maturin
+//! sdist`, unpacked into `target/python/sdist/tree/` (only the files that changed are written, so
+//! cargo rebuilds no more than it would from python/), and `maturin build` there; a file the
+//! sdist lacks fails the build here, not in a user's `pip install`. The wheel is compiled in the
+//! root's own target directory: its dependencies are the root crate's, at the versions of the
+//! root's lock file (python/Cargo.lock keeps them equal), so they are compiled once for both;
+//! `cargo test` releases the directory's lock before it runs the tests. The suite runs twice:
+//! from python/tests (beside `../shared`'s data) in that venv, and from the sdist's own tests
+//! in a clean venv without Rust (below). Where Python ≥ 3.9, its `venv` module or pip's packages
 //! cannot be had (no network), the test says why on stderr and passes; with
 //! `SHADELAB_REQUIRE_PYTHON=1` (set by `.ci/run` once it has installed them) it fails instead.
 //! `SHADELAB_PYTHON` names the interpreter (default `python3`).
@@ -98,7 +103,7 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
             "install",
             "--quiet",
             "--disable-pip-version-check",
-            "maturin>=1.5,<2",
+            "maturin>=1.14,<2",
             "numpy",
             "pytest",
             "nbclient",
@@ -115,27 +120,25 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         }
     }
 
-    // The wheel, built incrementally beside the root crate's release build.
+    // The wheel, built from the sdist incrementally beside the root crate's release build.
+    let tree = sdist_tree(&py, &dir);
     let wheels = dir.join("wheels");
     let _ = std::fs::remove_dir_all(&wheels);
     let build = Command::new(&py)
         .args(["-m", "maturin", "build", "--release", "--quiet", "--out"])
         .arg(&wheels)
-        .current_dir(root.join("python"))
+        .current_dir(&tree)
         .env("CARGO_TARGET_DIR", cargo_target_dir())
         .env_remove("CARGO_BUILD_TARGET_DIR")
         .output()
         .expect("maturin runs");
     assert!(
         build.status.success(),
-        "maturin could not build the wheel:\n{}",
+        "maturin could not build the wheel from the sdist ({}):\n{}",
+        tree.display(),
         text(&build)
     );
-    let wheel = std::fs::read_dir(&wheels)
-        .expect("the wheels folder")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .find(|p| p.extension().is_some_and(|e| e == "whl"))
-        .expect("maturin wrote a wheel");
+    let wheel = written(&wheels, ".whl");
     let install = pip_install(&py, &["--no-deps", "--force-reinstall"], &wheel)
         .output()
         .expect("pip runs");
@@ -146,10 +149,88 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
         text(&install)
     );
 
-    let summary = pytest_suite(&py, &dir, &mut |_| {});
+    let summary = pytest_suite(&py, &dir, &root.join("python").join("tests"), &mut |_| {});
     eprintln!("python: {summary}");
 
-    the_wheel_installs_and_passes_without_rust(&python, &dir, &wheel);
+    the_wheel_installs_and_passes_without_rust(&python, &dir, &wheel, &tree);
+}
+
+/// The file whose name ends with `suffix` that maturin wrote into `folder`.
+fn written(folder: &Path, suffix: &str) -> PathBuf {
+    std::fs::read_dir(folder)
+        .unwrap_or_else(|e| panic!("{}: {e}", folder.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.to_string_lossy().ends_with(suffix))
+        .unwrap_or_else(|| panic!("maturin wrote no {suffix} into {}", folder.display()))
+}
+
+/// Unpacks the sdist into `tree` as pip would, but writing only the files whose bytes changed
+/// and removing those the sdist no longer has, so that cargo (which compares modification
+/// times) rebuilds from `tree` exactly what changed. Fails on a link or any entry that is not a
+/// plain file: pip on another system gets the sdist's bytes, not a link into this checkout.
+const UNPACK: &str = r#"
+import os, sys, tarfile
+archive, tree = sys.argv[1], os.path.abspath(sys.argv[2])
+kept = set()
+with tarfile.open(archive) as tar:
+    for m in tar.getmembers():
+        if m.isdir():
+            continue
+        if not m.isfile():
+            sys.exit(f"{archive}: {m.name} is a link or a special file, not a file")
+        rel = m.name.split("/", 1)[1]
+        path = os.path.normpath(os.path.join(tree, rel))
+        if not path.startswith(tree + os.sep):
+            sys.exit(f"{archive}: {m.name} lies outside the sdist's folder")
+        data = tar.extractfile(m).read()
+        kept.add(path)
+        if os.path.isfile(path):
+            with open(path, "rb") as f:
+                if f.read() == data:
+                    continue
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as f:
+            f.write(data)
+for folder, _, files in os.walk(tree):
+    for name in files:
+        if os.path.join(folder, name) not in kept:
+            os.remove(os.path.join(folder, name))
+print(len(kept))
+"#;
+
+/// `maturin sdist` of python/ into `dir/sdist/`, unpacked into `dir/sdist/tree/` ([`UNPACK`]);
+/// returns the tree, whose root holds the sdist's pyproject.toml.
+fn sdist_tree(py: &Path, dir: &Path) -> PathBuf {
+    let out = dir.join("sdist");
+    let archives = out.join("dist");
+    let _ = std::fs::remove_dir_all(&archives);
+    let sdist = Command::new(py)
+        .args(["-m", "maturin", "sdist", "--out"])
+        .arg(&archives)
+        .current_dir(root().join("python"))
+        .output()
+        .expect("maturin runs");
+    assert!(
+        sdist.status.success(),
+        "maturin could not build the sdist:\n{}",
+        text(&sdist)
+    );
+    let archive = written(&archives, ".tar.gz");
+    let tree = out.join("tree");
+    let unpack = Command::new(py)
+        .args(["-c", UNPACK])
+        .arg(&archive)
+        .arg(&tree)
+        .output()
+        .expect("python runs");
+    assert!(unpack.status.success(), "{}", text(&unpack));
+    eprintln!(
+        "python: {} ({} bytes, {} files)",
+        archive.display(),
+        std::fs::metadata(&archive).expect("the sdist").len(),
+        String::from_utf8_lossy(&unpack.stdout).trim()
+    );
+    tree
 }
 
 /// The largest wheel users are asked to download (issue 40: 10 MB).
@@ -169,9 +250,11 @@ fn path_without_rust() -> std::ffi::OsString {
 }
 
 /// The wheel as a user gets it: a fresh venv with only NumPy and pytest, no Rust toolchain on
-/// PATH (so nothing can compile), the wheel installed by pip, and the whole pytest suite run
-/// against it. Also the wheel's size (at most [`MAX_WHEEL_BYTES`]) and its metadata.
-fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &Path) {
+/// PATH (so nothing can compile), the wheel installed by pip, and the sdist's own pytest suite
+/// (`tree`, where the tests find the pages they read as a lab unpacking the sdist does) run
+/// against it. Also the wheel's size (at most [`MAX_WHEEL_BYTES`]) and its metadata, the
+/// description python/README.md's.
+fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &Path, tree: &Path) {
     let bytes = std::fs::metadata(wheel).expect("the wheel").len();
     assert!(
         bytes <= MAX_WHEEL_BYTES,
@@ -219,15 +302,18 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
     let probe = Command::new(&py)
         .args([
             "-c",
-            "import shutil, time, importlib.metadata as m; \
+            "import sys, shutil, time, importlib.metadata as m; \
              assert shutil.which('cargo') is None and shutil.which('rustc') is None; \
              t = time.perf_counter(); import shadelab; t = time.perf_counter() - t; \
              md = m.metadata('shadelab'); \
              print(f'import {t * 1000:.0f} ms'); \
              print(md['License-Expression'] or md['License']); \
+             text = (md.get_payload() or md['Description'] or '').strip(); \
+             readme = open(sys.argv[1], encoding='utf-8').read().strip(); \
              print(len(md.get_all('Classifier') or []), len(md.get_all('Project-URL') or []), \
-                   len(md.get_payload() or md['Description'] or ''))",
+                   len(text), int(text == readme))",
         ])
+        .arg(root().join("python").join("README.md"))
         .env("PATH", &path)
         .current_dir(dir)
         .output()
@@ -237,12 +323,13 @@ fn the_wheel_installs_and_passes_without_rust(python: &str, dir: &Path, wheel: &
     let lines: Vec<&str> = said.lines().collect();
     let counts: Vec<usize> = lines[2].split(' ').map(|n| n.parse().unwrap()).collect();
     assert!(
-        // Classifiers and the README as the long description; no project URLs until there is
+        // Classifiers and python/README.md as the long description (not the crate's README.md,
+        // which sits at the sdist's root beside pyproject.toml); no project URLs until there is
         // a public home (README.md says a release sets them).
-        counts[0] >= 5 && counts[2] > 1000,
-        "metadata: {said}"
+        counts[0] >= 5 && counts[2] > 1000 && counts[3] == 1,
+        "metadata (classifiers, project URLs, description's length, whether it is python/README.md): {said}"
     );
-    let summary = pytest_suite(&py, dir, &mut |cmd| {
+    let summary = pytest_suite(&py, dir, &tree.join("python").join("tests"), &mut |cmd| {
         // PsychoPy and stimupy live in the build venv only; here their tests say why they skip.
         cmd.env("PATH", &path)
             .env_remove("SHADELAB_REQUIRE_PSYCHOPY")
@@ -269,10 +356,15 @@ fn pip_install(py: &Path, options: &[&str], what: &Path) -> Command {
     cmd
 }
 
-/// Runs the pytest suite with `py` from `dir` (outside python/, so that `import shadelab` is
-/// the installed wheel), `adjust` setting its environment; fails with pytest's report unless
-/// it passes, and returns pytest's summary line.
-fn pytest_suite(py: &Path, dir: &Path, adjust: &mut dyn FnMut(&mut Command)) -> String {
+/// Runs the pytest suite `tests` with `py` from `dir` (outside python/ and the sdist's tree, so
+/// that `import shadelab` is the installed wheel), `adjust` setting its environment; fails with
+/// pytest's report unless it passes, and returns pytest's summary line.
+fn pytest_suite(
+    py: &Path,
+    dir: &Path,
+    tests: &Path,
+    adjust: &mut dyn FnMut(&mut Command),
+) -> String {
     // PsychoPy keeps its preferences, fonts and monitors under the home folder (~/.psychopy3),
     // matplotlib its caches: the suite runs with a home of its own, so that testing writes
     // nothing into the user's.
@@ -281,7 +373,7 @@ fn pytest_suite(py: &Path, dir: &Path, adjust: &mut dyn FnMut(&mut Command)) -> 
     std::fs::create_dir_all(&home).expect("a scratch home folder");
     let mut cmd = Command::new(py);
     cmd.args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
-        .arg(root().join("python").join("tests"))
+        .arg(tests)
         .current_dir(dir)
         .env("HOME", &home)
         .env("PSYCHOPY_USERDIR", home.join(".psychopy3"))

@@ -122,6 +122,20 @@ fn every_manifest_lock_and_citation_carries_the_crates_version() {
     };
     assert_eq!(field("version:").as_deref(), Some(VERSION), "CITATION.cff");
     let changelog = read("CHANGELOG.md");
+    // Keep a Changelog's order: `[Unreleased]` first (empty right after a release), then this
+    // version's section, the newest released: a release renames `[Unreleased]` to it.
+    let sections: Vec<&str> = changelog
+        .lines()
+        .filter(|l| l.starts_with("## ["))
+        .take(2)
+        .collect();
+    assert!(
+        sections.first() == Some(&"## [Unreleased]")
+            && sections
+                .get(1)
+                .is_some_and(|s| s.starts_with(&format!("## [{VERSION}] - "))),
+        "CHANGELOG.md's first sections are {sections:?}: '## [Unreleased]', then '## [{VERSION}] - DATE'"
+    );
     let heading = format!("## [{VERSION}] - ");
     let date = changelog
         .lines()

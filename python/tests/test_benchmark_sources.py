@@ -2,15 +2,11 @@
 look lighter, and where it was read): checked on the table itself, without stimupy. The
 recorded positions are checked against stimupy's own target masks by tests/benchmark.rs."""
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "shadelab" / "_benchmark_data.py"
-_SPEC = importlib.util.spec_from_file_location("benchmark_data_under_test", _PATH)
-bd = importlib.util.module_from_spec(_SPEC)
-_SPEC.loader.exec_module(bd)
+# The installed package's module (the exporter `shadelab.benchmark` runs); it imports stimupy
+# only when it exports.
+from shadelab import _benchmark_data as bd
 
 
 def test_every_stimulus_cites_its_primary_source():
