@@ -25,9 +25,10 @@
 //! **Its schedule (issue 62), the default method of `shadelab solve` and `eval`.** The coarser
 //! grids solved to 10⁻⁴, the finest stopped at 10⁻²: within 0.1° of integrable-lm on the bench
 //! sphere (tilt 30° slant 40°) at 128², 256² and 512² and at λ = 0.1, 1, 10, 30 (see
-//! [`FINEST_TOL`]); about 50–130× the multigrid solve at 128²–512² on the loaded 2-core
-//! machine (`shadelab bench --methods multigrid,nested-lm`). The measurements below are of
-//! the method as first shipped, every grid to 10⁻⁴ and the finest to 10⁻⁶.
+//! [`FINEST_TOL`]); 85×, 116×, 140× and 202× the multigrid solve at 128², 256², 512² and
+//! 1024² on the 2-core machine (`shadelab bench --methods multigrid,nested-lm`). The
+//! measurements below are of the method as first shipped, every grid to 10⁻⁴ and the finest
+//! to 10⁻⁶.
 //!
 //! **What it achieves (measured for issue 43, 2-core machine, sphere of radius 0.45·side,
 //! occluding boundary, light at tilt 30° slant 40°).** The same minimum as integrable-lm:
