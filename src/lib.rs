@@ -106,7 +106,7 @@ pub use reflectance::{
 };
 pub use render::RenderOptions;
 pub use solver::crease::{CreaseOptions, Smoothness};
-pub use solver::{Method, Solution, SolveOptions};
+pub use solver::{Method, MethodSource, Solution, SolveOptions};
 
 // Stimuli (the catalogue itself is the `stimulus` module).
 pub use stimulus::{Pixels, SurfaceLayers, Targets};

@@ -109,14 +109,24 @@ pub const ANALYSIS_MULTIGRID_CYCLES: usize = 40;
 pub const ANALYSIS_JACOBI_SWEEPS: usize = 200_000;
 
 impl Default for ReconstructOptions {
-    /// `shadelab solve`'s policy: multigrid, λ = 1, tolerance 10⁻⁶, the method's default cap,
-    /// non-convergence reported, masked Poisson integration.
+    /// The fast policy (`shadelab solve --method multigrid`): multigrid, λ = 1, tolerance
+    /// 10⁻⁶, the method's default cap, non-convergence reported, masked Poisson integration.
+    /// `shadelab solve`'s own default is [`ReconstructOptions::for_solve`].
     fn default() -> Self {
         ReconstructOptions::from_solve(&SolveOptions::default(), NonConvergence::Report)
     }
 }
 
 impl ReconstructOptions {
+    /// `shadelab solve`'s and `eval`'s policy: [`Method::SOLVE_DEFAULT`] with its default
+    /// tolerance and cap, λ = 1, non-convergence reported, masked Poisson integration.
+    pub fn for_solve() -> Self {
+        ReconstructOptions::from_solve(
+            &SolveOptions::for_method(Method::SOLVE_DEFAULT),
+            NonConvergence::Report,
+        )
+    }
+
     /// The analyses' policy: at most [`ANALYSIS_MULTIGRID_CYCLES`] multigrid cycles, then
     /// Jacobi (at most [`ANALYSIS_JACOBI_SWEEPS`]) when multigrid has not settled.
     pub fn for_analysis() -> Self {

@@ -190,7 +190,8 @@ fn eval_writes_table_report_and_pictures() {
 }
 
 /// Without `--method`, eval solves each case once, with the method `shadelab solve` uses by
-/// default (issue 43: the evaluation runs the default; the other methods are asked for).
+/// default, nested-lm since issue 62 (issue 43: the evaluation runs the default; the other
+/// methods are asked for).
 #[test]
 fn eval_runs_the_solve_default_alone_unless_asked() {
     let Some(dir) = data() else { return };
@@ -205,8 +206,11 @@ fn eval_runs_the_solve_default_alone_unless_asked() {
     let cases: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let cases = cases.as_array().unwrap();
     assert_eq!(cases.len(), 1, "{cases:?}");
-    let default = shadelab::SolveOptions::default().method;
-    assert_eq!(cases[0]["method"], default.to_string());
+    assert_eq!(
+        cases[0]["method"],
+        shadelab::Method::SOLVE_DEFAULT.to_string()
+    );
+    assert_eq!(cases[0]["method"], "nested-lm");
 }
 
 fn image_size(path: &std::path::Path) -> (usize, usize) {

@@ -174,10 +174,10 @@ def solve(
     boundary: str = ...,
     albedo: Optional[Union[float, Literal["estimate"]]] = ...,
     lam: float = ...,
-    method: Literal[
-        "multigrid", "jacobi", "literal", "integrable", "integrable-lm", "nested-lm"
+    method: Optional[
+        Literal["nested-lm", "multigrid", "jacobi", "literal", "integrable", "integrable-lm"]
     ] = ...,
-    tol: float = ...,
+    tol: Optional[float] = ...,
     max_iter: Optional[int] = ...,
     saturation: Optional[Union[float, Literal["auto", "none"]]] = ...,
 ) -> Reconstruction: ...
@@ -317,9 +317,12 @@ def gallery(out: PathLike, *, presets: Optional[PathLike] = ..., force: bool = .
 def bench(
     *,
     sizes: Sequence[int] = ...,
+    methods: Union[str, Sequence[str]] = ...,
+    lam: float = ...,
     shape: str = ...,
     light: LightSpec = ...,
     jacobi_up_to: int = ...,
+    integrable_up_to: int = ...,
     reference: PathLike = ...,
     reference_up_to: int = ...,
     repeat: int = ...,

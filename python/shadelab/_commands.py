@@ -169,7 +169,7 @@ def evaluate(
     Mozart, DiLiGenT, Beethoven and the ball, from the data folder ``data``
     (docs/evaluation.md). ``only`` the sets, ``objects`` the DiLiGenT objects,
     ``ball_images`` the ball photographs, ``methods`` the solvers (a row each; by default
-    the one ``solve`` uses), and the other
+    the one ``solve`` uses, nested-lm; ``"multigrid"`` is the fast choice), and the other
     settings as the command line's flags. With ``out``, the folder (the table, every number,
     a picture per row) is written as the command line writes it. Returns an
     :class:`Evaluation` (``cases``, ``table``, ``folder``)."""
@@ -208,22 +208,31 @@ def gallery(out: PathLike, *, presets: Optional[PathLike] = None, force: bool = 
 def bench(
     *,
     sizes: Sequence[int] = (128, 256, 512, 1024),
+    methods: Union[str, Sequence[str]] = ("multigrid", "nested-lm", "jacobi"),
+    lam: float = 1.0,
     shape: str = "sphere",
     light: Any = (0.0, 0.0, 1.0),
     jacobi_up_to: int = 256,
+    integrable_up_to: int = 512,
     reference: PathLike = "../shared/reference",
     reference_up_to: int = 256,
     repeat: int = 3,
 ) -> Bench:
     """Times the shape-from-shading solvers on a synthetic ``shape`` at each size
-    (``shadelab bench``): multigrid, Jacobi up to ``jacobi_up_to``, and the NumPy reference
-    solver from ``reference`` up to ``reference_up_to`` when python3 with NumPy and that
-    folder are there. Returns a :class:`Bench` (``rows``, ``table``)."""
+    (``shadelab bench``): multigrid (always: every ratio is to it) and the ``methods`` named
+    (a list or a comma-separated string: jacobi up to ``jacobi_up_to``, integrable,
+    integrable-lm and nested-lm up to ``integrable_up_to``) at brightness weight ``lam``, and
+    the NumPy reference solver from ``reference`` up to ``reference_up_to`` when python3 with
+    NumPy and that folder are there. Returns a :class:`Bench` (``rows``, ``table``)."""
+    names = methods.split(",") if isinstance(methods, str) else [str(m) for m in methods]
     report, table = _shadelab.bench(
         [int(n) for n in sizes],
+        names,
+        float(lam),
         str(shape),
         _light_text(light),
         int(jacobi_up_to),
+        int(integrable_up_to),
         _fspath(reference),
         int(reference_up_to),
         int(repeat),

@@ -41,8 +41,8 @@ def solve(
     albedo: Optional[float],
     albedo_estimate: bool,
     lam: float,
-    method: str,
-    tol: float,
+    method: Optional[str],
+    tol: Optional[float],
     max_iter: Optional[int],
     saturation: str,
 ) -> Tuple[
@@ -145,9 +145,12 @@ def evaluate(
 def gallery(out: str, presets: Optional[str], force: bool) -> str: ...
 def bench(
     sizes: List[int],
+    methods: List[str],
+    lam: float,
     shape: str,
     light: str,
     jacobi_up_to: int,
+    integrable_up_to: int,
     reference: str,
     reference_up_to: int,
     repeat: int,

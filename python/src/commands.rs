@@ -279,9 +279,10 @@ pub fn evaluate(
             .map(|m| m.parse::<shadelab::Method>())
             .collect::<Result<_, _>>()
             .map_err(to_py)?;
+        config.method_source = shadelab::MethodSource::Asked;
     }
     config.options.lambda = lam.unwrap_or(config.options.lambda);
-    config.options.tol = tol.unwrap_or(config.options.tol);
+    config.tol = tol;
     config.max_iter = max_iter;
     config.validate().map_err(to_py)?;
     let record = evaluation::Record {
@@ -328,14 +329,17 @@ pub fn gallery(
 
 /// The solvers timed (`bench`): (report JSON, table).
 #[pyfunction]
-#[pyo3(signature = (sizes, shape, light, jacobi_up_to, reference, reference_up_to, repeat))]
+#[pyo3(signature = (sizes, methods, lambda, shape, light, jacobi_up_to, integrable_up_to, reference, reference_up_to, repeat))]
 #[allow(clippy::too_many_arguments)]
 pub fn bench(
     py: Python<'_>,
     sizes: Vec<usize>,
+    methods: Vec<String>,
+    lambda: f64,
     shape: String,
     light: &str,
     jacobi_up_to: usize,
+    integrable_up_to: usize,
     reference: PathBuf,
     reference_up_to: usize,
     repeat: usize,
@@ -343,11 +347,21 @@ pub fn bench(
     let light: shadelab::FrontLight = light
         .parse()
         .map_err(|e: Error| PyValueError::new_err(format!("light: {e}")))?;
+    let methods = methods
+        .iter()
+        .map(|m| {
+            m.parse::<shadelab::Method>()
+                .map_err(|e| PyValueError::new_err(format!("methods: {e}")))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
     let config = pl::bench::BenchConfig {
         sizes,
+        methods,
+        lambda,
         shape,
         light,
         jacobi_up_to,
+        integrable_up_to,
         reference,
         reference_up_to,
         repeat,

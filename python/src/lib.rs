@@ -503,8 +503,8 @@ fn solve<'py>(
     albedo: Option<f64>,
     albedo_estimate: bool,
     lam: f64,
-    method: &str,
-    tol: f64,
+    method: Option<&str>,
+    tol: Option<f64>,
     max_iter: Option<usize>,
     saturation: &str,
 ) -> PyResult<(
@@ -517,10 +517,13 @@ fn solve<'py>(
 )> {
     let image: Image = grid_from(image.as_array());
     let mask: Option<Mask> = mask.map(|m| grid_from(m.as_array()));
-    let method: shadelab::Method = method.parse().map_err(to_py)?;
+    let asked = method.map(str::parse).transpose().map_err(to_py)?;
+    let (method, method_source) = shadelab::Method::chosen(asked);
     let mut options = shadelab::SolveOptions::for_method(method);
     options.lambda = lam;
-    options.tol = tol;
+    if let Some(t) = tol {
+        options.tol = t;
+    }
     if let Some(n) = max_iter {
         options.max_iter = n;
     }
@@ -533,6 +536,7 @@ fn solve<'py>(
     config.saturation = saturation.parse().map_err(to_py)?;
     config.options =
         shadelab::ReconstructOptions::from_solve(&options, shadelab::NonConvergence::Report);
+    config.method_source = method_source;
     config.record = pl::solve::SolveRecord {
         light: light.to_string(),
         boundary: boundary.to_string(),

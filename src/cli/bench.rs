@@ -5,7 +5,7 @@
 use super::flags::usage;
 use super::{progress::Bar, CliError, CliResult, Global};
 use shadelab::pipeline::bench::{self, BenchConfig};
-use shadelab::FrontLight;
+use shadelab::{FrontLight, Method};
 use std::path::PathBuf;
 
 /// Arguments of `bench`.
@@ -20,6 +20,23 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub sizes: Vec<usize>,
+    /// The methods to time, comma separated, in the table's order: multigrid (always timed:
+    /// every ratio is to it), jacobi, integrable, integrable-lm, nested-lm.
+    #[arg(
+        long,
+        value_name = "M,M,…",
+        default_value = "multigrid,nested-lm,jacobi",
+        value_delimiter = ','
+    )]
+    pub methods: Vec<String>,
+    /// Weight λ of the brightness term (0.001 to 1000).
+    #[arg(
+        long,
+        value_name = "L",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
+    pub lambda: f64,
     /// The shape: sphere (radius 0.45 of the side) or vase.
     #[arg(long, value_name = "sphere|vase", default_value = "sphere")]
     pub shape: String,
@@ -40,6 +57,15 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub jacobi_up_to: usize,
+    /// Time the integrable methods (integrable, integrable-lm, nested-lm) up to this side
+    /// (at 1024² nested-lm takes minutes on two cores, integrable-lm far longer).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 512,
+        allow_hyphen_values = true
+    )]
+    pub integrable_up_to: usize,
     /// The folder of the NumPy reference (`run_reference.py`).
     #[arg(long, value_name = "PATH", default_value = "../shared/reference")]
     pub reference: PathBuf,
@@ -71,6 +97,11 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     if args.repeat == 0 {
         return Err(CliError::usage("--repeat must be at least 1"));
     }
+    let methods = args
+        .methods
+        .iter()
+        .map(|m| m.parse::<Method>().map_err(|e| usage("--methods", e)))
+        .collect::<Result<Vec<_>, _>>()?;
     let light: FrontLight = args.light.parse().map_err(|e| usage("--light", e))?;
     if let Some(&n) = args
         .sizes
@@ -84,6 +115,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
     }
     let config = BenchConfig {
         sizes: args.sizes,
+        methods,
+        lambda: args.lambda,
+        integrable_up_to: args.integrable_up_to,
         shape: args.shape,
         light,
         jacobi_up_to: args.jacobi_up_to,
@@ -92,6 +126,9 @@ pub fn run(args: Args, global: &Global) -> CliResult {
         repeat: args.repeat,
         max_pixels: global.max_pixels,
     };
+    config
+        .validate()
+        .map_err(|e| CliError::usage(e.to_string()))?;
     let report = bench::run(&config, &Bar::new(global.quiet))?;
     super::output::Output::new(global).results(&report.table(), &report)
 }

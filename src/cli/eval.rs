@@ -76,8 +76,9 @@ fn methods_help() -> String {
          solution), integrable-lm (the integrable method's energy minimised by \
          Levenberg–Marquardt; slower), nested-lm (the same energy, solved coarse to fine; \
          integrable-lm's accuracy in fewer steps), jacobi (Ikeuchi–Horn's fixed point, slowly; for \
-         comparison) [default: {}, the method of `shadelab solve`]",
-        Method::default()
+         comparison) [default: {}, the method of `shadelab solve`; multigrid is the fast \
+         choice]",
+        Method::SOLVE_DEFAULT
     )
 }
 
@@ -115,8 +116,10 @@ pub fn run(args: Args, global: &Global) -> CliResult {
             .iter()
             .map(|m| m.trim().parse::<Method>())
             .collect::<Result<_, _>>()?;
+        config.method_source = shadelab::MethodSource::Asked;
     }
     args.solver.apply(&mut config.options)?;
+    config.tol = args.solver.tol;
     config.max_iter = args.solver.max_iter;
     config.validate()?;
     let commit = match &args.commit {

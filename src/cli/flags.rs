@@ -9,7 +9,7 @@ use shadelab::pipeline::solve::BoundarySource;
 use shadelab::pipeline::solve::{
     INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER, JACOBI_MAX_SWEEPS, MULTIGRID_MAX_CYCLES,
 };
-use shadelab::SolveOptions;
+use shadelab::{Method, SolveOptions};
 
 /// The solver's settings: λ, the tolerance and the iteration cap (left out, the cap is the one
 /// the library's configuration of the command already holds).
@@ -24,18 +24,22 @@ pub struct SolverFlags {
         allow_hyphen_values = true
     )]
     pub lambda: f64,
-    /// Stop when the largest change of f or g in a Jacobi sweep is below this (for multigrid:
-    /// the change the next Jacobi sweep would make); 1e-12 to 0.1.
-    #[arg(
-        long,
-        value_name = "T",
-        default_value_t = SolveOptions::default().tol,
-        allow_hyphen_values = true
-    )]
-    pub tol: f64,
+    #[arg(long, value_name = "T", allow_hyphen_values = true, help = tol_help())]
+    pub tol: Option<f64>,
     /// Stop a solve after this many sweeps, or cycles for multigrid.
     #[arg(long, value_name = "N", allow_hyphen_values = true, help = max_iter_help())]
     pub max_iter: Option<usize>,
+}
+
+/// The `--tol` help, with the library's defaults.
+fn tol_help() -> String {
+    format!(
+        "Stop when the largest change of f or g in a Jacobi sweep or step is below this (for \
+         multigrid: the change the next Jacobi sweep would make); 1e-12 to 0.1 [default: {:e} \
+         for nested-lm (its finest grid's steps), {:e} for the others]",
+        Method::NestedLm.default_tol(),
+        Method::Multigrid.default_tol()
+    )
 }
 
 /// The `--max-iter` help, with the library's defaults.
@@ -50,7 +54,7 @@ fn max_iter_help() -> String {
 }
 
 impl SolverFlags {
-    /// Sets λ, the tolerance and (when given) the cap of `options`, each checked alone
+    /// Sets λ and (when given) the tolerance and the cap of `options`, each checked alone
     /// ([`SolveOptions::validate`]) so that a refusal names its own flag and the range.
     pub fn apply(&self, options: &mut SolveOptions) -> Result<(), CliError> {
         let alone = |flag: &str, set: &dyn Fn(&mut SolveOptions)| {
@@ -59,12 +63,16 @@ impl SolverFlags {
             one.validate().map_err(|e| usage(flag, e))
         };
         alone("--lambda", &|o| o.lambda = self.lambda)?;
-        alone("--tol", &|o| o.tol = self.tol)?;
+        if let Some(t) = self.tol {
+            alone("--tol", &|o| o.tol = t)?;
+        }
         if let Some(n) = self.max_iter {
             alone("--max-iter", &|o| o.max_iter = n)?;
         }
         options.lambda = self.lambda;
-        options.tol = self.tol;
+        if let Some(t) = self.tol {
+            options.tol = t;
+        }
         if let Some(n) = self.max_iter {
             options.max_iter = n;
         }

@@ -41,7 +41,7 @@ use crate::light::{FrontLight, Light};
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
-use crate::solver::{Method, SolveOptions};
+use crate::solver::{Method, MethodSource, SolveOptions};
 use crate::surface::Surface;
 use crop::Crop;
 use datasets::Photo;
@@ -87,18 +87,24 @@ pub struct Config {
     /// Divide the ball photographs by the albedo their true normals give instead of the
     /// estimate: not a user's situation, a reference for how much the estimate costs.
     pub ball_albedo_from_truth: bool,
-    /// The solver's parameters λ and tolerance (its method and cap are set per method by
+    /// The solver's parameter λ (its method, tolerance and cap are set per method by
     /// [`Config::options_for`]).
     pub options: SolveOptions,
     /// The methods every case is solved with, a row each, in this order.
     pub methods: Vec<Method>,
+    /// Whether [`Config::methods`] were asked for or are the default
+    /// ([`Method::SOLVE_DEFAULT`]); recorded in the report's settings.
+    pub method_source: MethodSource,
+    /// The tolerance for every method; `None`: each method's default
+    /// ([`Method::default_tol`]).
+    pub tol: Option<f64>,
     /// The cap of iterations for every method; `None`: each method's default
     /// ([`Method::default_max_iter`]).
     pub max_iter: Option<usize>,
 }
 
-/// The solver parameters of the evaluation: the defaults of `shadelab solve` (λ = 1,
-/// tolerance 10⁻⁶; the method and cap are set per method, [`Config::options_for`]).
+/// The solver parameters of the evaluation: the defaults of `shadelab solve` (λ = 1; the
+/// method, tolerance and cap are set per method, [`Config::options_for`]).
 pub fn default_options() -> SolveOptions {
     SolveOptions::default()
 }
@@ -147,16 +153,19 @@ impl Config {
             options: default_options(),
             // The method `shadelab solve` uses, as a user would solve: a row per case. The
             // table of docs/evaluation.md names its methods with `--method`.
-            methods: vec![Method::default()],
+            methods: vec![Method::SOLVE_DEFAULT],
+            method_source: MethodSource::Default,
+            tol: None,
             max_iter: None,
         })
     }
 
-    /// The solver's parameters for `method`: λ and the tolerance of [`Config::options`], the
-    /// cap [`Config::max_iter`] or the method's default.
+    /// The solver's parameters for `method`: λ of [`Config::options`], the tolerance
+    /// [`Config::tol`] and the cap [`Config::max_iter`] or the method's defaults.
     pub fn options_for(&self, method: Method) -> SolveOptions {
         SolveOptions {
             method,
+            tol: self.tol.unwrap_or(method.default_tol()),
             max_iter: self.max_iter.unwrap_or(method.default_max_iter()),
             ..self.options
         }
@@ -278,8 +287,9 @@ impl Config {
             "occluding_shrink": crate::boundary::OCCLUDING_SHRINK,
             "solver": {
                 "methods": self.methods.iter().map(Method::to_string).collect::<Vec<_>>(),
+                "methods_source": self.method_source,
                 "lambda": self.options.lambda,
-                "tol": self.options.tol,
+                "tol": self.methods.iter().map(|&m| (m.to_string(), Value::from(self.options_for(m).tol))).collect::<serde_json::Map<_, _>>(),
                 "max_iter": self.methods.iter().map(|&m| (m.to_string(), Value::from(self.options_for(m).max_iter))).collect::<serde_json::Map<_, _>>(),
                 "reflectance": "Lambertian, albedo 1 (images divided by the albedo), no ambient",
             },

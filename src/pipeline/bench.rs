@@ -10,16 +10,15 @@ use crate::progress::Progress;
 use crate::reconstruct::{NonConvergence, Problem, ReconstructOptions, Reconstructor};
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
-use crate::solver::{Method, Solution};
+use crate::solver::{Method, Solution, SolveOptions};
 use crate::surface::{sphere, vase};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// The largest side at which [`Method::NestedLm`] is timed: it takes about 35 s at 512² and
-/// several minutes at 1024² on a 2-core machine.
-pub const NESTED_LM_UP_TO: usize = 512;
+/// The methods timed when none are named: multigrid, nested-lm and Jacobi.
+pub const DEFAULT_BENCH_METHODS: &[Method] = &[Method::Multigrid, Method::NestedLm, Method::Jacobi];
 
 /// The shapes the bench renders.
 pub const BENCH_SHAPES: &[&str] = &["sphere", "vase"];
@@ -29,6 +28,15 @@ pub const BENCH_SHAPES: &[&str] = &["sphere", "vase"];
 pub struct BenchConfig {
     /// Image sides to time.
     pub sizes: Vec<usize>,
+    /// The methods to time, in the table's order ([`DEFAULT_BENCH_METHODS`] by default).
+    /// Multigrid is timed whether named or not: every ratio is to it. Jacobi is timed up to
+    /// [`BenchConfig::jacobi_up_to`], the integrable methods up to
+    /// [`BenchConfig::integrable_up_to`].
+    pub methods: Vec<Method>,
+    /// Weight λ of the brightness term (1 by default).
+    pub lambda: f64,
+    /// Time the integrable methods (integrable, integrable-lm, nested-lm) up to this side.
+    pub integrable_up_to: usize,
     /// `sphere` (radius 0.45 of the side) or `vase`.
     pub shape: String,
     /// The light.
@@ -56,6 +64,17 @@ impl BenchConfig {
         if self.repeat == 0 {
             return Err(Error::invalid("repeat must be at least 1"));
         }
+        if self.methods.contains(&Method::Literal) {
+            return Err(Error::invalid(
+                "the methods cannot include literal: its update is unstable and never converges \
+                 (nothing to time)",
+            ));
+        }
+        SolveOptions {
+            lambda: self.lambda,
+            ..SolveOptions::default()
+        }
+        .validate()?;
         if !BENCH_SHAPES.contains(&self.shape.as_str()) {
             return Err(Error::unknown("shape", &self.shape, BENCH_SHAPES));
         }
@@ -97,15 +116,24 @@ pub struct BenchRow {
     pub numpy: Option<Timing>,
     /// Mean angle between the multigrid and Jacobi normals, degrees.
     pub jacobi_difference_deg: Option<f64>,
-    /// The integrable energy minimised coarse to fine ([`Method::NestedLm`]), timed once, up
-    /// to [`NESTED_LM_UP_TO`].
-    pub nested_lm: Option<Timing>,
-    /// Its seconds over multigrid's.
-    pub nested_lm_vs_multigrid: Option<f64>,
-    /// Mean angle between its normals and the true ones, degrees.
-    pub nested_lm_error_deg: Option<f64>,
+    /// The other methods asked for (not multigrid, not Jacobi), each timed once, in the
+    /// order asked, up to [`BenchConfig::integrable_up_to`].
+    pub others: Vec<MethodTiming>,
     /// Mean angle between multigrid's normals and the true ones, degrees.
     pub multigrid_error_deg: f64,
+}
+
+/// One timed solve of a method other than multigrid and Jacobi.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MethodTiming {
+    /// The method, as `--method` spells it.
+    pub method: String,
+    /// Its timing.
+    pub timing: Timing,
+    /// Its seconds over multigrid's.
+    pub vs_multigrid: f64,
+    /// Mean angle between its normals and the true ones, degrees.
+    pub error_deg: f64,
 }
 
 /// The bench's results.
@@ -113,6 +141,8 @@ pub struct BenchRow {
 pub struct BenchReport {
     /// What was timed, in words.
     pub setup: String,
+    /// The methods timed, in the table's order (multigrid first).
+    pub methods: Vec<String>,
     /// Worker threads.
     pub threads: usize,
     /// Multigrid repeats per size.
@@ -135,7 +165,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
     let reference = Reference::find(&config.reference);
     let d = light.direction();
     let setup = format!(
-        "{} (occluding boundary), light ({:.3}, {:.3}, {:.3}), λ = 1, tol 1e-6",
+        "{} (occluding boundary), light ({:.3}, {:.3}, {:.3}), λ = {}, tol: each method's own",
         if config.shape == "sphere" {
             "sphere of radius 0.45·side"
         } else {
@@ -143,8 +173,16 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         },
         d.x,
         d.y,
-        d.z
+        d.z,
+        config.lambda
     );
+    // Multigrid first (every ratio is to it), then the others in the order asked, once each.
+    let mut methods = vec![Method::Multigrid];
+    for &m in &config.methods {
+        if !methods.contains(&m) {
+            methods.push(m);
+        }
+    }
     let mut rows = Vec::new();
     progress.start(config.sizes.len() as u64, "timing");
     for &size in &config.sizes {
@@ -163,6 +201,8 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         let planner = |method: Method| {
             let options = ReconstructOptions {
                 method,
+                lambda: config.lambda,
+                tol: method.default_tol(),
                 // The method's own cap: the default options carry multigrid's 1,000, which
                 // would stop Jacobi long before it converges.
                 max_iter: None,
@@ -171,11 +211,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
             };
             Reconstructor::new(size, size, options)
         };
-        let (mut multigrid_planner, mut jacobi_planner, mut nested_planner) = (
-            planner(Method::Multigrid)?,
-            planner(Method::Jacobi)?,
-            planner(Method::NestedLm)?,
-        );
+        let mut multigrid_planner = planner(Method::Multigrid)?;
         let time = |planner: &mut Reconstructor| -> Result<(Timing, Solution)> {
             let started = Instant::now();
             let shape = planner.solve(&problem, &crate::progress::NoProgress)?;
@@ -197,16 +233,28 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
         let Some((multigrid, fast)) = best else {
             continue;
         };
-        let jacobi = (size <= config.jacobi_up_to)
-            .then(|| time(&mut jacobi_planner))
-            .transpose()?;
-        let nested = (size <= NESTED_LM_UP_TO)
-            .then(|| time(&mut nested_planner))
+        let jacobi = (methods.contains(&Method::Jacobi) && size <= config.jacobi_up_to)
+            .then(|| time(&mut planner(Method::Jacobi)?))
             .transpose()?;
         let truth = &surface.normals;
         let error = |s: &Solution| -> Result<f64> {
             Ok(angular_error(&s.normals(), truth, &surface.mask)?.mean_deg)
         };
+        let mut others = Vec::new();
+        for &method in &methods {
+            if matches!(method, Method::Multigrid | Method::Jacobi)
+                || size > config.integrable_up_to
+            {
+                continue;
+            }
+            let (timing, s) = time(&mut planner(method)?)?;
+            others.push(MethodTiming {
+                method: method.to_string(),
+                timing,
+                vs_multigrid: timing.seconds / multigrid.seconds,
+                error_deg: error(&s)?,
+            });
+        }
         let numpy = match &reference {
             Ok(r) if size <= config.reference_up_to => Some(r.run(&config.shape, size, &light)?),
             _ => None,
@@ -221,9 +269,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
                 .map(|e| e.mean_deg),
             jacobi: jacobi.map(|(t, _)| t),
             numpy,
-            nested_lm: nested.as_ref().map(|(t, _)| *t),
-            nested_lm_vs_multigrid: nested.as_ref().map(|(t, _)| t.seconds / multigrid.seconds),
-            nested_lm_error_deg: nested.as_ref().map(|(_, s)| error(s)).transpose()?,
+            others,
             multigrid_error_deg: error(&fast)?,
         });
         progress.advance(1);
@@ -231,6 +277,7 @@ pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchReport>
     progress.finish();
     Ok(BenchReport {
         setup,
+        methods: methods.iter().map(|m| m.to_string()).collect(),
         threads: crate::parallel::threads(),
         repeat: config.repeat,
         notes: notes(config, &reference),
@@ -243,12 +290,13 @@ fn notes(config: &BenchConfig, reference: &std::result::Result<Reference, String
     let mut notes = Vec::new();
     let above = |limit: usize| config.sizes.iter().filter(|&&n| n > limit).count();
     let jacobi_above = above(config.jacobi_up_to);
-    if jacobi_above == config.sizes.len() {
+    let jacobi = config.methods.contains(&Method::Jacobi);
+    if jacobi && jacobi_above == config.sizes.len() {
         notes.push(format!(
             "jacobi is not run: every size is above its limit of {}",
             config.jacobi_up_to
         ));
-    } else if jacobi_above > 0 {
+    } else if jacobi && jacobi_above > 0 {
         notes.push(format!(
             "jacobi is timed up to {0}²; its sweeps grow about 3.4× per doubling of the side",
             config.jacobi_up_to
@@ -272,9 +320,17 @@ fn notes(config: &BenchConfig, reference: &std::result::Result<Reference, String
         }
         Err(why) => notes.push(format!("vs numpy-sor column skipped: {why}")),
     }
-    if config.sizes.iter().any(|&n| n > NESTED_LM_UP_TO) {
+    let integrable: Vec<String> = config
+        .methods
+        .iter()
+        .filter(|m| !matches!(m, Method::Multigrid | Method::Jacobi))
+        .map(|m| m.to_string())
+        .collect();
+    if !integrable.is_empty() && above(config.integrable_up_to) > 0 {
         notes.push(format!(
-            "nested-lm is timed up to {NESTED_LM_UP_TO}² (it takes minutes above)"
+            "{} timed up to {}² (--integrable-up-to)",
+            integrable.join(", "),
+            config.integrable_up_to
         ));
     }
     if let Some(peak) = peak_memory_bytes() {
@@ -329,29 +385,31 @@ impl BenchReport {
                     &error(r.multigrid_error_deg),
                 ],
             );
-            if let (Some(n), Some(ratio), Some(e)) = (
-                &r.nested_lm,
-                r.nested_lm_vs_multigrid,
-                r.nested_lm_error_deg,
-            ) {
-                let ratio = format!("{ratio:.1}×");
-                t += &row(
-                    r.size,
-                    "nested-lm",
-                    n,
-                    "steps",
-                    ["—", "—", "—", &ratio, &error(e)],
-                );
-            }
-            if let Some(j) = &r.jacobi {
-                let vs_numpy = ratio(r.numpy.map(|n| n.seconds), j.seconds, 1);
-                t += &row(
-                    r.size,
-                    "jacobi",
-                    j,
-                    "sweeps",
-                    ["1×", &vs_numpy, "0", "—", "—"],
-                );
+            for name in &self.methods {
+                if let Some(o) = r.others.iter().find(|o| &o.method == name) {
+                    let unit = o
+                        .method
+                        .parse::<Method>()
+                        .map_or("steps", |m| m.iteration_unit());
+                    let ratio = format!("{:.1}×", o.vs_multigrid);
+                    t += &row(
+                        r.size,
+                        &o.method,
+                        &o.timing,
+                        unit,
+                        ["—", "—", "—", &ratio, &error(o.error_deg)],
+                    );
+                }
+                if let (Some(j), "jacobi") = (&r.jacobi, name.as_str()) {
+                    let vs_numpy = ratio(r.numpy.map(|n| n.seconds), j.seconds, 1);
+                    t += &row(
+                        r.size,
+                        "jacobi",
+                        j,
+                        "sweeps",
+                        ["1×", &vs_numpy, "0", "—", "—"],
+                    );
+                }
             }
             if let Some(n) = &r.numpy {
                 t += &row(r.size, "numpy-sor", n, "sweeps", ["—", "1×", "—", "—", "—"]);
@@ -360,8 +418,8 @@ impl BenchReport {
         t += &format!(
             "\nmultigrid: best of {} runs; its iterations are cycles (W-cycles), the others' are \
              sweeps;\nΔ jacobi: mean angle between the multigrid and Jacobi normals over the \
-             unknowns;\nnested-lm (the integrable energy minimised coarse to fine, its iterations \
-             the finest grid's steps): one run, its seconds over multigrid's in vs multigrid;\n\
+             unknowns;\nintegrable, integrable-lm and nested-lm: one run each, their seconds over \
+             multigrid's in vs multigrid (nested-lm's steps: the finest grid's);\n\
              error: mean angle between the normals and the true ones over the mask.\n",
             self.repeat
         );

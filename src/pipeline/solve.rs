@@ -28,6 +28,7 @@ use crate::reconstruct::{
     Depth, LightAndAlbedo, Problem, ReconstructOptions, Reconstructor, Shape,
 };
 use crate::reflectance::BrdfSpec;
+use crate::solver::MethodSource;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -131,6 +132,9 @@ pub struct SolveConfig {
     pub saturation: Saturation,
     /// The reconstruction's policy (method, λ, tolerance, cap, non-convergence, integration).
     pub options: ReconstructOptions,
+    /// Whether [`ReconstructOptions::method`] was asked for or is the default
+    /// ([`crate::Method::SOLVE_DEFAULT`]); recorded in the report.
+    pub method_source: MethodSource,
     /// The largest image accepted, in pixels.
     pub max_pixels: usize,
     /// How the light and boundary were written by the user and where the outputs go, recorded
@@ -165,7 +169,7 @@ impl SolveConfig {
     }
 
     /// A configuration with `shadelab solve`'s defaults: no mask, the occluding boundary,
-    /// Lambertian reflectance, [`ReconstructOptions::default`].
+    /// Lambertian reflectance, [`ReconstructOptions::for_solve`] (the default method).
     pub fn new(image: impl Into<PathBuf>, light: LightChoice) -> SolveConfig {
         SolveConfig {
             image: image.into(),
@@ -177,7 +181,8 @@ impl SolveConfig {
             albedo: None,
             albedo_estimate: false,
             saturation: Saturation::Auto,
-            options: ReconstructOptions::default(),
+            options: ReconstructOptions::for_solve(),
+            method_source: MethodSource::Default,
             max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             record: SolveRecord::default(),
         }
@@ -265,6 +270,8 @@ pub struct SolveParameters {
     pub lambda: f64,
     /// The method.
     pub method: String,
+    /// Why that method: `default` (none was asked: [`crate::Method::SOLVE_DEFAULT`]) or `asked`.
+    pub method_source: MethodSource,
     /// The tolerance.
     pub tol: f64,
     /// The cap of iterations.
@@ -743,6 +750,7 @@ fn report(
             albedo_estimate: solved.albedo_estimate,
             lambda: config.options.lambda,
             method: config.options.method.to_string(),
+            method_source: config.method_source,
             tol: config.options.tol,
             max_iter: config.options.max_iter(),
             out: record.out.clone(),

@@ -69,6 +69,35 @@ pub enum Method {
     NestedLm,
 }
 
+impl Method {
+    /// The method of `shadelab solve` and `shadelab eval` (and of Python's `solve` and
+    /// `evaluate`) when none is asked: nested-lm, the integrable answer (within 0.1° of
+    /// integrable-lm's minimum on the bench sphere; 1.3° at 256² against multigrid's 6.5°) at
+    /// about 50–150× the multigrid solve. The analyses and the teaching page keep
+    /// [`Method::default`] (multigrid, docs/perception.md says why); a user who wants the fast
+    /// answer asks for multigrid.
+    pub const SOLVE_DEFAULT: Method = Method::NestedLm;
+
+    /// The method to run and why: the one asked, or [`Method::SOLVE_DEFAULT`].
+    pub fn chosen(asked: Option<Method>) -> (Method, MethodSource) {
+        match asked {
+            Some(m) => (m, MethodSource::Asked),
+            None => (Method::SOLVE_DEFAULT, MethodSource::Default),
+        }
+    }
+}
+
+/// Why a solve ran the method it ran, as its report records it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MethodSource {
+    /// No method was asked: [`Method::SOLVE_DEFAULT`].
+    #[default]
+    Default,
+    /// The user named it (`--method`, Python's `method=`).
+    Asked,
+}
+
 /// The names of the methods, as `--method` spells them.
 pub const METHOD_NAMES: &[&str] = &[
     "multigrid",
@@ -141,6 +170,17 @@ impl Method {
         }
     }
 
+    /// The default tolerance of this method (the largest change of f or g at which it stops):
+    /// 10⁻⁶ for all but nested-lm, whose finest grid stops at [`FINEST_TOL`] (its
+    /// cheapest schedule that keeps integrable-lm's accuracy; a smaller `tol` polishes
+    /// further). The one place these defaults are decided.
+    pub const fn default_tol(self) -> f64 {
+        match self {
+            Method::NestedLm => FINEST_TOL,
+            _ => DEFAULT_TOL,
+        }
+    }
+
     /// What one iteration of this method is called: `cycles` for multigrid, `iterations` for
     /// the integrable method (one depth solve and its gradient sweeps), `steps` for
     /// integrable-lm (one accepted Levenberg–Marquardt step), `sweeps` else.
@@ -153,6 +193,9 @@ impl Method {
         }
     }
 }
+
+/// The tolerance every method but nested-lm stops at by default ([`Method::default_tol`]).
+pub const DEFAULT_TOL: f64 = 1e-6;
 
 /// The smoothness weights λ accepted (both ends included): the multigrid solve converges
 /// across it on the rendered sphere and vase (tests/solve.rs); Jacobi sweeps are stable only
@@ -190,7 +233,7 @@ impl SolveOptions {
     pub const fn for_method(method: Method) -> SolveOptions {
         SolveOptions {
             lambda: 1.0,
-            tol: 1e-6,
+            tol: method.default_tol(),
             max_iter: method.default_max_iter(),
             method,
             saturation: None,
@@ -929,7 +972,7 @@ pub use integrable::{
     ANDERSON_DEPTH, CG_MAX_ITER, CG_TOL, INTEGRABLE_LM_MAX_STEPS, INTEGRABLE_MAX_ITER,
     LM_ANDERSON_DEPTH, MU, SIGMA, SWEEPS,
 };
-pub use nested::{COARSEST_SIDE, LEVEL_MAX_STEPS, LEVEL_TOL};
+pub use nested::{COARSEST_SIDE, FINEST_TOL, LEVEL_MAX_STEPS, LEVEL_TOL};
 
 #[cfg(test)]
 pub(crate) mod tests;
