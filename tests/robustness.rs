@@ -53,6 +53,7 @@ fn the_albedo_estimate_does_not_care_how_a_photograph_was_normalised() {
                 LightChoice::Given(shadelab::FrontLight::new(photo.light).unwrap()),
             );
             config.albedo_estimate = true;
+            config.options = multigrid();
             let run = run_image(&config, picture, Some(mask.clone()), &NoProgress).unwrap();
             let error = angular_error(&run.shape.solution.normals(), &truth, &mask).unwrap();
             let albedo = run.report.parameters.albedo_estimate.unwrap().value * top;
@@ -117,6 +118,7 @@ fn a_sphere_clipped_at_its_90th_percentile_is_solved_as_the_unclipped_one() {
             LightChoice::Given(shadelab::FrontLight::new(light).unwrap()),
         );
         config.albedo_estimate = true;
+        config.options = multigrid();
         config.saturation = saturation;
         let run = run_image(&config, picture.clone(), Some(s.mask.clone()), &NoProgress).unwrap();
         assert!(run.report.solver.converged);
@@ -140,4 +142,14 @@ fn a_sphere_clipped_at_its_90th_percentile_is_solved_as_the_unclipped_one() {
         "{left_out} against {unclipped}"
     );
     assert!(kept_in > left_out + 0.2, "{kept_in} against {left_out}");
+}
+
+/// The multigrid solve's options: the saturation rule and the albedo estimate were measured
+/// with it (the default, nested-lm, loses more on a clipped plateau: the clipped sphere's
+/// 4.75° against its unclipped 2.33°; issue 62).
+fn multigrid() -> shadelab::ReconstructOptions {
+    shadelab::ReconstructOptions::from_solve(
+        &shadelab::SolveOptions::for_method(shadelab::Method::Multigrid),
+        shadelab::NonConvergence::Report,
+    )
 }

@@ -15,7 +15,7 @@ use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
-use crate::io::{self, Stamp};
+use crate::io::{self, render_sidecar::Beside, Stamp};
 use crate::lightness::fading::{adaptation_time_course, border_energy, Disk, PerceivedFrames};
 use crate::parallel::prelude::*;
 use crate::plot::{LinePlot, Series};
@@ -333,11 +333,15 @@ fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
     // A fading disk rendered to a file (its sidecar records it) and no labels given: the file
     // holds the blurred disk, and its sharp twin is the render the sidecar records with
     // blur = 0, as for the stimulus by name, so that both routes give the same numbers.
+    // (A sidecar that cannot be read is left to the picture's own reading to report.)
     let given_labels = source.mask.is_some() || source.labels.is_some();
-    let beside = source.beside()?;
+    let beside = match given_labels {
+        true => Beside::Nothing,
+        false => source.beside().unwrap_or(Beside::Nothing),
+    };
     let render = beside
         .sidecar()
-        .filter(|s| !given_labels && s.stimulus.as_deref() == Some(FADING_DISK));
+        .filter(|s| s.stimulus.as_deref() == Some(FADING_DISK));
     if let Some(sidecar) = render {
         let blurred = source.load(true)?;
         let sharp = PictureSource {
