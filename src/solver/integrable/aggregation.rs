@@ -147,6 +147,9 @@ const COARSEST: usize = 500;
 /// planned: the finest pattern of a 1024² picture takes seconds in all.
 const CANCEL_ROWS: usize = 1 << 16;
 
+/// Blocks inverted between two looks for a requested stop while the matrix is filled.
+const CANCEL_BLOCKS: usize = 1 << 12;
+
 /// The most levels.
 const MAX_LEVELS: usize = 12;
 
@@ -231,11 +234,17 @@ impl Multigrid {
     /// Sets the finest matrix to the sums of `values` at the planned positions (in their
     /// order), and every coarser level, smoother and factor from it.
     pub(super) fn fill(&mut self, values: impl ExactSizeIterator<Item = f64>) {
+        // A requested stop ends the filling where it is (the caller's step then lowers
+        // nothing and its loop stops on the same flag): at 1024² the whole fill is a few
+        // hundred milliseconds.
         self.levels[0].a.fill(&self.entry, values);
         for l in 0..self.levels.len() {
             let (fine, coarser) = self.levels.split_at_mut(l + 1);
             let level = &mut fine[l];
-            for block in &mut level.blocks {
+            for (i, block) in level.blocks.iter_mut().enumerate() {
+                if i % CANCEL_BLOCKS == 0 && crate::cancel::requested() {
+                    return;
+                }
                 block.invert(&level.a);
             }
             match (&level.coarse, coarser.first_mut()) {

@@ -145,7 +145,8 @@ impl Model<'_, '_> {
     /// Calls `emit(row, column, value)` for each entry of [`Model::matrix`] (summed where they
     /// meet): the matrix the preconditioner coarsens. The positions are the same at every
     /// point of one energy, in the same order, so the preconditioner is planned from them once
-    /// and later steps read the values alone.
+    /// and later steps read the values alone. Once a stop is requested ([`crate::cancel`]) it
+    /// emits no more: a caller looks at the flag before it uses the entries.
     pub(super) fn entries(&self, nu: f64, mut emit: impl FnMut(u32, u32, f64)) {
         let e = self.energy;
         let n = e.len();
@@ -156,6 +157,11 @@ impl Model<'_, '_> {
         );
         let mut terms: Vec<(usize, f64, f64)> = Vec::with_capacity(4);
         for j in 0..n {
+            // A requested stop ends the listing early (at 1024² it takes a tenth of a second
+            // or more); the caller looks at the same flag before it uses what was emitted.
+            if j % CANCEL_PIXELS == 0 && crate::cancel::requested() {
+                return;
+            }
             let [ff, fg, gg] = self.blocks[j].fg;
             emit(f(j), f(j), ff * (1.0 + nu) + DIAGONAL_FLOOR);
             emit(f(j), g(j), fg);
@@ -274,3 +280,6 @@ pub(super) fn held(data: [f64; 3], diagonal: f64) -> [f64; 3] {
 /// adds to every diagonal entry: a depth that no slope reads (and the depth's checkerboard,
 /// which central differences do not see) has none.
 pub(super) const DIAGONAL_FLOOR: f64 = 1e-6;
+
+/// Pixels listed by [`Model::entries`] between two looks for a requested stop.
+const CANCEL_PIXELS: usize = 1 << 15;
