@@ -250,6 +250,9 @@ fn npy_picture(
 ) -> Result<PictureFile> {
     let array = npy::read_array_from_bytes(bytes, path, max_pixels)?;
     let dtype = array.dtype.clone();
+    // The codes as stored, kept where they are decoded again: per channel for an explicit
+    // encoding, or for the colour of an H×W×3 array.
+    let colour = colour && matches!(array.shape[..], [_, _, 3]);
     let raw = (encoding.is_explicit() || colour).then(|| array.clone());
     let (mut image, scale, rgb) = npy::luminance_npy(array, path, max_pixels)?;
     let mut notes = Vec::new();
