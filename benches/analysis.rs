@@ -6,11 +6,11 @@
 //! median, and how many solves needed the Jacobi fallback. Not criterion: one sample takes
 //! seconds, and the figure wanted is the wall time of one sweep.
 
-use shadelab::internal::analysis::interpretation::analysis_solve_options;
-use shadelab::internal::analysis::{sweep, Domain, Scene, TokenPicture};
 use shadelab::Boundary;
 use shadelab::Method;
 use shadelab::SizeRequest;
+use shadelab_analysis::analysis::interpretation::analysis_solve_options;
+use shadelab_analysis::analysis::{sweep, Domain, Scene, TokenPicture};
 use std::time::Instant;
 
 fn main() {

@@ -6,9 +6,9 @@
 //! model, applies it once, prints the timings and exits.
 
 use criterion::{criterion_group, Criterion};
-use shadelab::internal::lightness::{Odog, Variant};
 use shadelab::Grid;
 use shadelab::Image;
+use shadelab_analysis::lightness::{Odog, Variant};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

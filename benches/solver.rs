@@ -8,12 +8,12 @@
 //! once with multigrid, prints the time and exits.
 
 use criterion::{criterion_group, BenchmarkId, Criterion};
-use shadelab::internal::render::{render, RenderOptions};
-use shadelab::internal::solver::{Method, SolveOptions, Solver};
-use shadelab::internal::surface::{sphere, Surface};
 use shadelab::Boundary;
 use shadelab::Lambertian;
 use shadelab::{Image, Light};
+use shadelab_engine::render::{render, RenderOptions};
+use shadelab_engine::solver::{Method, SolveOptions, Solver};
+use shadelab_engine::surface::{sphere, Surface};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(2));
-    for preset in shadelab::internal::gallery::builtin_presets().unwrap_or_default() {
+    for preset in shadelab_stimuli::gallery::builtin_presets().unwrap_or_default() {
         let spec = preset.spec;
         group.bench_function(preset.name.as_str(), |b| {
             b.iter(|| {
@@ -77,7 +77,7 @@ fn bench(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(10));
-    let presets = shadelab::internal::gallery::builtin_presets().expect("the built-in presets");
+    let presets = shadelab_stimuli::gallery::builtin_presets().expect("the built-in presets");
     let out = std::env::temp_dir().join(format!("shadelab-bench-gallery-{}", std::process::id()));
     let config = shadelab::GalleryConfig {
         presets,

@@ -9,12 +9,12 @@
 //! docs/evaluation.md's "Albedo estimate" section; says why and stops when the data is absent).
 
 use shadelab::angular_error;
-use shadelab::internal::albedo::{albedo_with_normals, brightness_quantile, Saturation};
-use shadelab::internal::evaluation::crop::Crop;
-use shadelab::internal::evaluation::datasets::{ball, BALL_IMAGES};
 use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
 use shadelab::{FrontLight, Light, NoProgress};
 use shadelab::{Image, Mask};
+use shadelab_analysis::evaluation::crop::Crop;
+use shadelab_analysis::evaluation::datasets::{ball, BALL_IMAGES};
+use shadelab_engine::albedo::{albedo_with_normals, brightness_quantile, Saturation};
 use std::path::PathBuf;
 
 /// The pre-scalings: the quantile of the brightness on the mask made 1.

@@ -44,38 +44,19 @@
 #![deny(missing_docs)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
-mod albedo;
-mod analysis;
-mod boundary;
-pub mod cancel;
-mod colormap;
-mod conjugate_gradients;
-pub mod display;
-mod error;
-mod evaluation;
-mod gallery;
-mod gradient_space;
-mod grid;
-mod imageops;
-mod integrate;
-mod io;
-mod light;
-mod light_estimation;
-mod lightness;
-mod message;
-mod parallel;
-mod params;
-pub mod pipeline;
-mod plot;
-mod progress;
-mod random;
-mod reconstruct;
-mod reflectance;
-mod render;
-mod solver;
-pub mod stimulus;
-mod surface;
-mod visual_size;
+pub use shadelab_commands::pipeline;
+pub use shadelab_core::cancel;
+pub use shadelab_io::display;
+pub use shadelab_stimuli as stimulus;
+
+// The floors the names below come from, under their module names.
+use shadelab_analysis::{evaluation, lightness};
+use shadelab_core::{error, gradient_space, grid, light, message, params, progress, visual_size};
+use shadelab_engine::{
+    albedo, boundary, integrate, light_estimation, reconstruct, reflectance, render, solver,
+};
+use shadelab_io as io;
+use shadelab_io::colormap;
 
 // The core: images, lights, sizes, errors, progress.
 pub use error::{nearest_name, Error, Result};
@@ -147,59 +128,3 @@ pub use pipeline::{
     solve::run as solve,
     study::{merge as study_merge, run as study_run},
 };
-
-/// The modules behind the surface, for this repository's own front ends and tests (the
-/// command line, the Python and WebAssembly bindings, `tests/`) while they move onto the
-/// surface above. Not API: anything here may change in any release.
-#[doc(hidden)]
-#[cfg(not(shadelab_surface))]
-pub mod internal {
-    #![allow(missing_docs)]
-
-    /// Each named module's whole contents under `internal::`.
-    macro_rules! reexport {
-        ($($module:ident),* $(,)?) => {
-            $(pub mod $module {
-                pub use crate::$module::*;
-            })*
-        };
-    }
-
-    reexport!(
-        albedo,
-        analysis,
-        boundary,
-        colormap,
-        evaluation,
-        gallery,
-        gradient_space,
-        grid,
-        imageops,
-        integrate,
-        io,
-        light,
-        light_estimation,
-        lightness,
-        parallel,
-        params,
-        plot,
-        progress,
-        reconstruct,
-        reflectance,
-        render,
-        solver,
-        surface,
-        visual_size,
-    );
-    pub mod stimulus {
-        pub mod bundle {
-            pub use crate::stimulus::bundle::*;
-        }
-        pub mod face {
-            pub use crate::stimulus::face::*;
-        }
-        pub mod mat {
-            pub use crate::stimulus::mat::*;
-        }
-    }
-}

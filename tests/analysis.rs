@@ -3,11 +3,6 @@
 
 use crate::cli::{assert_error, scratch, shadelab};
 use serde_json::{Map, Value};
-use shadelab::internal::analysis::binding::binding;
-use shadelab::internal::analysis::convexity::tokens_from_labels;
-use shadelab::internal::analysis::interpretation::analysis_solve_options;
-use shadelab::internal::analysis::observer::observe;
-use shadelab::internal::analysis::sweep;
 use shadelab::pipeline::observer::{LightPrior, ObserverOptions};
 use shadelab::pipeline::perception::{
     parse_angles, rotate_quarter_turns, Domain, Interpretation, Interpreter, Lighting, Scene,
@@ -18,6 +13,11 @@ use shadelab::stimulus;
 use shadelab::Boundary;
 use shadelab::Mask;
 use shadelab::SizeRequest;
+use shadelab_analysis::analysis::binding::binding;
+use shadelab_analysis::analysis::convexity::tokens_from_labels;
+use shadelab_analysis::analysis::interpretation::analysis_solve_options;
+use shadelab_analysis::analysis::observer::observe;
+use shadelab_analysis::analysis::sweep;
 use std::path::Path;
 
 /// Renders `name` at `w`×`h` pixels and `ppd` with `pairs` as parameters.
@@ -686,7 +686,7 @@ fn bad_input_is_one_line_and_leaves_nothing() {
     assert_error(&out, 2, "unknown stimulus 'teapot'");
     // A mask with no tokens.
     let empty = shadelab::Labels::new(48, 48, 0);
-    shadelab::internal::io::write_labels(&d.join("empty.png"), &empty).unwrap();
+    shadelab_io::write_labels(&d.join("empty.png"), &empty).unwrap();
     assert_error(&run(sweep_args(&["--mask", "empty.png"])), 2, "no tokens");
     // A spec with an unknown key, a shard that does not exist.
     std::fs::write(
@@ -739,7 +739,7 @@ fn the_engine_follows_the_shading_not_the_outline_of_boundary_strips() {
     // the sawtooth cut should give facets (bending concentrated at folds, share near 1) and
     // the sinusoidal cut smooth corrugations (about 0.31); the engine gives the sinusoid's
     // spread in both. If this fails, the engine has learned to show the effect: update the doc.
-    use shadelab::internal::analysis::outline::outline_shapes;
+    use shadelab_analysis::analysis::outline::outline_shapes;
     let p = picture(
         "boundary-strips",
         &["boundary=sinusoidal,sawtooth"],
@@ -836,10 +836,7 @@ fn command_writes_the_same(dir: &Path, command: &str, extra: &[&str]) {
         crate::determinism::outputs(&dir.join("cli")),
     );
     // Both folders list their files (the output-folder rule's manifest).
-    assert!(
-        lib.contains_key(shadelab::internal::io::MANIFEST)
-            && cli.contains_key(shadelab::internal::io::MANIFEST)
-    );
+    assert!(lib.contains_key(shadelab_io::MANIFEST) && cli.contains_key(shadelab_io::MANIFEST));
     assert_eq!(
         lib.keys().collect::<Vec<_>>(),
         cli.keys().collect::<Vec<_>>()

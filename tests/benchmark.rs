@@ -4,11 +4,11 @@
 //! it, else `python3`); without one they say why and pass, unless `SHADELAB_REQUIRE_STIMUPY=1`.
 
 use crate::cli::{assert_error, scratch, shadelab};
-use shadelab::internal::lightness::benchmark::spearman;
 use shadelab::pipeline::benchmark::{
     self as bm, contrast_stimulus, BenchmarkConfig, BenchmarkRow, Human, Verdict,
 };
 use shadelab::NoProgress;
+use shadelab_analysis::lightness::benchmark::spearman;
 use std::path::PathBuf;
 
 /// The interpreter with stimupy, or `None` (having said why) when there is none.

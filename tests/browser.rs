@@ -95,9 +95,7 @@ fn every_image_of_the_gallery_loads_in_headless_chromium() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let presets = shadelab::internal::gallery::builtin_presets()
-        .unwrap()
-        .len();
+    let presets = shadelab_stimuli::gallery::builtin_presets().unwrap().len();
     let (count, broken) = check_images(&d.join("g"), &d.join("profile"));
     assert!(
         broken.is_empty(),

@@ -74,10 +74,10 @@ fn render_writes_image_sidecar_mask_and_layers() {
     assert_eq!(sidecar["shape"], serde_json::json!([64, 64]));
     assert_eq!(sidecar["version"], env!("CARGO_PKG_VERSION"));
     // The PNG is 16-bit and equals the library's render to the last code.
-    let (img, info) = shadelab::internal::io::read_gray(&d.join("s.png"), 1 << 20).unwrap();
+    let (img, info) = shadelab_io::read_gray(&d.join("s.png"), 1 << 20).unwrap();
     assert_eq!(info.bit_depth, 16);
     let light: shadelab::Light = "above".parse().unwrap();
-    let s = shadelab::internal::surface::sphere(64, 64, 0.45 * 64.0).unwrap();
+    let s = shadelab_engine::surface::sphere(64, 64, 0.45 * 64.0).unwrap();
     for (i, n) in s.normals.data().iter().enumerate() {
         let expect = if s.mask.data()[i] {
             n.dot(&light.direction()).max(0.0)
@@ -86,12 +86,12 @@ fn render_writes_image_sidecar_mask_and_layers() {
         };
         assert!((img.data()[i] - expect).abs() <= 0.5 / 65535.0 + 1e-12);
     }
-    let normals = shadelab::internal::io::read_normals(&d.join("s_normals.npy"), 1 << 20).unwrap();
+    let normals = shadelab_io::read_normals(&d.join("s_normals.npy"), 1 << 20).unwrap();
     assert!(
         (normals.get(32, 5).y) > 0.5,
         "top of the sphere faces up (y up)"
     );
-    let mask = shadelab::internal::io::read_mask(&d.join("s_mask.png"), 1 << 20).unwrap();
+    let mask = shadelab_io::read_mask(&d.join("s_mask.png"), 1 << 20).unwrap();
     assert_eq!(&mask, &s.mask);
 }
 
@@ -107,8 +107,8 @@ fn lit_from_above_is_brighter_on_top_and_from_the_left_on_the_left() {
         );
         assert!(out.status.success());
     }
-    let a = shadelab::internal::io::read_image(&d.join("a.npy"), 1 << 20).unwrap();
-    let l = shadelab::internal::io::read_image(&d.join("l.npy"), 1 << 20).unwrap();
+    let a = shadelab_io::read_image(&d.join("a.npy"), 1 << 20).unwrap();
+    let l = shadelab_io::read_image(&d.join("l.npy"), 1 << 20).unwrap();
     let half_sum = |img: &shadelab::Image, f: &dyn Fn(usize, usize) -> bool| -> f64 {
         let mut s = 0.0;
         for r in 0..64 {
@@ -274,7 +274,7 @@ fn a_foreign_file_is_not_overwritten_without_force() {
 fn heightfield_from_npy_renders_at_its_own_size() {
     let d = scratch("heightfield");
     let depth = shadelab::Grid::from_fn(30, 20, |c, _| if c > 5 { c as f64 * 0.5 } else { 0.0 });
-    shadelab::internal::io::write_image(&d.join("depth.npy"), &depth).unwrap();
+    shadelab_io::write_image(&d.join("depth.npy"), &depth).unwrap();
     let out = shadelab(
         &d,
         &[
@@ -293,10 +293,10 @@ fn heightfield_from_npy_renders_at_its_own_size() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let img = shadelab::internal::io::read_image(&d.join("h.npy"), 1 << 20).unwrap();
+    let img = shadelab_io::read_image(&d.join("h.npy"), 1 << 20).unwrap();
     assert_eq!((img.width(), img.height()), (30, 20));
     // z rises to the right, so the surface faces left: light from the right grazes it less.
-    let n = shadelab::internal::gradient_space::normal_from_pq(-0.5, 0.0);
+    let n = shadelab_core::gradient_space::normal_from_pq(-0.5, 0.0);
     let s: shadelab::Light = "right".parse().unwrap();
     assert!((img.get(15, 10) - n.dot(&s.direction()).max(0.0)).abs() < 1e-6);
     assert_eq!(*img.get(2, 10), 0.0);
@@ -332,13 +332,13 @@ fn the_built_in_bunny_renders_upright() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let mask = shadelab::internal::io::read_mask(&d.join("b_mask.png"), 1 << 20).unwrap();
+    let mask = shadelab_io::read_mask(&d.join("b_mask.png"), 1 << 20).unwrap();
     let frac = mask.count() as f64 / mask.len() as f64;
     assert!(
         (0.25..0.6).contains(&frac),
         "bunny covers {frac} of the frame"
     );
-    let normals = shadelab::internal::io::read_normals(&d.join("b_normals.npy"), 1 << 20).unwrap();
+    let normals = shadelab_io::read_normals(&d.join("b_normals.npy"), 1 << 20).unwrap();
     // Ears up: the topmost object row lies in the top fifth of the frame, and the normals along
     // the top of the silhouette point up.
     let top = (0..96).find(|&r| (0..96).any(|c| *mask.get(c, r))).unwrap();
@@ -388,7 +388,7 @@ fn negative_values_are_values_not_flags() {
         "b.png",
     ]);
     assert_eq!(read("a.png"), read("b.png"));
-    let (image, _) = shadelab::internal::io::read_gray(&dir.join("a.png"), 1 << 20).unwrap();
+    let (image, _) = shadelab_io::read_gray(&dir.join("a.png"), 1 << 20).unwrap();
     assert!(image.get(8, 16) > image.get(23, 16));
     // solve --light.
     run(&[
@@ -468,7 +468,7 @@ fn a_huge_thread_count_is_capped_with_a_warning() {
     let out = shadelab(&d, &["--threads", "100000", "describe", "disc"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    let cap = shadelab::internal::parallel::thread_cap();
+    let cap = shadelab_core::parallel::thread_cap();
     assert!(
         err.contains(&format!("--threads 100000 is more than {cap}")),
         "{err}"

@@ -455,7 +455,7 @@ fn the_link_checker_finds_missing_files_and_anchors() {
 
 #[test]
 fn every_gallery_preset_is_explained_on_a_docs_page_that_exists() {
-    let presets = shadelab::internal::gallery::builtin_presets().unwrap();
+    let presets = shadelab_stimuli::gallery::builtin_presets().unwrap();
     let readme = root().join("README.md");
     for p in &presets {
         let caption = p.spec.caption.as_deref().unwrap_or("");
@@ -479,9 +479,9 @@ fn every_gallery_preset_is_explained_on_a_docs_page_that_exists() {
 
 #[test]
 fn the_gallery_page_links_each_picture_to_its_explanation() {
-    use shadelab::internal::gallery::{Options, Preset};
     use shadelab::pipeline::gallery::GalleryConfig;
     use shadelab::{CommandReport, NoProgress, Output};
+    use shadelab_stimuli::gallery::{Options, Preset};
     let d = scratch("gallery-links");
     let spec: shadelab::stimulus::Spec = serde_json::from_str(
         r#"{"stimulus": "disc", "shape": [16, 16], "title": "A disc",

@@ -2,9 +2,9 @@
 //! and its errors when data is missing.
 
 use crate::cli::{assert_error, scratch, shadelab};
-use shadelab::internal::evaluation::{self, CaseResult, Config, Set};
 use shadelab::Boundary;
 use shadelab::Method;
+use shadelab_analysis::evaluation::{self, CaseResult, Config, Set};
 use std::path::PathBuf;
 
 /// The shared evaluation data, or `None` (with the reason printed) when it is not there.
@@ -214,7 +214,7 @@ fn eval_runs_the_solve_default_alone_unless_asked() {
 }
 
 fn image_size(path: &std::path::Path) -> (usize, usize) {
-    let rgb = shadelab::internal::io::read_rgb(path, 1 << 24).unwrap();
+    let rgb = shadelab_io::read_rgb(path, 1 << 24).unwrap();
     (rgb.width(), rgb.height())
 }
 

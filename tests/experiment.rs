@@ -77,7 +77,7 @@ fn the_default_design_shows_every_rotation_repeats_times_in_a_seeded_order() {
 
 /// Mean luminance of the rows `rows` and columns `cols` of an image file.
 fn mean(path: &Path, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> f64 {
-    let (image, _) = shadelab::internal::io::read_luminance(path, 1 << 24).unwrap();
+    let (image, _) = shadelab_io::read_luminance(path, 1 << 24).unwrap();
     let mut sum = 0.0;
     for r in rows.clone() {
         for c in cols.clone() {
@@ -459,7 +459,7 @@ fn element(dom: &str, tag: &str, id: &str) -> Option<String> {
 
 /// jsPsych's CSV as rows of named fields.
 fn rows(csv: &str) -> Vec<BTreeMap<String, String>> {
-    let table = shadelab::internal::io::parse_csv(csv).unwrap();
+    let table = shadelab_io::parse_csv(csv).unwrap();
     let (_, header) = &table[0];
     table[1..]
         .iter()
@@ -927,7 +927,7 @@ fn the_pilot_is_fitted_back_and_each_participant_gets_their_own_order() {
 /// Where the bright side of the middle 300 × 300 pixels of a screenshot faces (tilt
 /// convention, degrees), as the library measures its images.
 fn bright_side_on_screen(path: &Path) -> f64 {
-    let (image, _) = shadelab::internal::io::read_luminance(path, 1 << 24).unwrap();
+    let (image, _) = shadelab_io::read_luminance(path, 1 << 24).unwrap();
     let (cx, cy) = (image.width() / 2, image.height() / 2);
     experiment::bright_side(&image, &|c, r| c.abs_diff(cx) < 150 && r.abs_diff(cy) < 150)
         .unwrap_or_else(|| panic!("nothing shaded in the middle of {}", path.display()))

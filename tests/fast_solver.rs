@@ -8,23 +8,23 @@
 //! of everything that shapes Jacobi's answer (any change there recomputes them).
 
 use md5::{Digest, Md5};
-use shadelab::internal::boundary::{boundary_conditions, Boundary, Role};
-use shadelab::internal::gradient_space::{angle_deg, normal_from_fg};
-use shadelab::internal::render::{render, RenderOptions};
-use shadelab::internal::solver::{Method, Solution, SolveOptions, Solver};
-use shadelab::internal::surface::{gaussian, sphere, vase, Surface};
 use shadelab::Lambertian;
 use shadelab::{Grid, Image, Light, Mask};
+use shadelab_core::gradient_space::{angle_deg, normal_from_fg};
+use shadelab_engine::boundary::{boundary_conditions, Boundary, Role};
+use shadelab_engine::render::{render, RenderOptions};
+use shadelab_engine::solver::{Method, Solution, SolveOptions, Solver};
+use shadelab_engine::surface::{gaussian, sphere, vase, Surface};
 use std::path::PathBuf;
 
 /// The sources whose change can change Jacobi's answer.
 const JACOBI_SOURCES: &[&str] = &[
-    include_str!("../src/solver/mod.rs"),
-    include_str!("../src/boundary.rs"),
-    include_str!("../src/reflectance.rs"),
-    include_str!("../src/gradient_space.rs"),
-    include_str!("../src/render.rs"),
-    include_str!("../src/surface/shapes.rs"),
+    include_str!("../crates/engine/src/solver/mod.rs"),
+    include_str!("../crates/engine/src/boundary.rs"),
+    include_str!("../crates/engine/src/reflectance.rs"),
+    include_str!("../crates/core/src/gradient_space.rs"),
+    include_str!("../crates/engine/src/render.rs"),
+    include_str!("../crates/engine/src/surface/shapes.rs"),
 ];
 
 /// One test problem.
@@ -351,7 +351,7 @@ fn bad_input_is_rejected_as_for_jacobi() {
 #[test]
 fn solve_command_uses_multigrid_and_reports_non_convergence() {
     use crate::cli::{scratch, shadelab};
-    use shadelab::internal::io;
+    use shadelab_io as io;
     let d = scratch("fast-solver-cli");
     let c = case("sphere", 64, FRONT, Boundary::Occluding);
     io::write_image(&d.join("image.npy"), &c.image).unwrap();

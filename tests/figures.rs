@@ -214,8 +214,8 @@ fn the_gallery_sheet_has_a_caption_under_each_stimulus() {
     let d = scratch("fig-gallery");
     ok(&d, &["gallery", "--out", "g"]);
     let sheet = rgb(&d.join("g/gallery.png"));
-    let presets = shadelab::internal::gallery::builtin_presets().unwrap();
-    let (thumb, gap, caption) = (shadelab::internal::gallery::THUMBNAIL as u32, 12, 44);
+    let presets = shadelab_stimuli::gallery::builtin_presets().unwrap();
+    let (thumb, gap, caption) = (shadelab_stimuli::gallery::THUMBNAIL as u32, 12, 44);
     let rows = presets.len().div_ceil(4) as u32;
     assert_eq!(sheet.height(), rows * (thumb + caption + gap) + gap);
     // Under every thumbnail, in its caption band, dark text.

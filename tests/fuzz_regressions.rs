@@ -5,13 +5,13 @@
 //! fuzz target reads; see docs/reliability.md.
 
 use serde_json::{Map, Value};
-use shadelab::internal::analysis::study::{Study, StudySpec};
-use shadelab::internal::io;
-use shadelab::internal::surface::{view_rotation, Mesh, MeshShading};
 use shadelab::stimulus::{self, Spec};
 use shadelab::Params;
 use shadelab::SizeRequest;
 use shadelab::{Image, Mask, Result};
+use shadelab_analysis::analysis::study::{Study, StudySpec};
+use shadelab_engine::surface::{view_rotation, Mesh, MeshShading};
+use shadelab_io as io;
 use std::path::{Path, PathBuf};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -51,7 +51,7 @@ fn parse_mesh(data: &[u8]) -> Result<Mesh> {
 }
 
 /// As the fuzz target: shading and view from the selector byte, a 32×24 frame.
-fn rasterize_as_fuzzed(selector: u8, mesh: &Mesh) -> Result<shadelab::internal::surface::Surface> {
+fn rasterize_as_fuzzed(selector: u8, mesh: &Mesh) -> Result<shadelab_engine::surface::Surface> {
     let shading = if selector & 2 == 0 {
         MeshShading::Smooth
     } else {
@@ -132,7 +132,7 @@ fn spec_seeds_prepare_without_panicking() {
     let all = seeds("spec");
     // Every shipped preset is a seed.
     let presets = all.iter().filter(|(n, _)| n.starts_with("preset_")).count();
-    assert_eq!(presets, shadelab::internal::gallery::BUILTIN.len());
+    assert_eq!(presets, shadelab_stimuli::gallery::BUILTIN.len());
     for (name, data) in all {
         run_spec(&data).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
@@ -205,7 +205,7 @@ fn from_bytes_readers_match_the_path_readers() {
 
 /// As the fuzz target: a shard's rows (with their points) or a sidecar's summary.
 fn run_csv_sidecar(data: &[u8]) -> Result<Vec<(usize, String)>> {
-    use shadelab::internal::analysis::study::{merge::shard_rows, Shard, RESULTS, SWEEP};
+    use shadelab_analysis::analysis::study::{merge::shard_rows, Shard, RESULTS, SWEEP};
     let [selector, shape, rest @ ..] = data else {
         panic!("input too short");
     };

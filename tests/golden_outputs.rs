@@ -255,18 +255,15 @@ pub fn non_finite(name: &str, bytes: &[u8]) -> Option<String> {
         "csv" => {
             let text = String::from_utf8_lossy(bytes);
             text.lines().enumerate().find_map(|(n, line)| {
-                let fields = shadelab::internal::io::csv_record(line).ok()?;
+                let fields = shadelab_io::csv_record(line).ok()?;
                 let field = fields.iter().find(|f| bad(f))?;
                 Some(format!("{name} line {}: '{field}'", n + 1))
             })
         }
         "npy" => {
-            let array = shadelab::internal::io::read_array_from_bytes(
-                bytes,
-                std::path::Path::new(name),
-                usize::MAX,
-            )
-            .ok()?;
+            let array =
+                shadelab_io::read_array_from_bytes(bytes, std::path::Path::new(name), usize::MAX)
+                    .ok()?;
             let at = array.data.iter().position(|v| !v.is_finite())?;
             Some(format!("{name} value {at}: {}", array.data[at]))
         }
@@ -286,7 +283,7 @@ pub fn non_finite(name: &str, bytes: &[u8]) -> Option<String> {
 
 #[test]
 fn the_scan_finds_what_it_looks_for() {
-    let npy = shadelab::internal::io::encode_f64(&[2], &[0.5, f64::NAN]).unwrap();
+    let npy = shadelab_io::encode_f64(&[2], &[0.5, f64::NAN]).unwrap();
     let cases: [(&str, &[u8], bool); 8] = [
         ("a.csv", b"a,b\n1,NaN\n", true),
         ("a.csv", b"a,b\n1,\"inf, or not\"\n2,-inf\n", true),

@@ -140,7 +140,7 @@ fn fixtures(dir: &Path) {
     // A mesh over the 1 GiB read limit (sparse: no disk used): refused by its length.
     std::fs::File::create(i.join("huge.ply"))
         .unwrap()
-        .set_len(shadelab::internal::surface::MAX_MESH_BYTES + 1)
+        .set_len(shadelab_engine::surface::MAX_MESH_BYTES + 1)
         .unwrap();
 
     // Images.
@@ -533,31 +533,31 @@ fn odd_but_valid_images_are_read_as_documented() {
     let max = shadelab::DEFAULT_MAX_PIXELS;
     let value = |c: usize, r: usize, k: usize| (40 + 8 * c + 4 * r + 10 * k) as f64;
     // 16-bit gray: the codes over 65535, exactly.
-    let (g, info) = shadelab::internal::io::read_gray(&i.join("gray16.png"), max).unwrap();
+    let (g, info) = shadelab_io::read_gray(&i.join("gray16.png"), max).unwrap();
     assert_eq!((info.bit_depth, info.channels), (16, 1));
     assert_eq!(*g.get(3, 5), value(3, 5, 0) * 257.0 / 65535.0);
     // Gray + alpha: the alpha is ignored.
-    let (g, info) = shadelab::internal::io::read_gray(&i.join("graya16.png"), max).unwrap();
+    let (g, info) = shadelab_io::read_gray(&i.join("graya16.png"), max).unwrap();
     assert_eq!(info.channels, 2);
     assert_eq!(*g.get(7, 2), value(7, 2, 0) * 257.0 / 65535.0);
     // RGBA and 16-bit RGB: Rec. 709 luminance of the stored values, alpha ignored (read as
     // linear: by default an 8-bit picture without a gamma chunk is sRGB, tests/photographs.rs).
     let linear = shadelab::InputEncoding::Linear;
     for (file, scale) in [("rgba.png", 255.0), ("rgb16.png", 65535.0 / 257.0)] {
-        let (y, _) = shadelab::internal::io::read_gray_as(&i.join(file), max, linear).unwrap();
+        let (y, _) = shadelab_io::read_gray_as(&i.join(file), max, linear).unwrap();
         let lum =
             (0.2126 * value(4, 9, 0) + 0.7152 * value(4, 9, 1) + 0.0722 * value(4, 9, 2)) / scale;
         assert!((y.get(4, 9) - lum).abs() < 1e-6, "{file}: {}", y.get(4, 9));
     }
     // Palette: the index looks up the colour.
-    let rgb = shadelab::internal::io::read_rgb_as(&i.join("palette.png"), max, linear).unwrap();
+    let rgb = shadelab_io::read_rgb_as(&i.join("palette.png"), max, linear).unwrap();
     let v = value(2, 3, 0);
     let expect = [v / 255.0, (v / 2.0).floor() / 255.0, (255.0 - v) / 255.0];
     for (got, want) in rgb.get(2, 3).iter().zip(expect) {
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
     }
     // 1×1.
-    let (one, _) = shadelab::internal::io::read_gray_as(&i.join("one.png"), max, linear).unwrap();
+    let (one, _) = shadelab_io::read_gray_as(&i.join("one.png"), max, linear).unwrap();
     assert_eq!(one.data(), &[128.0 / 255.0]);
 }
 
@@ -1853,7 +1853,7 @@ fn picture_values_follow_one_rule() {
     // uint8 and uint16: the codes of a PNG of that depth, exactly.
     let max = shadelab::DEFAULT_MAX_PIXELS;
     for (file, scale) in [("u8.npy", 255.0), ("u16.npy", 65535.0 / 257.0)] {
-        let (image, info) = shadelab::internal::io::read_luminance(&i.join(file), max).unwrap();
+        let (image, info) = shadelab_io::read_luminance(&i.join(file), max).unwrap();
         let want: Vec<f64> = codes().map(|c| c as f64 / scale).collect();
         for (got, want) in image.data().iter().zip(&want) {
             assert!((got - want).abs() < 1e-15, "{file}: {got} vs {want}");

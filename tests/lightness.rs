@@ -1,9 +1,9 @@
 //! Lightness models against reference data: the ODOG family against multyscale 0.2's outputs
 //! (`../shared/reference/odog_white32.npz`; skipped with a message when absent).
 
-use shadelab::internal::lightness::{Odog, Variant};
 use shadelab::Grid;
 use shadelab::Image;
+use shadelab_analysis::lightness::{Odog, Variant};
 use std::path::PathBuf;
 
 fn reference_npz() -> Option<PathBuf> {
@@ -120,8 +120,8 @@ mod cli {
     //! `shadelab analyze lightness` and `analyze fading` through the binary.
 
     use crate::cli::{assert_error, scratch, shadelab};
-    use shadelab::internal::io;
     use shadelab::Grid;
+    use shadelab_io as io;
 
     fn read(path: &std::path::Path) -> String {
         std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -392,9 +392,9 @@ mod cli {
 /// write the same folder layout the command writes.
 #[test]
 fn lightness_and_fading_pipelines_run_from_plain_values() {
-    use shadelab::internal::lightness::fading::{AdaptationOptions, DogBand};
     use shadelab::pipeline::{fading, lightness, PictureSource};
     use shadelab::NoProgress;
+    use shadelab_analysis::lightness::fading::{AdaptationOptions, DogBand};
     let source = |name: &str| PictureSource {
         stimulus: Some(name.into()),
         ppd: Some(12.0),

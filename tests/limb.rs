@@ -7,17 +7,17 @@
 use crate::cli::{scratch, shadelab};
 use nalgebra::Vector3;
 use shadelab::angular_error;
-use shadelab::internal::boundary::{
+use shadelab::{Grid, Light};
+use shadelab::{Lambertian, ReflectanceMap};
+use shadelab_core::gradient_space::{angle_deg, normal_from_fg};
+use shadelab_engine::boundary::{
     boundary_conditions, dark_level, limb_conditions, limb_count, Boundary, Role, BOUNDARY_NAMES,
     LIMB_MAX_NZ,
 };
-use shadelab::internal::gradient_space::{angle_deg, normal_from_fg};
-use shadelab::internal::io;
-use shadelab::internal::render::{render, RenderOptions};
-use shadelab::internal::solver::{SolveOptions, Solver};
-use shadelab::internal::surface::{sphere, Surface};
-use shadelab::{Grid, Light};
-use shadelab::{Lambertian, ReflectanceMap};
+use shadelab_engine::render::{render, RenderOptions};
+use shadelab_engine::solver::{SolveOptions, Solver};
+use shadelab_engine::surface::{sphere, Surface};
+use shadelab_io as io;
 
 /// Side of the test images.
 const SIDE: usize = 96;
@@ -383,9 +383,9 @@ fn solve_reports_the_dark_level_of_the_limb_test() {
 /// and the analyses take it: their domain is the occluding one.
 #[test]
 fn the_limb_boundary_estimates_the_light_at_the_outline_and_serves_the_analyses() {
-    use shadelab::internal::boundary::domain_roles;
     use shadelab::EstimateMethod;
     use shadelab::LightAndAlbedo as Lighting;
+    use shadelab_engine::boundary::domain_roles;
     let s = sphere(SIDE, SIDE, RADIUS).unwrap();
     let truth = Light::from_tilt_slant(90.0, 45.0).unwrap();
     let image = image_of(&s, &Lambertian::unit(truth));

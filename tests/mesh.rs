@@ -2,14 +2,14 @@
 //! binary PLY, a sphere mesh against the analytic sphere, and `.npy` depth maps.
 
 use nalgebra::{Rotation3, Vector3};
-use shadelab::internal::gradient_space::angle_deg;
-use shadelab::internal::render::{render, RenderOptions};
-use shadelab::internal::surface::{
+use shadelab::Lambertian;
+use shadelab::{Grid, Light};
+use shadelab_core::gradient_space::angle_deg;
+use shadelab_engine::render::{render, RenderOptions};
+use shadelab_engine::surface::{
     self, load_depth_surface, view_rotation, world_xy, DepthDomain, Mesh, MeshShading, Projection,
     Surface,
 };
-use shadelab::Lambertian;
-use shadelab::{Grid, Light};
 use std::path::{Path, PathBuf};
 
 fn bunny_path() -> PathBuf {

@@ -3,13 +3,13 @@
 //! reconstruction keeps a sawtooth cut's folds.
 
 use crate::cli::{assert_error, files_in, scratch, shadelab};
-use shadelab::internal::analysis::convexity::tokens_from_labels;
-use shadelab::internal::analysis::outline::{fit_shading, outline_profile, ProfileFit};
 use shadelab::pipeline::outline::{run, OutlineConfig, OutlineReport};
 use shadelab::pipeline::PictureSource;
 use shadelab::Light;
 use shadelab::NoProgress;
 use shadelab::{Grid, Labels};
+use shadelab_analysis::analysis::convexity::tokens_from_labels;
+use shadelab_analysis::analysis::outline::{fit_shading, outline_profile, ProfileFit};
 
 /// The default boundary-strips stimulus (sinusoidal shading in four outlines), analysed with
 /// the light fitted. Its numbers are docs/perception.md's.
@@ -184,7 +184,7 @@ fn shading_that_is_the_outlines_prediction_is_explained_exactly_and_leaves_flat_
     assert!((fit.albedo - 0.6).abs() < 1e-9 && (fit.offset - 0.1).abs() < 1e-9);
     // Through the pipeline, from files: the paint layer is flat.
     let d = scratch("outline-exact");
-    shadelab::internal::io::write_gray(
+    shadelab_io::write_gray(
         &d.join("wave.png"),
         &image,
         shadelab::BitDepth::Sixteen,
@@ -217,7 +217,7 @@ fn shading_that_is_the_outlines_prediction_is_explained_exactly_and_leaves_flat_
         .filter(|(_, &i)| i)
         .map(|(v, _)| *v)
         .collect();
-    let (lo, hi) = shadelab::internal::plot::span(&inside);
+    let (lo, hi) = shadelab_io::plot::span(&inside);
     assert!(hi - lo < 1e-12, "paint spans {lo}..{hi}");
     // The fitted light finds the light's part in the plane of the profile: from the left
     // (θ = atan(sin 60° tan 40°) ≈ 36.0°), and explains it as exactly.
@@ -299,13 +299,7 @@ fn bad_input_is_one_clear_line() {
     let d = scratch("outline-bad");
     // No targets: a bare image.
     let image = Grid::new(16, 12, 0.5);
-    shadelab::internal::io::write_gray(
-        &d.join("bare.png"),
-        &image,
-        shadelab::BitDepth::Eight,
-        None,
-    )
-    .unwrap();
+    shadelab_io::write_gray(&d.join("bare.png"), &image, shadelab::BitDepth::Eight, None).unwrap();
     let out = shadelab(&d, &["analyze", "outline", "bare.png", "--out", "o"]);
     assert_error(&out, 2, "no targets");
     // A light below the horizon, or grazing.

@@ -500,7 +500,7 @@ fn an_edited_picture_says_so_and_its_sidecar_is_not_rendered_again() {
     );
     assert_ne!(edited_md5, rendered_md5);
     // The .npy holds the edited values exactly (float32 of them).
-    let written = shadelab::internal::io::read_array(&d.join("e.npy"), 1 << 20).unwrap();
+    let written = shadelab_io::read_array(&d.join("e.npy"), 1 << 20).unwrap();
     let Pixels::Gray(want) = &edited.output.pixels else {
         unreachable!()
     };

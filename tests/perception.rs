@@ -2,9 +2,6 @@
 //! and the hollow mask read the same at any framing.
 
 use serde_json::{Map, Value};
-use shadelab::internal::light_estimation::{
-    estimate_light_with, EstimateMethod, LightEstimate, Outline,
-};
 use shadelab::pipeline::perception::Domain;
 use shadelab::pipeline::perception::{self, DomainSpec};
 use shadelab::pipeline::source::PictureSource;
@@ -12,6 +9,9 @@ use shadelab::stimulus;
 use shadelab::NoProgress;
 use shadelab::SizeRequest;
 use shadelab::{Image, Mask};
+use shadelab_engine::light_estimation::{
+    estimate_light_with, EstimateMethod, LightEstimate, Outline,
+};
 
 /// Renders stimulus `name` at `w`×`h` pixels (`ppd` pixels per degree) with `pairs`: its
 /// linear luminance and its target mask (every labelled pixel).
@@ -255,7 +255,7 @@ fn the_limb_estimate_on_the_finer_bunny() {
 /// recovers the light.
 #[test]
 fn the_bunny_outline_is_not_edge_on() {
-    use shadelab::internal::boundary::occluding_normals;
+    use shadelab_engine::boundary::occluding_normals;
     // (mean n_z, share above 0.5, median and 90th-percentile angle to the contour normal).
     let outline = |name: &str, tilt: f64, slant: f64, ppd: f64| {
         let light = format!("light=tilt={tilt},slant={slant}");
@@ -338,9 +338,9 @@ fn without_a_limb_the_moments_run() {
 }
 
 mod hollow {
-    use shadelab::internal::analysis::observer::observe;
     use shadelab::pipeline::observer::{LightPrior, ObserverOptions};
     use shadelab::pipeline::prior_sweep::Sweep;
+    use shadelab_analysis::analysis::observer::observe;
 
     /// (P(convex), P(light from above), most probable tilt) upright, with convexity bias `bias`.
     pub fn percept(s: &Sweep, bias: f64) -> (f64, f64, f64) {

@@ -3,8 +3,8 @@
 //! and other pictures").
 
 use crate::cli::{assert_error, scratch, shadelab};
-use shadelab::internal::io::{self, InputEncoding};
 use shadelab::DEFAULT_MAX_PIXELS as MAX;
+use shadelab_io::{self as io, InputEncoding};
 use std::path::Path;
 
 /// IEC 61966-2-1: the linear value of an sRGB code scaled to 0..1.

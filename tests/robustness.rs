@@ -4,14 +4,14 @@
 //! whose clipped plateau the solve leaves out of the data term.
 
 use shadelab::angular_error;
-use shadelab::internal::albedo::{brightness_quantile, Saturation};
-use shadelab::internal::evaluation::crop::Crop;
-use shadelab::internal::evaluation::datasets::ball;
-use shadelab::internal::surface::sphere;
 use shadelab::pipeline::solve::{run_image, LightChoice, SolveConfig};
 use shadelab::Light;
 use shadelab::NoProgress;
 use shadelab::{Lambertian, ReflectanceMap};
+use shadelab_analysis::evaluation::crop::Crop;
+use shadelab_analysis::evaluation::datasets::ball;
+use shadelab_engine::albedo::{brightness_quantile, Saturation};
+use shadelab_engine::surface::sphere;
 use std::path::PathBuf;
 
 /// The shared data: `SHADELAB_EVAL_DATA`, else `../shared/data` beside the repository.

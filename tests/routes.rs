@@ -461,7 +461,7 @@ fn a_picture_is_read_once_through_a_fifo_and_by_its_content() {
     let mask: shadelab::Image = shadelab::Grid::from_fn(64, 64, |c, r| {
         f64::from(u8::from((c as f64 - 31.5).hypot(r as f64 - 31.5) < 20.0))
     });
-    shadelab::internal::io::write_image(&d.join("mask.npy"), &mask).unwrap();
+    shadelab_io::write_image(&d.join("mask.npy"), &mask).unwrap();
     let masked = report(&shadelab(
         &d,
         &[
@@ -471,7 +471,7 @@ fn a_picture_is_read_once_through_a_fifo_and_by_its_content() {
     ));
     assert!(masked["solver"]["converged"].as_bool().unwrap(), "{masked}");
     let half = mask.map(|&v| v * 0.5);
-    shadelab::internal::io::write_image(&d.join("half.npy"), &half).unwrap();
+    shadelab_io::write_image(&d.join("half.npy"), &half).unwrap();
     let refused = shadelab(
         &d,
         &[

@@ -201,7 +201,7 @@ fn a_recorded_gamma_is_undone() {
             .fold(0.0, f64::max)
     };
     // The PNG alone says its gamma (gAMA 1/2.2): read without its sidecar, it is linear too.
-    let alone = shadelab::internal::io::read_gray(&d.join("gam.png"), 1 << 24)
+    let alone = shadelab_io::read_gray(&d.join("gam.png"), 1 << 24)
         .unwrap()
         .0;
     assert!(worst_against_lin(&alone) < 2e-3);
@@ -225,7 +225,7 @@ fn a_recorded_gamma_is_undone() {
     std::fs::write(d.join("old.png"), &old).unwrap();
     std::fs::copy(d.join("gam.json"), d.join("old.json")).unwrap();
     assert!(worst_against_lin(&load("old.png")) < 2e-3);
-    let raw = shadelab::internal::io::read_gray(&d.join("old.png"), 1 << 24)
+    let raw = shadelab_io::read_gray(&d.join("old.png"), 1 << 24)
         .unwrap()
         .0;
     let raw_worst = worst_against_lin(&raw);
@@ -390,6 +390,6 @@ fn solve_takes_a_silhouette_as_its_mask_and_solves_regions_whole() {
 
 /// The number of nonzero pixels of a mask PNG.
 fn io_mask(path: &Path) -> u64 {
-    let labels = shadelab::internal::io::read_labels(path, 1 << 24).unwrap();
+    let labels = shadelab_io::read_labels(path, 1 << 24).unwrap();
     labels.data().iter().filter(|&&l| l > 0).count() as u64
 }

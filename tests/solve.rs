@@ -2,12 +2,12 @@
 //! that leave no half-filled folder behind.
 
 use crate::cli::{assert_error, files_in, scratch, shadelab};
-use shadelab::internal::gradient_space::angle_deg;
-use shadelab::internal::io::{self, BitDepth};
-use shadelab::internal::render::{render, RenderOptions};
-use shadelab::internal::surface::{sphere, Surface};
 use shadelab::Lambertian;
 use shadelab::{Grid, Light};
+use shadelab_core::gradient_space::angle_deg;
+use shadelab_engine::render::{render, RenderOptions};
+use shadelab_engine::surface::{sphere, Surface};
+use shadelab_io::{self as io, BitDepth};
 use std::path::Path;
 
 /// A 64² sphere (radius 28.8) lit from `light`, written as `image.npy` and `mask.png` in `dir`.

@@ -185,7 +185,7 @@ fn a_screenshot_of_the_page_shows_the_picture_and_the_reading() {
         ],
         Duration::from_secs(120),
     );
-    let shot = shadelab::internal::io::read_rgb(&png, 10_000_000).unwrap();
+    let shot = shadelab_io::read_rgb(&png, 10_000_000).unwrap();
     assert_eq!((shot.width(), shot.height()), (1280, 900));
     // The picture, the depth map and the plots: many distinct colours, not a blank page.
     let mut colours: Vec<[u8; 3]> = shot

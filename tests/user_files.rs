@@ -49,7 +49,7 @@ fn assert_user_files(out: &Path, what: &str) {
         assert_eq!(got, bytes, "{what}: {name} changed");
     }
     // The manifest lists what shadelab wrote, never the user's files.
-    let manifest = std::fs::read_to_string(out.join(shadelab::internal::io::MANIFEST)).unwrap();
+    let manifest = std::fs::read_to_string(out.join(shadelab_io::MANIFEST)).unwrap();
     let listed: serde_json::Value = serde_json::from_str(&manifest).unwrap();
     let files = listed["files"].as_array().unwrap();
     assert!(!files.is_empty(), "{what}: {manifest}");
@@ -644,7 +644,7 @@ fn rim_normals_facing_away_are_refused_naming_the_file() {
     render_sphere(&d);
     // Normals facing away from the viewer everywhere: (0, 0, -1).
     let normals = shadelab::Grid::new(32, 32, nalgebra::Vector3::new(0.0, 0.0, -1.0));
-    shadelab::internal::io::write_normals(&d.join("back_normals.npy"), &normals).unwrap();
+    shadelab_io::write_normals(&d.join("back_normals.npy"), &normals).unwrap();
     let out = quiet(
         &d,
         false,

@@ -122,7 +122,7 @@ fn read_pngs(root: &Path, dir: &Path) -> Result<Vec<(String, Decoded)>, Error> {
         if path.extension().and_then(|e| e.to_str()) != Some("png") {
             continue;
         }
-        let bytes = shadelab::internal::io::read_bytes(&path)?;
+        let bytes = shadelab_io::read_bytes(&path)?;
         let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
         let mut reader = decoder
             .read_info()

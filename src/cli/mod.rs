@@ -202,7 +202,7 @@ fn configure_threads(global: &Global) -> CliResult {
         if n == 0 {
             return Err(CliError::usage("--threads must be at least 1"));
         }
-        let (n, capped) = shadelab::internal::parallel::capped_threads(n);
+        let (n, capped) = shadelab_core::parallel::capped_threads(n);
         if capped {
             output::Output::new(global).warn(format!(
                 "--threads {} is more than {n} (4 per core of this machine): using {n}",

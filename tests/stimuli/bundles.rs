@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::cli::{scratch, shadelab};
-use shadelab::internal::stimulus::mat::{decode_all, MatValue};
+use shadelab_stimuli::mat::{decode_all, MatValue};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::process::Command;
@@ -48,7 +48,7 @@ fn a_mat_bundle_holds_the_image_mask_parameters_and_layers() {
     let (dims, img) = double("img");
     assert_eq!(dims, [100, 140]);
     // Column-major, equal to the 16-bit PNG to its last code.
-    let (png, _) = shadelab::internal::io::read_gray(&d.join("b.png"), MAX).unwrap();
+    let (png, _) = shadelab_io::read_gray(&d.join("b.png"), MAX).unwrap();
     for r in 0..100 {
         for c in 0..140 {
             assert_eq!(codes(img[r + 100 * c]), codes(*png.get(c, r)));
@@ -56,7 +56,7 @@ fn a_mat_bundle_holds_the_image_mask_parameters_and_layers() {
     }
     let (dims, mask) = double("target_mask");
     assert_eq!(dims, [100, 140]);
-    let labels = shadelab::internal::io::read_labels(&d.join("b_mask.png"), MAX).unwrap();
+    let labels = shadelab_io::read_labels(&d.join("b_mask.png"), MAX).unwrap();
     for r in 0..100 {
         for c in 0..140 {
             assert_eq!(mask[r + 100 * c], f64::from(*labels.get(c, r)));
@@ -91,7 +91,7 @@ fn a_mat_bundle_holds_the_image_mask_parameters_and_layers() {
     // The layers, as the .npy files beside it hold them.
     let (dims, depth) = double("depth");
     assert_eq!(dims, [100, 140]);
-    let npy = shadelab::internal::io::read_image(&d.join("b_depth.npy"), MAX).unwrap();
+    let npy = shadelab_io::read_image(&d.join("b_depth.npy"), MAX).unwrap();
     assert_eq!(depth[37 + 100 * 51] as f32, *npy.get(51, 37) as f32);
     assert_eq!(double("normals").0, [100, 140, 3]);
     assert!(vars.contains_key("shading"));

@@ -19,7 +19,7 @@ fn a_spec_gives_stimupys_shape_in_height_width_order() {
         &d,
         &["render", "--spec", "spec.json", "--out", "c.png"],
     ));
-    let (img, _) = shadelab::internal::io::read_gray(&d.join("c.png"), MAX).unwrap();
+    let (img, _) = shadelab_io::read_gray(&d.join("c.png"), MAX).unwrap();
     assert_eq!((img.height(), img.width()), (128, 256));
     // 1° checks at 32 ppd: 4 rows and 8 columns of checks.
     let changes = |values: Vec<f64>| values.windows(2).filter(|pair| pair[0] != pair[1]).count();
@@ -44,7 +44,7 @@ fn a_spec_gives_stimupys_shape_in_height_width_order() {
         &["render", "sphere", "--size", "50x30", "--out", "t.png"],
     ));
     for f in ["s.png", "t.png"] {
-        let (img, _) = shadelab::internal::io::read_gray(&d.join(f), MAX).unwrap();
+        let (img, _) = shadelab_io::read_gray(&d.join(f), MAX).unwrap();
         assert_eq!((img.height(), img.width()), (30, 50), "{f}");
     }
 }
@@ -315,14 +315,8 @@ fn a_visual_size_is_rounded_down_to_whole_pixels_as_stimupy_and_said() {
     let side: Value = serde_json::from_slice(&std::fs::read(d.join("w.json")).unwrap()).unwrap();
     assert!(side["notes"].get("visual_size_rounded").is_none());
     // 0.29° × 100 ppd is 29 px (28.999999999999996 before the product is rounded to 10 decimals).
-    assert_eq!(
-        shadelab::internal::visual_size::whole_pixels(0.29, 100.0),
-        29.0
-    );
-    assert_eq!(
-        shadelab::internal::visual_size::whole_pixels(3.3, 31.7),
-        104.0
-    );
+    assert_eq!(shadelab_core::visual_size::whole_pixels(0.29, 100.0), 29.0);
+    assert_eq!(shadelab_core::visual_size::whole_pixels(3.3, 31.7), 104.0);
 }
 
 #[test]
@@ -392,7 +386,7 @@ fn a_check_that_is_no_whole_number_of_pixels_is_rounded_as_stimupy_rounds_it() {
     );
     let side: Value = serde_json::from_slice(&std::fs::read(d.join("c.json")).unwrap()).unwrap();
     assert_eq!(side["notes"]["check_rounded"]["check_px"], 8.0);
-    let (img, _) = shadelab::internal::io::read_gray(&d.join("c.png"), 1 << 20).unwrap();
+    let (img, _) = shadelab_io::read_gray(&d.join("c.png"), 1 << 20).unwrap();
     // Row 0: 8 dark columns, 8 light, 8 dark … (not 7.5).
     let top: Vec<f64> = (0..60).map(|c| *img.get(c, 0)).collect();
     for (c, v) in top.iter().enumerate() {

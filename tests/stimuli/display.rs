@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::cli::{assert_error, files_in, scratch, shadelab};
-use shadelab::internal::io;
+use shadelab_io as io;
 
 /// The gAMA value (hundred-thousandths) and the iTXt chunks of a PNG, as the `png` crate reads
 /// them.

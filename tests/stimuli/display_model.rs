@@ -47,7 +47,7 @@ fn linear(d: &Path, args: &[&str]) -> Vec<f64> {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let array = shadelab::internal::io::read_array(&d.join("truth.npy"), 1 << 24).unwrap();
+    let array = shadelab_io::read_array(&d.join("truth.npy"), 1 << 24).unwrap();
     array.data
 }
 
@@ -165,7 +165,7 @@ fn the_sidecar_records_each_targets_luminance_and_the_file_reads_back_as_the_sti
     )
     .unwrap();
     let (codes, ..) = samples(&d.join("b.png"));
-    let labels = shadelab::internal::io::read_labels(&d.join("b_mask.png"), 1 << 24).unwrap();
+    let labels = shadelab_io::read_labels(&d.join("b_mask.png"), 1 << 24).unwrap();
     for t in side["targets"].as_array().unwrap() {
         let label = t["label"].as_u64().unwrap() as u16;
         let inside: Vec<f64> = codes

@@ -2,12 +2,12 @@
 //! mesh rasteriser at the size where the bunny showed dark slivers.
 
 use serde_json::{Map, Value};
-use shadelab::internal::imageops::fill_holes;
-use shadelab::internal::stimulus::face::{face_mesh, face_relief, face_view, FACE_MIRROR_NORMAL};
 use shadelab::stimulus::{self, hollow_mask, HollowMaskParams, Output, Pixels};
 use shadelab::Grid;
 use shadelab::{Geometry, SizeRequest};
 use shadelab::{ParamSet, Params};
+use shadelab_engine::imageops::fill_holes;
+use shadelab_stimuli::face::{face_mesh, face_relief, face_view, FACE_MIRROR_NORMAL};
 
 fn mask_face(pairs: &[&str], width: usize, height: usize, ppd: f64) -> Output {
     let params = HollowMaskParams::from_map(&Params::parse_pairs(pairs).unwrap()).unwrap();

@@ -3,12 +3,12 @@
 //! target mask beside every stimulus.
 
 use super::*;
-use shadelab::internal::io;
 use shadelab::pipeline::render::{self, RenderConfig};
 use shadelab::stimulus::{disc, DiscParams, Pixels};
 use shadelab::Geometry;
 use shadelab::NoProgress;
 use shadelab::Params;
+use shadelab_io as io;
 
 fn render_with(name: &str, pairs: &[&str]) -> Output {
     let given = Params::parse_pairs(pairs).unwrap();

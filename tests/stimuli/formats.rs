@@ -3,10 +3,10 @@
 use super::*;
 use crate::cli::{assert_error, scratch, shadelab};
 use serde_json::Map;
-use shadelab::internal::io::{self};
-use shadelab::internal::stimulus::mat;
 use shadelab::stimulus::{self, ExportOptions, Pixels};
 use shadelab::SizeRequest;
+use shadelab_io as io;
+use shadelab_stimuli::mat;
 use std::collections::BTreeSet;
 use std::path::Path;
 

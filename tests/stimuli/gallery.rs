@@ -12,7 +12,7 @@ fn the_gallery_renders_every_preset_with_captions_and_files() {
     ok(&out);
     let g = d.join("g");
     let html = std::fs::read_to_string(g.join("index.html")).unwrap();
-    let presets = shadelab::internal::gallery::builtin_presets().unwrap();
+    let presets = shadelab_stimuli::gallery::builtin_presets().unwrap();
     // Every spec in stimuli/ is a built-in preset.
     let on_disk: BTreeSet<String> =
         std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("stimuli"))

@@ -1,10 +1,10 @@
 //! Golden images of every stimulus, and rendering that repeats exactly.
 
 use super::*;
-use shadelab::internal::io::{self, BitDepth};
 use shadelab::stimulus::{self, Output, Pixels};
 use shadelab::Grid;
 use shadelab::SizeRequest;
+use shadelab_io::{self as io, BitDepth};
 use std::path::{Path, PathBuf};
 
 fn golden_dir() -> PathBuf {

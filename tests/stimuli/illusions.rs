@@ -2,8 +2,8 @@
 
 use super::*;
 use crate::cli::{scratch, shadelab};
-use shadelab::internal::io::{self};
 use shadelab::Image;
+use shadelab_io as io;
 use std::collections::BTreeSet;
 
 fn labels_and_values(img: &Image, labels: &shadelab::Labels, label: u16) -> Vec<f64> {
