@@ -46,7 +46,13 @@
 
 pub use shadelab_commands::pipeline;
 pub use shadelab_core::cancel;
-pub use shadelab_io::display;
+/// A display in physical units (gamma, cd/m², quantisation: [`shadelab_io::display`]), and how
+/// linear values reach a screen without a measured display (a gamma alone), or from a display
+/// described by a JSON value (the Python module's dicts) as [`read_display`] reads a file.
+pub mod display {
+    pub use shadelab_io::display::*;
+    pub use shadelab_io::{display_from_value, display_rgba8, stimulus_codes};
+}
 pub use shadelab_stimuli as stimulus;
 
 // The floors the names below come from, under their module names.
@@ -63,10 +69,10 @@ pub use error::{nearest_name, Error, Result};
 pub use gradient_space::Normal;
 pub use grid::{check_size, Grid, Image, Labels, Mask, RgbImage, DEFAULT_MAX_PIXELS};
 pub use light::{FrontLight, Light};
-pub use message::{Message, Setting};
+pub use message::{Message, Setting, SizeText};
 pub use params::{ParamKind, ParamSet, ParamSpec, Params};
 pub use progress::{NoProgress, Progress};
-pub use visual_size::{parse_size, Geometry, SizeRequest, SizeText, MAX_VISUAL_DEGREES};
+pub use visual_size::{parse_size, Geometry, SizeRequest, MAX_VISUAL_DEGREES};
 
 // Files: what a picture's pixels mean when read, and how they are written.
 pub use colormap::Colormap;

@@ -1,7 +1,6 @@
-//! One version (docs/releasing.md): the root crate's `Cargo.toml` sets it, and everything that
-//! carries a version says the same: the Python binding's and the WebAssembly engine's manifests
-//! and lock files (their own workspaces, so they repeat it), the wheel (pyproject.toml takes it
-//! from the binding's manifest), CITATION.cff and its release date, the changelog, the program's
+//! One version (docs/releasing.md): the workspace's `Cargo.toml` sets it, and everything that
+//! carries a version says the same: every member's manifest (each inherits it), the one lock
+//! file, the wheel (pyproject.toml takes it from the binding's manifest), CITATION.cff and its release date, the changelog, the program's
 //! `--version`, a sidecar, the PNG's `Software` text, a report, and the pages that show a
 //! version as an example of what shadelab writes.
 
@@ -66,36 +65,51 @@ fn versions_after(text: &str, prefix: &str) -> Vec<String> {
 
 #[test]
 fn every_manifest_lock_and_citation_carries_the_crates_version() {
-    // The binding's and the engine's manifests repeat the version (they are workspaces of their
-    // own and cannot inherit it), and their lock files record it for both crates.
-    for (manifest, lock, own) in [
-        ("python/Cargo.toml", "python/Cargo.lock", "shadelab-python"),
-        (
-            "web/engine/Cargo.toml",
-            "web/engine/Cargo.lock",
-            "shadelab-web",
-        ),
-    ] {
-        let m = read(manifest);
-        assert_eq!(
-            quoted(&table(&m, "[package]"), "version"),
-            Some(VERSION),
-            "{manifest}'s version"
-        );
-        let l = read(lock);
-        for name in ["shadelab", own] {
-            assert_eq!(
-                locked(&l, name).as_deref(),
-                Some(VERSION),
-                "{lock}'s {name}"
-            );
-        }
-    }
+    // The workspace sets the version once; every member inherits it, and the one lock file
+    // records it for each of them.
+    let root_manifest = read("Cargo.toml");
     assert_eq!(
-        locked(&read("Cargo.lock"), "shadelab").as_deref(),
+        quoted(&table(&root_manifest, "[workspace.package]"), "version"),
         Some(VERSION),
-        "Cargo.lock's shadelab"
+        "the workspace's version"
     );
+    let lock = read("Cargo.lock");
+    let members = [
+        ("Cargo.toml", "shadelab"),
+        ("crates/core/Cargo.toml", "shadelab-core"),
+        ("crates/io/Cargo.toml", "shadelab-io"),
+        ("crates/engine/Cargo.toml", "shadelab-engine"),
+        ("crates/stimuli/Cargo.toml", "shadelab-stimuli"),
+        ("crates/analysis/Cargo.toml", "shadelab-analysis"),
+        ("crates/commands/Cargo.toml", "shadelab-commands"),
+        ("python/Cargo.toml", "shadelab-python"),
+        ("web/engine/Cargo.toml", "shadelab-web"),
+    ];
+    for (manifest, name) in members {
+        let text = read(manifest);
+        let package = table(&text, "[package]");
+        assert!(
+            package
+                .iter()
+                .any(|l| l.trim() == "version.workspace = true"),
+            "{manifest} does not inherit the workspace's version"
+        );
+        assert_eq!(
+            quoted(&package, "version"),
+            None,
+            "{manifest} sets a version"
+        );
+        assert_eq!(
+            locked(&lock, name).as_deref(),
+            Some(VERSION),
+            "Cargo.lock's {name}"
+        );
+        assert!(
+            root_manifest.contains(&format!("\"{}\"", manifest.trim_end_matches("/Cargo.toml")))
+                || manifest == "Cargo.toml",
+            "{manifest} is not a member of the workspace"
+        );
+    }
 
     // The wheel's version is maturin's reading of python/Cargo.toml: pyproject.toml must not
     // set a second one.

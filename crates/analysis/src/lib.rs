@@ -10,7 +10,7 @@ pub mod lightness;
 
 // The floors below, under the module names their code has always used (`crate::grid`, ...).
 use shadelab_core::{
-    error, gradient_space, grid, light, parallel, params, progress, random, visual_size,
+    error, gradient_space, grid, light, message, parallel, params, progress, random,
 };
 use shadelab_engine::{
     albedo, boundary, imageops, integrate, light_estimation, reconstruct, reflectance, render,

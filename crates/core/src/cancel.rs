@@ -8,7 +8,7 @@
 //!
 //! Workers only look at the flag and stop; they never clean up. A stopped pipeline returns
 //! [`Error::Cancelled`] to the thread that called it, whose temporaries (an
-//! [`crate::io::AtomicDir`], an [`crate::io::OutputSet`]) are then dropped and removed, so
+//! `io::AtomicDir`, an `io::OutputSet`) are then dropped and removed, so
 //! that no partial output ever appears under its final name.
 //!
 //! ```

@@ -4,7 +4,7 @@
 //! `docs/conventions.md`). Data are stored row-major.
 
 use crate::error::{Error, Result};
-use crate::visual_size::SizeText;
+use crate::message::SizeText;
 
 /// A width × height grid of `T`, stored row-major from the top-left pixel.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,7 +34,7 @@ pub fn luminance(rgb: [f64; 3]) -> f64 {
 }
 
 /// The words of every size-mismatch error, `"{what} H px high × W px wide but {other_what} …"`
-/// (the axes in words, [`crate::visual_size::SizeText`]): what
+/// (the axes in words, [`crate::message::SizeText`]): what
 /// [`Grid::check_same_size`] says, and the base of messages about a size that is not a grid's.
 pub fn size_mismatch(
     what: &str,

@@ -101,3 +101,41 @@ impl From<String> for Message {
         Message::text(text)
     }
 }
+
+/// A size written for a message with its axes named in words, height first, so that it reads
+/// right whatever order the reader writes sizes in (Python and JSON (height, width), the
+/// command line's `--size WxH` width first).
+///
+/// ```
+/// use shadelab::SizeText;
+/// assert_eq!(SizeText::Degrees(10.0, 14.0).to_string(), "10.0° high × 14.0° wide");
+/// assert_eq!(SizeText::Degrees(3.97476, 0.25).to_string(), "3.975° high × 0.25° wide");
+/// assert_eq!(SizeText::Pixels(40, 60).to_string(), "40 px high × 60 px wide");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SizeText {
+    /// (height, width) in degrees of visual angle, written to three decimals at most.
+    Degrees(f64, f64),
+    /// (height, width) in pixels.
+    Pixels(usize, usize),
+}
+
+impl std::fmt::Display for SizeText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            SizeText::Degrees(h, w) => write!(f, "{}° high × {}° wide", degrees(h), degrees(w)),
+            SizeText::Pixels(h, w) => write!(f, "{h} px high × {w} px wide"),
+        }
+    }
+}
+
+/// `v` to three decimals at most and one at least (10.0, 3.975, 0.25).
+fn degrees(v: f64) -> String {
+    let text = format!("{v:.3}");
+    let trimmed = text.trim_end_matches('0');
+    if trimmed.ends_with('.') {
+        format!("{trimmed}0")
+    } else {
+        trimmed.to_string()
+    }
+}

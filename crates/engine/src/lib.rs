@@ -19,6 +19,6 @@ pub mod surface;
 
 // The floors below, under the module names their code has always used (`crate::grid`, ...).
 use shadelab_core::{
-    cancel, error, gradient_space, grid, light, message, parallel, params, progress, visual_size,
+    cancel, error, gradient_space, grid, light, message, parallel, params, progress,
 };
 use shadelab_io as io;

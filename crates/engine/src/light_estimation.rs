@@ -54,8 +54,8 @@
 //! model that does not fit the object (a cross-section that is no circle, an outline partly a
 //! cut) leaves residuals that run along the outline, so the fit's least-squares errors are
 //! widened by √(residuals / 8) (the residuals taken as 8 independent blocks of the outline,
-//! [`outline_blocks`]) and combined with a delete-one-eighth jackknife over the outline's
-//! directions ([`jackknife`]). Measured on spheres, ellipsoids and vases at 64², 128² and 256²
+//! `outline_blocks`) and combined with a delete-one-eighth jackknife over the outline's
+//! directions (`jackknife`). Measured on spheres, ellipsoids and vases at 64², 128² and 256²
 //! under 32 lights each, the true tilt lies within ±2σ in 92 % of the estimates and the slant in
 //! 96 % (docs/perception.md). The moments' tilt error is the mean gradient's sampling error
 //! only, and they give no slant error.

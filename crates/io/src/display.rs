@@ -27,10 +27,6 @@
 //! assert!((l[0] - 10.0).abs() < 0.5 && (l[1] - 50.0).abs() < 0.5 && (l[2] - 90.0).abs() < 0.5);
 //! ```
 
-// How linear values become a screen's codes without a measured display (a gamma alone), and a
-// display described by a JSON value (the Python module's dicts) as `read_display` reads a file.
-pub use crate::{display_from_value, display_rgba8, stimulus_codes};
-
 use crate::error::{Error, Result};
 use crate::grid::{Grid, Image, Labels};
 use serde::Serialize;

@@ -25,6 +25,7 @@ pub mod render_sidecar;
 
 // The floors below, under the module names their code has always used (`crate::grid`, ...).
 use shadelab_core::{cancel, error, gradient_space, grid, light};
+
 mod sidecar;
 mod temp;
 
@@ -79,6 +80,22 @@ pub fn read_luminance_as(
     let picture = read_picture(path, max_pixels, encoding, false)?;
     check_luminance_range(picture.gray.data(), path)?;
     Ok((picture.gray, picture.info))
+}
+
+/// Fails on the first NaN or infinity of a picture `width` pixels wide with `channels` values
+/// per pixel, naming its column and row, and on values outside linear luminance 0..1
+/// ([`check_luminance_range`]).
+pub fn check_values(values: &[f64], channels: usize, width: usize, what: &str) -> Result<()> {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        let pixel = i / channels.max(1);
+        let w = width.max(1);
+        return Err(Error::invalid(format!(
+            "{what}: the image has a non-finite value (NaN or Inf) at column {}, row {}",
+            pixel % w,
+            pixel / w
+        )));
+    }
+    check_luminance_range(values, std::path::Path::new(what))
 }
 
 /// Checks that every value of a picture (gray, or RGB channels in turn) is linear luminance

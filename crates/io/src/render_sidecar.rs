@@ -1,7 +1,7 @@
 //! Reading the sidecar that `shadelab render` writes beside a picture (`X.png` → `X.json`):
 //! what an analysis of that picture should know about it — its target mask and names, its
 //! resolution, the albedo and ambient level it was rendered with, how its values were encoded
-//! (display gamma, value range) and its true light. The writer is [`crate::stimulus::write_output`].
+//! (display gamma, value range) and its true light. The writer is `stimulus::write_output`.
 
 use crate::display::{Display, Luminance};
 use crate::error::{Error, Result};

@@ -123,7 +123,7 @@ pub fn boundary_strips(p: &BoundaryStripsParams, g: &Geometry) -> Result<Output>
     if width > fw || stack > fh {
         return Err(Error::invalid(format!(
             "boundary-strips: {n} strips need {} but the frame is {}: enlarge the visual size or shorten them",
-            crate::visual_size::SizeText::Degrees(stack / g.ppd, width / g.ppd),
+            crate::message::SizeText::Degrees(stack / g.ppd, width / g.ppd),
             g.size_text()
         )));
     }

@@ -249,7 +249,7 @@ pub fn checker_shadow(p: &CheckerShadowParams, g: &Geometry) -> Result<Output> {
     if content_w > g.width as f64 + 0.5 || content_h > g.height as f64 + 0.5 {
         return Err(Error::invalid(format!(
             "checker-shadow: the scene needs {} but the frame is {}: enlarge the visual size or shrink `square`",
-            crate::visual_size::SizeText::Degrees(content_h / g.ppd, content_w / g.ppd),
+            crate::message::SizeText::Degrees(content_h / g.ppd, content_w / g.ppd),
             g.size_text()
         )));
     }

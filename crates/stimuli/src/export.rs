@@ -235,7 +235,7 @@ pub const MAT_VARIABLE: &str = "img";
 /// Writes `output` to `path` (format from the extension) with its sidecar `path.json`
 /// (extension replaced), target mask `*_mask.png` and, with `options.layers`, the surface
 /// layers, replacing a file shadelab did not write only with `force` (the caller's output
-/// policy, as [`crate::pipeline::Output`] holds it). Returns every file written. The files are
+/// policy, as `pipeline::Output` holds it). Returns every file written. The files are
 /// committed as a set ([`io::OutputSet`]): whatever stops the write, the old set or the new set
 /// is there whole, never a mix; a second run writing the same output meanwhile fails with
 /// [`Error::Locked`]. `edited` says the picture is not the render `request` describes (its

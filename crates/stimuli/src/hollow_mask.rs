@@ -146,7 +146,7 @@ fn pair(w: usize, h: usize, relief: f64) -> Result<(Surface, Named, Option<Overl
     if cw < 8 || ch < 8 {
         return Err(Error::invalid(format!(
             "hollow-mask: layout=pair needs at least 16 px high × 16 px wide, not {}",
-            crate::visual_size::SizeText::Pixels(h, w)
+            crate::message::SizeText::Pixels(h, w)
         )));
     }
     // The face fills 90 % of its quarter along the tighter axis.

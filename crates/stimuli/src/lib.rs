@@ -14,14 +14,6 @@
 
 pub mod gallery;
 
-// The floors below, under the module names their code has always used (`crate::grid`, ...).
-use shadelab_core::{
-    cancel, error, gradient_space, grid, light, parallel, params, random, visual_size,
-};
-use shadelab_engine::{reflectance, render, surface};
-use shadelab_io as io;
-use shadelab_io::{colormap, display, plot};
-
 mod boundary_strips;
 mod bumps;
 pub mod bundle;
@@ -37,6 +29,14 @@ mod hollow_mask;
 pub mod mat;
 mod reflectance_map;
 pub mod stimupy_names;
+
+// The floors below, under the module names their code has always used (`crate::grid`, ...).
+use shadelab_core::{
+    cancel, error, gradient_space, grid, light, message, parallel, params, random, visual_size,
+};
+use shadelab_engine::{reflectance, render, surface};
+use shadelab_io as io;
+use shadelab_io::{colormap, display, plot};
 mod strips;
 mod surfaces;
 mod svg;
@@ -74,8 +74,9 @@ pub use surfaces::{
 use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Labels, Mask, RgbImage};
+use crate::message::SizeText;
 use crate::params::{ParamSet, ParamSpec, Params};
-use crate::visual_size::{Geometry, SizeRequest, SizeText};
+use crate::visual_size::{Geometry, SizeRequest};
 use serde::Deserialize;
 use serde_json::{Map, Value};
 

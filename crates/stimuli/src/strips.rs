@@ -111,7 +111,7 @@ pub fn strips(p: &StripsParams, g: &Geometry) -> Result<Output> {
     if total > across_px || length > along_px {
         return Err(Error::invalid(format!(
             "strips: {n} strips need {} but the frame is {}: enlarge the visual size or make them smaller or fewer",
-            crate::visual_size::SizeText::Degrees(
+            crate::message::SizeText::Degrees(
                 if horizontal { total } else { length } as f64 / g.ppd,
                 if horizontal { length } else { total } as f64 / g.ppd,
             ),

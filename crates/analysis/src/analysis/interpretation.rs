@@ -422,7 +422,7 @@ pub fn check_scene(scene: &Scene) -> Result<()> {
             return Err(Error::invalid(format!(
                 "token '{}' does not fit an image {}",
                 t.name,
-                crate::visual_size::SizeText::Pixels(h, w)
+                crate::message::SizeText::Pixels(h, w)
             )));
         }
         if !t.inside(scene.domain) {

@@ -381,9 +381,9 @@ fn same_size<A, B>(a: &Grid<A>, b: &Grid<B>, a_path: &Path, b_path: &Path) -> Re
             a_path,
             format!(
                 "is {} but {} is {}",
-                crate::visual_size::SizeText::Pixels(a.height(), a.width()),
+                crate::message::SizeText::Pixels(a.height(), a.width()),
                 b_path.display(),
-                crate::visual_size::SizeText::Pixels(b.height(), b.width())
+                crate::message::SizeText::Pixels(b.height(), b.width())
             ),
         ))
     }

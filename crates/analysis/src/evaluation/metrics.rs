@@ -133,9 +133,9 @@ fn check_sizes<A, B>(a: &Grid<A>, b: &Grid<B>, mask: &Mask) -> Result<()> {
     } else {
         Err(Error::invalid(format!(
             "sizes differ: {}, {} and a mask of {}",
-            crate::visual_size::SizeText::Pixels(a.height(), a.width()),
-            crate::visual_size::SizeText::Pixels(b.height(), b.width()),
-            crate::visual_size::SizeText::Pixels(mask.height(), mask.width())
+            crate::message::SizeText::Pixels(a.height(), a.width()),
+            crate::message::SizeText::Pixels(b.height(), b.width()),
+            crate::message::SizeText::Pixels(mask.height(), mask.width())
         )))
     }
 }

@@ -5,7 +5,7 @@
 //! models with observers by the difference of the mean model output on the two targets). The
 //! model predicts the human *direction* when its effect is positive (the verdicts, with the
 //! tolerance under which an effect is no prediction, are
-//! [`crate::pipeline::benchmark::Verdict`]'s). Across stimuli, the
+//! `pipeline::benchmark::Verdict`'s). Across stimuli, the
 //! Spearman rank correlation between the models' effects and the human effect sizes says
 //! whether the model orders the illusions by strength as people do; it does not depend on
 //! the model's units.

@@ -683,8 +683,8 @@ fn check_geometry(width: usize, height: usize, ppd: f64) -> Result<()> {
         return Err(Error::invalid(format!(
             "image {} at {ppd} ppd is {}, smaller than the largest filter ({MIN_SIDE_DEG}°, \
              twice its 3° space constant) either way: use a larger image or a smaller ppd",
-            crate::visual_size::SizeText::Pixels(height, width),
-            crate::visual_size::SizeText::Degrees(hd, wd)
+            crate::message::SizeText::Pixels(height, width),
+            crate::message::SizeText::Degrees(hd, wd)
         )));
     }
     Ok(())

@@ -97,7 +97,7 @@ impl OutlineConfig {
             if w == 0 || h == 0 {
                 return Err(Error::invalid(format!(
                     "size {} must be at least 1 pixel each way",
-                    crate::visual_size::SizeText::Pixels(h, w)
+                    crate::message::SizeText::Pixels(h, w)
                 )));
             }
         }

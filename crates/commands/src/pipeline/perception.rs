@@ -207,7 +207,7 @@ impl Config {
             } else if w == 0 || h == 0 {
                 Err(Error::invalid(format!(
                     "size {} must be at least 1 pixel each way",
-                    crate::visual_size::SizeText::Pixels(h, w)
+                    crate::message::SizeText::Pixels(h, w)
                 )))
             } else {
                 Ok(())

@@ -278,7 +278,7 @@ impl RenderReport {
             Pixels::Gray(i) => (i.data(), 1),
             Pixels::Rgb(i) => (i.data().as_flattened(), 3),
         };
-        super::source::check_values(values, channels, w, what)?;
+        crate::io::check_values(values, channels, w, what)?;
         let rendered: &[f64] = match &self.output.pixels {
             Pixels::Gray(i) => i.data(),
             Pixels::Rgb(i) => i.data().as_flattened(),

@@ -609,7 +609,7 @@ pub fn run_image(
     config.validate()?;
     let name = config.image.display().to_string();
     crate::grid::check_size(image.width(), image.height(), config.max_pixels)?;
-    super::source::check_values(image.data(), 1, image.width(), &name)?;
+    crate::io::check_values(image.data(), 1, image.width(), &name)?;
     let mask = match mask {
         Some(mask) => {
             let mask_name = config

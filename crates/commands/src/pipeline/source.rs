@@ -516,26 +516,5 @@ fn check_pixel_values(pixels: &Pixels, what: &str) -> Result<()> {
         Pixels::Gray(i) => (i.data(), 1),
         Pixels::Rgb(i) => (i.data().as_flattened(), 3),
     };
-    check_values(values, channels, pixels.size().0, what)
-}
-
-/// Fails on the first NaN or infinity of a picture `width` pixels wide with `channels` values
-/// per pixel, naming its column and row, and on values outside linear luminance 0..1
-/// ([`io::check_luminance_range`]).
-pub(crate) fn check_values(
-    values: &[f64],
-    channels: usize,
-    width: usize,
-    what: &str,
-) -> Result<()> {
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        let pixel = i / channels.max(1);
-        let w = width.max(1);
-        return Err(Error::invalid(format!(
-            "{what}: the image has a non-finite value (NaN or Inf) at column {}, row {}",
-            pixel % w,
-            pixel / w
-        )));
-    }
-    io::check_luminance_range(values, std::path::Path::new(what))
+    io::check_values(values, channels, pixels.size().0, what)
 }

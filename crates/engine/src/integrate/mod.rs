@@ -116,9 +116,9 @@ pub fn gradients_from_fg(
     if !f.same_size(&g) || !f.same_size(mask) {
         return Err(Error::invalid(format!(
             "f is {}, g {} and the mask {}: they must have one size",
-            crate::visual_size::SizeText::Pixels(f.height(), f.width()),
-            crate::visual_size::SizeText::Pixels(g.height(), g.width()),
-            crate::visual_size::SizeText::Pixels(mask.height(), mask.width())
+            crate::message::SizeText::Pixels(f.height(), f.width()),
+            crate::message::SizeText::Pixels(g.height(), g.width()),
+            crate::message::SizeText::Pixels(mask.height(), mask.width())
         )));
     }
     check_min_nz(min_nz)?;
@@ -207,8 +207,8 @@ fn check_gradients(dz_dx: &Image, dz_dy: &Image) -> Result<()> {
     if !dz_dx.same_size(dz_dy) {
         return Err(Error::invalid(format!(
             "gradient fields differ in size: {} and {}",
-            crate::visual_size::SizeText::Pixels(dz_dx.height(), dz_dx.width()),
-            crate::visual_size::SizeText::Pixels(dz_dy.height(), dz_dy.width())
+            crate::message::SizeText::Pixels(dz_dx.height(), dz_dx.width()),
+            crate::message::SizeText::Pixels(dz_dy.height(), dz_dy.width())
         )));
     }
     for (name, grid) in [("x", dz_dx), ("y", dz_dy)] {

@@ -489,7 +489,7 @@ impl Solver {
         if n >= NO_SLOT as usize {
             return Err(Error::invalid(format!(
                 "image size {} is too large for the solver",
-                crate::visual_size::SizeText::Pixels(height, width)
+                crate::message::SizeText::Pixels(height, width)
             )));
         }
         Ok(Solver {
@@ -559,8 +559,8 @@ impl Solver {
             if (gw, gh) != (w, h) {
                 return Err(Error::invalid(format!(
                     "{what} is {} but the solver was made for {}",
-                    crate::visual_size::SizeText::Pixels(gh, gw),
-                    crate::visual_size::SizeText::Pixels(h, w)
+                    crate::message::SizeText::Pixels(gh, gw),
+                    crate::message::SizeText::Pixels(h, w)
                 )));
             }
         }

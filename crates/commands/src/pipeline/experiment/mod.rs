@@ -429,7 +429,7 @@ impl Config {
                 field: "visual_size",
                 error: Error::invalid(format!(
                     "the visual size {} must be above 0 and at most {most}° each way",
-                    crate::visual_size::SizeText::Degrees(h, w)
+                    crate::message::SizeText::Degrees(h, w)
                 )),
             });
         }

@@ -86,7 +86,7 @@ impl Mesh {
         if owner.iter().all(|&t| t == NONE) {
             return Err(Error::Compute(format!(
                 "the mesh covers no pixel centre of the frame {} at fill {fill}",
-                crate::visual_size::SizeText::Pixels(height, width)
+                crate::message::SizeText::Pixels(height, width)
             )));
         }
 
