@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every check a release's registries would make, without uploading anything (docs/releasing.md):
 # the one-version test (with the changelog's section for the version), CITATION.cff against its
-# schema, `cargo publish --dry-run` of the crate, the Python sdist and wheel through `twine check
+# schema, `cargo publish --dry-run` of the workspace's crates, the Python sdist and wheel through `twine check
 # --strict`, the sdist installed by pip into a fresh venv (compiled from source, as a lab
 # without a wheel for its platform gets it) with the sdist's own test suite run against it, and
 # the documentation site. It stops at the first step that fails and names it; it publishes
@@ -40,9 +40,10 @@ fi
 step "cffconvert --validate CITATION.cff"
 "$work/tools/bin/cffconvert" --validate -i CITATION.cff
 
-step "cargo publish --dry-run (the shadelab crate; python/ and web/engine/ are publish = false)"
-# It says what it packaged ("Packaged N files, … compressed") and keeps no .crate file.
-cargo publish --dry-run
+step "cargo publish --dry-run --workspace (the six floors and the shadelab crate, in order; python/ and web/engine/ are publish = false)"
+# It says what it packaged for each crate ("Packaged N files, … compressed"), builds each against
+# the others as packaged, and keeps no .crate file.
+cargo publish --dry-run --workspace --exclude shadelab-python --exclude shadelab-web
 
 step "maturin sdist and wheel of the Python package"
 "$work/tools/bin/maturin" sdist -m python/Cargo.toml --out "$work/dist"

@@ -7,8 +7,8 @@
 //! sdist`, unpacked into `target/python/sdist/tree/` (only the files that changed are written, so
 //! cargo rebuilds no more than it would from python/), and `maturin build` there; a file the
 //! sdist lacks fails the build here, not in a user's `pip install`. The wheel is compiled in the
-//! root's own target directory: its dependencies are the root crate's, at the versions of the
-//! root's lock file (python/Cargo.lock keeps them equal), so they are compiled once for both;
+//! root's own target directory: the binding is a member of the root workspace, with its one lock
+//! file, so the dependencies are compiled once for both;
 //! `cargo test` releases the directory's lock before it runs the tests. The suite runs twice:
 //! from python/tests (beside `../shared`'s data) in that venv, and from the sdist's own tests
 //! in a clean venv without Rust (below). Where Python ≥ 3.9, its `venv` module or pip's packages

@@ -73,6 +73,18 @@ fn every_manifest_lock_and_citation_carries_the_crates_version() {
         Some(VERSION),
         "the workspace's version"
     );
+    // Each floor as the others name it: a path with the same version (crates.io needs both).
+    let floors: Vec<&str> = table(&root_manifest, "[workspace.dependencies]")
+        .into_iter()
+        .filter(|l| l.starts_with("shadelab-"))
+        .collect();
+    assert_eq!(floors.len(), 6, "the workspace names its six floors");
+    for floor in floors {
+        assert!(
+            floor.contains(&format!("version = \"{VERSION}\"")),
+            "the workspace's dependency {floor}"
+        );
+    }
     let lock = read("Cargo.lock");
     let members = [
         ("Cargo.toml", "shadelab"),

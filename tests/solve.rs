@@ -471,7 +471,7 @@ fn albedo_estimate_is_indifferent_to_scale_and_highlights() {
     for (run, scale) in runs.iter().zip([1.0, 0.8, 0.5]) {
         let estimate = run.report.parameters.albedo_estimate.unwrap();
         // The rule scales with the image exactly; on a matte sphere it reads 1–1.5 % low
-        // (src/albedo.rs).
+        // (crates/engine/src/albedo.rs).
         let ratio = estimate.value / scale;
         assert!(
             ratio < 1.0 && ratio > 0.98,

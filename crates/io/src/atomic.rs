@@ -212,7 +212,7 @@ pub fn check_overwrite(target: &Path, marker: &Path, force: bool) -> Result<()> 
 /// run writing the same folder fails with [`Error::Locked`]; dropped uncommitted, the temporary
 /// folder and the lock are removed.
 ///
-/// The folder is the user's too (see src/io/keep.rs): the new folder replaces only the files
+/// The folder is the user's too (see crates/io/src/keep.rs): the new folder replaces only the files
 /// this run writes and those the previous run's manifest lists; every other file in the old
 /// folder is carried over unchanged, with or without `force`. An input the run reads
 /// ([`AtomicDir::reads`]) is never replaced.
@@ -282,7 +282,7 @@ impl AtomicDir {
     /// the file (e.g. `report.json`) that identifies a folder shadelab wrote: an existing
     /// `target` is written into only when it is empty or holds that file, or when `force` is
     /// set (and it is then still never a file). Either way the files in it that this run does
-    /// not write are kept (see src/io/keep.rs).
+    /// not write are kept (see crates/io/src/keep.rs).
     pub fn create(target: &Path, marker: &str, force: bool) -> Result<AtomicDir> {
         let shown = target.to_path_buf();
         let target = resolve_folder(target)?;

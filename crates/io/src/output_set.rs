@@ -317,7 +317,7 @@ fn move_in(e: &Entry) -> std::io::Result<()> {
 
 /// A set of output files (or one folder) in one folder, written under temporary names and made
 /// visible together by [`OutputSet::commit`]; dropped uncommitted, it removes its temporaries
-/// and its lock and leaves the old set as it was (src/io/output_set.rs says how).
+/// and its lock and leaves the old set as it was (crates/io/src/output_set.rs says how).
 #[derive(Debug)]
 pub struct OutputSet {
     lock: PathBuf,
@@ -416,7 +416,7 @@ impl OutputSet {
     }
 
     /// Makes the new set visible, its commit record last, replacing the old set (see
-    /// src/io/output_set.rs). Every file must have been written. Fails with [`Error::Cancelled`],
+    /// crates/io/src/output_set.rs). Every file must have been written. Fails with [`Error::Cancelled`],
     /// changing nothing, when a stop was requested before the commit began; once begun, it
     /// completes (or is undone when a rename fails).
     pub fn commit(mut self) -> Result<()> {

@@ -12,7 +12,7 @@ use crate::surface::{Mesh, Projection, Surface};
 use nalgebra::{Rotation3, Vector3};
 
 /// The canonical face mesh (Wavefront OBJ, centimetres, y up, z toward the viewer).
-pub const FACE_OBJ: &str = include_str!("../../../assets/face/canonical_face_model.obj");
+pub const FACE_OBJ: &str = include_str!("../assets/face/canonical_face_model.obj");
 
 /// The unit normal of the stored mesh's mirror plane (which passes through the origin).
 pub const FACE_MIRROR_NORMAL: [f64; 3] = [0.979_403_08, 0.011_966_23, 0.201_559_96];

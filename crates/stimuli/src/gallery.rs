@@ -30,69 +30,63 @@ pub struct Preset {
 
 /// The presets shipped in `stimuli/`, in gallery order.
 pub const BUILTIN: &[(&str, &str)] = &[
-    ("bumps", include_str!("../../../stimuli/bumps.json")),
+    ("bumps", include_str!("../presets/bumps.json")),
     (
         "bumps-gradient",
-        include_str!("../../../stimuli/bumps-gradient.json"),
+        include_str!("../presets/bumps-gradient.json"),
     ),
-    ("crater", include_str!("../../../stimuli/crater.json")),
+    ("crater", include_str!("../presets/crater.json")),
     (
         "crater-rotated",
-        include_str!("../../../stimuli/crater-rotated.json"),
+        include_str!("../presets/crater-rotated.json"),
     ),
-    ("sideways", include_str!("../../../stimuli/sideways.json")),
-    ("strips", include_str!("../../../stimuli/strips.json")),
+    ("sideways", include_str!("../presets/sideways.json")),
+    ("strips", include_str!("../presets/strips.json")),
     (
         "circles-binary",
-        include_str!("../../../stimuli/circles-binary.json"),
+        include_str!("../presets/circles-binary.json"),
     ),
     (
         "circles-gradient",
-        include_str!("../../../stimuli/circles-gradient.json"),
+        include_str!("../presets/circles-gradient.json"),
     ),
     (
         "circles-odd-one-out",
-        include_str!("../../../stimuli/circles-odd-one-out.json"),
+        include_str!("../presets/circles-odd-one-out.json"),
     ),
     (
         "boundary-strips",
-        include_str!("../../../stimuli/boundary-strips.json"),
+        include_str!("../presets/boundary-strips.json"),
     ),
     (
         "boundary-strips-ramp",
-        include_str!("../../../stimuli/boundary-strips-ramp.json"),
+        include_str!("../presets/boundary-strips-ramp.json"),
     ),
-    (
-        "hollow-mask",
-        include_str!("../../../stimuli/hollow-mask.json"),
-    ),
+    ("hollow-mask", include_str!("../presets/hollow-mask.json")),
     (
         "hollow-mask-convex",
-        include_str!("../../../stimuli/hollow-mask-convex.json"),
+        include_str!("../presets/hollow-mask-convex.json"),
     ),
     (
         "hollow-mask-pair",
-        include_str!("../../../stimuli/hollow-mask-pair.json"),
+        include_str!("../presets/hollow-mask-pair.json"),
     ),
     (
         "checker-shadow",
-        include_str!("../../../stimuli/checker-shadow.json"),
+        include_str!("../presets/checker-shadow.json"),
     ),
     (
         "checker-shadow-proof",
-        include_str!("../../../stimuli/checker-shadow-proof.json"),
+        include_str!("../presets/checker-shadow-proof.json"),
     ),
-    (
-        "fading-disk",
-        include_str!("../../../stimuli/fading-disk.json"),
-    ),
+    ("fading-disk", include_str!("../presets/fading-disk.json")),
     (
         "fading-disk-achromatic",
-        include_str!("../../../stimuli/fading-disk-achromatic.json"),
+        include_str!("../presets/fading-disk-achromatic.json"),
     ),
-    ("sphere", include_str!("../../../stimuli/sphere.json")),
-    ("vase", include_str!("../../../stimuli/vase.json")),
-    ("bunny", include_str!("../../../stimuli/bunny.json")),
+    ("sphere", include_str!("../presets/sphere.json")),
+    ("vase", include_str!("../presets/vase.json")),
+    ("bunny", include_str!("../presets/bunny.json")),
 ];
 
 /// The file that marks a folder as a shadelab gallery.
@@ -174,16 +168,13 @@ pub fn load_presets(dir: &Path) -> Result<Vec<Preset>> {
 /// The docs pages compiled into shadelab, whose sections the gallery's cards carry with them
 /// (see [`explanation`]): every page a built-in preset's `docs` names.
 const DOCS: &[(&str, &str)] = &[
-    ("docs/priors.md", include_str!("../../../docs/priors.md")),
-    (
-        "docs/lightness.md",
-        include_str!("../../../docs/lightness.md"),
-    ),
+    ("docs/priors.md", include_str!("../docs/priors.md")),
+    ("docs/lightness.md", include_str!("../docs/lightness.md")),
     (
         "docs/ikeuchi-horn.md",
-        include_str!("../../../docs/ikeuchi-horn.md"),
+        include_str!("../docs/ikeuchi-horn.md"),
     ),
-    ("docs/problem.md", include_str!("../../../docs/problem.md")),
+    ("docs/problem.md", include_str!("../docs/problem.md")),
 ];
 
 /// GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens.

@@ -391,7 +391,7 @@ pub fn all() -> Vec<Box<dyn Stimulus>> {
 
 /// The Stanford Bunny at its coarsest resolution (Stanford 3D Scanning Repository, Stanford
 /// Computer Graphics Laboratory; Turk & Levoy 1994; credited in tests/data/README.md).
-const BUNNY_PLY: &[u8] = include_bytes!("../../../tests/data/bun_zipper_res3.ply");
+const BUNNY_PLY: &[u8] = include_bytes!("../assets/bun_zipper_res3.ply");
 
 fn rasterize_mesh(mesh: &Mesh, view: &ViewParams, g: &Geometry) -> Result<Surface> {
     let rotation = surface::view_rotation(view.yaw, view.pitch, view.roll)?;

@@ -357,7 +357,7 @@ impl BenchmarkConfig {
 
 /// The exporter (`python/shadelab/_benchmark_data.py`), carried by the program so that the
 /// command line needs only Python with stimupy and NumPy, not the shadelab package.
-pub const EXPORTER: &str = include_str!("../../../../assets/benchmark/_benchmark_data.py");
+pub const EXPORTER: &str = include_str!("../../assets/_benchmark_data.py");
 
 /// A scratch folder for one export, removed when dropped.
 struct Scratch(std::path::PathBuf);

@@ -46,7 +46,7 @@ use std::sync::Once;
 
 #[cfg(feature = "plots")]
 /// The font every figure uses.
-static FONT: &[u8] = include_bytes!("../../../../assets/fonts/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 #[cfg(feature = "plots")]
 /// The family name the font is registered under.

@@ -90,10 +90,10 @@ pub const MAX_PRACTICE: usize = 100;
 pub const MAX_PAGE_SEED: u64 = (1 << 53) - 1;
 
 /// The runner and its style sheet, copied into every experiment folder.
-const RUNNER_JS: &str = include_str!("../../../../../assets/experiment/experiment.js");
-const TIMELINE_JS: &str = include_str!("../../../../../assets/experiment/shadelab-timeline.js");
-const RUNNER_CSS: &str = include_str!("../../../../../assets/experiment/experiment.css");
-const PAGE_HTML: &str = include_str!("../../../../../assets/experiment/index.html");
+const RUNNER_JS: &str = include_str!("../../../assets/experiment/experiment.js");
+const TIMELINE_JS: &str = include_str!("../../../assets/experiment/shadelab-timeline.js");
+const RUNNER_CSS: &str = include_str!("../../../assets/experiment/experiment.css");
+const PAGE_HTML: &str = include_str!("../../../assets/experiment/index.html");
 
 /// Default test trials between two breaks.
 pub const DEFAULT_BREAK_EVERY: usize = 96;

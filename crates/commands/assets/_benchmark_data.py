@@ -1,0 +1,1 @@
+../../../python/shadelab/_benchmark_data.py
