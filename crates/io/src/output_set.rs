@@ -26,7 +26,7 @@
 //! only while its old version (if any) is still kept aside to be put back.
 //!
 //! ```
-//! use shadelab_io::{self, OutputSet};
+//! use shadelab_io::{self as io, OutputSet};
 //! let dir = std::env::temp_dir().join(format!("shadelab-doc-set-{}", std::process::id()));
 //! std::fs::create_dir_all(&dir)?;
 //! let (picture, sidecar) = (dir.join("a.txt"), dir.join("a.json"));
