@@ -59,12 +59,12 @@ fn each(r: &Value, pointer: &str, key: &str) -> Vec<f64> {
 /// Every analysis of a picture gives the numbers of `--stimulus NAME` from the 16-bit PNG,
 /// the 8-bit PNG and the float32 `.npy` shadelab wrote of it, each taking the recorded albedo
 /// and ambient level (or, where none is recorded, the albedo of its background as stored). The prior sweep (every stimulus with targets): flips within 0.1°,
-/// convexities within 1 % of the curve's largest value (2 % for 8 bits: 19 lit pixels of the
-/// crater, 0.1 to 0.104 just beside its terminator, share the ambient level's 8-bit code and
-/// cannot be told from shadow; the same 19 pixels set to the ambient level in the float
-/// picture give the 8-bit numbers, 1.8 %). The observer: P(convex) within 0.01. The outline:
-/// the share each shape explains within 0.01, the fitted light's slant within 0.1°. Lightness:
-/// each target's luminance within 1e-3 (half an 8-bit code for 8 bits), every model's output
+/// convexities within 1 % of the curve's largest value, 8 bits included: 19 lit pixels of the
+/// crater, 0.1 to 0.104 just beside its shadow, share the ambient level's 8-bit code, and the
+/// render's record (the file checked to be the render its sidecar records) says they are lit
+/// (before, decided by the values, they were shadow: 1.82 %). The observer: P(convex) within
+/// 0.01. The outline: the share each shape explains within 0.01, the fitted light's slant
+/// within 0.1°. Lightness: each target's luminance within 1e-3 (half an 8-bit code for 8 bits), every model's output
 /// per target within 1e-3 at 16 bits and float32 (in the model's units, or of its largest
 /// output where that exceeds 1: FLODOG's are about 20). At 8 bits the models see another
 /// picture (a shallow gradient in steps of 1/255; the strips' ODOG outputs move by 12 % of
@@ -75,8 +75,11 @@ fn each(r: &Value, pointer: &str, key: &str) -> Vec<f64> {
 /// it is the blurred disk and its sharp twin is rendered from its record, as by name; border
 /// energy (×1e3) and the perceived contrast within 1e-3 at 16 bits and float32 (before,
 /// a file was refused, and an RGB `.npy` was read as its luminance: 1/33 of the energy). At 8
-/// bits the blurred edge is a staircase of codes that the band-pass sees (its contrast after
-/// 10 s: 0.127 against 0.087), so only its sharp twin is held there.
+/// bits the blurred edge is a staircase of codes that the band-pass sees and that does not
+/// fade (its contrast after 10 s: 0.127 against 0.087, which the float render rounded to 8
+/// bits gives too: the picture, not the route): the sharp twin and the border energy are held
+/// there, the contrast within 0.05, and the same 8-bit picture as a float32 `.npy` gives the
+/// PNG's numbers within 1e-6.
 #[test]
 fn every_route_gives_the_stimulus_numbers() {
     let started = std::time::Instant::now();
@@ -187,9 +190,8 @@ fn every_route_gives_the_stimulus_numbers() {
                                 flip = flip.max((a - b).abs());
                             }
                         }
-                        let bound = if route == "png8" { 0.02 } else { 0.01 };
                         assert!(
-                            conv <= bound,
+                            conv <= 0.01,
                             "{what}: convexity off by {:.2} %",
                             conv * 100.0
                         );
@@ -229,25 +231,72 @@ fn every_route_gives_the_stimulus_numbers() {
                     "fading" => {
                         // The file is the blurred disk; its sharp twin is rendered from the
                         // record, as by name.
-                        let disks: &[&str] = if route == "png8" {
-                            &["sharp"]
+                        let pick = |disks: &'static [&'static str]| {
+                            move |v: &Value| -> Vec<f64> {
+                                disks
+                                    .iter()
+                                    .flat_map(|k| {
+                                        [
+                                            v["border_energy"][k].as_f64().unwrap() * 1e3,
+                                            v["final_contrast"][k].as_f64().unwrap(),
+                                        ]
+                                    })
+                                    .collect()
+                            }
+                        };
+                        let both = pick(&["blurred", "sharp"]);
+                        if route == "png8" {
+                            // 8 bits cannot carry the blurred edge: its codes are a staircase
+                            // that the eye's movements keep refreshing, so it does not fade
+                            // as the smooth edge does (contrast after 10 s 0.127 against
+                            // 0.087; the float render rounded to 7, 8, 9, 10, 12 bits gives
+                            // 0.309, 0.127, 0.099, 0.090, 0.0869). The same 8-bit picture
+                            // by another route (its values as a float32 .npy beside a copy
+                            // of its record) gives its numbers.
+                            let sharp = worst(&base, &r, pick(&["sharp"]), &what);
+                            assert!(sharp <= 1e-3, "{what}: the sharp disk off by {sharp}");
+                            let energy = (r["border_energy"]["blurred"].as_f64().unwrap()
+                                - base["border_energy"]["blurred"].as_f64().unwrap())
+                            .abs()
+                                * 1e3;
+                            assert!(energy <= 1e-3, "{what}: border energy off by {energy}");
+                            let contrast = (r["final_contrast"]["blurred"].as_f64().unwrap()
+                                - base["final_contrast"]["blurred"].as_f64().unwrap())
+                            .abs();
+                            assert!(contrast <= 0.05, "{what}: contrast off by {contrast}");
+                            let rgb = shadelab::internal::io::read_picture(
+                                &d.join(file),
+                                shadelab::DEFAULT_MAX_PIXELS,
+                                Default::default(),
+                                true,
+                            )
+                            .unwrap()
+                            .rgb
+                            .unwrap();
+                            let (h, w) = (rgb.height(), rgb.width());
+                            shadelab::internal::io::write_f32(
+                                &d.join("fading-disk8f.npy"),
+                                &[h, w, 3],
+                                rgb.data().iter().flat_map(|p| *p),
+                            )
+                            .unwrap();
+                            std::fs::copy(
+                                d.join("fading-disk8.json"),
+                                d.join("fading-disk8f.json"),
+                            )
+                            .unwrap();
+                            let same = analyse(analysis, &["fading-disk8f.npy"], "fading-8f");
+                            let off = worst(&r, &same, both, &what);
+                            assert!(off <= 1e-6, "{what}: as float32 off by {off}");
+                            format!(
+                                "sharp {sharp:.1e}, blurred energy (×1e3) {energy:.1e}, contrast \
+                                 {contrast:.3} (quantisation); as float32 {off:.1e}"
+                            )
                         } else {
-                            &["blurred", "sharp"]
-                        };
-                        let pick = |v: &Value| -> Vec<f64> {
-                            disks
-                                .iter()
-                                .flat_map(|k| {
-                                    [
-                                        v["border_energy"][k].as_f64().unwrap() * 1e3,
-                                        v["final_contrast"][k].as_f64().unwrap(),
-                                    ]
-                                })
-                                .collect()
-                        };
-                        let off = worst(&base, &r, pick, &what);
-                        assert!(off <= 1e-3, "{what}: off by {off}");
-                        format!("energy (×1e3) and contrast {off:.1e}")
+                            let off = worst(&base, &r, both, &what);
+                            assert!(off <= 1e-3, "{what}: off by {off}");
+                            format!("energy (×1e3) and contrast {off:.1e}")
+                        }
                     }
                     _ => {
                         let models = base["targets"].as_array().unwrap().len();
@@ -286,6 +335,147 @@ fn every_route_gives_the_stimulus_numbers() {
     }
     assert_eq!(table.len(), ((names.len() - 2) * 4 + 2 + 1) * 3);
     eprintln!("every route: {:.1} s", started.elapsed().as_secs_f64());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The render's record of its shadow is taken only for the render itself: the crater's 8-bit
+/// PNG with its sidecar gives the numbers by name (its 19 lit pixels on the ambient level's
+/// code are lit by the record), the same picture bare (its mask, albedo and ambient given)
+/// is decided by its values (they are shadow there), and the picture edited by one code of
+/// one background pixel, beside the same sidecar, is no longer the render: analysed from its
+/// values, it gives exactly the numbers of the bare edited picture. `solve` takes the record
+/// as the analyses do.
+#[test]
+fn the_shadow_record_is_taken_only_for_the_recorded_render() {
+    use shadelab::internal::io;
+    let d = scratch("shadow-record");
+    let made = shadelab(
+        &d,
+        &[
+            "--quiet",
+            "render",
+            "crater",
+            "--bit-depth",
+            "8",
+            "--out",
+            "c.png",
+        ],
+    );
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let record: Value = serde_json::from_slice(&std::fs::read(d.join("c.json")).unwrap()).unwrap();
+    let albedo = record["notes"]["albedo"].as_f64().unwrap().to_string();
+    let sweep = |picture: &str, extra: &[&str], out: &str| -> Vec<Vec<f64>> {
+        let args = [
+            &["--json", "--quiet", "analyze", "prior-sweep", picture][..],
+            extra,
+            &["--tilts", "0:360:90", "--out", out],
+        ]
+        .concat();
+        curves(&report(&shadelab(&d, &args)))
+            .into_iter()
+            .map(|(c, _)| c)
+            .collect()
+    };
+    let bare_flags = [
+        "--mask",
+        "c_mask.png",
+        "--albedo",
+        albedo.as_str(),
+        "--ambient",
+        "0.1",
+    ];
+    let off = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| {
+                let largest = x.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+                x.iter()
+                    .zip(y)
+                    .fold(0.0f64, |m, (p, q)| m.max((p - q).abs() / largest))
+            })
+            .fold(0.0f64, f64::max)
+    };
+    let by_name = sweep("--stimulus", &["crater"], "name");
+    let recorded = sweep("c.png", &[], "recorded");
+    std::fs::create_dir(d.join("bare")).unwrap();
+    std::fs::copy(d.join("c.png"), d.join("bare/c.png")).unwrap();
+    let bare = sweep("bare/c.png", &bare_flags, "o-bare");
+    let (with_record, by_values) = (off(&by_name, &recorded), off(&by_name, &bare));
+    eprintln!(
+        "crater 8 bits: {:.3} % with the record, {:.3} % by the values",
+        with_record * 100.0,
+        by_values * 100.0
+    );
+    assert!(with_record <= 0.01, "{with_record}");
+    assert!(by_values > 0.01, "{by_values}");
+    // `solve` takes the record too: the 8-bit picture's normals within 0.5° of the 16-bit
+    // one's (0.25° measured; 2.68° where the 19 pixels were shadow).
+    let made = shadelab(&d, &["--quiet", "render", "crater", "--out", "c16.png"]);
+    assert!(made.status.success());
+    let normals = |picture: &str, out: &str| {
+        let solved = shadelab(
+            &d,
+            &[
+                "--quiet",
+                "solve",
+                picture,
+                "--light",
+                "above",
+                "--method",
+                "multigrid",
+                "--out",
+                out,
+            ],
+        );
+        assert!(
+            solved.status.success(),
+            "{}",
+            String::from_utf8_lossy(&solved.stderr)
+        );
+        io::read_normals(
+            &d.join(out).join("normals.npy"),
+            shadelab::DEFAULT_MAX_PIXELS,
+        )
+        .unwrap()
+    };
+    let (eight, sixteen) = (normals("c.png", "s8"), normals("c16.png", "s16"));
+    let apart = eight
+        .data()
+        .iter()
+        .zip(sixteen.data())
+        .map(|(a, b)| a.dot(b).clamp(-1.0, 1.0).acos().to_degrees())
+        .fold(0.0f64, f64::max);
+    eprintln!("crater 8 bits: normals within {apart:.3}° of the 16-bit picture's");
+    assert!(apart <= 0.5, "{apart}°");
+    // One background pixel one code brighter: no longer the recorded render.
+    let file = io::read_picture(
+        &d.join("c.png"),
+        shadelab::DEFAULT_MAX_PIXELS,
+        Default::default(),
+        false,
+    )
+    .unwrap();
+    let mut edited = file.gray.clone();
+    *edited.get_mut(0, 0) += 1.0 / 255.0;
+    for path in ["c.png", "bare/c.png"] {
+        let text = [("Comment".to_string(), "edited".to_string())];
+        io::write_stimulus(
+            &d.join(path),
+            io::PngPicture::Gray(&edited),
+            io::BitDepth::Eight,
+            None,
+            &text,
+        )
+        .unwrap();
+    }
+    let edited_beside = sweep("c.png", &[], "edited");
+    let edited_bare = sweep("bare/c.png", &bare_flags, "o-edited-bare");
+    assert_eq!(edited_beside, edited_bare);
+    assert!(off(&by_name, &edited_beside) > 0.01);
     let _ = std::fs::remove_dir_all(&d);
 }
 

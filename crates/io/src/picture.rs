@@ -8,7 +8,7 @@ use super::encoding::{Decoding, InputEncoding};
 use super::npy::{self, IntegerScale};
 use super::png;
 use crate::error::{Error, Result};
-use crate::grid::{Image, RgbImage};
+use crate::grid::{Grid, Image, Mask, RgbImage};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::sync::Arc;
@@ -180,12 +180,43 @@ impl Quantum {
         }
     }
 
-    /// `image` with every value the picture cannot tell from `level` ([`bin`](Self::bin))
-    /// set to `level` exactly: a rendered picture's attached shadow, stored as 8- or 16-bit
-    /// codes or float32, is at its ambient level again, as when it was rendered.
-    pub fn settle(&self, image: &Image, level: f64) -> Image {
+    /// `image` with its shadow at `level` exactly, as when it was rendered. Where a record
+    /// says which pixels the light does not reach (`unlit`, of `image`'s size: a render's
+    /// attached and cast shadow), those are at `level` and every other pixel lies above it (a
+    /// lit pixel whose code is the level's, as a lit 0.1001 is at 16 bits where the ambient
+    /// 0.2 is a code, is the smallest value above it: one the code stands for). Without a
+    /// record, every value the picture cannot tell from `level` ([`bin`](Self::bin)) is set to
+    /// `level`: a rendered picture's shadow, stored as 8- or 16-bit codes or float32, is at
+    /// its ambient level again, but so is a lit pixel that shares the level's code.
+    pub fn settle(&self, image: &Image, level: f64, unlit: Option<&Mask>) -> Image {
+        if let Some(unlit) =
+            unlit.filter(|m| (m.width(), m.height()) == (image.width(), image.height()))
+        {
+            // Levels are never negative (an ambient level is at least 0).
+            let above = if level > 0.0 {
+                f64::from_bits(level.to_bits() + 1)
+            } else {
+                f64::MIN_POSITIVE
+            };
+            return Grid::from_fn(image.width(), image.height(), |c, r| {
+                match (*unlit.get(c, r), *image.get(c, r)) {
+                    (true, _) => level,
+                    (false, v) if v <= level => above,
+                    (false, v) => v,
+                }
+            });
+        }
         let (low, high) = self.bin(level);
         image.map(|&v| if v > low && v <= high { level } else { v })
+    }
+
+    /// Whether `value`, stored in a picture of this quantum, could be the stored form of
+    /// `exact`: `exact` lies in the interval of `value`'s code (for floats, within the
+    /// float's last places).
+    pub fn could_store(&self, value: f64, exact: f64) -> bool {
+        let (low, high) = self.bin(value);
+        let slack = 1e-6 * (high - low).min(1.0);
+        exact > low - slack && exact <= high + slack
     }
 }
 
@@ -355,7 +386,7 @@ mod tests {
             let lit = stored + 1.0 / top;
             let image = Grid::from_vec(3, 1, vec![stored, lit, 0.5]).unwrap();
             assert_eq!(
-                q.settle(&image, 0.1).data(),
+                q.settle(&image, 0.1, None).data(),
                 &[0.1, lit, 0.5],
                 "{bits} bits"
             );
@@ -364,15 +395,49 @@ mod tests {
         let stored = f64::from(0.1f32);
         assert_ne!(stored, 0.1);
         let image = Grid::from_vec(2, 1, vec![stored, 0.1 + 1e-6]).unwrap();
-        assert_eq!(float32.settle(&image, 0.1).data(), &[0.1, 0.1 + 1e-6]);
+        assert_eq!(float32.settle(&image, 0.1, None).data(), &[0.1, 0.1 + 1e-6]);
         // Float64: only the level itself, to its last bits.
         let image = Grid::from_vec(2, 1, vec![0.1, 0.1 + 1e-12]).unwrap();
-        assert_eq!(Quantum::default().settle(&image, 0.1).data(), image.data());
+        assert_eq!(
+            Quantum::default().settle(&image, 0.1, None).data(),
+            image.data()
+        );
         // Codes through a display gamma: the level's code found through the decoding.
         let q = Quantum::codes(255.0, |v| v.powf(2.2));
         let code = (0.1f64.powf(1.0 / 2.2) * 255.0).round();
         let stored = (code / 255.0).powf(2.2);
         let image = Grid::from_vec(1, 1, vec![stored]).unwrap();
-        assert_eq!(q.settle(&image, 0.1).data(), &[0.1]);
+        assert_eq!(q.settle(&image, 0.1, None).data(), &[0.1]);
+    }
+
+    #[test]
+    fn a_record_of_the_unlit_pixels_decides_what_the_codes_cannot() {
+        // At 8 bits a lit 0.103 and the shadow's 0.1 share code 26: by the values both are
+        // shadow; by the record only the unlit one is, and the lit one keeps its code's value.
+        let q = Quantum::codes(255.0, |v| v);
+        let code = |v: f64| (v * 255.0).round() / 255.0;
+        let (shadow, lit) = (code(0.1), code(0.103));
+        assert_eq!(shadow, lit);
+        let image = Grid::from_vec(3, 1, vec![shadow, lit, 0.5]).unwrap();
+        assert_eq!(q.settle(&image, 0.1, None).data(), &[0.1, 0.1, 0.5]);
+        let unlit = Grid::from_vec(3, 1, vec![true, false, false]).unwrap();
+        assert_eq!(q.settle(&image, 0.1, Some(&unlit)).data(), &[0.1, lit, 0.5]);
+        // An ambient level that is a code: a lit pixel stored at it lies just above it, so
+        // that it carries data as the render's own value does.
+        let level = 51.0 / 255.0;
+        let image = Grid::from_vec(2, 1, vec![level, level]).unwrap();
+        let unlit = Grid::from_vec(2, 1, vec![true, false]).unwrap();
+        let settled = q.settle(&image, level, Some(&unlit));
+        assert_eq!(settled.data()[0], level);
+        assert!(settled.data()[1] > level && settled.data()[1] - level < 1e-15);
+        // A record of another size is no record of this picture.
+        let other = Grid::new(1, 1, true);
+        assert_eq!(
+            q.settle(&image, level, Some(&other)).data(),
+            &[level, level]
+        );
+        // Which exact values a stored one could stand for: its code's interval.
+        assert!(q.could_store(lit, 0.1) && q.could_store(lit, 0.1035));
+        assert!(!q.could_store(lit, 0.105));
     }
 }

@@ -274,11 +274,19 @@ impl Config {
         let (w, h) = (picture.image.width(), picture.image.height());
         let boundary = self.boundary.resolve(w, h, max_pixels)?;
         let lighting = picture.lighting(&domain, self.slant_deg, self.albedo, self.ambient)?;
-        // Attached shadow sits at the ambient level; stored as 8- or 16-bit codes or float32
-        // it is a code's width off it, which would decide the treatment of every shadowed
-        // pixel (in the solver, data or not): what the picture cannot tell from the ambient
-        // level is the ambient level.
-        picture.image = loaded.quantum.settle(&picture.image, lighting.ambient);
+        // Shadow sits at the ambient level; stored as 8- or 16-bit codes or float32 it is a
+        // code's width off it, which would decide the treatment of every shadowed pixel (in
+        // the solver, data or not). Where the render's shadow is on record and the ambient
+        // level is the one it declares, the record says which pixels are shadow (a lit pixel
+        // may share the level's code: 19 of the crater's at 8 bits); elsewhere what the
+        // picture cannot tell from the ambient level is the ambient level.
+        let unlit = match self.ambient {
+            None => loaded.unlit(max_pixels),
+            Some(_) => None,
+        };
+        picture.image = loaded
+            .quantum
+            .settle(&picture.image, lighting.ambient, unlit.as_ref());
         picture.albedo = Some(lighting.albedo);
         picture.ambient = Some(lighting.ambient);
         let parameters = Parameters {

@@ -428,11 +428,14 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         (beside.sidecar().cloned()).map(|s| super::source::without_gamma(s, config.input_encoding));
     if let Some(s) = &sidecar {
         let ambient = s.ambient.unwrap_or(0.0);
-        // What the stored codes cannot tell from the ambient level is attached shadow, at 0
-        // once the ambient is taken off (see perception's load).
+        // Shadow, at 0 once the ambient is taken off: the render's own where the picture is
+        // the render its sidecar records, else what the stored codes cannot tell from the
+        // ambient level (see perception's load).
         let quantum = file.quantum.map(|v| s.linearise(v));
+        let linear = image.map(|&v| s.linearise(v));
+        let unlit = super::source::recorded_unlit(s, &linear, &quantum, config.max_pixels);
         image = quantum
-            .settle(&image.map(|&v| s.linearise(v)), ambient)
+            .settle(&linear, ambient, unlit.as_ref())
             .map(|&v| (v - ambient).max(0.0));
     }
     let (w, h) = (image.width(), image.height());

@@ -13,9 +13,10 @@ pub use crate::io::{
 };
 
 use crate::error::{Error, Result};
-use crate::grid::{size_mismatch, Image, Labels};
+use crate::grid::{size_mismatch, Image, Labels, Mask};
 use crate::io::{self, InputEncoding};
 use crate::message::{Message, Setting};
+use crate::solver::carries_data;
 use crate::stimulus::{self, Pixels};
 use crate::visual_size::SizeRequest;
 use serde::Serialize;
@@ -120,12 +121,46 @@ pub struct Picture {
     /// for a picture rendered or handed over in memory), so that a level it records (the
     /// ambient) is found in it to its own precision ([`Quantum::settle`]).
     pub quantum: Quantum,
+    /// Where its shadow is on record ([`Picture::unlit`]).
+    pub shadow: ShadowRecord,
+}
+
+/// Where a picture's shadow (attached and cast: the pixels its render leaves at the declared
+/// ambient level, where the light does not reach) is on record, so that it is taken from the
+/// record and not decided from values that the picture's codes may not tell apart
+/// ([`Quantum::settle`]).
+#[derive(Debug, Clone, Default)]
+pub enum ShadowRecord {
+    /// Nowhere (a picture without a sidecar, or handed over in memory): its values decide.
+    #[default]
+    None,
+    /// A stimulus rendered here: the pixels of its own render.
+    Rendered(Mask),
+    /// A file with a shadelab sidecar: the render it records, made again and checked against
+    /// the picture only when asked ([`Picture::unlit`]).
+    Sidecar(Box<RenderSidecar>),
 }
 
 impl Picture {
     /// The luminance of the pixels (Rec. 709 weights for colour).
     pub fn luminance(&self) -> Image {
         self.pixels.luminance()
+    }
+
+    /// The pixels its render leaves at the declared ambient level, where that is on record
+    /// ([`ShadowRecord`]): a stimulus rendered here, or a file that is the render its sidecar
+    /// records (rendered again from the sidecar, up to `max_pixels` pixels, as `render --spec`
+    /// would, and every stored value found within its code of it); `None` leaves the shadow
+    /// to the values.
+    pub fn unlit(&self, max_pixels: usize) -> Option<Mask> {
+        match (&self.shadow, &self.pixels) {
+            (ShadowRecord::None, _) => None,
+            (ShadowRecord::Rendered(unlit), _) => Some(unlit.clone()),
+            (ShadowRecord::Sidecar(s), Pixels::Gray(gray)) => {
+                recorded_unlit(s, gray, &self.quantum, max_pixels)
+            }
+            (ShadowRecord::Sidecar(_), Pixels::Rgb(_)) => None,
+        }
     }
 }
 
@@ -340,6 +375,7 @@ impl PictureSource {
                     declared: Declared::default(),
                     on_backdrop: false,
                     quantum,
+                    shadow: ShadowRecord::None,
                 };
                 if let Some(s) = sidecar {
                     origin["sidecar"] = s.to_json();
@@ -350,6 +386,7 @@ impl PictureSource {
                         light: s.light,
                     };
                     picture.on_backdrop = s.silhouette;
+                    picture.shadow = ShadowRecord::Sidecar(Box::new(s.clone()));
                     if let (Some(mask), None) = (&s.target_mask, &self.mask) {
                         let labels = io::read_labels(mask, max_pixels)
                             .map_err(|e| Error::invalid(format!("{}: {e}", s.path.display())))?;
@@ -368,6 +405,8 @@ impl PictureSource {
                 declared: self.declared,
                 on_backdrop: self.silhouette,
                 quantum: Quantum::default(),
+                // The caller's values are the record (float64, as rendered).
+                shadow: ShadowRecord::None,
             },
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
@@ -470,6 +509,10 @@ fn rendered(
     // objects (a relief on a panel fills the frame), as its notes say, for a sidecar too.
     let on_backdrop =
         output.targets.is_some() && output.notes.get(SILHOUETTE_NOTE) == Some(&Value::Bool(true));
+    let shadow = match (&output.pixels, declared.ambient) {
+        (Pixels::Gray(gray), Some(ambient)) => ShadowRecord::Rendered(unlit_pixels(gray, ambient)),
+        _ => ShadowRecord::None,
+    };
     Ok(Picture {
         pixels: output.pixels,
         ppd: Some(made.geometry.ppd),
@@ -484,7 +527,49 @@ fn rendered(
         declared,
         on_backdrop,
         quantum: Quantum::default(),
+        shadow,
     })
+}
+
+/// The pixels of a render `image` at or below its `ambient` level, where the light does not
+/// reach (attached and cast shadow): the pixels without a data term by the solver's own rule
+/// ([`carries_data`]), found on the render's exact values.
+fn unlit_pixels(image: &Image, ambient: f64) -> Mask {
+    image.map(|&v| !carries_data(v, ambient, None))
+}
+
+/// The pixels that the render a shadelab sidecar records leaves at its ambient level
+/// ([`ShadowRecord`]), when `gray`, the picture read beside it (linear, stored as `quantum`
+/// says), is that render: rendered again from the record (as `render --spec` would), every
+/// pixel of it lies within the stored value's code. `None` where the sidecar declares no
+/// ambient level, its render cannot be made again (another version's, an edited record) or
+/// is in colour, or the picture is not that render (edited, or another picture): such a
+/// picture's shadow is decided by its values.
+pub(crate) fn recorded_unlit(
+    sidecar: &RenderSidecar,
+    gray: &Image,
+    quantum: &Quantum,
+    max_pixels: usize,
+) -> Option<Mask> {
+    let ambient = sidecar.ambient?;
+    sidecar.stimulus.as_ref()?;
+    let render = PictureSource {
+        spec: Some(sidecar.path.clone()),
+        max_pixels,
+        ..Default::default()
+    }
+    .load(false)
+    .ok()?;
+    let Pixels::Gray(exact) = render.pixels else {
+        return None;
+    };
+    let same = (exact.width(), exact.height()) == (gray.width(), gray.height())
+        && gray
+            .data()
+            .iter()
+            .zip(exact.data())
+            .all(|(&stored, &v)| quantum.could_store(stored, v));
+    same.then(|| unlit_pixels(&exact, ambient))
 }
 
 /// Whether two paths name the same file (compared as written when either cannot be resolved).
