@@ -264,7 +264,7 @@ fn every_route_gives_the_stimulus_numbers() {
                                 - base["final_contrast"]["blurred"].as_f64().unwrap())
                             .abs();
                             assert!(contrast <= 0.05, "{what}: contrast off by {contrast}");
-                            let rgb = shadelab::internal::io::read_picture(
+                            let rgb = shadelab_io::read_picture(
                                 &d.join(file),
                                 shadelab::DEFAULT_MAX_PIXELS,
                                 Default::default(),
@@ -274,7 +274,7 @@ fn every_route_gives_the_stimulus_numbers() {
                             .rgb
                             .unwrap();
                             let (h, w) = (rgb.height(), rgb.width());
-                            shadelab::internal::io::write_f32(
+                            shadelab_io::write_f32(
                                 &d.join("fading-disk8f.npy"),
                                 &[h, w, 3],
                                 rgb.data().iter().flat_map(|p| *p),
@@ -347,7 +347,7 @@ fn every_route_gives_the_stimulus_numbers() {
 /// as the analyses do.
 #[test]
 fn the_shadow_record_is_taken_only_for_the_recorded_render() {
-    use shadelab::internal::io;
+    use shadelab_io as io;
     let d = scratch("shadow-record");
     let made = shadelab(
         &d,
