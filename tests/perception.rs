@@ -370,7 +370,7 @@ fn hollow_setup(w: f64, h: f64, background: &str, domain: DomainSpec) -> percept
     let mut config = perception::Config::new(source);
     config.size = Some(((h * ppd) as usize, (w * ppd) as usize));
     config.domain = domain;
-    config.load().unwrap()
+    config.load(&NoProgress).unwrap()
 }
 
 /// The hollow face lit from above (light from tilt 0°, slant 45°), framed `w`×`h` degrees
@@ -459,7 +459,7 @@ fn the_default_domain_is_the_targets_of_an_object_on_a_backdrop_only() {
             max_pixels: 1 << 24,
             ..Default::default()
         };
-        perception::Config::new(source).load().unwrap()
+        perception::Config::new(source).load(&NoProgress).unwrap()
     };
     for (name, used) in [
         ("sphere", "tokens"),

@@ -30,6 +30,14 @@ fn png8(path: &Path, codes: &[u8], chunks: impl FnOnce(&mut png::Encoder<'_, std
 
 const CODES: [u8; 7] = [0, 10, 64, 128, 200, 250, 255];
 
+/// The note the one reading of the picture at `path` makes where its codes were taken as sRGB
+/// by the default rule.
+fn note_of(path: &std::path::Path, encoding: InputEncoding) -> Option<String> {
+    io::read_picture(path, MAX, encoding, false)
+        .unwrap()
+        .assumed_srgb
+}
+
 #[test]
 fn an_untagged_8_bit_png_is_srgb_by_default_and_as_said_otherwise() {
     let d = scratch("photo-png8");
@@ -49,7 +57,7 @@ fn an_untagged_8_bit_png_is_srgb_by_default_and_as_said_otherwise() {
     );
     let conversion = info.conversion.unwrap();
     assert!(conversion.contains("decoded as sRGB"), "{conversion}");
-    let note = io::assumed_srgb_note(&p, InputEncoding::Auto).unwrap();
+    let note = note_of(&p, InputEncoding::Auto).unwrap();
     assert!(
         note.starts_with(&format!("{}: 8-bit picture", p.display())),
         "{note}"
@@ -67,7 +75,7 @@ fn an_untagged_8_bit_png_is_srgb_by_default_and_as_said_otherwise() {
     let (linear, info) = io::read_gray_as(&p, MAX, InputEncoding::Linear).unwrap();
     assert_eq!(linear.data(), &scaled[..]);
     assert_eq!(info.conversion, None);
-    assert_eq!(io::assumed_srgb_note(&p, InputEncoding::Linear), None);
+    assert_eq!(note_of(&p, InputEncoding::Linear), None);
 
     // Gamma 2.2: luminance = code^2.2.
     let (gamma, info) = io::read_gray_as(&p, MAX, InputEncoding::Gamma(2.2)).unwrap();
@@ -99,7 +107,7 @@ fn a_chunk_a_shadelab_text_or_sidecar_or_16_bits_keep_the_codes_linear_by_defaul
     let (image, info) = io::read_gray(&tagged, MAX).unwrap();
     assert_eq!(image.data(), &scaled[..]);
     assert_eq!(info.conversion, None);
-    assert_eq!(io::assumed_srgb_note(&tagged, InputEncoding::Auto), None);
+    assert_eq!(note_of(&tagged, InputEncoding::Auto), None);
     let (image, info) = io::read_gray_as(&tagged, MAX, InputEncoding::Srgb).unwrap();
     assert!((image.get(3, 0) - 0.215861).abs() < 1e-6);
     let conversion = info.conversion.unwrap();
@@ -128,7 +136,7 @@ fn a_chunk_a_shadelab_text_or_sidecar_or_16_bits_keep_the_codes_linear_by_defaul
     png8(&old, &CODES, |_| {});
     std::fs::write(d.join("old.json"), r#"{"program": "shadelab"}"#).unwrap();
     assert_eq!(io::read_gray(&old, MAX).unwrap().0.data(), &scaled[..]);
-    assert_eq!(io::assumed_srgb_note(&old, InputEncoding::Auto), None);
+    assert_eq!(note_of(&old, InputEncoding::Auto), None);
 
     // 16 bits without a chunk: scientific data, linear.
     let deep = d.join("deep.png");
@@ -262,7 +270,7 @@ fn a_jpeg_is_decoded_as_srgb_within_its_compression_error() {
             .contains("decoded as sRGB"),
         "{info}"
     );
-    assert!(io::assumed_srgb_note(&p, InputEncoding::Auto).is_some());
+    assert!(note_of(&p, InputEncoding::Auto).is_some());
     // Linear: the codes over 255.
     let (image, _) = io::read_luminance_as(&p, MAX, InputEncoding::Linear).unwrap();
     let got = mean(&mut image.data().iter().copied());
@@ -324,10 +332,7 @@ fn a_16_bit_tiff_reads_back_exactly_linear() {
         conversion.contains("TIFF has no gamma chunk"),
         "{conversion}"
     );
-    assert_eq!(
-        io::assumed_srgb_note(&d.join("gray.tif"), InputEncoding::Auto),
-        None
-    );
+    assert_eq!(note_of(&d.join("gray.tif"), InputEncoding::Auto), None);
     // With a gamma: code^G.
     let (image, _) =
         io::read_luminance_as(&d.join("gray.tif"), MAX, InputEncoding::Gamma(2.0)).unwrap();

@@ -674,3 +674,104 @@ fn a_picture_is_read_once_through_a_fifo_and_by_its_content() {
     assert!(!Path::new(&d.join("g")).exists());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A picture is read once per run: `solve` and `analyze prior-sweep` of a rendered crater open
+/// its PNG, its sidecar and (for the analysis) its target mask once each, as
+/// `strace -f -e trace=openat` sees them. The lines each run says of what it read (the sidecar's
+/// summary) come from that one reading. Skips, saying why, where strace cannot trace.
+#[test]
+fn solve_and_the_prior_sweep_open_the_picture_and_its_record_once_each() {
+    let d = scratch("read-once");
+    let made = shadelab(
+        &d,
+        &[
+            "--quiet",
+            "render",
+            "crater",
+            "--ppd",
+            "10",
+            "--out",
+            "crater.png",
+        ],
+    );
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let exe = env!("CARGO_BIN_EXE_shadelab");
+    let traced = |name: &str, args: &[&str]| -> Option<(String, String)> {
+        let log = d.join(format!("{name}.trace"));
+        let out = std::process::Command::new("strace")
+            .args(["-f", "-e", "trace=openat", "-o"])
+            .arg(&log)
+            .arg(exe)
+            .args(args)
+            .current_dir(&d)
+            .output()
+            .ok()?;
+        let trace = std::fs::read_to_string(&log).ok()?;
+        // strace missing, or not allowed to trace here (no ptrace in some containers).
+        if !out.status.success() && trace.is_empty() {
+            return None;
+        }
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        Some((trace, String::from_utf8_lossy(&out.stderr).into_owned()))
+    };
+    let opened = |trace: &str, file: &str| {
+        let needle = format!("\"{file}\"");
+        trace
+            .lines()
+            .filter(|l| l.contains("openat(") && l.contains(&needle) && !l.contains("ENOENT"))
+            .count()
+    };
+    let runs: [(&str, &[&str], &[&str]); 2] = [
+        (
+            "solve",
+            &[
+                "solve",
+                "crater.png",
+                "--light",
+                "tilt=0,slant=45",
+                "--method",
+                "multigrid",
+                "--out",
+                "solved",
+            ],
+            &["crater.png", "crater.json"],
+        ),
+        (
+            "prior-sweep",
+            &[
+                "analyze",
+                "prior-sweep",
+                "crater.png",
+                "--tilts",
+                "0:360:90",
+                "--out",
+                "swept",
+            ],
+            &["crater.png", "crater.json", "crater_mask.png"],
+        ),
+    ];
+    for (name, args, files) in runs {
+        let Some((trace, stderr)) = traced(name, args) else {
+            eprintln!("read-once test skipped: strace is not installed or cannot trace here");
+            return;
+        };
+        for file in files {
+            assert_eq!(opened(&trace, file), 1, "{name} opened {file}:\n{trace}");
+        }
+        // What the sidecar gives is said once, from that reading.
+        assert_eq!(
+            stderr.matches("read crater.json: ").count(),
+            1,
+            "{name}: {stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

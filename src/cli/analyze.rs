@@ -9,7 +9,6 @@ mod outline;
 mod perception;
 mod prior_sweep;
 
-use super::output::Output;
 use super::{CliError, CliResult, Global};
 use shadelab::pipeline::PictureSource;
 use std::path::PathBuf;
@@ -34,34 +33,15 @@ pub enum Command {
     Outline(outline::Args),
 }
 
-/// Runs `analyze`; the note that an 8-bit picture without a gamma chunk (or a JPEG) was
-/// decoded as sRGB is said once, after the analysis succeeded (a refusal stays one line).
+/// Runs `analyze`: what was read with the picture (its sidecar, the note that an 8-bit picture
+/// without a gamma chunk was decoded as sRGB) is said by the library as it reads it, once.
 pub fn run(command: Command, global: &Global) -> CliResult {
-    // The picture's note, read from its header before the analysis (which consumes it).
-    let note = command.source().input_note();
-    let result = match command {
+    match command {
         Command::Lightness(a) => lightness::run(a, global),
         Command::Fading(a) => fading::run(a, global),
         Command::PriorSweep(a) => prior_sweep::run(a, global),
         Command::Observer(a) => observer::run(a, global),
         Command::Outline(a) => outline::run(a, global),
-    };
-    if result.is_ok() {
-        super::flags::say_input_note(&Output::new(global), note);
-    }
-    result
-}
-
-impl Command {
-    /// Where the subcommand's picture comes from.
-    fn source(&self) -> &Source {
-        match self {
-            Command::Lightness(a) => &a.source,
-            Command::Fading(a) => &a.source,
-            Command::PriorSweep(a) => &a.picture.source,
-            Command::Observer(a) => &a.picture.source,
-            Command::Outline(a) => &a.source,
-        }
     }
 }
 
@@ -155,11 +135,6 @@ impl Source {
             input_encoding: super::flags::input_gamma(&self.input_gamma)?,
             ..Default::default()
         };
-        let out = Output::new(global);
-        // A sidecar that cannot be read is reported when the picture is (after the image).
-        for line in source.notes().unwrap_or_default() {
-            out.note(super::flags::worded(&line));
-        }
         Ok(source)
     }
 
@@ -175,16 +150,6 @@ impl Source {
     }
 
     /// The files named, as the library's source (no parameters parsed, nothing printed).
-    /// The note that the image's codes were taken as sRGB, where they were (see
-    /// [`PictureSource::input_note`]); `None` for a bad --input-gamma (refused by the run).
-    fn input_note(&self) -> Option<String> {
-        PictureSource {
-            input_encoding: super::flags::input_gamma(&self.input_gamma).ok()?,
-            ..self.library_source()
-        }
-        .input_note()
-    }
-
     fn library_source(&self) -> PictureSource {
         PictureSource {
             image: self.image.clone(),

@@ -134,13 +134,6 @@ pub fn input_gamma(text: &str) -> Result<shadelab::InputEncoding, CliError> {
     text.parse().map_err(|e| usage("--input-gamma", e))
 }
 
-/// Says once, on stderr, that an untagged 8-bit picture or a JPEG is decoded as sRGB.
-pub fn say_input_note(out: &super::output::Output, note: Option<String>) {
-    if let Some(line) = note {
-        out.note(format!("note: {line}"));
-    }
-}
-
 /// Angles in degrees from `START:STOP:STEP` or a list, for `flag`.
 pub fn angles(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
     Ok(shadelab::pipeline::perception::parse_angles(text, flag)?)

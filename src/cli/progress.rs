@@ -17,32 +17,45 @@ pub fn bar(total: u64, what: &str, quiet: bool) -> ProgressBar {
 }
 
 /// The library's progress reports drawn as one bar on stderr (hidden when quiet or not a
-/// terminal).
-pub struct Bar(ProgressBar);
+/// terminal), and its notes as lines above it (none when quiet).
+pub struct Bar {
+    bar: ProgressBar,
+    quiet: bool,
+}
 
 impl Bar {
     /// A bar, hidden with `quiet`.
     pub fn new(quiet: bool) -> Bar {
-        Bar(bar(0, "", quiet))
+        Bar {
+            bar: bar(0, "", quiet),
+            quiet,
+        }
     }
 }
 
 impl shadelab::Progress for Bar {
     fn start(&self, total: u64, what: &str) {
-        self.0.reset();
-        self.0.set_length(total);
-        self.0.set_message(what.to_string());
+        self.bar.reset();
+        self.bar.set_length(total);
+        self.bar.set_message(what.to_string());
     }
     fn advance(&self, steps: u64) {
-        self.0.inc(steps);
+        self.bar.inc(steps);
     }
     fn set_position(&self, done: u64) {
-        self.0.set_position(done);
+        self.bar.set_position(done);
     }
     fn message(&self, text: &str) {
-        self.0.set_message(text.to_string());
+        self.bar.set_message(text.to_string());
     }
     fn finish(&self) {
-        self.0.finish_and_clear();
+        self.bar.finish_and_clear();
+    }
+    fn note(&self, line: &shadelab::Message) {
+        if !self.quiet {
+            // Above the bar, which is drawn again below it.
+            let text = super::flags::worded(line);
+            self.bar.suspend(|| super::output::stderr_line(&text));
+        }
     }
 }

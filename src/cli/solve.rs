@@ -1,6 +1,6 @@
 //! `shadelab solve`: shape from shading on one grayscale image, into an output folder.
 
-use super::flags::{input_gamma, say_input_note, usage, OutFolder, SolverFlags};
+use super::flags::{input_gamma, usage, OutFolder, SolverFlags};
 use super::output::Output;
 use super::{progress::Bar, CliError, CliResult, Global};
 use shadelab::pipeline::solve::check_albedo;
@@ -76,20 +76,11 @@ pub struct Args {
 pub fn run(args: Args, global: &Global) -> CliResult {
     let started = Instant::now();
     let config = config(&args, global)?;
-    // What the image's sidecar gives (the library reads it; this says so).
     let out = Output::new(global);
-    for line in solve::sidecar_notes(&config) {
-        out.note(super::flags::worded(&line));
-    }
     // The folder is claimed before the long part, so an unwritable one fails at once.
     let dest = super::output_to(&args.output.out, global, config.files());
     let report = solve::run_into(&config, &dest, &Bar::new(global.quiet))?;
     let target = dest.path().to_path_buf();
-    // Said once the picture was read and solved: a refusal stays one line.
-    say_input_note(
-        &out,
-        shadelab::pipeline::source::assumed_srgb_note(&config.image, config.input_encoding),
-    );
     let solver = &report.solver;
     let unit = solver.iteration_unit;
     if !solver.converged {

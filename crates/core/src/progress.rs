@@ -22,6 +22,8 @@
 //! NoProgress.start(10, "ignored"); // the silent one
 //! ```
 
+use crate::message::Message;
+
 /// A receiver of progress reports. All methods default to doing nothing.
 pub trait Progress: Sync {
     /// A stage of `total` steps called `what` begins (a new stage replaces the last).
@@ -34,6 +36,11 @@ pub trait Progress: Sync {
     fn message(&self, _text: &str) {}
     /// The stage is over; whatever was drawn may be cleared.
     fn finish(&self) {}
+    /// A line for the log about what was read, said once, as soon as it is known: what a
+    /// picture's sidecar gives and what a given value replaces, how a `.npy`'s integers were
+    /// scaled, that an untagged 8-bit picture was decoded as sRGB. Its words may name a
+    /// [`Setting`](crate::message::Setting), which each front end names its own way.
+    fn note(&self, _line: &Message) {}
 }
 
 /// Progress that goes nowhere.

@@ -76,6 +76,11 @@ pub struct RenderSidecar {
     /// The picture file it records (`files.image`), when it says.
     #[serde(skip)]
     pub image: Option<String>,
+    /// The whole record as read, so that what it records (the render, to make again) is taken
+    /// from this one reading, never from the file again. Not written again with the record's
+    /// summary (it is the file).
+    #[serde(skip)]
+    pub record: Value,
     /// The recorded picture's size (height, width), when it says.
     #[serde(skip)]
     pub shape: Option<(usize, usize)>,
@@ -447,6 +452,7 @@ impl RenderSidecar {
                 .and_then(Value::as_str)
                 .map(String::from),
             shape: recorded_shape(value),
+            record: value.clone(),
         })
     }
 

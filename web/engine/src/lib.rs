@@ -310,7 +310,7 @@ pub fn frame(request: &Request) -> Result<Frame> {
     config.slant_deg = request.assume.slant_deg;
     config.albedo = loaded.declared.albedo;
     config.ambient = loaded.declared.ambient;
-    let setup = config.load()?;
+    let setup = config.load(&shadelab::NoProgress)?;
     let scene = setup.scene();
     let reading = Interpreter::new(&scene, &setup.options)?
         .keep_depth(true)

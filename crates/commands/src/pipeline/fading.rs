@@ -153,7 +153,7 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
     config.validate()?;
     let (band, options) = (&config.band, &config.adaptation);
     progress.start(3, "fading: loading");
-    let (blurred, sharp, ppd, origin) = scenes(&config.source)?;
+    let (blurred, sharp, ppd, origin) = scenes(&config.source, progress)?;
     let (b, s) = (
         Disk {
             channels: &blurred.channels,
@@ -329,7 +329,7 @@ impl FadingReport {
 }
 
 /// The blurred and the sharp disk, the resolution, and where they came from.
-fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
+fn scenes(source: &PictureSource, progress: &dyn Progress) -> Result<(Scene, Scene, f64, Value)> {
     // A fading disk rendered to a file (its sidecar records it) and no labels given: the file
     // holds the blurred disk, and its sharp twin is the render the sidecar records with
     // blur = 0, as for the stimulus by name, so that both routes give the same numbers.
@@ -344,6 +344,7 @@ fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
         .filter(|s| s.stimulus.as_deref() == Some(FADING_DISK));
     if let Some(sidecar) = render {
         let blurred = source.load(true)?;
+        blurred.say_notes(progress);
         let sharp = PictureSource {
             spec: Some(sidecar.path.clone()),
             params: Map::from_iter([("blur".to_string(), Value::from("0"))]),
@@ -356,6 +357,7 @@ fn scenes(source: &PictureSource) -> Result<(Scene, Scene, f64, Value)> {
     }
     if source.image.is_some() {
         let input = source.load(true)?;
+        input.say_notes(progress);
         let ppd = input.ppd.unwrap_or_default();
         let (labels, names) = input
             .labels

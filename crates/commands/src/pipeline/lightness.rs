@@ -160,6 +160,7 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
     let started = Instant::now();
     config.validate()?;
     let input = config.source.load(false)?;
+    input.say_notes(progress);
     let image = input.luminance();
     let single = config.models.len() == 1;
     progress.start(config.models.len() as u64, "lightness models");

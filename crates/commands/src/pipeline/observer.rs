@@ -207,7 +207,7 @@ pub struct Report {
 pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let started = Instant::now();
     config.check()?;
-    let setup = config.picture.load()?;
+    let setup = config.picture.load(progress)?;
     let result = setup.sweep(&config.tilts, progress, "observer sweep")?;
     let curves = config
         .observers()

@@ -215,6 +215,7 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
     let started = Instant::now();
     config.validate()?;
     let (loaded, _) = config.source.load_shaped(false, config.size)?;
+    loaded.say_notes(progress);
     let Some((labels, names)) = loaded.labels.as_ref() else {
         return Err(Error::invalid(
             "the picture has no targets: the outline analysis reads each target (label 1..N of a target mask) as a strip cut by an outline",

@@ -255,12 +255,13 @@ impl Config {
         Ok(self.check()?)
     }
 
-    /// Reads or renders the picture and resolves the domain, boundary, lighting and solver
-    /// options.
-    pub fn load(&self) -> Result<Setup> {
+    /// Reads or renders the picture (once: what was read with it is said through `progress`
+    /// as soon as it is known) and resolves the domain, boundary, lighting and solver options.
+    pub fn load(&self, progress: &dyn Progress) -> Result<Setup> {
         self.validate()?;
         let options = self.solver;
         let (loaded, _) = self.source.load_shaped(false, self.size)?;
+        loaded.say_notes(progress);
         let labels = loaded.labels.as_ref().map(|(l, n)| (l, n.as_slice()));
         let mut picture = TokenPicture::from_image(loaded.luminance(), labels)
             .map_err(|e| self.naming_mask(e))?;

@@ -146,7 +146,7 @@ pub struct Report {
 pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
     let started = Instant::now();
     config.check()?;
-    let setup = config.picture.load()?;
+    let setup = config.picture.load(progress)?;
     let scene = setup.scene();
     let fourier = Interpreter::new(&scene, &setup.options)?.uses_fourier();
     let result = setup.sweep(&config.tilts, progress, "prior sweep")?;

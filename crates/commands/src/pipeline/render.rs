@@ -111,6 +111,12 @@ impl RenderConfig {
         from_sidecar(&value).map_err(|e| Error::format(path, format!("{e}")))
     }
 
+    /// Renders what a shadelab sidecar already read records (`sidecar.record`, read from
+    /// `sidecar.path`), as [`from_spec_file`](Self::from_spec_file) would from its file.
+    pub fn from_sidecar_record(sidecar: &crate::io::RenderSidecar) -> Result<RenderConfig> {
+        from_sidecar(&sidecar.record).map_err(|e| Error::format(&sidecar.path, format!("{e}")))
+    }
+
     /// The files the render reads (its spec, if any), for [`Output::reads`](super::Output::reads).
     pub fn files(&self) -> Vec<PathBuf> {
         self.spec.iter().cloned().collect()

@@ -404,6 +404,38 @@ struct Solved {
     clipped: Option<ClippedReport>,
 }
 
+/// The lines that say what the image read from `file` and its sidecar (`beside`) give the
+/// solve, for the log, said through `progress` as soon as they are known: what was read, what
+/// the config gives instead, which mask is solved, and that untagged codes were taken as sRGB.
+fn say_notes(
+    config: &SolveConfig,
+    file: &io::PictureFile,
+    beside: &io::Beside,
+    progress: &dyn Progress,
+) {
+    let source = super::PictureSource {
+        image: Some(config.image.clone()),
+        input_encoding: config.input_encoding,
+        mask: config.mask.clone(),
+        ..Default::default()
+    };
+    let mut lines = source.notes_on(&config.image, file.npy_scale.as_ref(), beside);
+    if let Some(s) = beside.sidecar() {
+        if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
+            lines.push(
+                Message::text(
+                    "its targets are regions of a surface, not objects' outlines: the whole \
+                     picture is solved (give ",
+                )
+                .setting(Setting::Mask, "a mask")
+                .then(" to solve inside them)"),
+            );
+        }
+    }
+    lines.extend(super::source::assumed_srgb(file));
+    lines.iter().for_each(|line| progress.note(line));
+}
+
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
 fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> {
     config.validate()?;
@@ -421,6 +453,7 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         config.input_encoding,
         config.max_pixels,
     )?;
+    say_notes(config, &file, &beside, progress);
     let (mut image, image_info) = (file.gray, file.info);
     // A shadelab render's sidecar: its values made linear again and its ambient level taken
     // off (the solve's reflectance has no ambient term), its target mask as the object's.
@@ -532,35 +565,6 @@ fn solve_loaded(
         albedo_estimate,
         clipped,
     })
-}
-
-/// The lines that say what the image's shadelab sidecar gives the solve (none without one),
-/// for a log: what was read, what the config gives instead, and which mask is solved.
-/// A sidecar that cannot be read gives no lines here: [`run`] reports it, after the image.
-pub fn sidecar_notes(config: &SolveConfig) -> Vec<Message> {
-    let source = super::PictureSource {
-        image: Some(config.image.clone()),
-        input_encoding: config.input_encoding,
-        mask: config.mask.clone(),
-        ..Default::default()
-    };
-    let Ok(beside) = source.beside() else {
-        return Vec::new();
-    };
-    let mut lines = source.notes_on(&beside);
-    if let Some(s) = beside.sidecar() {
-        if config.mask.is_none() && s.target_mask.is_some() && !s.silhouette {
-            lines.push(
-                Message::text(
-                    "its targets are regions of a surface, not objects' outlines: the whole \
-                     picture is solved (give ",
-                )
-                .setting(Setting::Mask, "a mask")
-                .then(" to solve inside them)"),
-            );
-        }
-    }
-    lines
 }
 
 /// Reads the inputs named by `config`, reconstructs, and reports, keeping everything in

@@ -7,10 +7,8 @@
 //! ambient level and true light are taken, and a recorded display gamma or PsychoPy range is
 //! undone, so that the picture is linear again. Values given explicitly win over the sidecar's.
 
-// What a loaded picture's sidecar says, and the note on an untagged file, defined in io.
-pub use crate::io::{
-    assumed_srgb_note, Beside, Declared, Quantum, RenderSidecar, TrueLight, SILHOUETTE_NOTE,
-};
+// What a loaded picture's sidecar says, defined in io.
+pub use crate::io::{Beside, Declared, Quantum, RenderSidecar, TrueLight, SILHOUETTE_NOTE};
 
 use crate::error::{Error, Result};
 use crate::grid::{size_mismatch, Image, Labels, Mask};
@@ -123,6 +121,12 @@ pub struct Picture {
     pub quantum: Quantum,
     /// Where its shadow is on record ([`Picture::unlit`]).
     pub shadow: ShadowRecord,
+    /// What was read with it, for the log, in the order said: how a `.npy`'s integers were
+    /// scaled, what its sidecar gives and what a given value replaces, and (a line that begins
+    /// `note: `) that an untagged 8-bit picture was decoded as sRGB. Empty for a stimulus or a
+    /// picture in memory. A pipeline says them through [`Progress::note`](crate::progress::Progress::note)
+    /// as soon as the picture is read ([`Picture::say_notes`]).
+    pub notes: Vec<Message>,
 }
 
 /// Where a picture's shadow (attached and cast: the pixels its render leaves at the declared
@@ -142,6 +146,11 @@ pub enum ShadowRecord {
 }
 
 impl Picture {
+    /// Says [`notes`](Self::notes) through `progress`, once, in order.
+    pub fn say_notes(&self, progress: &dyn crate::progress::Progress) {
+        self.notes.iter().for_each(|line| progress.note(line));
+    }
+
     /// The luminance of the pixels (Rec. 709 weights for colour).
     pub fn luminance(&self) -> Image {
         self.pixels.luminance()
@@ -217,25 +226,19 @@ impl PictureSource {
         }
     }
 
-    /// The lines that say what the picture's sidecar gives and what is given instead (none
-    /// without a sidecar), for a log.
-    pub fn notes(&self) -> Result<Vec<Message>> {
-        Ok(self.notes_on(&self.beside()?))
-    }
-
-    /// The note to say once when the image is an 8-bit picture without a gamma chunk (or a
-    /// JPEG) that is decoded as sRGB by the default rule ([`io::assumed_srgb_note`]).
-    pub fn input_note(&self) -> Option<String> {
-        io::assumed_srgb_note(self.image.as_deref()?, self.input_encoding)
-    }
-
-    /// [`notes`](Self::notes) on a sidecar already read by [`beside`](Self::beside).
-    pub fn notes_on(&self, beside: &Beside) -> Vec<Message> {
+    /// The lines that say what the picture read from `image` gives and what is given instead,
+    /// for a log ([`Picture::notes`]): how its integers were scaled (`npy_scale`, a `.npy`'s,
+    /// the one rule of docs/conventions.md), what its sidecar (`beside`) gives, and what a
+    /// value given here replaces.
+    pub(crate) fn notes_on(
+        &self,
+        image: &std::path::Path,
+        npy_scale: Option<&io::IntegerScale>,
+        beside: &Beside,
+    ) -> Vec<Message> {
         let mut lines: Vec<Message> = Vec::new();
-        // The one rule for integer pictures, said where it applies (docs/conventions.md).
-        let npy = self.image.as_deref().filter(|p| io::extension(p) == "npy");
-        if let Some((path, scale)) = npy.and_then(|p| Some((p, io::npy_file_scale(p)?))) {
-            lines.push(format!("{}: {}", path.display(), scale.note()).into());
+        if let Some(scale) = npy_scale {
+            lines.push(format!("{}: {}", image.display(), scale.note()).into());
         }
         match beside {
             Beside::Nothing => {}
@@ -340,6 +343,8 @@ impl PictureSource {
                 let file = io::read_picture(path, max_pixels, encoding, colour)?;
                 // The image is read first: a broken image is reported before its sidecar.
                 let beside = RenderSidecar::of_picture(path, &file, encoding, max_pixels)?;
+                let mut notes = self.notes_on(path, file.npy_scale.as_ref(), &beside);
+                notes.extend(assumed_srgb(&file));
                 let (mut pixels, info) = match file.rgb {
                     Some(rgb) => (Pixels::Rgb(rgb), Value::Null),
                     None => (Pixels::Gray(file.gray), file.info),
@@ -376,6 +381,7 @@ impl PictureSource {
                     on_backdrop: false,
                     quantum,
                     shadow: ShadowRecord::None,
+                    notes,
                 };
                 if let Some(s) = sidecar {
                     origin["sidecar"] = s.to_json();
@@ -407,6 +413,7 @@ impl PictureSource {
                 quantum: Quantum::default(),
                 // The caller's values are the record (float64, as rendered).
                 shadow: ShadowRecord::None,
+                notes: Vec::new(),
             },
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
@@ -494,6 +501,13 @@ pub fn without_gamma(mut sidecar: RenderSidecar, encoding: InputEncoding) -> Ren
     sidecar
 }
 
+/// The line (beginning `note: `) that says a picture file's codes were taken as sRGB by the
+/// default rule, where they were.
+pub(crate) fn assumed_srgb(file: &io::PictureFile) -> Option<Message> {
+    let line = file.assumed_srgb.as_ref()?;
+    Some(Message::text(format!("note: {line}")))
+}
+
 /// A rendered stimulus as a picture, with its targets and what it declares.
 fn rendered(
     name: &str,
@@ -528,6 +542,7 @@ fn rendered(
         on_backdrop,
         quantum: Quantum::default(),
         shadow,
+        notes: Vec::new(),
     })
 }
 
@@ -553,13 +568,17 @@ pub(crate) fn recorded_unlit(
 ) -> Option<Mask> {
     let ambient = sidecar.ambient?;
     sidecar.stimulus.as_ref()?;
-    let render = PictureSource {
-        spec: Some(sidecar.path.clone()),
+    // The render the record describes, made again from the record as read (not the file).
+    let config = crate::pipeline::render::RenderConfig::from_sidecar_record(sidecar).ok()?;
+    let (made, output) = stimulus::generate(
+        &config.stimulus,
+        &config.params,
+        &config.size,
+        config.seed,
         max_pixels,
-        ..Default::default()
-    }
-    .load(false)
+    )
     .ok()?;
+    let render = rendered(&config.stimulus, &made, output, config.seed).ok()?;
     let Pixels::Gray(exact) = render.pixels else {
         return None;
     };

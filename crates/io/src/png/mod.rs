@@ -402,53 +402,6 @@ fn resolve(facts: &Facts, encoding: InputEncoding) -> Resolved {
     }
 }
 
-/// The note to say once where `path` is read under `encoding` as an 8-bit picture (PNG or GIF
-/// without a gamma chunk, or a JPEG) that shadelab did not write, decoded as sRGB:
-/// `"photo.jpg: 8-bit picture without a gamma chunk decoded as sRGB, …"`. `None` for anything
-/// else, and for a file that cannot be read (its reader says why).
-pub fn assumed_srgb_note(path: &Path, encoding: InputEncoding) -> Option<String> {
-    use std::io::Read;
-    // Only a file that can be read again: a pipe is read once, by the picture's reader
-    // (whose report records the conversion).
-    if encoding.is_explicit() || !path.is_file() {
-        return None;
-    }
-    let file = std::fs::File::open(path).ok()?;
-    // The whole file (as much as a reader takes of it), so that a truncated one, whose reader
-    // will refuse it, gets no note before its error.
-    let mut bytes = Vec::new();
-    let cap = largest_file_bytes(crate::grid::DEFAULT_MAX_PIXELS);
-    file.take(cap).read_to_end(&mut bytes).ok()?;
-    let format = format_of(&bytes)?;
-    let facts = picture_facts(&bytes, path).ok()?;
-    let whole = match format {
-        Format::Png => png_is_whole(&bytes),
-        Format::Jpeg => check_jpeg_complete(&bytes).is_ok(),
-        Format::Gif => bytes.ends_with(b";"),
-        Format::Tiff => true,
-    };
-    (whole && resolve(&facts, encoding).assumed)
-        .then(|| format!("{}: {ASSUMED_SRGB}", path.display()))
-}
-
-/// Whether a PNG's chunks follow one another up to its IEND chunk (the file is not cut short).
-fn png_is_whole(bytes: &[u8]) -> bool {
-    let Some(mut rest) = bytes.strip_prefix(PNG_SIGNATURE) else {
-        return false;
-    };
-    while rest.len() >= 8 {
-        let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
-        let Some(next) = rest.get(length.saturating_add(12)..) else {
-            return false;
-        };
-        if &rest[4..8] == b"IEND" {
-            return true;
-        }
-        rest = next;
-    }
-    false
-}
-
 /// Whether the PNG at `path` says how its codes encode luminance (an sRGB or gAMA chunk before
 /// its pixels), so that [`read_gray`] decodes them; false for anything unreadable or not a PNG
 /// (its reader reports those).
