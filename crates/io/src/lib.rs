@@ -44,12 +44,12 @@ pub use npy::{
 };
 pub use output::Output;
 pub use output_set::{remove_dead_temporaries, OutputSet};
-pub use picture::{read_picture, PictureFile, Quantum, PICTURE_EXTENSIONS};
+pub use picture::{read_labels, read_mask, read_picture, PictureFile, Quantum, PICTURE_EXTENSIONS};
 pub use png::{
-    display_rgba8, read_gray, read_gray_as, read_gray_from_bytes, read_labels, read_mask,
-    read_mask_from_bytes, read_rgb, read_rgb_as, stimulus_codes, write_display_codes, write_gray,
-    write_gray_fn, write_labels, write_mask, write_rgb, write_rgb_fn, write_stimulus, BitDepth,
-    DisplayCodes, GrayInfo, PngPicture, LUMINANCE_FORMULA,
+    display_rgba8, read_gray, read_gray_as, read_gray_from_bytes, read_mask_from_bytes, read_rgb,
+    read_rgb_as, stimulus_codes, write_display_codes, write_gray, write_gray_fn, write_labels,
+    write_mask, write_rgb, write_rgb_fn, write_stimulus, BitDepth, DisplayCodes, GrayInfo,
+    PngPicture, LUMINANCE_FORMULA,
 };
 pub use render_sidecar::{Beside, Declared, RenderSidecar, TrueLight, SILHOUETTE_NOTE};
 pub use sidecar::{conventions_json, image_md5, write_json, Stamp, PROGRAM_VERSION};

@@ -186,154 +186,9 @@ impl Beside {
 }
 
 impl RenderSidecar {
-    /// Looks beside `image` for its sidecar. A `.json` that is not valid JSON, or a shadelab
-    /// sidecar with a malformed field, is an error naming the file; a JSON file of another
-    /// program is [`Beside::Foreign`].
-    pub fn beside(image: &Path) -> Result<Beside> {
-        Self::beside_unchecked(image, || super::png::states_its_encoding(image))
-    }
-
-    /// [`beside`](Self::beside) of `file`, the picture read from `image`: a sidecar is taken
-    /// as its record only when it records this picture. One that names another file
-    /// (`files.image`) is that file's record, and is taken only for the same picture: the
-    /// same size and, when that file is still there, the same values to the precision of
-    /// both encodings, each file read as `encoding` says (`a.npy` beside the `a.png` it was
-    /// saved with; export writes a shared record only then). A record of another picture is an error naming both files; a
-    /// renamed copy (the recorded file gone) keeps its record when the size is the one
-    /// recorded.
-    pub fn of_picture(
-        image: &Path,
-        file: &super::PictureFile,
-        encoding: super::InputEncoding,
-        max_pixels: usize,
-    ) -> Result<Beside> {
-        // Checked with its gamma as recorded: each file is compared as its reader takes it.
-        let mut beside = Self::beside_unchecked(image, || false)?;
-        if let Beside::Ours(sidecar) = &mut beside {
-            sidecar.check_records(image, file, encoding, max_pixels)?;
-            if file.states_its_encoding {
-                sidecar.decoded_by_file();
-            }
-        }
-        Ok(beside)
-    }
-
-    /// Checks that this sidecar, found beside `image`, records `file` (see
-    /// [`of_picture`](Self::of_picture)).
-    fn check_records(
-        &self,
-        image: &Path,
-        file: &super::PictureFile,
-        encoding: super::InputEncoding,
-        max_pixels: usize,
-    ) -> Result<()> {
-        let Some(recorded) = &self.image else {
-            return Ok(());
-        };
-        if super::atomic::file_name_of(image) == *recorded {
-            return Ok(());
-        }
-        let other = self.path.with_file_name(recorded);
-        let refuse = |why: String| {
-            Err(Error::format(
-                image,
-                format!(
-                    "{} beside it is the record of {recorded}, {why}; give this picture without \
-                     it (another name or folder), or with its own record",
-                    super::atomic::file_name_of(&self.path)
-                ),
-            ))
-        };
-        let size = (file.gray.width(), file.gray.height());
-        if let Some((height, width)) = self.shape {
-            if (width, height) != size {
-                return refuse(crate::grid::size_mismatch(
-                    "a picture",
-                    (width, height),
-                    "this one is",
-                    size,
-                ));
-            }
-        }
-        // A plain name beside it that is still there: the same picture only by its values.
-        let plain = Path::new(recorded).file_name().and_then(|n| n.to_str()) == Some(recorded);
-        if !plain || !other.is_file() || same_file(&other, image) {
-            return Ok(());
-        }
-        let theirs = super::read_picture(&other, max_pixels, encoding, false)
-            .map_err(|e| Error::format(image, format!("{}: {e}", self.path.display())))?;
-        // Each file's values made linear as its reader takes them: the recorded gamma undone
-        // for a file that does not state its own encoding (and for neither under an explicit
-        // encoding).
-        let reader = |states: bool| {
-            let mut s = self.clone();
-            if states || encoding.is_explicit() {
-                s.gamma = None;
-            }
-            s
-        };
-        let (mine, other_reader) = (
-            reader(file.states_its_encoding),
-            reader(theirs.states_its_encoding),
-        );
-        let (my_quantum, their_quantum) = (
-            file.quantum.map(|v| mine.linearise(v)),
-            theirs.quantum.map(|v| other_reader.linearise(v)),
-        );
-        let within = |a: f64, b: f64| {
-            let (a, b) = (mine.linearise(a), other_reader.linearise(b));
-            let half = |q: &super::Quantum, v: f64| {
-                let (low, high) = q.bin(v);
-                let width = high - low;
-                if width.is_finite() {
-                    width / 2.0
-                } else {
-                    0.0
-                }
-            };
-            (a - b).abs() <= half(&my_quantum, a) + half(&their_quantum, b) + 1e-12
-        };
-        let same = theirs.gray.width() == size.0
-            && theirs.gray.height() == size.1
-            && file
-                .gray
-                .data()
-                .iter()
-                .zip(theirs.gray.data())
-                .all(|(&a, &b)| within(a, b));
-        if same {
-            Ok(())
-        } else {
-            refuse("another picture (its values differ from this one's by more than either file's precision)".into())
-        }
-    }
-
-    /// [`beside`](Self::beside), where the picture says (when asked) whether its own chunk
-    /// states its encoding, without asking whether the sidecar records it.
-    fn beside_unchecked(
-        image: &Path,
-        states_its_encoding: impl FnOnce() -> bool,
-    ) -> Result<Beside> {
-        let path = sidecar_path(image);
-        if path == image || !path.is_file() {
-            return Ok(Beside::Nothing);
-        }
-        let value = read_json(&path)?;
-        if value.get("program").and_then(Value::as_str) != Some("shadelab") {
-            return Ok(Beside::Foreign(path));
-        }
-        let mut sidecar = Self::from_value(&path, &value)?;
-        // A PNG whose own chunk states its encoding (every stimulus PNG since the gAMA chunk)
-        // is decoded by the reader: the recorded gamma is not undone a second time.
-        if sidecar.gamma.is_some() && states_its_encoding() {
-            sidecar.decoded_by_file();
-        }
-        Ok(Beside::Ours(Box::new(sidecar)))
-    }
-
     /// This record of a picture whose own chunk states its encoding: the reader decodes it,
     /// so the recorded gamma is not undone a second time.
-    fn decoded_by_file(&mut self) {
+    pub(crate) fn decoded_by_file(&mut self) {
         if self.gamma.is_some() {
             self.gamma = None;
             self.gamma_decoded_by_file = true;
@@ -552,7 +407,7 @@ impl RenderSidecar {
 }
 
 /// The JSON in the file at `path`; an error naming it when it is not JSON.
-fn read_json(path: &Path) -> Result<Value> {
+pub(crate) fn read_json(path: &Path) -> Result<Value> {
     let bytes = super::read_bytes(path)?;
     serde_json::from_slice(&bytes)
         .map_err(|e| Error::format(path, format!("the sidecar is not valid JSON: {e}")))
@@ -576,14 +431,6 @@ fn recorded_shape(value: &Value) -> Option<(usize, usize)> {
         None => (v.get("height")?.as_u64()?, v.get("width")?.as_u64()?),
     };
     Some((pair.0 as usize, pair.1 as usize))
-}
-
-/// Whether two paths name the same file (compared as written when either cannot be resolved).
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => a == b,
-    }
 }
 
 /// Pixels per degree from the recorded sizes: the height in pixels over the height in degrees.

@@ -17,6 +17,7 @@ use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
 use crate::io::{self, render_sidecar::Beside, Stamp};
 use crate::lightness::fading::{adaptation_time_course, border_energy, Disk, PerceivedFrames};
+use crate::message::Message;
 use crate::parallel::prelude::*;
 use crate::plot::{LinePlot, Series};
 use crate::progress::Progress;
@@ -153,7 +154,7 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
     config.validate()?;
     let (band, options) = (&config.band, &config.adaptation);
     progress.start(3, "fading: loading");
-    let (blurred, sharp, ppd, origin) = scenes(&config.source, progress)?;
+    let (blurred, sharp, ppd, origin, input_note) = scenes(&config.source, progress)?;
     let (b, s) = (
         Disk {
             channels: &blurred.channels,
@@ -226,6 +227,8 @@ pub fn run(config: &FadingConfig, progress: &dyn Progress) -> Result<FadingRepor
     progress.finish();
 
     let last = course.times.len() - 1;
+    // Said once the run succeeded: a refusal stays one line.
+    input_note.iter().for_each(|line| progress.note(line));
     Ok(FadingReport {
         stamp: Stamp::of("analyze fading"),
         input: origin,
@@ -329,7 +332,11 @@ impl FadingReport {
 }
 
 /// The blurred and the sharp disk, the resolution, and where they came from.
-fn scenes(source: &PictureSource, progress: &dyn Progress) -> Result<(Scene, Scene, f64, Value)> {
+/// With the note to say once the run succeeded that a file's codes were taken as sRGB.
+fn scenes(
+    source: &PictureSource,
+    progress: &dyn Progress,
+) -> Result<(Scene, Scene, f64, Value, Option<Message>)> {
     // A fading disk rendered to a file (its sidecar records it) and no labels given: the file
     // holds the blurred disk, and its sharp twin is the render the sidecar records with
     // blur = 0, as for the stimulus by name, so that both routes give the same numbers.
@@ -345,6 +352,7 @@ fn scenes(source: &PictureSource, progress: &dyn Progress) -> Result<(Scene, Sce
     if let Some(sidecar) = render {
         let blurred = source.load(true)?;
         blurred.say_notes(progress);
+        let note = blurred.input_note.clone();
         let sharp = PictureSource {
             spec: Some(sidecar.path.clone()),
             params: Map::from_iter([("blur".to_string(), Value::from("0"))]),
@@ -353,7 +361,8 @@ fn scenes(source: &PictureSource, progress: &dyn Progress) -> Result<(Scene, Sce
             ..Default::default()
         }
         .load(true)?;
-        return twin(blurred, sharp);
+        let (b, s, ppd, origin) = twin(blurred, sharp)?;
+        return Ok((b, s, ppd, origin, note));
     }
     if source.image.is_some() {
         let input = source.load(true)?;
@@ -396,13 +405,14 @@ fn scenes(source: &PictureSource, progress: &dyn Progress) -> Result<(Scene, Sce
             channels,
             mask: ms,
         };
-        return Ok((blurred, sharp, ppd, input.origin));
+        return Ok((blurred, sharp, ppd, input.origin, input.input_note));
     }
     // A stimulus: as given for the blurred disk, with blur = 0 for the sharp one.
     let blurred_input = source.load(true)?;
     let mut sharp_source = source.clone();
     sharp_source.params.insert("blur".into(), Value::from("0"));
-    twin(blurred_input, sharp_source.load(true)?)
+    let (b, s, ppd, origin) = twin(blurred_input, sharp_source.load(true)?)?;
+    Ok((b, s, ppd, origin, None))
 }
 
 /// The fading disk's stimulus name.

@@ -202,6 +202,8 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
         let (a, b) = (index("A")?, index("B")?);
         Some(checker_section(&image, labels, a, b, &images))
     });
+    // Said once the run succeeded: a refusal stays one line.
+    input.input_note.iter().for_each(|line| progress.note(line));
     Ok(LightnessReport {
         stamp: Stamp::of("analyze lightness"),
         input: input.origin,

@@ -219,6 +219,8 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    // Said once the run succeeded: a refusal stays one line.
+    setup.input_note.iter().for_each(|line| progress.note(line));
     Ok(Report {
         header: setup.header("analyze observer"),
         observer: ObserverSettings {

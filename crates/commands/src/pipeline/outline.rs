@@ -293,6 +293,11 @@ pub fn run(config: &OutlineConfig, progress: &dyn Progress) -> Result<OutlineRep
         Smoothness::Charbonnier { epsilon } => epsilon,
         Smoothness::Quadratic => 0.0,
     };
+    // Said once the run succeeded: a refusal stays one line.
+    loaded
+        .input_note
+        .iter()
+        .for_each(|line| progress.note(line));
     Ok(OutlineReport {
         stamp: Stamp::of("analyze outline"),
         picture: PictureInfo::new(&loaded.origin, w, h),

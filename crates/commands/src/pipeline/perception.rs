@@ -313,6 +313,7 @@ impl Config {
             origin: loaded.origin,
             true_light: loaded.declared.light,
             parameters,
+            input_note: loaded.input_note,
         })
     }
 
@@ -370,6 +371,9 @@ pub struct Setup {
     pub true_light: Option<TrueLight>,
     /// The settings, for reports.
     pub parameters: Parameters,
+    /// The note that the picture's codes were taken as sRGB, to say once the run succeeded
+    /// ([`Picture::input_note`](super::source::Picture::input_note)).
+    pub input_note: Option<crate::message::Message>,
 }
 
 impl Setup {

@@ -169,6 +169,8 @@ pub fn run(config: &Config, progress: &dyn Progress) -> Result<Report> {
             concave_tilts_deg: result.tilts_where(k, |v| v < 0.0),
         })
         .collect();
+    // Said once the run succeeded: a refusal stays one line.
+    setup.input_note.iter().for_each(|line| progress.note(line));
     Ok(Report {
         header: setup.header("analyze prior-sweep"),
         tilts_deg: config.tilts.clone(),

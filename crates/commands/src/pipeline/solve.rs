@@ -402,17 +402,20 @@ struct Solved {
     sidecar: Option<RenderSidecar>,
     albedo_estimate: Option<AlbedoEstimate>,
     clipped: Option<ClippedReport>,
+    /// The note that the image's codes were taken as sRGB, said once the solve succeeded.
+    input_note: Option<Message>,
 }
 
 /// The lines that say what the image read from `file` and its sidecar (`beside`) give the
 /// solve, for the log, said through `progress` as soon as they are known: what was read, what
-/// the config gives instead, which mask is solved, and that untagged codes were taken as sRGB.
+/// the config gives instead, which mask is solved. Returns the note that untagged codes were
+/// taken as sRGB, said once the solve succeeded (a refusal stays one line).
 fn say_notes(
     config: &SolveConfig,
     file: &io::PictureFile,
     beside: &io::Beside,
     progress: &dyn Progress,
-) {
+) -> Option<Message> {
     let source = super::PictureSource {
         image: Some(config.image.clone()),
         input_encoding: config.input_encoding,
@@ -432,8 +435,8 @@ fn say_notes(
             );
         }
     }
-    lines.extend(super::source::assumed_srgb(file));
     lines.iter().for_each(|line| progress.note(line));
+    super::source::assumed_srgb(file)
 }
 
 /// Reads the inputs and solves; the image and boundary are dropped before returning.
@@ -453,7 +456,7 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         config.input_encoding,
         config.max_pixels,
     )?;
-    say_notes(config, &file, &beside, progress);
+    let input_note = say_notes(config, &file, &beside, progress);
     let (mut image, image_info) = (file.gray, file.info);
     // A shadelab render's sidecar: its values made linear again and its ambient level taken
     // off (the solve's reflectance has no ambient term), its target mask as the object's.
@@ -480,7 +483,11 @@ fn solve_stage(config: &SolveConfig, progress: &dyn Progress) -> Result<Solved> 
         Some(path) => read_mask(path, config, &image)?,
         None => Grid::new(w, h, true),
     };
-    solve_loaded(config, image, image_info, mask, sidecar, progress)
+    let solved = solve_loaded(config, image, image_info, mask, sidecar, progress)?;
+    Ok(Solved {
+        input_note,
+        ..solved
+    })
 }
 
 /// Solves an image and mask already read (or handed over in memory), with what a render's
@@ -564,6 +571,7 @@ fn solve_loaded(
         sidecar,
         albedo_estimate,
         clipped,
+        input_note: None,
     })
 }
 
@@ -572,7 +580,10 @@ fn solve_loaded(
 pub fn run(config: &SolveConfig, progress: &dyn Progress) -> Result<SolveRun> {
     let started = Instant::now();
     let solved = solve_stage(config, progress)?;
-    finish(config, solved, started)
+    let input_note = solved.input_note.clone();
+    let run = finish(config, solved, started)?;
+    input_note.iter().for_each(|line| progress.note(line));
+    Ok(run)
 }
 
 /// Integrates a solve to depth and reports, keeping the solution.
@@ -643,13 +654,19 @@ pub fn run_into(
     progress: &dyn Progress,
 ) -> Result<SolveReport> {
     let folder = out.folder(SolveRun::MARKER)?;
-    let report = fill(config, folder.path(), progress)?;
+    let (report, input_note) = fill(config, folder.path(), progress)?;
     folder.commit()?;
+    // Said once the solve succeeded and its folder is written: a refusal stays one line.
+    input_note.iter().for_each(|line| progress.note(line));
     Ok(report)
 }
 
 /// The outputs of [`run_into`], written into `dir`.
-fn fill(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<SolveReport> {
+fn fill(
+    config: &SolveConfig,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<(SolveReport, Option<Message>)> {
     let started = Instant::now();
     let mut solved = solve_stage(config, progress)?;
     write_normals(dir, &solved.shape.solution)?;
@@ -660,7 +677,7 @@ fn fill(config: &SolveConfig, dir: &Path, progress: &dyn Progress) -> Result<Sol
     let (depth, report) = integrate(config, &mut solved, f, g, started)?;
     write_depth(dir, &depth, &solved.mask)?;
     write_report(dir, &report)?;
-    Ok(report)
+    Ok((report, solved.input_note))
 }
 
 /// Integrates (f, g) to depth and makes the report.

@@ -122,11 +122,15 @@ pub struct Picture {
     /// Where its shadow is on record ([`Picture::unlit`]).
     pub shadow: ShadowRecord,
     /// What was read with it, for the log, in the order said: how a `.npy`'s integers were
-    /// scaled, what its sidecar gives and what a given value replaces, and (a line that begins
-    /// `note: `) that an untagged 8-bit picture was decoded as sRGB. Empty for a stimulus or a
-    /// picture in memory. A pipeline says them through [`Progress::note`](crate::progress::Progress::note)
-    /// as soon as the picture is read ([`Picture::say_notes`]).
+    /// scaled, what its sidecar gives and what a given value replaces. Empty for a stimulus or
+    /// a picture in memory. A pipeline says them through
+    /// [`Progress::note`](crate::progress::Progress::note) as soon as the picture is read
+    /// ([`Picture::say_notes`]).
     pub notes: Vec<Message>,
+    /// The line (beginning `note: `) that says its codes were taken as sRGB by the default
+    /// rule, where they were: a pipeline says it once its run has succeeded, so that a refusal
+    /// stays one line.
+    pub input_note: Option<Message>,
 }
 
 /// Where a picture's shadow (attached and cast: the pixels its render leaves at the declared
@@ -343,8 +347,8 @@ impl PictureSource {
                 let file = io::read_picture(path, max_pixels, encoding, colour)?;
                 // The image is read first: a broken image is reported before its sidecar.
                 let beside = RenderSidecar::of_picture(path, &file, encoding, max_pixels)?;
-                let mut notes = self.notes_on(path, file.npy_scale.as_ref(), &beside);
-                notes.extend(assumed_srgb(&file));
+                let notes = self.notes_on(path, file.npy_scale.as_ref(), &beside);
+                let input_note = assumed_srgb(&file);
                 let (mut pixels, info) = match file.rgb {
                     Some(rgb) => (Pixels::Rgb(rgb), Value::Null),
                     None => (Pixels::Gray(file.gray), file.info),
@@ -382,6 +386,7 @@ impl PictureSource {
                     quantum,
                     shadow: ShadowRecord::None,
                     notes,
+                    input_note,
                 };
                 if let Some(s) = sidecar {
                     origin["sidecar"] = s.to_json();
@@ -414,6 +419,7 @@ impl PictureSource {
                 // The caller's values are the record (float64, as rendered).
                 shadow: ShadowRecord::None,
                 notes: Vec::new(),
+                input_note: None,
             },
             (None, None) if self.spec.is_some() => {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
@@ -543,6 +549,7 @@ fn rendered(
         quantum: Quantum::default(),
         shadow,
         notes: Vec::new(),
+        input_note: None,
     })
 }
 

@@ -678,20 +678,6 @@ fn rgb_from(img: &DynamicImage, decoding: Decoding) -> Result<RgbImage> {
     )
 }
 
-/// Reads a mask: a PNG (any non-zero pixel, in any channel, is inside) or an H×W `.npy` of
-/// booleans or 0/1 values (1 inside), told apart by their content.
-pub fn read_mask(path: &Path, max_pixels: usize) -> Result<Mask> {
-    match super::picture::read_file_bytes(path, max_pixels)? {
-        super::picture::FileBytes::Npy(bytes) => {
-            let (w, h, data) = super::picture::npy_levels(&bytes, path, max_pixels, 1)?;
-            Grid::from_vec(w, h, data.into_iter().map(|v| v == 1).collect())
-        }
-        super::picture::FileBytes::Raster(bytes) => {
-            mask_from(decode_bytes(&bytes, path, max_pixels)?.0)
-        }
-    }
-}
-
 /// [`read_mask`] of an image held in memory; `source` names it in errors.
 pub fn read_mask_from_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Mask> {
     mask_from(decode_bytes(bytes, source, max_pixels)?.0)
@@ -709,24 +695,17 @@ fn mask_from(img: DynamicImage) -> Result<Mask> {
     )
 }
 
-/// Reads a label map: an 8- or 16-bit grayscale PNG of codes 0..N, or an H×W `.npy` of
-/// booleans or whole numbers 0..65535, told apart by their content.
-pub fn read_labels(path: &Path, max_pixels: usize) -> Result<Labels> {
-    let bytes = match super::picture::read_file_bytes(path, max_pixels)? {
-        super::picture::FileBytes::Npy(bytes) => {
-            let (w, h, data) = super::picture::npy_levels(&bytes, path, max_pixels, 65535)?;
-            return Grid::from_vec(w, h, data);
-        }
-        super::picture::FileBytes::Raster(bytes) => bytes,
-    };
-    let img = decode_bytes(&bytes, path, max_pixels)?.0;
+/// The label map of a raster picture's `bytes` (read from `source`): an 8- or 16-bit grayscale
+/// PNG of codes 0..N.
+pub(crate) fn labels_from_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Labels> {
+    let img = decode_bytes(bytes, source, max_pixels)?.0;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let data = match img {
         DynamicImage::ImageLuma8(b) => b.into_raw().into_iter().map(u16::from).collect(),
         DynamicImage::ImageLuma16(b) => b.into_raw(),
         _ => {
             return Err(Error::format(
-                path,
+                source,
                 "a label map must be an 8- or 16-bit grayscale PNG",
             ))
         }
@@ -760,7 +739,7 @@ mod tests {
         let labels = Grid::from_fn(4, 3, |c, r| (c + 300 * r) as u16);
         write_labels(&d.join("l.png"), &labels).unwrap();
         assert_eq!(
-            read_labels(&d.join("l.png"), DEFAULT_MAX_PIXELS).unwrap(),
+            crate::read_labels(&d.join("l.png"), DEFAULT_MAX_PIXELS).unwrap(),
             labels
         );
     }
