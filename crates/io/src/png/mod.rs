@@ -678,7 +678,7 @@ fn rgb_from(img: &DynamicImage, decoding: Decoding) -> Result<RgbImage> {
     )
 }
 
-/// [`read_mask`] of an image held in memory; `source` names it in errors.
+/// [`read_mask`](crate::read_mask) of an image held in memory; `source` names it in errors.
 pub fn read_mask_from_bytes(bytes: &[u8], source: &Path, max_pixels: usize) -> Result<Mask> {
     mask_from(decode_bytes(bytes, source, max_pixels)?.0)
 }
