@@ -675,30 +675,26 @@ fn a_picture_is_read_once_through_a_fifo_and_by_its_content() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A picture is read once per run: `solve` and `analyze prior-sweep` of a rendered crater open
-/// its PNG, its sidecar and (for the analysis) its target mask once each, as
-/// `strace -f -e trace=openat` sees them. The lines each run says of what it read (the sidecar's
-/// summary) come from that one reading. Skips, saying why, where strace cannot trace.
+/// A picture is read once per run: `solve`, `analyze prior-sweep` and `analyze lightness` of a
+/// rendered crater, and `analyze fading` of a rendered fading disk (whose sharp twin is made
+/// from the record as read), open the PNG, its sidecar and (for the analyses) its target mask
+/// once each, as `strace -f -e trace=openat` sees them. The lines each run says of what it
+/// read (the sidecar's summary) come from that one reading. Skips, saying why, where strace
+/// cannot trace.
 #[test]
-fn solve_and_the_prior_sweep_open_the_picture_and_its_record_once_each() {
+fn solve_and_the_analyses_open_the_picture_and_its_record_once_each() {
     let d = scratch("read-once");
-    let made = shadelab(
-        &d,
-        &[
-            "--quiet",
-            "render",
-            "crater",
-            "--ppd",
-            "10",
-            "--out",
-            "crater.png",
-        ],
-    );
-    assert!(
-        made.status.success(),
-        "{}",
-        String::from_utf8_lossy(&made.stderr)
-    );
+    for (stimulus, file) in [("crater", "crater.png"), ("fading-disk", "disk.png")] {
+        let made = shadelab(
+            &d,
+            &["--quiet", "render", stimulus, "--ppd", "10", "--out", file],
+        );
+        assert!(
+            made.status.success(),
+            "{}",
+            String::from_utf8_lossy(&made.stderr)
+        );
+    }
     let exe = env!("CARGO_BIN_EXE_shadelab");
     let traced = |name: &str, args: &[&str]| -> Option<(String, String)> {
         let log = d.join(format!("{name}.trace"));
@@ -729,7 +725,7 @@ fn solve_and_the_prior_sweep_open_the_picture_and_its_record_once_each() {
             .filter(|l| l.contains("openat(") && l.contains(&needle) && !l.contains("ENOENT"))
             .count()
     };
-    let runs: [(&str, &[&str], &[&str]); 2] = [
+    let runs: [(&str, &[&str], &[&str]); 4] = [
         (
             "solve",
             &[
@@ -757,6 +753,24 @@ fn solve_and_the_prior_sweep_open_the_picture_and_its_record_once_each() {
             ],
             &["crater.png", "crater.json", "crater_mask.png"],
         ),
+        (
+            "lightness",
+            &[
+                "analyze",
+                "lightness",
+                "crater.png",
+                "--model",
+                "retinex",
+                "--out",
+                "lit",
+            ],
+            &["crater.png", "crater.json", "crater_mask.png"],
+        ),
+        (
+            "fading",
+            &["analyze", "fading", "disk.png", "--out", "faded"],
+            &["disk.png", "disk.json", "disk_mask.png"],
+        ),
     ];
     for (name, args, files) in runs {
         let Some((trace, stderr)) = traced(name, args) else {
@@ -767,8 +781,9 @@ fn solve_and_the_prior_sweep_open_the_picture_and_its_record_once_each() {
             assert_eq!(opened(&trace, file), 1, "{name} opened {file}:\n{trace}");
         }
         // What the sidecar gives is said once, from that reading.
+        let sidecar = files[1];
         assert_eq!(
-            stderr.matches("read crater.json: ").count(),
+            stderr.matches(&format!("read {sidecar}: ")).count(),
             1,
             "{name}: {stderr}"
         );

@@ -137,26 +137,4 @@ impl Source {
         };
         Ok(source)
     }
-
-    /// Whether the picture's resolution is known without reading it: --ppd, the sidecar's,
-    /// or a stimulus's own.
-    pub fn knows_ppd(&self) -> bool {
-        self.library_source().ppd_known()
-    }
-
-    /// Whether the picture has target labels (--mask, the sidecar's, or a stimulus's own).
-    pub fn has_labels(&self) -> bool {
-        self.library_source().has_labels()
-    }
-
-    /// The files named, as the library's source (no parameters parsed, nothing printed).
-    fn library_source(&self) -> PictureSource {
-        PictureSource {
-            image: self.image.clone(),
-            spec: self.spec.clone(),
-            mask: self.mask.clone(),
-            ppd: self.ppd,
-            ..PictureSource::default()
-        }
-    }
 }

@@ -119,12 +119,18 @@ impl Error {
     }
 
     /// Whether the error is a usage error (a bad argument rather than a failure while working):
-    /// the command line exits with 2 for these and 1 for the rest.
+    /// the command line exits with 2 for these and 1 for the rest. A [`Error::Setting`] is one
+    /// where its remedy is to give what the picture lacks (its resolution, its target labels),
+    /// not to tune a computation (a smaller λ).
     pub fn is_usage(&self) -> bool {
-        matches!(
-            self,
-            Error::Invalid(_) | Error::Unknown { .. } | Error::TooLarge(_)
-        )
+        use crate::message::Setting;
+        match self {
+            Error::Invalid(_) | Error::Unknown { .. } | Error::TooLarge(_) => true,
+            Error::Setting(m) => m
+                .settings()
+                .any(|s| matches!(s, Setting::Ppd | Setting::Mask)),
+            _ => false,
+        }
     }
 }
 

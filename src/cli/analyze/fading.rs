@@ -2,7 +2,7 @@
 //! and a sharp disk, the perceived-contrast time course of a first-order adaptation model with
 //! fixational jitter, and an animation in which the blurred disk fades.
 
-use super::{CliError, CliResult, Global, Source};
+use super::{CliResult, Global, Source};
 use crate::cli::destination;
 use crate::cli::flags::OutFolder;
 use crate::cli::output::Output;
@@ -82,22 +82,7 @@ pub struct Args {
 
 /// Runs `analyze fading`.
 pub fn run(args: Args, global: &Global) -> CliResult {
-    // The flags an image needs, named as flags (the library's messages name no flag).
     args.source.check()?;
-    if args.source.image.is_some() {
-        if !args.source.knows_ppd() {
-            return Err(CliError::usage(
-                "the fading analysis works in degrees of visual angle: give the image's \
-                 resolution with --ppd N (pixels per degree)",
-            ));
-        }
-        if !args.source.has_labels() {
-            return Err(CliError::usage(
-                "an image needs --mask LABELS.png with label 1 = the blurred disk and 2 = the \
-                 sharp disk",
-            ));
-        }
-    }
     let band = DogBand {
         centre_sigma_deg: args.dog_sigma,
         border_half_width_deg: args.border,

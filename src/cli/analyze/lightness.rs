@@ -2,7 +2,7 @@
 //! output per target, and for the checker-shadow (targets named A and B) the pixel facts and
 //! each model's verdict.
 
-use super::{CliError, CliResult, Global, Source};
+use super::{CliResult, Global, Source};
 use crate::cli::destination;
 use crate::cli::flags::OutFolder;
 use crate::cli::output::Output;
@@ -25,16 +25,7 @@ pub struct Args {
 /// Runs `analyze lightness`.
 pub fn run(args: Args, global: &Global) -> CliResult {
     let models = LightnessConfig::parse_models(&args.model)?;
-    // The resolution flag, named as a flag (the library's messages name no flag).
     args.source.check()?;
-    if !args.source.knows_ppd() {
-        if let Some(m) = models.iter().find(|m| m.needs_ppd()) {
-            return Err(CliError::usage(format!(
-                "the {m} model works in degrees of visual angle: give the image's resolution \
-                 with --ppd N (pixels per degree)"
-            )));
-        }
-    }
     let config = LightnessConfig::new(args.source.to_library(global)?, models)?;
     let dest = destination::<LightnessReport>(&args.output.out, global, config.source.files())?;
     let report = lightness::run(&config, &Bar::new(global.quiet))?;

@@ -10,14 +10,14 @@
 // The parts of this command's configuration and report that other modules define.
 pub use crate::lightness::fading::{AdaptationOptions, BorderEnergy, DogBand, TimeCourse};
 
-use super::source::{Picture, PictureSource};
+use super::source::{render_record, Picture, PictureSource};
 use super::CommandReport;
 use crate::error::{Error, Result};
 use crate::grid::{Image, Mask, RgbImage};
 use crate::imageops::{shrink, side_by_side};
-use crate::io::{self, render_sidecar::Beside, Stamp};
+use crate::io::{self, Stamp};
 use crate::lightness::fading::{adaptation_time_course, border_energy, Disk, PerceivedFrames};
-use crate::message::Message;
+use crate::message::{Message, Setting};
 use crate::parallel::prelude::*;
 use crate::plot::{LinePlot, Series};
 use crate::progress::Progress;
@@ -59,26 +59,12 @@ impl FadingConfig {
         Ok(config)
     }
 
-    /// Checks what needs no file: the source, the filter and the adaptation settings, and for
-    /// an image its resolution and labels.
+    /// Checks what needs no file: the source, the filter and the adaptation settings (an
+    /// image's resolution and labels are checked when it is read, once).
     pub fn validate(&self) -> Result<()> {
         self.source.check()?;
         self.band.check()?;
         self.adaptation.check()?;
-        if self.source.image.is_some() {
-            if !self.source.ppd_known() {
-                return Err(Error::invalid(
-                    "the fading analysis works in degrees of visual angle: give the image's \
-                     resolution in pixels per degree",
-                ));
-            }
-            if !self.source.has_labels() {
-                return Err(Error::invalid(
-                    "an image needs target labels with label 1 = the blurred disk and 2 = the \
-                     sharp disk",
-                ));
-            }
-        }
         Ok(())
     }
 }
@@ -337,41 +323,42 @@ fn scenes(
     source: &PictureSource,
     progress: &dyn Progress,
 ) -> Result<(Scene, Scene, f64, Value, Option<Message>)> {
-    // A fading disk rendered to a file (its sidecar records it) and no labels given: the file
-    // holds the blurred disk, and its sharp twin is the render the sidecar records with
-    // blur = 0, as for the stimulus by name, so that both routes give the same numbers.
-    // (A sidecar that cannot be read is left to the picture's own reading to report.)
-    let given_labels = source.mask.is_some() || source.labels.is_some();
-    let beside = match given_labels {
-        true => Beside::Nothing,
-        false => source.beside().unwrap_or(Beside::Nothing),
-    };
-    let render = beside
-        .sidecar()
-        .filter(|s| s.stimulus.as_deref() == Some(FADING_DISK));
-    if let Some(sidecar) = render {
-        let blurred = source.load(true)?;
-        blurred.say_notes(progress);
-        let note = blurred.input_note.clone();
-        let sharp = PictureSource {
-            spec: Some(sidecar.path.clone()),
-            params: Map::from_iter([("blur".to_string(), Value::from("0"))]),
-            ppd: source.ppd,
-            max_pixels: source.max_pixels,
-            ..Default::default()
-        }
-        .load(true)?;
-        let (b, s, ppd, origin) = twin(blurred, sharp)?;
-        return Ok((b, s, ppd, origin, note));
-    }
     if source.image.is_some() {
+        // Read once: the picture, its sidecar and its labels.
         let input = source.load(true)?;
         input.say_notes(progress);
-        let ppd = input.ppd.unwrap_or_default();
-        let (labels, names) = input
-            .labels
-            .as_ref()
-            .ok_or_else(|| Error::invalid("an image needs target labels"))?;
+        // A fading disk rendered to a file (its sidecar records it) and no labels given: the
+        // file holds the blurred disk, and its sharp twin is the render its record describes
+        // with blur = 0, as for the stimulus by name, so that both routes give the same
+        // numbers.
+        let given_labels = source.mask.is_some() || source.labels.is_some();
+        let render = input
+            .record()
+            .filter(|s| !given_labels && s.stimulus.as_deref() == Some(FADING_DISK));
+        if let Some(sidecar) = render {
+            let blur = Map::from_iter([("blur".to_string(), Value::from("0"))]);
+            let sharp = render_record(sidecar, &blur, source.ppd, source.max_pixels)?;
+            let note = input.input_note.clone();
+            let (b, s, ppd, origin) = twin(input, sharp)?;
+            return Ok((b, s, ppd, origin, note));
+        }
+        let Some(ppd) = input.ppd else {
+            return Err(Error::Setting(
+                Message::text(
+                    "the fading analysis works in degrees of visual angle: give the image's \
+                     resolution with ",
+                )
+                .setting(Setting::Ppd, "its ppd")
+                .then(" (pixels per degree)"),
+            ));
+        };
+        let Some((labels, names)) = input.labels.as_ref() else {
+            return Err(Error::Setting(
+                Message::text("an image needs ")
+                    .setting(Setting::Mask, "target labels")
+                    .then(" with label 1 = the blurred disk and 2 = the sharp disk"),
+            ));
+        };
         // Targets named by a render's sidecar are that render's (the fading disk's are `disk`
         // and `fixation`), not a blurred and a sharp disk: reading them as such would compare
         // the disk with the fixation dot.

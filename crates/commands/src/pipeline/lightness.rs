@@ -14,6 +14,7 @@ use crate::grid::{Image, Labels, Mask};
 use crate::io::{self, BitDepth, Stamp};
 use crate::lightness::checker::{self};
 use crate::lightness::{target_means, Model};
+use crate::message::{Message, Setting};
 use crate::plot::{ColourBar, MapFigure, Outline};
 use crate::progress::Progress;
 use serde::Serialize;
@@ -55,20 +56,12 @@ impl LightnessConfig {
         }
     }
 
-    /// Checks what needs no file: the source, a model to run, and for an image read from a
-    /// file, a resolution when a model works in degrees.
+    /// Checks what needs no file: the source and a model to run (a picture's resolution, where
+    /// a model works in degrees, is checked when it is read, once).
     pub fn validate(&self) -> Result<()> {
         self.source.check()?;
         if self.models.is_empty() {
             return Err(Error::invalid("no lightness model to run"));
-        }
-        if !self.source.ppd_known() {
-            if let Some(m) = self.models.iter().find(|m| m.needs_ppd()) {
-                return Err(Error::invalid(format!(
-                    "the {m} model works in degrees of visual angle: give the image's \
-                     resolution in pixels per degree"
-                )));
-            }
         }
         Ok(())
     }
@@ -161,6 +154,18 @@ pub fn run(config: &LightnessConfig, progress: &dyn Progress) -> Result<Lightnes
     config.validate()?;
     let input = config.source.load(false)?;
     input.say_notes(progress);
+    if input.ppd.is_none() {
+        if let Some(m) = config.models.iter().find(|m| m.needs_ppd()) {
+            return Err(Error::Setting(
+                Message::text(format!(
+                    "the {m} model works in degrees of visual angle: give the image's \
+                     resolution with "
+                ))
+                .setting(Setting::Ppd, "its ppd")
+                .then(" (pixels per degree)"),
+            ));
+        }
+    }
     let image = input.luminance();
     let single = config.models.len() == 1;
     progress.start(config.models.len() as u64, "lightness models");

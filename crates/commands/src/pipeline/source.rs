@@ -150,6 +150,14 @@ pub enum ShadowRecord {
 }
 
 impl Picture {
+    /// The record (a shadelab sidecar) it was read with, where it has one.
+    pub fn record(&self) -> Option<&RenderSidecar> {
+        match &self.shadow {
+            ShadowRecord::Sidecar(sidecar) => Some(sidecar),
+            _ => None,
+        }
+    }
+
     /// Says [`notes`](Self::notes) through `progress`, once, in order.
     pub fn say_notes(&self, progress: &dyn crate::progress::Progress) {
         self.notes.iter().for_each(|line| progress.note(line));
@@ -221,15 +229,6 @@ impl PictureSource {
         }
     }
 
-    /// What lies beside the image file ([`Beside::Nothing`] for a stimulus or a spec): its
-    /// shadelab sidecar is an error when malformed.
-    pub fn beside(&self) -> Result<Beside> {
-        match &self.image {
-            Some(path) => RenderSidecar::beside(path),
-            None => Ok(Beside::Nothing),
-        }
-    }
-
     /// The lines that say what the picture read from `image` gives and what is given instead,
     /// for a log ([`Picture::notes`]): how its integers were scaled (`npy_scale`, a `.npy`'s,
     /// the one rule of docs/conventions.md), what its sidecar (`beside`) gives, and what a
@@ -291,36 +290,6 @@ impl PictureSource {
             }
         }
         lines
-    }
-
-    /// Whether the picture's resolution is known without reading its pixels: given, a
-    /// stimulus's or spec's own, or its sidecar's. A sidecar that cannot be read counts as
-    /// giving it: reading the picture reports what is wrong (the image first).
-    pub fn ppd_known(&self) -> bool {
-        if self.ppd.is_some() {
-            return true;
-        }
-        if self.image.is_none() {
-            // A stimulus or spec knows its own; pixels in memory have none.
-            return self.pixels.is_none();
-        }
-        self.beside()
-            .map_or(true, |b| b.sidecar().is_some_and(|s| s.ppd.is_some()))
-    }
-
-    /// Whether the picture has target labels: given, a stimulus's or spec's own, or its
-    /// sidecar's (a sidecar that cannot be read counts as giving them, as in
-    /// [`ppd_known`](Self::ppd_known)).
-    pub fn has_labels(&self) -> bool {
-        if self.mask.is_some() || self.labels.is_some() {
-            return true;
-        }
-        if self.image.is_none() {
-            return self.pixels.is_none();
-        }
-        self.beside().map_or(true, |b| {
-            b.sidecar().is_some_and(|s| s.target_mask.is_some())
-        })
     }
 
     /// Reads the image or renders the stimulus; with `colour`, PNGs are read as RGB.
@@ -425,16 +394,7 @@ impl PictureSource {
                 let spec = self.spec.as_deref().unwrap_or(std::path::Path::new(""));
                 // The output name is not used: the spec is rendered in memory.
                 let config = crate::pipeline::render::RenderConfig::from_spec_file(spec)?;
-                let mut size = config.size;
-                if self.ppd.is_some() {
-                    size.ppd = self.ppd;
-                }
-                // Parameters given beside the spec win over its own.
-                let mut params = config.params.clone();
-                params.extend(self.params.clone());
-                let (made, output) =
-                    stimulus::generate(&config.stimulus, &params, &size, config.seed, max_pixels)?;
-                let picture = rendered(&config.stimulus, &made, output, config.seed)?;
+                let (picture, made) = render_config(&config, &self.params, self.ppd, max_pixels)?;
                 request = Some(made);
                 picture
             }
@@ -507,6 +467,39 @@ pub fn without_gamma(mut sidecar: RenderSidecar, encoding: InputEncoding) -> Ren
     sidecar
 }
 
+/// The picture `config` renders in memory, with `params` given beside it winning over its own
+/// and the resolution `ppd` where given, and the request it was made from.
+fn render_config(
+    config: &crate::pipeline::render::RenderConfig,
+    params: &Map<String, Value>,
+    ppd: Option<f64>,
+    max_pixels: usize,
+) -> Result<(Picture, stimulus::Request)> {
+    let mut size = config.size;
+    if ppd.is_some() {
+        size.ppd = ppd;
+    }
+    let mut all = config.params.clone();
+    all.extend(params.clone());
+    let (made, output) =
+        stimulus::generate(&config.stimulus, &all, &size, config.seed, max_pixels)?;
+    let picture = rendered(&config.stimulus, &made, output, config.seed)?;
+    Ok((picture, made))
+}
+
+/// The render a picture's record (its sidecar, as read with it) describes, made again in
+/// memory from that record, with `params` given beside it winning over its own and the
+/// resolution `ppd` where given (the fading disk's sharp twin: `blur = 0`).
+pub(crate) fn render_record(
+    sidecar: &RenderSidecar,
+    params: &Map<String, Value>,
+    ppd: Option<f64>,
+    max_pixels: usize,
+) -> Result<Picture> {
+    let config = crate::pipeline::render::RenderConfig::from_sidecar_record(sidecar)?;
+    Ok(render_config(&config, params, ppd, max_pixels)?.0)
+}
+
 /// The line (beginning `note: `) that says a picture file's codes were taken as sRGB by the
 /// default rule, where they were.
 pub(crate) fn assumed_srgb(file: &io::PictureFile) -> Option<Message> {
@@ -576,16 +569,7 @@ pub(crate) fn recorded_unlit(
     let ambient = sidecar.ambient?;
     sidecar.stimulus.as_ref()?;
     // The render the record describes, made again from the record as read (not the file).
-    let config = crate::pipeline::render::RenderConfig::from_sidecar_record(sidecar).ok()?;
-    let (made, output) = stimulus::generate(
-        &config.stimulus,
-        &config.params,
-        &config.size,
-        config.seed,
-        max_pixels,
-    )
-    .ok()?;
-    let render = rendered(&config.stimulus, &made, output, config.seed).ok()?;
+    let render = render_record(sidecar, &Map::new(), None, max_pixels).ok()?;
     let Pixels::Gray(exact) = render.pixels else {
         return None;
     };
