@@ -452,6 +452,8 @@ impl Reconstructor {
     ) -> Result<Shape> {
         progress.start(options.max_iter as u64, "solving");
         let mut history = Vec::new();
+        // Once a solve estimates its time left, its steps are shown against the time.
+        let mut estimating = false;
         let solution = self.solver.solve_with_progress(
             problem.image,
             problem.mask,
@@ -466,9 +468,11 @@ impl Reconstructor {
                 }
                 match p.seconds_left {
                     Some(seconds) => {
+                        estimating = true;
                         progress.time_left(seconds);
                         progress.message(&step_message(p));
                     }
+                    None if estimating => progress.message(&step_message(p)),
                     None => {
                         progress.set_position(p.iteration as u64);
                         if p.iteration % 64 == 0 {

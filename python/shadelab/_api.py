@@ -587,7 +587,8 @@ def solve(
     ``progress``: a function called, on the calling thread, with a dict of where the solve
     stands (``stage``, ``message``, ``done`` and ``total`` steps, and ``seconds_left``: the
     solve's own estimate of the time it has left from the time its steps took so far, for
-    nested-lm, integrable-lm and integrable; None for the quick methods) about every 50 ms
+    nested-lm, integrable-lm and integrable; None for the quick methods and before a first
+    estimate) about every 50 ms
     while it changes and once at the end; an exception it raises stops the solve and is raised.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)

@@ -22,19 +22,17 @@ const RATE_WINDOW: usize = 3;
 /// The steps an iteration whose largest changes were `updates` (one per step, in order) still
 /// needs to bring its change below `tol`, at most `cap` in all (steps done included): 0 once
 /// the last change is below `tol`; else the steps its change's geometric fall over the last
-/// few steps takes to reach `tol`; where the change has not been falling, as many steps
-/// again as were done. A change that is not a number gives the cap.
-pub(crate) fn steps_to(updates: &[f64], tol: f64, cap: usize) -> usize {
+/// few steps takes to reach `tol`; `None` where it has not been falling (nothing to extrapolate
+/// yet). A change that is not a number gives the cap.
+pub(crate) fn steps_to(updates: &[f64], tol: f64, cap: usize) -> Option<usize> {
     let done = updates.len();
     let left = cap.saturating_sub(done);
-    let Some(&last) = updates.last() else {
-        return left.min(1);
-    };
+    let &last = updates.last()?;
     if last < tol {
-        return 0;
+        return Some(0);
     }
     if !last.is_finite() || tol.is_nan() || tol <= 0.0 {
-        return left;
+        return Some(left);
     }
     let window = RATE_WINDOW.min(done - 1);
     let first = updates[done - 1 - window];
@@ -43,23 +41,17 @@ pub(crate) fn steps_to(updates: &[f64], tol: f64, cap: usize) -> usize {
     } else {
         0.0
     };
-    let wanted = if fall > 1e-3 {
-        ((last / tol).ln() / fall).ceil()
-    } else {
-        done as f64
-    };
-    (wanted.max(1.0) as usize).min(left)
+    (fall > 1e-3).then(|| ((((last / tol).ln() / fall).ceil().max(1.0)) as usize).min(left))
 }
 
 /// The steps in all that an iteration like the one whose largest changes were `updates`
 /// takes to bring its change below `tol` (at most `cap`): those it took, or those it took and
-/// [`steps_to`] the rest.
-fn expected(updates: &[f64], tol: f64, cap: usize) -> usize {
+/// [`steps_to`] the rest; `None` where that is not known.
+fn expected(updates: &[f64], tol: f64, cap: usize) -> Option<usize> {
     match updates.iter().position(|&u| u < tol) {
-        Some(i) => i + 1,
-        None => updates.len() + steps_to(updates, tol, cap),
+        Some(i) => Some((i + 1).min(cap)),
+        None => steps_to(updates, tol, cap).map(|left| (updates.len() + left).min(cap)),
     }
-    .min(cap)
 }
 
 /// One grid of a solve, as the estimate sees it.
@@ -114,18 +106,26 @@ impl TimeLeft {
     }
 
     /// A step of the current level ended at `now` with largest change `update`: the seconds
-    /// the solve has left (finite, not negative).
-    pub(crate) fn step(&mut self, update: f64, now: f64) -> f64 {
+    /// the solve has left (finite, not negative), or `None` where the steps so far give no
+    /// estimate (a first grid whose change has not yet fallen).
+    pub(crate) fn step(&mut self, update: f64, now: f64) -> Option<f64> {
         self.updates.push(update);
         let level = self.levels[self.current];
-        let per_step = (now - self.began).max(0.0) / self.updates.len() as f64;
-        // A level just begun has no fall of its own yet: the last level's steps model it.
-        let own = if self.updates.len() < 2 && !self.last_updates.is_empty() && update >= level.tol
-        {
-            expected(&self.last_updates, level.tol, level.cap).saturating_sub(self.updates.len())
-        } else {
-            steps_to(&self.updates, level.tol, level.cap)
+        let done = self.updates.len();
+        let per_step = (now - self.began).max(0.0) / done as f64;
+        // The level before models this one while this one's own fall says nothing (a level just
+        // begun, or one whose change has not been falling).
+        let before = (!self.last_updates.is_empty()).then_some(&self.last_updates[..]);
+        let borrowed = || {
+            before
+                .and_then(|b| expected(b, level.tol, level.cap))
+                .map(|steps| steps.saturating_sub(done))
         };
+        let own = if done < 2 && update >= level.tol {
+            borrowed()
+        } else {
+            steps_to(&self.updates, level.tol, level.cap).or_else(borrowed)
+        }?;
         let mut left = own as f64 * per_step;
         // Each step's cost grows from one level to the next by the growth measured between the
         // last two levels, or by the growth of the unknowns before two are measured.
@@ -134,24 +134,19 @@ impl TimeLeft {
             _ => None,
         };
         // The steps of a finer level: those this level needed (or will need) to reach its
-        // tolerance; those of the level before while this one has taken fewer than two.
-        let model = if self.updates.len() < 2 && !self.last_updates.is_empty() {
-            &self.last_updates
-        } else {
-            &self.updates
-        };
+        // tolerance; those of the level before where this one says nothing yet.
         let (mut cost, mut unknowns) = (per_step, level.unknowns.max(1));
         for finer in &self.levels[self.current + 1..] {
             let growth = measured_growth.unwrap_or(finer.unknowns as f64 / unknowns as f64);
             cost *= growth.max(0.0);
             unknowns = finer.unknowns.max(1);
-            left += expected(model, finer.tol, finer.cap) as f64 * cost;
+            let own = (done >= 2)
+                .then(|| expected(&self.updates, finer.tol, finer.cap))
+                .flatten();
+            let steps = own.or_else(|| before.and_then(|b| expected(b, finer.tol, finer.cap)))?;
+            left += steps as f64 * cost;
         }
-        if left.is_finite() {
-            left.max(0.0)
-        } else {
-            0.0
-        }
+        Some(if left.is_finite() { left.max(0.0) } else { 0.0 })
     }
 }
 
@@ -214,7 +209,7 @@ impl Estimate {
         let seconds_left = self
             .clock
             .seconds()
-            .map(|now| self.time_left.step(step.last_update, now));
+            .and_then(|now| self.time_left.step(step.last_update, now));
         Progress {
             level: self.level,
             seconds_left,
@@ -230,18 +225,17 @@ mod tests {
     #[test]
     fn steps_follow_the_geometric_fall_of_the_change() {
         // Falling tenfold per step: 1e-2 → 1e-6 takes four more.
-        assert_eq!(steps_to(&[1.0, 0.1, 0.01], 1e-6, 100), 4);
+        assert_eq!(steps_to(&[1.0, 0.1, 0.01], 1e-6, 100), Some(4));
         // Below the tolerance: none.
-        assert_eq!(steps_to(&[1.0, 0.1, 1e-7], 1e-6, 100), 0);
+        assert_eq!(steps_to(&[1.0, 0.1, 1e-7], 1e-6, 100), Some(0));
         // The cap bounds the steps done and left together.
-        assert_eq!(steps_to(&[1.0, 0.1, 0.01], 1e-6, 5), 2);
-        // Not falling: as many again as were done.
-        assert_eq!(steps_to(&[0.5, 0.5, 0.6], 1e-6, 100), 3);
-        // Nothing done yet: one step at least, none past the cap.
-        assert_eq!(steps_to(&[], 1e-6, 100), 1);
-        assert_eq!(steps_to(&[], 1e-6, 0), 0);
+        assert_eq!(steps_to(&[1.0, 0.1, 0.01], 1e-6, 5), Some(2));
+        // Not falling, or nothing done yet: nothing to extrapolate.
+        assert_eq!(steps_to(&[0.5, 0.5, 0.6], 1e-6, 100), None);
+        assert_eq!(steps_to(&[0.5], 1e-6, 100), None);
+        assert_eq!(steps_to(&[], 1e-6, 100), None);
         // A change that is not a number: the cap.
-        assert_eq!(steps_to(&[1.0, f64::NAN], 1e-6, 10), 8);
+        assert_eq!(steps_to(&[1.0, f64::NAN], 1e-6, 10), Some(8));
     }
 
     /// Two levels, the coarse one with a quarter of the unknowns, each step of it 1 s: the
@@ -263,23 +257,23 @@ mod tests {
             },
         ];
         let mut t = TimeLeft::new(levels, 0.0);
-        let first = t.step(1.0, 1.0);
-        assert!(first.is_finite() && first > 0.0);
+        // One step, nothing fallen yet and no level before: no estimate.
+        assert_eq!(t.step(1.0, 1.0), None);
         // Falling tenfold a step at 1 s a step: four more coarse steps (to below 5e-5), and the
         // fine level expects the four steps the coarse one takes to below 5e-3, at 4 s each.
-        let second = t.step(0.1, 2.0);
+        let second = t.step(0.1, 2.0).unwrap();
         assert!(near(second, 4.0 * 1.0 + 4.0 * 4.0), "{second}");
-        t.step(0.01, 3.0);
-        let coarse_done = t.step(1e-5, 4.0);
+        t.step(0.01, 3.0).unwrap();
+        let coarse_done = t.step(1e-5, 4.0).unwrap();
         // The coarse level is done: the fine level's four steps at 4 s.
         assert!(near(coarse_done, 4.0 * 4.0), "{coarse_done}");
         t.next_level(4.0);
         // The fine level's first step took 5 s: the coarse level's count models it (three
         // more); then its own fall (tenfold: two more to below 5e-3), then nothing.
-        let fine = t.step(1.0, 9.0);
+        let fine = t.step(1.0, 9.0).unwrap();
         assert!(near(fine, 3.0 * 5.0), "{fine}");
-        let fine = t.step(0.1, 14.0);
+        let fine = t.step(0.1, 14.0).unwrap();
         assert!(near(fine, 2.0 * 5.0), "{fine}");
-        assert_eq!(t.step(0.001, 19.0), 0.0);
+        assert_eq!(t.step(0.001, 19.0), Some(0.0));
     }
 }
