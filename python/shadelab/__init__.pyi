@@ -1,7 +1,7 @@
 """Type stubs of ``shadelab`` (see ``__init__.py`` for the documentation)."""
 
 import os
-from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterator, List, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -180,6 +180,7 @@ def solve(
     tol: Optional[float] = ...,
     max_iter: Optional[int] = ...,
     saturation: Optional[Union[float, Literal["auto", "none"]]] = ...,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = ...,
 ) -> Reconstruction: ...
 def prior_sweep(
     picture: PictureSpec,

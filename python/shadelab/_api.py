@@ -8,7 +8,7 @@ import json
 import os as _os
 import warnings
 from os import fspath as _fspath
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -562,6 +562,7 @@ def solve(
     tol: Optional[float] = None,
     max_iter: Optional[int] = None,
     saturation: Union[float, str, None] = "auto",
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> Reconstruction:
     """Recovers shape from one H×W image of linear luminance (``shadelab solve``).
 
@@ -583,6 +584,12 @@ def solve(
     what the analyses use); also ``jacobi``, ``literal``, ``integrable``, ``integrable-lm``.
     ``report["parameters"]["method_source"]`` says ``"default"`` or ``"asked"``. ``tol``:
     by default 1e-2 for nested-lm (its finest grid's steps), 1e-6 for the others.
+    ``progress``: a function called, on the calling thread, with a dict of where the solve
+    stands (``stage``, ``message``, ``done`` and ``total`` steps, and ``seconds_left``: the
+    solve's own estimate of the time it has left from the time its steps took so far, for
+    nested-lm, integrable-lm and integrable; None for the quick methods and before a first
+    estimate) about every 50 ms
+    while it changes and once at the end; an exception it raises stops the solve and is raised.
 
     >>> s = render("sphere", shape=64, light=(0.3, 0.4, 0.866), layers=True)
     >>> r = solve(s["img"], light=(0.3, 0.4, 0.866), mask=s["target_mask"])
@@ -612,6 +619,7 @@ def solve(
         _opt(float, tol),
         None if max_iter is None else int(max_iter),
         "none" if saturation is None else str(saturation),
+        progress,
     )
     report = json.loads(report_json)
     warning = ((report.get("light") or {}).get("estimate") or {}).get("warning")

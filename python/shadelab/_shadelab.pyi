@@ -1,7 +1,7 @@
 """Type stubs of the compiled module ``shadelab._shadelab`` (called by ``shadelab``; use the
 functions of ``shadelab`` itself, which take and give dicts, tuples and NumPy arrays)."""
 
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -45,6 +45,7 @@ def solve(
     tol: Optional[float],
     max_iter: Optional[int],
     saturation: str,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = ...,
 ) -> Tuple[
     npt.NDArray[np.float64],
     npt.NDArray[np.float64],

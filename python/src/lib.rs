@@ -77,6 +77,17 @@ pub(crate) fn run_released<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> Result<T, Error> + Send,
 ) -> PyResult<T> {
+    run_watched(py, work, |_| Ok(()))
+}
+
+/// [`run_released`] that also runs `watch` on the calling thread, with the GIL, at every look
+/// for Ctrl-C and once at the end; an exception it raises stops the work as Ctrl-C does and is
+/// raised in Python.
+fn run_watched<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> Result<T, Error> + Send,
+    mut watch: impl FnMut(Python<'_>) -> PyResult<()> + Send,
+) -> PyResult<T> {
     let (outcome, interrupted) = py.detach(|| {
         std::thread::scope(|scope| {
             let (done, finished) = mpsc::channel();
@@ -88,13 +99,19 @@ pub(crate) fn run_released<T: Send>(
             let mut interrupted = None;
             while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
                 if interrupted.is_none() {
-                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    if let Err(e) = Python::attach(|py| py.check_signals().and_then(|_| watch(py)))
+                    {
                         shadelab::cancel::request();
                         interrupted = Some(e);
                     }
                 }
             }
             let outcome = worker.join().unwrap_or_else(Err);
+            if interrupted.is_none() {
+                if let Err(e) = Python::attach(&mut watch) {
+                    interrupted = Some(e);
+                }
+            }
             if interrupted.is_some() {
                 shadelab::cancel::reset();
             }
@@ -111,6 +128,94 @@ pub(crate) fn run_released<T: Send>(
             )
         })?
         .map_err(to_py)
+}
+
+/// Where a running call stands, as its last progress reports left it (see
+/// [`shadelab::Progress`]); read by the calling thread, which hands it to Python's callback.
+#[derive(Default)]
+struct Standing {
+    stage: String,
+    message: String,
+    done: u64,
+    total: u64,
+    seconds_left: Option<f64>,
+    /// Whether a report came since the callback last saw it.
+    changed: bool,
+}
+
+/// The library's progress reports kept for Python's `progress` callback.
+#[derive(Default)]
+struct Reported(std::sync::Mutex<Standing>);
+
+impl Reported {
+    fn update(&self, change: impl FnOnce(&mut Standing)) {
+        if let Ok(mut s) = self.0.lock() {
+            change(&mut s);
+            s.changed = true;
+        }
+    }
+
+    /// Calls `callback` with a dict of where the call stands, if a report came since the last
+    /// call: `stage`, `message`, `done` and `total` (steps of the stage) and `seconds_left`
+    /// (the work's own estimate, or None where it makes none).
+    fn hand_to(&self, py: Python<'_>, callback: &Py<PyAny>) -> PyResult<()> {
+        let dict = {
+            let Ok(mut s) = self.0.lock() else {
+                return Ok(());
+            };
+            if !s.changed {
+                return Ok(());
+            }
+            s.changed = false;
+            let dict = PyDict::new(py);
+            dict.set_item("stage", &s.stage)?;
+            dict.set_item("message", &s.message)?;
+            dict.set_item("done", s.done)?;
+            dict.set_item("total", s.total)?;
+            dict.set_item("seconds_left", s.seconds_left)?;
+            dict
+        };
+        callback.call1(py, (dict,)).map(|_| ())
+    }
+}
+
+impl shadelab::Progress for Reported {
+    fn start(&self, total: u64, what: &str) {
+        self.update(|s| {
+            *s = Standing {
+                stage: what.to_string(),
+                message: what.to_string(),
+                total,
+                ..Standing::default()
+            }
+        });
+    }
+    fn advance(&self, steps: u64) {
+        self.update(|s| s.done += steps);
+    }
+    fn set_position(&self, done: u64) {
+        self.update(|s| s.done = done);
+    }
+    fn time_left(&self, seconds: f64) {
+        self.update(|s| s.seconds_left = Some(seconds));
+    }
+    fn message(&self, text: &str) {
+        self.update(|s| s.message = text.to_string());
+    }
+}
+
+/// Runs `work` as [`run_released`] does, handing its progress to `callback` (when given) from
+/// the calling thread every [`SIGNAL_POLL`] while it changes, and once at the end.
+fn run_reporting<T: Send>(
+    py: Python<'_>,
+    callback: Option<Py<PyAny>>,
+    work: impl FnOnce(&dyn shadelab::Progress) -> Result<T, Error> + Send,
+) -> PyResult<T> {
+    let Some(callback) = callback else {
+        return run_released(py, || work(&NoProgress));
+    };
+    let reported = Reported::default();
+    run_watched(py, || work(&reported), |py| reported.hand_to(py, &callback))
 }
 
 /// The library's size request from Python's pairs: both are (height, width), as stimupy's.
@@ -492,7 +597,7 @@ fn save(
 
 /// Solves an image for shape: (normals, depth, f, g, report JSON).
 #[pyfunction]
-#[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter, saturation))]
+#[pyo3(signature = (image, mask, light, boundary, albedo, albedo_estimate, lam, method, tol, max_iter, saturation, progress=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn solve<'py>(
     py: Python<'py>,
@@ -507,6 +612,7 @@ fn solve<'py>(
     tol: Option<f64>,
     max_iter: Option<usize>,
     saturation: &str,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<(
     Bound<'py, PyArray3<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -542,8 +648,8 @@ fn solve<'py>(
         boundary: boundary.to_string(),
         out: String::new(),
     };
-    let run = run_released(py, || {
-        pl::solve::run_image(&config, image, mask, &NoProgress)
+    let run = run_reporting(py, progress, |progress| {
+        pl::solve::run_image(&config, image, mask, progress)
     })?;
     let text = json_text(&run.report)?;
     // Copies for NumPy; the run itself stays with the handle, for its writer.

@@ -276,3 +276,34 @@ def test_the_default_is_the_accurate_method_and_the_report_says_why(sphere):
     accurate = angular_error_deg(default.normals, sphere["normals"], inside)
     biased = angular_error_deg(fast.normals, sphere["normals"], inside)
     assert accurate < biased - 1.0, f"default {accurate:.2f}°, multigrid {biased:.2f}°"
+
+
+def test_progress_reports_the_time_left_of_a_long_solve():
+    """``progress`` receives where the solve stands; nested-lm (the default) estimates the time
+    it has left: finite, not negative, nothing left at the end. Multigrid makes no estimate.
+    An exception raised by the callback stops the solve and reaches the caller."""
+    s = shadelab.render("sphere", shape=192, light=LIGHT, layers=True)
+    inside = s["target_mask"] == 1
+    seen = []
+    r = shadelab.solve(s["img"], light=LIGHT, mask=inside, progress=seen.append)
+    assert r.converged and seen
+    assert all(p["stage"] == "solving" for p in seen)
+    left = [p["seconds_left"] for p in seen if p["seconds_left"] is not None]
+    assert left, seen
+    assert all(np.isfinite(t) and t >= 0 for t in left)
+    assert left[-1] == 0.0
+    assert seen[-1]["message"].startswith("solving (step")
+
+    quick = []
+    shadelab.solve(s["img"], light=LIGHT, mask=inside, method="multigrid", progress=quick.append)
+    assert quick and all(p["seconds_left"] is None for p in quick)
+    assert quick[-1]["done"] == shadelab.solve(s["img"], light=LIGHT, mask=inside, method="multigrid").iterations
+
+    class Enough(Exception):
+        pass
+
+    def stop(_):
+        raise Enough
+
+    with pytest.raises(Enough):
+        shadelab.solve(s["img"], light=LIGHT, mask=inside, progress=stop)

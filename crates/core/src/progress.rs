@@ -32,6 +32,11 @@ pub trait Progress: Sync {
     fn advance(&self, _steps: u64) {}
     /// `done` steps of the stage are done.
     fn set_position(&self, _done: u64) {}
+    /// An estimate of the seconds the stage has left, made by the work itself from the time
+    /// its steps took so far (finite, not negative), where the steps of a stage differ in cost
+    /// or their number is not known in advance (a nested-lm solve); a receiver shows it rather
+    /// than extrapolate the steps' rate.
+    fn time_left(&self, _seconds: f64) {}
     /// A short message about the current step (e.g. the solver's last update).
     fn message(&self, _text: &str) {}
     /// The stage is over; whatever was drawn may be cleared.

@@ -353,6 +353,20 @@ impl Problem<'_> {
     }
 }
 
+/// What a step of a long solve says beside its estimate of the time left: the grid it is on
+/// (a nested solve's coarser grids count from the image's, 0), the step and its change.
+fn step_message(p: &crate::solver::Progress) -> String {
+    let grid = if p.level > 0 {
+        format!("coarse grid 1/{} side, ", 1 << p.level)
+    } else {
+        String::new()
+    };
+    format!(
+        "solving ({grid}step {}, last update {:.2e})",
+        p.iteration, p.last_update
+    )
+}
+
 /// The reconstruction planner for one image size: the solver and the integrator, planned once
 /// and reused by every reconstruction.
 #[derive(Debug)]
@@ -438,6 +452,8 @@ impl Reconstructor {
     ) -> Result<Shape> {
         progress.start(options.max_iter as u64, "solving");
         let mut history = Vec::new();
+        // Once a solve estimates its time left, its steps are shown against the time.
+        let mut estimating = false;
         let solution = self.solver.solve_with_progress(
             problem.image,
             problem.mask,
@@ -445,10 +461,25 @@ impl Reconstructor {
             problem.reflectance,
             options,
             &mut |p| {
-                history.push(p.last_update);
-                progress.set_position(p.iteration as u64);
-                if p.iteration % 64 == 0 {
-                    progress.message(&format!("solving (last update {:.2e})", p.last_update));
+                // A nested solve's coarser grids report their steps too: the history is the
+                // image's grid's.
+                if p.level == 0 {
+                    history.push(p.last_update);
+                }
+                match p.seconds_left {
+                    Some(seconds) => {
+                        estimating = true;
+                        progress.time_left(seconds);
+                        progress.message(&step_message(p));
+                    }
+                    None if estimating => progress.message(&step_message(p)),
+                    None => {
+                        progress.set_position(p.iteration as u64);
+                        if p.iteration % 64 == 0 {
+                            progress
+                                .message(&format!("solving (last update {:.2e})", p.last_update));
+                        }
+                    }
                 }
             },
         )?;

@@ -38,6 +38,7 @@ use crate::error::{Error, Result};
 use crate::gradient_space::Normal;
 use crate::grid::{Grid, Image, Mask, RgbImage};
 use crate::light::{FrontLight, Light};
+use crate::parallel::prelude::*;
 use crate::progress::Progress;
 use crate::reflectance::Lambertian;
 use crate::render::{render, RenderOptions};
@@ -322,8 +323,9 @@ pub fn light_label(light: &Light) -> String {
 }
 
 /// Runs the evaluation: every case solved by each of [`Config::methods`], a row each (the
-/// methods' rows of a case one after the other). `progress` is told before each row (a stage
-/// of one step per row, its message the case's label and method); `picture` receives each
+/// methods' rows of a case one after the other), a few cases' rows at a time on the worker
+/// threads ([`CASE_BATCH`]). `progress` is told the rows done as each row is handed on, in
+/// order (a stage of one step per row; its message the label of the first case being solved); `picture` receives each
 /// row's picture ([`pictures::case_panel`]) with a file name for it (the case's, with
 /// `-<method>` added for every method but multigrid), when `want_pictures` is set.
 /// Fails before any work when a file is missing ([`datasets::check_files`]).
@@ -343,19 +345,42 @@ pub fn run(
     let total = config.case_count();
     progress.start(total as u64, "evaluating");
     let mut results = Vec::with_capacity(total);
-    let mut finish = |case: Case, file: String, results: &mut Vec<CaseResult>| -> Result<()> {
-        for &method in &config.methods {
-            let label = format!("{} {} ({method})", case.object, case.light_label);
-            progress.set_position(results.len() as u64);
-            progress.message(&label);
-            let output = solve_case(&case, &config.options_for(method))?;
-            if want_pictures {
-                picture(
-                    &method_file_name(&file, method),
-                    &pictures::case_panel(&case, &output),
-                )?;
+    // The cases are gathered in batches of CASE_BATCH and each batch's rows solved on the
+    // worker threads (one row each), then handed on in order.
+    let mut pending: Vec<(Case, String)> = Vec::with_capacity(CASE_BATCH);
+    let mut solve_batch =
+        |pending: &mut Vec<(Case, String)>, results: &mut Vec<CaseResult>| -> Result<()> {
+            let rows: Vec<(usize, Method)> = (0..pending.len())
+                .flat_map(|i| config.methods.iter().map(move |&method| (i, method)))
+                .collect();
+            if let Some((case, _)) = pending.first() {
+                progress.message(&format!("{} {}", case.object, case.light_label));
             }
-            results.push(output.result);
+            let cases = &pending[..];
+            let solved: Vec<Result<(CaseResult, Option<RgbImage>)>> = rows
+                .par_iter()
+                .map(|&(i, method)| {
+                    let case = &cases[i].0;
+                    let output = solve_case(case, &config.options_for(method))?;
+                    let panel = want_pictures.then(|| pictures::case_panel(case, &output));
+                    Ok((output.result, panel))
+                })
+                .collect();
+            for (&(i, method), row) in rows.iter().zip(solved) {
+                progress.set_position(results.len() as u64);
+                let (result, panel) = row?;
+                if let Some(panel) = panel {
+                    picture(&method_file_name(&pending[i].1, method), &panel)?;
+                }
+                results.push(result);
+            }
+            pending.clear();
+            Ok(())
+        };
+    let mut finish = |case: Case, file: String, results: &mut Vec<CaseResult>| -> Result<()> {
+        pending.push((case, file));
+        if pending.len() == CASE_BATCH {
+            solve_batch(&mut pending, results)?;
         }
         Ok(())
     };
@@ -480,9 +505,17 @@ pub fn run(
             }
         }
     }
+    solve_batch(&mut pending, &mut results)?;
     progress.finish();
     Ok(results)
 }
+
+/// Cases gathered before their rows are solved, on the worker threads, a row each: enough to
+/// keep two cores busy when one case's rows take far longer than another's, few enough that the
+/// cases held at once (the DiLiGenT objects' are about 13 MB each) stay small. The rows and
+/// their order do not depend on it, nor on the thread count; their seconds are those of rows
+/// solved side by side.
+const CASE_BATCH: usize = 4;
 
 /// A case rendered from true normals: max(n·l, 0) with albedo 1 on `surface`'s mask, cropped
 /// to it; errors on `scored`; the depth is truth when `depth_known`.

@@ -245,6 +245,8 @@ impl Solver {
                 max_iter: cycles_before + options.max_iter,
                 last_update,
                 energy: Some(energy),
+                level: 0,
+                seconds_left: None,
             });
         }
         let mut solution = self.solution(

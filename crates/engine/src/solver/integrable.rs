@@ -125,6 +125,7 @@
 //! them (as every solve is integrated) gives the depth of the last depth solve to within the
 //! last iteration's change (below `tol` once converged).
 
+use super::estimate::{Estimate, Level};
 use super::{
     iterate, sweep_chunks, Method, Node, Posed, Progress, Solution, SolveOptions, Solver,
     MULTIGRID_MAX_CYCLES,
@@ -229,6 +230,12 @@ impl Solver {
         if start.diverged || crate::cancel::requested() {
             return Ok(start);
         }
+        let mut estimate = Estimate::new(vec![Level {
+            unknowns: start.unknowns,
+            tol: options.tol,
+            cap: options.max_iter,
+        }]);
+        let progress = &mut |p: &Progress| progress(&estimate.report(p));
         if options.method == Method::IntegrableLm {
             let lm = LmStart {
                 f: &start.f,

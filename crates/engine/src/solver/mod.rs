@@ -341,6 +341,13 @@ pub struct Progress {
     /// The energy e_S + λ·e_R after the step, where it is computed: after each step of the
     /// globalisation (`globalize.rs`), not after multigrid cycles or sweeps.
     pub energy: Option<f64>,
+    /// The grid the step was taken on: 0 for the image's own, l for [`Method::NestedLm`]'s
+    /// grid of 2^l times fewer pixels a side (its coarser grids report their steps too).
+    pub level: usize,
+    /// The seconds the whole solve has left, estimated from the time its steps took so far
+    /// (`estimate.rs`): with every step of [`Method::IntegrableLm`], [`Method::NestedLm`] and
+    /// [`Method::Integrable`]; `None` for the other methods, quick enough without.
+    pub seconds_left: Option<f64>,
 }
 
 /// The result of a solve.
@@ -873,6 +880,8 @@ fn iterate(
             max_iter: options.max_iter,
             last_update: stats.last_update,
             energy: None,
+            level: 0,
+            seconds_left: None,
         });
         if stats.last_update.is_nan() || stats.last_update > DIVERGENCE_UPDATE {
             stats.diverged = true;
@@ -962,6 +971,7 @@ fn sweep_nodes(
 }
 
 pub mod crease;
+mod estimate;
 mod globalize;
 mod integrable;
 mod multigrid;

@@ -56,6 +56,7 @@
 //! runs in a fixed order (the pieces are those of integrable-lm, which does not depend on the
 //! thread count), so neither does the result.
 
+use super::estimate::{Estimate, Level};
 use super::integrable::LmStart;
 use super::multigrid::half_size_problem;
 use super::{Method, Posed, Progress, Solution, SolveOptions, Solver, MULTIGRID_MAX_CYCLES};
@@ -129,6 +130,20 @@ impl Solver {
             .chain(coarse.iter().map(|(i, b)| (i, b)))
             .collect();
         let top = problems.len() - 1;
+        let mut estimate = Estimate::new(
+            (0..=top)
+                .rev()
+                .map(|level| Level {
+                    unknowns: problems[level].1.unknown_count(),
+                    tol: if level == 0 { options.tol } else { LEVEL_TOL },
+                    cap: if level == 0 {
+                        options.max_iter
+                    } else {
+                        LEVEL_MAX_STEPS
+                    },
+                })
+                .collect(),
+        );
         // The coarsest grid, from its Ikeuchi–Horn solution.
         let (img, b) = problems[top];
         let mut solver = Solver::new(img.width(), img.height())?;
@@ -155,12 +170,11 @@ impl Solver {
             max_iter: LEVEL_MAX_STEPS,
             ..*options
         };
-        let mut quiet = |_: &Progress| {};
         let (mut found, mut depth) = solver.minimise_from(
             Posed::new(img, b, reflectance),
             &options_at(top),
             start,
-            &mut quiet,
+            &mut |p| progress(&estimate.report(p)),
         )?;
         let mut own: Solver;
         // Each finer grid from the coarser one's minimum; the finest (level 0) last.
@@ -179,20 +193,20 @@ impl Solver {
                 depth: Some(&z),
                 weight: WEIGHT_GROWTH.powi(level as i32),
             };
-            let (level_options, solver, report): (_, &mut Solver, &mut dyn FnMut(&Progress)) =
-                if level == 0 {
-                    (finest, &mut *self, &mut *progress)
-                } else {
-                    let mut coarse = Solver::new(img.width(), img.height())?;
-                    coarse.saturation = self.saturation;
-                    own = coarse;
-                    (options_at(level), &mut own, &mut quiet)
-                };
+            let (level_options, solver): (_, &mut Solver) = if level == 0 {
+                (finest, &mut *self)
+            } else {
+                let mut coarse = Solver::new(img.width(), img.height())?;
+                coarse.saturation = self.saturation;
+                own = coarse;
+                (options_at(level), &mut own)
+            };
+            estimate.next_level();
             (found, depth) = solver.minimise_from(
                 Posed::new(img, b, reflectance),
                 &level_options,
                 start,
-                report,
+                &mut |p| progress(&estimate.report(p)),
             )?;
         }
         Ok(found)
@@ -344,6 +358,63 @@ mod tests {
             nested.iterations,
             lm.iterations
         );
+    }
+
+    /// Every step, coarse grids first, reports the solve's time left: finite, not negative,
+    /// nothing once the finest grid converged; a reconstruction hands it to its receiver and
+    /// keeps the finest grid's steps as its history. (No timing is asserted: the machine's
+    /// load sets the seconds.)
+    #[test]
+    fn every_step_reports_the_time_left() {
+        use crate::progress::Progress as Receiver;
+        use crate::reconstruct::{NonConvergence, Problem, ReconstructOptions, Reconstructor};
+        use std::sync::Mutex;
+
+        /// The estimates received.
+        struct Estimates(Mutex<Vec<f64>>);
+        impl Receiver for Estimates {
+            fn time_left(&self, seconds: f64) {
+                self.0.lock().unwrap().push(seconds);
+            }
+        }
+
+        let s = sphere(128, 128, 0.45 * 128.0).unwrap();
+        let light = Light::from_tilt_slant(30.0, 40.0).unwrap();
+        let (image, map) = picture(&s, light);
+        let options = SolveOptions::for_method(Method::NestedLm);
+        let (sol, seen) = super::super::tests::solve_reporting(&s, light, &options);
+        assert!(sol.converged);
+        // Two grids, the coarse one's steps first.
+        assert_eq!(seen.first().map(|p| p.level), Some(1));
+        assert!(seen.windows(2).all(|w| w[1].level <= w[0].level));
+        let finest = seen.iter().filter(|p| p.level == 0).count();
+        assert_eq!(finest, sol.iterations);
+        // The first estimate comes on the coarsest grid, once its change has fallen.
+        let left: Vec<f64> = seen.iter().filter_map(|p| p.seconds_left).collect();
+        let first = seen.iter().position(|p| p.seconds_left.is_some()).unwrap();
+        assert!(seen[..first].iter().all(|p| p.level == 1), "{first}");
+        assert!(left.iter().all(|t| t.is_finite() && *t >= 0.0), "{left:?}");
+        assert!(left[0] > 0.0, "{left:?}");
+        assert_eq!(seen.last().and_then(|p| p.seconds_left), Some(0.0));
+
+        let problem = Problem {
+            image: &image,
+            mask: &s.mask,
+            boundary: &Boundary::Occluding,
+            reflectance: &map,
+        };
+        let plan = ReconstructOptions::from_solve(&options, NonConvergence::Report);
+        let received = Estimates(Mutex::new(Vec::new()));
+        let shape = Reconstructor::new(128, 128, plan)
+            .unwrap()
+            .solve(&problem, &received)
+            .unwrap();
+        let received = received.0.into_inner().unwrap();
+        assert_eq!(received.len(), left.len());
+        assert!(received.iter().all(|t| t.is_finite() && *t >= 0.0));
+        assert_eq!(received.last(), Some(&0.0));
+        assert_eq!(shape.history.len(), shape.solution.iterations);
+        assert_eq!(shape.solution, sol);
     }
 
     /// An image too small to coarsen is solved by integrable-lm itself, bit for bit (at

@@ -252,22 +252,33 @@ fn a_plane_facing_the_viewer_is_a_fixed_point_with_zero_energy() {
     assert_eq!(sol.unknowns, 18 * 14);
 }
 
-#[test]
-fn progress_is_reported_every_sweep() {
-    let s = sphere(32, 32, 14.0).unwrap();
-    let (image, map) = picture(&s, Light::FRONT);
-    let mut solver = Solver::new(32, 32).unwrap();
+/// Solves the picture of `surface` under `light` with `options` (the occluding boundary),
+/// keeping every progress report.
+pub(super) fn solve_reporting(
+    surface: &Surface,
+    light: Light,
+    options: &SolveOptions,
+) -> (Solution, Vec<Progress>) {
+    let (image, map) = picture(surface, light);
+    let mut solver = Solver::new(surface.width(), surface.height()).unwrap();
     let mut seen = Vec::new();
     let sol = solver
         .solve_with_progress(
             &image,
-            &s.mask,
+            &surface.mask,
             &Boundary::Occluding,
             &map,
-            &SolveOptions::default(),
+            options,
             &mut |p| seen.push(*p),
         )
         .unwrap();
+    (sol, seen)
+}
+
+#[test]
+fn progress_is_reported_every_sweep() {
+    let s = sphere(32, 32, 14.0).unwrap();
+    let (sol, seen) = solve_reporting(&s, Light::FRONT, &SolveOptions::default());
     assert_eq!(seen.len(), sol.iterations);
     for (i, p) in seen.iter().enumerate() {
         assert_eq!(p.iteration, i + 1);

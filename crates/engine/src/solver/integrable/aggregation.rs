@@ -49,46 +49,58 @@ impl Csr {
     /// (row, column), added in the triplets' order.
     #[cfg(test)]
     pub(super) fn from_triplets(rows: usize, triplets: &[(u32, u32, f64)]) -> Csr {
-        let (mut a, entry) = Csr::pattern(rows, triplets.iter().map(|&(r, c, _)| (r, c)))
-            .expect("no stop is requested in tests");
-        a.fill(&entry, triplets.iter().map(|t| t.2));
+        let (mut a, entry) = Csr::pattern(rows, |emit| {
+            triplets.iter().for_each(|&(r, c, _)| emit(r, c))
+        })
+        .expect("no stop is requested in tests");
+        a.fill(&entry, |emit| triplets.iter().for_each(|t| emit(t.2)));
         a
     }
 
-    /// The matrix of `rows` rows with an entry, 0, at each of the (row, column) `positions`
-    /// (repeats stored once), and the index of each position's entry in the values.
-    fn pattern(
-        rows: usize,
-        positions: impl Iterator<Item = (u32, u32)>,
-    ) -> Option<(Csr, Vec<u32>)> {
-        let positions: Vec<(u32, u32)> = positions.collect();
-        if crate::cancel::requested() {
-            return None;
-        }
+    /// The matrix of `rows` rows with an entry, 0, at each of the (row, column) positions that
+    /// `list` emits (repeats stored once), and the index of each position's entry in the
+    /// values. `list` is called twice and must emit the same positions in the same order: the
+    /// positions are counted, then bucketed by row, never held as a list of their own (at
+    /// 1024² they are tens of millions). `None` when a stop was requested meanwhile.
+    fn pattern(rows: usize, list: impl Fn(&mut dyn FnMut(u32, u32))) -> Option<(Csr, Vec<u32>)> {
         // Bucket by row (stable), then sort each row's few entries by column (stable too).
         let mut count = vec![0usize; rows + 1];
-        for &(r, _) in &positions {
-            count[r as usize + 1] += 1;
+        list(&mut |r, _| count[r as usize + 1] += 1);
+        if crate::cancel::requested() {
+            return None;
         }
         for i in 0..rows {
             count[i + 1] += count[i];
         }
+        let total = count[rows];
         let mut next = count.clone();
-        let mut bucket = vec![(0u32, 0u32); positions.len()];
-        for (k, &(r, c)) in positions.iter().enumerate() {
-            bucket[next[r as usize]] = (c, k as u32);
+        let mut bucket = vec![(0u32, 0u32); total];
+        let mut k = 0u32;
+        list(&mut |r, c| {
+            bucket[next[r as usize]] = (c, k);
             next[r as usize] += 1;
+            k += 1;
+        });
+        drop(next);
+        if crate::cancel::requested() || k as usize != total {
+            return None;
         }
-        let mut start = vec![0; rows + 1];
-        let mut col: Vec<u32> = Vec::with_capacity(positions.len() / 2);
-        let mut entry = vec![0u32; positions.len()];
+        // Each row sorted, and its distinct columns counted, before the columns are stored:
+        // the column list is allocated once at its size.
+        let mut distinct = 0;
         for i in 0..rows {
             if i % CANCEL_ROWS == 0 && crate::cancel::requested() {
                 return None;
             }
             let row = &mut bucket[count[i]..count[i + 1]];
             row.sort_by_key(|&(c, _)| c);
-            for &(c, k) in row.iter() {
+            distinct += row.len() - row.windows(2).filter(|w| w[0].0 == w[1].0).count();
+        }
+        let mut start = vec![0; rows + 1];
+        let mut col: Vec<u32> = Vec::with_capacity(distinct);
+        let mut entry = vec![0u32; total];
+        for i in 0..rows {
+            for &(c, k) in &bucket[count[i]..count[i + 1]] {
                 if col.len() == start[i] || col.last() != Some(&c) {
                     col.push(c);
                 }
@@ -100,14 +112,20 @@ impl Csr {
         Some((Csr { start, col, val }, entry))
     }
 
-    /// Sets every entry to the sum of the `values` whose index in `entry` points at it, added
-    /// in their order (`values` in the order of the positions `entry` was made from).
-    fn fill(&mut self, entry: &[u32], values: impl ExactSizeIterator<Item = f64>) {
-        assert_eq!(values.len(), entry.len(), "values for another pattern");
+    /// Sets every entry to the sum of the values `list` emits whose index in `entry` points at
+    /// it, added in their order (`list` emits them in the order of the positions `entry` was
+    /// made from; one that stops early, on a requested stop, leaves the rest 0).
+    fn fill(&mut self, entry: &[u32], list: impl FnOnce(&mut dyn FnMut(f64))) {
         self.val.fill(0.0);
-        for (&k, v) in entry.iter().zip(values) {
-            self.val[k as usize] += v;
-        }
+        let (val, mut k) = (&mut self.val, 0);
+        list(&mut |v| {
+            val[entry[k] as usize] += v;
+            k += 1;
+        });
+        debug_assert!(
+            k == entry.len() || crate::cancel::requested(),
+            "values for another pattern"
+        );
     }
 
     /// The number of rows.
@@ -189,7 +207,7 @@ impl Multigrid {
     /// until [`Multigrid::fill`]. `None` when a stop was requested meanwhile ([`crate::cancel`]).
     pub(super) fn plan(
         rows: usize,
-        positions: impl Iterator<Item = (u32, u32)>,
+        positions: impl Fn(&mut dyn FnMut(u32, u32)),
         places: Vec<Place>,
     ) -> Option<Multigrid> {
         let (mut a, entry) = Csr::pattern(rows, positions)?;
@@ -215,11 +233,13 @@ impl Multigrid {
                 });
             }
             // PᵀAP for P the aggregates' indicators: the entries summed by aggregate.
-            let positions = (0..a.rows()).flat_map(|i| {
-                let ai = aggregate[i];
-                let aggregate = &aggregate;
-                a.row(i).0.iter().map(move |&c| (ai, aggregate[c as usize]))
-            });
+            let positions = |emit: &mut dyn FnMut(u32, u32)| {
+                for (i, &ai) in aggregate.iter().enumerate() {
+                    for &c in a.row(i).0 {
+                        emit(ai, aggregate[c as usize]);
+                    }
+                }
+            };
             let (coarse, scatter) = Csr::pattern(coarse_places.len(), positions)?;
             levels.push(Level {
                 blocks: blocks(&places),
@@ -231,13 +251,13 @@ impl Multigrid {
         }
     }
 
-    /// Sets the finest matrix to the sums of `values` at the planned positions (in their
-    /// order), and every coarser level, smoother and factor from it.
-    pub(super) fn fill(&mut self, values: impl ExactSizeIterator<Item = f64>) {
+    /// Sets the finest matrix to the sums of the values `list` emits at the planned positions
+    /// (in their order), and every coarser level, smoother and factor from it.
+    pub(super) fn fill(&mut self, list: impl FnOnce(&mut dyn FnMut(f64))) {
         // A requested stop ends the filling where it is (the caller's step then lowers
         // nothing and its loop stops on the same flag): at 1024² the whole fill is a few
         // hundred milliseconds.
-        self.levels[0].a.fill(&self.entry, values);
+        self.levels[0].a.fill(&self.entry, list);
         for l in 0..self.levels.len() {
             let (fine, coarser) = self.levels.split_at_mut(l + 1);
             let level = &mut fine[l];
@@ -249,7 +269,8 @@ impl Multigrid {
             }
             match (&level.coarse, coarser.first_mut()) {
                 (Some((_, scatter)), Some(next)) => {
-                    next.a.fill(scatter, level.a.val.iter().copied());
+                    next.a
+                        .fill(scatter, |emit| level.a.val.iter().for_each(|&v| emit(v)));
                 }
                 _ => self.factor = cholesky(&level.a),
             }
@@ -493,10 +514,14 @@ mod tests {
 
     /// The hierarchy of `a`: planned for its pattern and filled with its values.
     fn hierarchy(a: &Csr, places: Vec<Place>) -> Multigrid {
-        let positions = (0..a.rows()).flat_map(|i| a.row(i).0.iter().map(move |&c| (i as u32, c)));
+        let positions = |emit: &mut dyn FnMut(u32, u32)| {
+            for i in 0..a.rows() {
+                a.row(i).0.iter().for_each(|&c| emit(i as u32, c));
+            }
+        };
         let mut mg =
             Multigrid::plan(a.rows(), positions, places).expect("no stop is requested in tests");
-        mg.fill(a.val.iter().copied());
+        mg.fill(|emit| a.val.iter().for_each(|&v| emit(v)));
         mg
     }
 
@@ -514,7 +539,7 @@ mod tests {
             }
         }
         let mut refilled = hierarchy(&first, places.clone());
-        refilled.fill(second.val.iter().copied());
+        refilled.fill(|emit| second.val.iter().for_each(|&v| emit(v)));
         let own = hierarchy(&second, places);
         assert!(own.levels.len() >= 3);
         for (a, b) in refilled.levels.iter().zip(&own.levels) {

@@ -140,6 +140,8 @@ impl Multigrid {
                 max_iter: options.max_iter,
                 last_update: residual,
                 energy: None,
+                level: 0,
+                seconds_left: None,
             });
             if residual.is_nan() || residual > DIVERGENCE_UPDATE {
                 stats.diverged = true;

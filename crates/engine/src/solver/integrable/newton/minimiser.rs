@@ -102,8 +102,6 @@ pub(in crate::solver::integrable) struct Minimiser {
     /// The preconditioner, planned at the first step for the model's pattern (the same at
     /// every point) and refilled at each, and its V-cycle's buffers.
     pub(super) multigrid: Option<(Multigrid, Vec<[Vec<f64>; 3]>)>,
-    /// The model's matrix entries at this step, in the order of [`Model::entries`].
-    pub(super) values: Vec<f64>,
     /// Whether the steps use the soft model (see [`Energy::linearise`]).
     pub(super) soft: bool,
     /// How many times the soft model predicted badly (after [`SOFT_TRIES`], it is not taken up
@@ -140,7 +138,6 @@ impl Minimiser {
             nu: START_DAMPING,
             cg_iterations: 0,
             multigrid: None,
-            values: Vec::new(),
             soft: false,
             soft_failed: 0,
             anderson: Anderson::new(len, depth, Restart::Never),
@@ -205,9 +202,10 @@ impl Minimiser {
         // step at 1024² (planning, filling, each damping's solve) is up to seconds, and the
         // caller's loop stops on the same flag.
         if self.multigrid.is_none() {
-            let mut positions = Vec::with_capacity(48 * n);
-            model.entries(self.nu, |r, c, _| positions.push((r, c)));
-            let Some(mg) = Multigrid::plan(3 * n, positions.into_iter(), energy.places()) else {
+            let positions = |emit: &mut dyn FnMut(u32, u32)| {
+                model.entries(self.nu, |r, c, _| emit(r, c));
+            };
+            let Some(mg) = Multigrid::plan(3 * n, positions, energy.places()) else {
                 return 0.0;
             };
             let cycle = mg.scratch();
@@ -219,13 +217,8 @@ impl Minimiser {
         if crate::cancel::requested() {
             return 0.0;
         }
-        let values = &mut self.values;
-        values.clear();
-        model.entries(self.nu, |_, _, v| values.push(v));
-        if crate::cancel::requested() {
-            return 0.0;
-        }
-        mg.fill(values.iter().copied());
+        // The values go straight into the matrix, in the order the plan listed them.
+        mg.fill(|emit| model.entries(self.nu, |_, _, v| emit(v)));
         let b: Vec<f64> = self.grad.iter().map(|g| -g).collect();
         let mut delta = vec![0.0; b.len()];
         let (trial, trial_grad, scratch) =
