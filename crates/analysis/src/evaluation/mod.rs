@@ -324,7 +324,7 @@ pub fn light_label(light: &Light) -> String {
 
 /// Runs the evaluation: every case solved by each of [`Config::methods`], a row each (the
 /// methods' rows of a case one after the other), a few cases' rows at a time on the worker
-/// threads ([`CASE_BATCH`]). `progress` is told the rows done as each row is handed on, in
+/// threads (`CASE_BATCH`). `progress` is told the rows done as each row is handed on, in
 /// order (a stage of one step per row; its message the label of the first case being solved); `picture` receives each
 /// row's picture ([`pictures::case_panel`]) with a file name for it (the case's, with
 /// `-<method>` added for every method but multigrid), when `want_pictures` is set.
