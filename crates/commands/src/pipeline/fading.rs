@@ -458,19 +458,34 @@ fn channels(pixels: &Pixels) -> Vec<Image> {
 mod tests {
     use super::*;
 
+    /// An image file without a resolution, or without labels, is refused when it is read
+    /// (once), each refusal naming the setting it lacks, as a usage error.
     #[test]
     fn an_image_without_resolution_or_labels_is_refused() {
+        let dir = std::env::temp_dir().join(format!("shadelab-fading-bare-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let image = dir.join("x.png");
+        let gray = crate::grid::Grid::new(32, 32, 0.5);
+        io::write_gray(&image, &gray, io::BitDepth::Sixteen, None).unwrap();
         let source = PictureSource {
-            image: Some("x.png".into()),
+            image: Some(image),
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             ..Default::default()
         };
-        let e = FadingConfig::new(source.clone(), DogBand::default(), Default::default());
-        assert!(e.unwrap_err().to_string().contains("pixels per degree"));
-        let with_ppd = PictureSource {
+        let refusal = |source: PictureSource| {
+            let config = FadingConfig::new(source, DogBand::default(), Default::default()).unwrap();
+            run(&config, &crate::progress::NoProgress).unwrap_err()
+        };
+        let e = refusal(source.clone());
+        assert!(e.to_string().contains("pixels per degree"), "{e}");
+        assert!(matches!(&e, Error::Setting(m) if m.settings().any(|s| s == Setting::Ppd)));
+        assert!(e.is_usage());
+        let e = refusal(PictureSource {
             ppd: Some(10.0),
             ..source
-        };
-        let e = FadingConfig::new(with_ppd, DogBand::default(), Default::default());
-        assert!(e.unwrap_err().to_string().contains("label 1"));
+        });
+        assert!(e.to_string().contains("label 1"), "{e}");
+        assert!(matches!(&e, Error::Setting(m) if m.settings().any(|s| s == Setting::Mask)));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

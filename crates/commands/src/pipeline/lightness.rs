@@ -386,18 +386,31 @@ fn checker_section(
 mod tests {
     use super::*;
 
+    /// An image file without a resolution is refused, when it is read (once), for a model
+    /// that works in degrees only, naming the setting (no flag: the front end names it).
     #[test]
     fn an_image_without_resolution_is_refused_for_a_filter_model_only() {
+        let dir =
+            std::env::temp_dir().join(format!("shadelab-lightness-bare-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let image = dir.join("x.png");
+        let gray = crate::grid::Grid::from_fn(32, 32, |c, _| 0.25 + 0.5 * (c % 2) as f64);
+        io::write_gray(&image, &gray, io::BitDepth::Sixteen, None).unwrap();
         let source = PictureSource {
-            image: Some("x.png".into()),
+            image: Some(image),
+            max_pixels: crate::grid::DEFAULT_MAX_PIXELS,
             ..Default::default()
         };
         let odog = LightnessConfig::parse_models("odog").unwrap();
-        let e = LightnessConfig::new(source.clone(), odog).unwrap_err();
-        assert!(e.to_string().contains("pixels per degree"));
-        assert!(!e.to_string().contains("--"));
+        let config = LightnessConfig::new(source.clone(), odog).unwrap();
+        let e = run(&config, &crate::progress::NoProgress).unwrap_err();
+        assert!(e.to_string().contains("pixels per degree"), "{e}");
+        assert!(!e.to_string().contains("--"), "{e}");
+        assert!(matches!(&e, Error::Setting(m) if m.settings().any(|s| s == Setting::Ppd)));
         let retinex = LightnessConfig::parse_models("retinex").unwrap();
-        assert!(LightnessConfig::new(source.clone(), retinex).is_ok());
+        let config = LightnessConfig::new(source.clone(), retinex).unwrap();
+        assert!(run(&config, &crate::progress::NoProgress).is_ok());
         assert!(LightnessConfig::new(source, Vec::new()).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
