@@ -17,8 +17,12 @@ import pytest
 # that the library's stop flag was lowered again.
 CHILD = textwrap.dedent(
     """
-    import sys, time
+    import signal, sys, time
     import shadelab
+    # Python's own Ctrl-C handler, whatever the child inherited: a job started in the
+    # background by a non-interactive shell starts with SIGINT ignored, and Python then
+    # installs no handler (a CI run launched with `&` hung here).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     s = shadelab.render("sphere", shape=1024, light="tilt=30,slant=40")
     print("ready", flush=True)
     started = time.monotonic()
@@ -67,8 +71,9 @@ def test_sigint_stops_a_1024_solve_within_half_a_second():
 # (saying so) and reports how it ended; a SIGINT that arrives between solves is ignored.
 PHASES_CHILD = textwrap.dedent(
     """
-    import sys, time
+    import signal, sys, time
     import shadelab
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # as in CHILD
     method = sys.argv[1]
     s = shadelab.render("sphere", shape=1024, light="tilt=30,slant=40")
     print("ready", flush=True)
